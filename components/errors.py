@@ -1,0 +1,84 @@
+"""The error types of tribocosim, shared by every package.
+
+One small hierarchy so that callers can catch what they can handle:
+
+- ``TribocosimError``: base of everything raised on purpose.
+- ``ParameterError`` (also a ``ValueError``): a parameter or input outside its allowed range;
+  the message names the quantity, its value and what is allowed.
+- ``TableError``: a friction table file that is missing, malformed, or fails its hash check.
+- ``TableDomainError`` (also a ``ValueError``): a friction-table lookup outside the table's axes
+  under the ``error`` policy.
+- ``ConvergenceError``: an iterative solver did not reach its tolerance.
+- ``SceneError``: a co-simulation scene file with problems (all of them in one message).
+- ``CosimStepError``: a co-simulation step that failed (names FMU, variable and time).
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class TribocosimError(Exception):
+    """Base class of every error tribocosim raises on purpose."""
+
+
+class ParameterError(TribocosimError, ValueError):
+    """A parameter or an input is outside its allowed range."""
+
+
+class TableError(TribocosimError):
+    """A friction table file is missing, malformed, or fails its integrity check."""
+
+
+class TableDomainError(TribocosimError, ValueError):
+    """A friction-table lookup fell outside the table's axes under the ``error`` policy."""
+
+
+class ConvergenceError(TribocosimError):
+    """An iterative solver did not converge to its tolerance."""
+
+
+class SceneError(TribocosimError):
+    """A scene file has one or more problems."""
+
+
+class CosimStepError(TribocosimError):
+    """A co-simulation step failed."""
+
+
+def check_finite(name: str, value: float) -> float:
+    """Return ``value`` as float, or raise ``ParameterError`` if it is NaN or infinite."""
+    x = float(value)
+    if not math.isfinite(x):
+        raise ParameterError(f"{name} = {value!r} is not finite; a finite number is required")
+    return x
+
+
+def check_range(
+    name: str,
+    value: float,
+    low: float | None = None,
+    high: float | None = None,
+    *,
+    low_inclusive: bool = True,
+    high_inclusive: bool = True,
+    unit: str = "",
+) -> float:
+    """Check that ``value`` is finite and inside ``[low, high]`` (bounds optional).
+
+    Raises
+    ------
+    ParameterError
+        With a message that names the quantity, its value and the allowed range.
+    """
+    x = check_finite(name, value)
+    lo_ok = low is None or (x >= low if low_inclusive else x > low)
+    hi_ok = high is None or (x <= high if high_inclusive else x < high)
+    if lo_ok and hi_ok:
+        return x
+    lb = "-inf" if low is None else f"{low:g}"
+    hb = "inf" if high is None else f"{high:g}"
+    lbr = "[" if (low is not None and low_inclusive) else "("
+    hbr = "]" if (high is not None and high_inclusive) else ")"
+    u = f" {unit}" if unit else ""
+    raise ParameterError(f"{name} = {value!r}{u} is out of range; allowed: {lbr}{lb}, {hb}{hbr}{u}")

@@ -1,0 +1,149 @@
+"""Parameters of the strip-draw model (one frozen dataclass, SI units, validated on creation).
+
+Defaults are the paper's strip-draw test (AA5182-O, 1.5 mm sheet, 35 x 35 mm pad, 140 mm draw at
+0.08 m/s; ../shared/MODEL.md section 6). The field metadata (unit, description, allowed range)
+is the single source for validation messages and for the FMU's variable declarations, so the
+two cannot drift.
+
+Half model: one pad and one face are modelled (paper Fig. 1b). The bar carries half the sheet:
+thickness h_B = sheet_thickness / 2 and width sheet_width; the pull force reported for the whole
+strip is twice the axial force of the half model, so that mu = pull_force / (2 normal_force)
+reads like Eq. 1.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from components.errors import ParameterError, check_range
+
+FRICTION_MODELS = ("table", "closed_form", "constant")
+INTEGRATORS = ("explicit", "implicit")
+TABLE_POLICIES = ("clamp", "error")
+
+
+def _p(default, unit: str, description: str, low=None, high=None, low_inclusive=True, **extra):
+    """A dataclass field with its unit, description and allowed range in the metadata."""
+    meta = {
+        "unit": unit,
+        "description": description,
+        "low": low,
+        "high": high,
+        "low_inclusive": low_inclusive,
+    }
+    meta.update(extra)
+    return field(default=default, metadata=meta)
+
+
+@dataclass(frozen=True)
+class StripDrawParameters:
+    """All parameters of the strip-draw model, SI units.
+
+    Each field's metadata holds ``unit``, ``description`` and the allowed range (``low``,
+    ``high``); ``__post_init__`` checks every field against it and raises
+    :class:`~components.errors.ParameterError` naming the field, its value and the range.
+    """
+
+    # --- geometry -------------------------------------------------------------------------
+    tool_length: float = _p(0.035, "m", "pad length L_T in the draw direction", 1e-4, 1.0, False)
+    tool_width: float = _p(0.035, "m", "pad width w_T", 1e-4, 1.0, False)
+    sheet_thickness: float = _p(1.5e-3, "m", "sheet thickness (the half model carries half of it)", 1e-5, 0.05, False)
+    sheet_width: float = _p(0.1, "m", "sheet width", 1e-4, 2.0, False)
+    draw_length: float = _p(0.14, "m", "longest draw the bar is built for", 0.0, 5.0, False)
+    free_length: float = _p(0.05, "m", "free strip length between the pad's exit edge and the grip", 1e-4, 5.0, False)
+    n_elements: int = _p(450, "1", "number of linear bar elements", 4, 200000, integer=True)
+    # --- strip material -------------------------------------------------------------------
+    youngs_modulus: float = _p(70e9, "Pa", "Young's modulus of the strip", 1e6, 1e13, False)
+    density: float = _p(2660.0, "kg/m3", "density of the strip", 1.0, 1e5, False)
+    # --- interface ------------------------------------------------------------------------
+    shear_stiffness_factor: float = _p(
+        1.0, "1", "interface penalty k_s in units of E/h_B (Eq. 4: k_s ~ E/h_B)", 1e-6, 1e9, False
+    )
+    # --- debris (Eq. 12-14, 37) -----------------------------------------------------------
+    archard_k: float = _p(1e-4, "1", "Archard wear coefficient K", 0.0, 1.0)
+    hardness: float = _p(0.8e9, "Pa", "hardness H of the strip (HV 84 of AA5182-O)", 1e6, 1e12, False)
+    zeta: float = _p(0.2, "1", "fraction of debris that sticks to the tool", 0.0, 1.0)
+    particle_thickness: float = _p(0.5e-6, "m", "debris flake thickness h_p", 1e-9, 1e-3, False)
+    beta_initial: float = _p(0.0, "1", "initial debris area fraction on the strip (multi-pass runs)", 0.0, 1.0)
+    beta_threshold: float = _p(
+        0.0, "1", "cap of beta (Eq. 24); 0 takes it from the friction law", 0.0, 1.0
+    )
+    # --- friction law (Eq. 6-9, 23) -------------------------------------------------------
+    friction_model: str = _p("table", "", "friction law: table | closed_form | constant", choices=FRICTION_MODELS)
+    mu0: float = _p(0.15, "1", "particle-free friction coefficient (calibration)", 0.0, 5.0)
+    mu_const: float = _p(0.15, "1", "friction coefficient of the constant law", 0.0, 5.0)
+    kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0, False)
+    rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0, False)
+    alpha_b: float = _p(
+        20.0, "1", "PROVISIONAL amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15)", 0.0, 1e6
+    )
+    alpha_v_ref: float = _p(
+        0.05, "m/s", "PROVISIONAL velocity scale v_ref of alpha(v) (Fig. 15)", 1e-9, 1e6, False
+    )
+    table_policy: str = _p(
+        "clamp", "", "lookups outside the table: clamp (counted) | error", choices=TABLE_POLICIES
+    )
+    # --- numerics -------------------------------------------------------------------------
+    integrator: str = _p("implicit", "", "bar integrator: explicit | implicit", choices=INTEGRATORS)
+    cfl_safety: float = _p(0.9, "1", "explicit step as a fraction of the CFL limit", 1e-3, 1.0, False)
+    rho_inf: float = _p(0.5, "1", "spectral radius at infinity of the generalized-alpha scheme", 0.0, 1.0)
+    window_courant: float = _p(
+        1.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0, False
+    )
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            meta = f.metadata
+            if "choices" in meta:
+                if value not in meta["choices"]:
+                    raise ParameterError(
+                        f"{f.name} = {value!r} is not allowed; choose one of {', '.join(meta['choices'])}"
+                    )
+                continue
+            if meta.get("integer"):
+                if isinstance(value, bool) or int(value) != value:
+                    raise ParameterError(f"{f.name} = {value!r} must be an integer")
+                object.__setattr__(self, f.name, int(value))
+            elif isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ParameterError(f"{f.name} = {value!r} must be a number")
+            check_range(
+                f.name,
+                value,
+                meta["low"],
+                meta["high"],
+                low_inclusive=meta["low_inclusive"],
+                unit=meta["unit"] if meta["unit"] not in ("", "1") else "",
+            )
+
+    # --- derived quantities ---------------------------------------------------------------
+    @property
+    def bar_thickness(self) -> float:
+        """h_B: thickness of the half-model bar [m]."""
+        return 0.5 * self.sheet_thickness
+
+    @property
+    def bar_area(self) -> float:
+        """Cross-section of the half-model bar [m^2]."""
+        return self.sheet_width * self.bar_thickness
+
+    @property
+    def shear_stiffness(self) -> float:
+        """Interface penalty k_s per unit area [Pa/m] (Eq. 4)."""
+        return self.shear_stiffness_factor * self.youngs_modulus / self.bar_thickness
+
+    @property
+    def wave_speed(self) -> float:
+        """Bar wave speed sqrt(E/rho) [m/s]."""
+        return math.sqrt(self.youngs_modulus / self.density)
+
+    def replace(self, **changes) -> "StripDrawParameters":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+def parameter_fields() -> tuple[dataclasses.Field, ...]:
+    """The dataclass fields of :class:`StripDrawParameters` (for adapters that declare variables)."""
+    return dataclasses.fields(StripDrawParameters)

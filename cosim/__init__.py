@@ -1,0 +1,1 @@
+"""Co-simulation: scenes, the master algorithms on fmpy, results, reports and the CLI."""

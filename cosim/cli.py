@@ -1,0 +1,52 @@
+"""The ``tribocosim`` console script: a thin dispatcher over subcommands that live with their package.
+
+Subcommand modules are imported lazily, so that for example ``tribocosim run`` never imports
+numba, pyfftw or the mesoscale code. Each module named below provides ``main(argv) -> int``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+#: subcommand -> (module providing ``main(argv)``, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("cosim.demo", "run the default strip-draw case and print mu_bar"),
+    "run": ("cosim.run_cli", "run a co-simulation scene (TOML)"),
+    "report": ("cosim.report_cli", "error-vs-run-time and stability reports"),
+    "fmu": ("components.fmus.cli", "build the project's FMUs"),
+    "meso": ("surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
+    "surrogate": ("surrogate.surrogate_cli", "campaigns and the friction table"),
+}
+
+
+def _usage() -> str:
+    lines = ["usage: tribocosim COMMAND [ARGS...]", "", "commands:"]
+    lines += [f"  {name:<10} {help_}" for name, (_, help_) in COMMANDS.items()]
+    lines += ["", "Run 'tribocosim COMMAND --help' for the options of a command."]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``tribocosim`` console script."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if not args or args[0] in ("-h", "--help", "help"):
+        print(_usage())
+        return 0
+    name, rest = args[0], args[1:]
+    if name not in COMMANDS:
+        print(f"tribocosim: unknown command {name!r}; known: {', '.join(COMMANDS)}", file=sys.stderr)
+        return 2
+    module_name = COMMANDS[name][0]
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name and module_name.startswith(exc.name):
+            print(f"tribocosim: command {name!r} is not available in this version", file=sys.stderr)
+            return 2
+        raise
+    return int(module.main(rest) or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Offline mesoscale model (rough surfaces, Fourier-BEM contact, DEM flakes) and the friction table."""
