@@ -1,0 +1,286 @@
+"""The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law.
+
+Physics (paper Sec. 3-4, App. B-C; ../shared/MODEL.md sections 1-4):
+
+- bar: rho U_tt = E U_XX (Eq. 2), linear elements, lumped mass (:mod:`.mesh`);
+- interface: elastic-perfectly-plastic Coulomb law with return mapping, T_max = mu P (Eq. 4-5),
+  uniform pressure P = F_N / (L_T w_T) over the pad (the paper's choice);
+- debris: beta transport with Archard source and tool-carried flux (Eq. 12-14, 37; :mod:`.transport`);
+- friction: mu(P, v, beta) from a table, the closed form, or a constant (:mod:`.friction`).
+
+Time integration. Two integrators for the bar, selected by ``integrator``:
+
+``explicit``
+    The paper's central-difference scheme (App. B) with the time step at ``cfl_safety`` times the
+    stability limit (:meth:`BarMesh.critical_time_step`), sub-cycled inside every requested step.
+    Resolves the elastic waves; ~1e7 steps for a 140 mm draw at 0.08 m/s.
+``implicit``
+    Generalized-alpha (Chung-Hulbert), unconditionally stable and second order, with a
+    semi-smooth Newton iteration on the stick/slip set (:mod:`.kernels`). Chosen over a purely
+    quasi-static solve because it keeps inertia (the grip is driven by a machine model whose
+    dynamics the co-simulation resolves, and velocity steps are legal inputs) while its
+    numerical damping (``rho_inf`` < 1) removes the unresolved elastic waves, so that at
+    V0 << sqrt(E/rho) it converges to the quasi-static answer with steps of milliseconds.
+
+Coupling of bar, friction and debris (our choice; MODEL.md section 7): a requested step is split
+into coupling intervals in which the pad slides at most ``window_courant`` elements. In each
+interval mu is evaluated per node from (P, slip rate of the last interval, beta) and held, the bar
+is advanced (sub-cycled explicit steps or one generalized-alpha step), then beta is updated from
+the nodal slip increments (implicit upwind, exact mass balance). Both integrators share this, so
+their comparison measures the bar integrator alone.
+
+Outputs (one pad, one face; ``pull_force`` for the whole strip):
+
+- ``pull_force`` = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 normal_force));
+- ``friction_force`` F_S = sum of nodal friction forces on the modelled face;
+- ``mu_mean`` = F_S / F_N (Eq. 28), 0 when F_N = 0;
+- ``sliding_distance``: contact-weighted mean displacement of the strip under the pad;
+- ``beta_mean`` (contact-weighted, under the pad), ``beta_max`` (whole strip);
+- ``contact_pressure`` P, ``grip_position`` (grip displacement), ``table_clamp_count``
+  (cumulative number of nodal table lookups outside the table, under the clamp policy).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+
+from components.errors import ConvergenceError, ParameterError, check_finite
+from components.stripdraw import kernels
+from components.stripdraw.mesh import BarMesh
+from components.stripdraw.parameters import StripDrawParameters
+from components.stripdraw.transport import transport_step
+
+OUTPUT_NAMES = (
+    "pull_force",
+    "friction_force",
+    "mu_mean",
+    "sliding_distance",
+    "beta_mean",
+    "beta_max",
+    "contact_pressure",
+    "grip_position",
+    "table_clamp_count",
+)
+INPUT_NAMES = ("normal_force", "grip_velocity")
+
+_ARRAYS = ("U", "V", "A", "Up", "contact", "beta", "slip_rate", "fprev")
+_SCALARS = ("time", "n_steps", "friction_force", "reaction", "normal_force", "clamp_count", "beta_removed")
+_MAX_HALVINGS = 12
+_NEWTON_MAX_ITER = 60
+_NEWTON_RTOL = 1e-10  # residual tolerance relative to the friction capacity + grip pull
+
+
+class StripDrawModel:
+    """The strip-draw model with explicit state.
+
+    Parameters
+    ----------
+    params : StripDrawParameters
+        All parameters (validated).
+    friction_law : object
+        A law from :func:`components.stripdraw.friction.make_friction_law`.
+    beta_field : array_like, optional
+        Initial nodal debris field (multi-pass runs); default ``params.beta_initial`` everywhere.
+    """
+
+    def __init__(self, params: StripDrawParameters, friction_law, beta_field=None):
+        self.params = params
+        self.law = friction_law
+        self.mesh = BarMesh.build(params)
+        cap = params.beta_threshold if params.beta_threshold > 0 else friction_law.beta_threshold
+        self.beta_cap = float(cap)
+        n = self.mesh.n_nodes
+        self.U = np.zeros(n)
+        self.V = np.zeros(n)
+        self.A = np.zeros(n)
+        self.Up = np.zeros(n)
+        self.contact = np.zeros(n, dtype=np.int8)
+        self.slip_rate = np.zeros(n)
+        self.fprev = np.zeros(n)
+        if beta_field is None:
+            beta0 = np.full(n, params.beta_initial)
+        else:
+            beta0 = np.array(beta_field, dtype=float)
+            if beta0.shape != (n,) or not np.all(np.isfinite(beta0)) or np.any(beta0 < 0):
+                raise ParameterError(
+                    f"beta_field must hold {n} finite values >= 0 (one per node); got shape {beta0.shape}"
+                )
+        if np.any(beta0 > self.beta_cap):
+            raise ParameterError(
+                f"initial beta = {float(beta0.max())!r} exceeds the cap beta_threshold = {self.beta_cap:g}"
+            )
+        self.beta = beta0
+        self._w = self._weights(self.U)  # contact weights at the current U (derived, cached)
+        self.time = 0.0
+        self.n_steps = 0
+        self.friction_force = 0.0
+        self.reaction = 0.0
+        self.normal_force = 0.0
+        self.clamp_count = 0
+        self.beta_removed = 0.0
+        m = self.mesh
+        self._minv = 1.0 / m.mass
+        self._dt_explicit = params.cfl_safety * m.critical_time_step()
+        r = params.rho_inf
+        self._am = (2.0 * r - 1.0) / (r + 1.0)
+        self._af = r / (r + 1.0)
+        self._gamma = 0.5 - self._am + self._af
+        self._beta_nm = 0.25 * (1.0 - self._am + self._af) ** 2
+
+    # ------------------------------------------------------------------ state
+    def get_state(self) -> dict:
+        """A deep copy of the full state; :meth:`set_state` restores the run bit-identically."""
+        st = {k: getattr(self, k).copy() for k in _ARRAYS}
+        st.update({k: copy.copy(getattr(self, k)) for k in _SCALARS})
+        return st
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`get_state` (copied, so the caller may keep using it)."""
+        n = self.mesh.n_nodes
+        for k in _ARRAYS:
+            arr = np.asarray(state[k])
+            if arr.shape != (n,):
+                raise ParameterError(f"state array {k} has shape {arr.shape}; this model has {n} nodes")
+            setattr(self, k, arr.astype(getattr(self, k).dtype, copy=True))
+        for k in _SCALARS:
+            setattr(self, k, type(getattr(self, k))(state[k]))
+        self._w = self._weights(self.U)
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, dt: float, inputs: dict) -> dict:
+        """Advance by ``dt`` seconds with inputs held constant; return the outputs.
+
+        Parameters
+        ----------
+        dt : float
+            Step length [s], > 0.
+        inputs : dict
+            ``normal_force`` [N] on one pad (>= 0) and ``grip_velocity`` [m/s].
+
+        Raises
+        ------
+        ParameterError
+            For a non-finite or negative input or step; the state is unchanged.
+        ConvergenceError
+            If the implicit solve fails even after step halving; the state is unchanged.
+        """
+        dt = check_finite("dt", dt)
+        if dt <= 0:
+            raise ParameterError(f"dt = {dt!r} s must be > 0")
+        fn = check_finite("normal_force", inputs["normal_force"])
+        if fn < 0:
+            raise ParameterError(f"normal_force = {fn!r} N must be >= 0")
+        vg = check_finite("grip_velocity", inputs["grip_velocity"])
+        saved = self.get_state()
+        try:
+            self._advance(dt, fn, vg)
+            if not (np.all(np.isfinite(self.U)) and math.isfinite(self.reaction)):
+                raise ConvergenceError(f"non-finite bar state at t = {self.time + dt:.9g} s")
+        except BaseException:
+            self.set_state(saved)
+            raise
+        self.time = saved["time"] + dt
+        self.n_steps += 1
+        return self.outputs()
+
+    def _advance(self, dt: float, fn: float, vg: float) -> None:
+        p, m = self.params, self.mesh
+        self.normal_force = fn
+        pressure = fn / (p.tool_length * p.tool_width)
+        h_max = p.window_courant * m.element_length / abs(vg) if vg != 0 else math.inf
+        n_int = max(1, math.ceil(dt / h_max - 1e-9))
+        h = dt / n_int
+        for _ in range(n_int):
+            self._interval(h, pressure, vg)
+
+    def _interval(self, h: float, pressure: float, vg: float) -> None:
+        p, m = self.params, self.mesh
+        tmax = np.zeros(m.n_nodes)
+        if pressure > 0:
+            # only nodes that can be under the pad during this interval need mu: the pad slides
+            # at most window_courant elements per interval
+            inside = np.flatnonzero(self._w > 0)
+            reach = math.ceil(p.window_courant) + 1
+            lo, hi = 0, m.n_nodes
+            if inside.size:
+                lo, hi = max(0, inside[0] - reach), min(m.n_nodes, inside[-1] + 1 + reach)
+            mu, clamped = self.law.mu(pressure, self.slip_rate[lo:hi], self.beta[lo:hi])
+            self.clamp_count += int(np.count_nonzero(clamped & (self._w[lo:hi] > 0)))
+            tmax[lo:hi] = mu * pressure
+        U0 = self.U.copy()
+        w0 = self._w
+        if p.integrator == "explicit":
+            n_sub = max(1, math.ceil(h / self._dt_explicit - 1e-9))
+            fric, reaction = kernels.explicit_kernel(
+                n_sub, h / n_sub, self.U, self.V, self.A, self.Up, self.contact, m.X, self._minv,
+                m.element_stiffness, p.shear_stiffness, p.tool_width, 0.5 * m.element_length,
+                m.window_lo, m.window_hi, tmax, vg,
+            )
+        else:
+            fric, reaction = self._implicit(h, w0 * m.element_length, tmax, vg, 0)
+        self.friction_force, self.reaction = float(fric), float(reaction)
+        dU = self.U - U0
+        self.slip_rate = np.abs(dU) / h
+        self._w = self._weights(self.U)
+        weight = 0.5 * (w0 + self._w)
+        self.beta, removed = transport_step(self.beta, dU, weight, pressure, p, m.element_length, self.beta_cap)
+        self.beta_removed += removed
+
+    def _implicit(self, h: float, ov: np.ndarray, tmax: np.ndarray, vg: float, depth: int):
+        m, p = self.mesh, self.params
+        it, fric, reaction = kernels.galpha_kernel(
+            h, self.U, self.V, self.A, self.Up, self.contact, self.fprev, ov, m.mass,
+            m.element_stiffness, p.shear_stiffness, p.tool_width, tmax, vg,
+            self._am, self._af, self._beta_nm, self._gamma, _NEWTON_MAX_ITER, _NEWTON_RTOL,
+        )
+        if it >= 0:
+            return fric, reaction
+        if depth >= _MAX_HALVINGS:
+            raise ConvergenceError(
+                f"implicit bar step did not converge (stick/slip set kept changing) at t = {self.time:.9g} s "
+                f"even with the step halved {depth} times to {h:.3g} s"
+            )
+        self._implicit(0.5 * h, ov, tmax, vg, depth + 1)
+        ov_mid = kernels.overlap_numpy(m.X, self.U, 0.5 * m.element_length, m.window_lo, m.window_hi)
+        return self._implicit(0.5 * h, ov_mid, tmax, vg, depth + 1)
+
+    def _weights(self, U: np.ndarray) -> np.ndarray:
+        m = self.mesh
+        return kernels.overlap_numpy(m.X, U, 0.5 * m.element_length, m.window_lo, m.window_hi) / m.element_length
+
+    # ------------------------------------------------------------------ outputs
+    def outputs(self) -> dict:
+        """The current outputs (see the module docstring)."""
+        p = self.params
+        w = self._w
+        wsum = float(w.sum())
+        fn = self.normal_force
+        return {
+            "pull_force": 2.0 * self.reaction,
+            "friction_force": self.friction_force,
+            "mu_mean": self.friction_force / fn if fn > 0 else 0.0,
+            "sliding_distance": float(w @ self.U) / wsum if wsum > 0 else 0.0,
+            "beta_mean": float(w @ self.beta) / wsum if wsum > 0 else 0.0,
+            "beta_max": float(self.beta.max()),
+            "contact_pressure": fn / (p.tool_length * p.tool_width),
+            "grip_position": float(self.U[-1]),
+            "table_clamp_count": float(self.clamp_count),
+        }
+
+    def fields(self) -> dict:
+        """Nodal fields for plots: X, U, beta, slip (plastic slip U_p), contact weight."""
+        return {
+            "X": self.mesh.X.copy(),
+            "U": self.U.copy(),
+            "beta": self.beta.copy(),
+            "slip": self.Up.copy(),
+            "contact": self._w.copy(),
+        }
+
+    @property
+    def explicit_time_step(self) -> float:
+        """The explicit scheme's step [s] (cfl_safety x the stability limit)."""
+        return self._dt_explicit

@@ -1,0 +1,232 @@
+"""The friction table format: mu(P, v, beta) on a rectilinear grid, in one ``.npz`` file.
+
+This module is the only owner of the format: the surrogate writes tables through
+:func:`write_table`, the strip-draw model and its FMU read them through :func:`read_table`.
+
+File layout (numpy ``.npz``, read with ``allow_pickle=False``):
+
+=============  =============================  ===============================================
+key            shape / type                   meaning
+=============  =============================  ===============================================
+``pressure``   (nP,) float64, increasing      contact pressure axis P [Pa]
+``velocity``   (nv,) float64, increasing      sliding-velocity axis v [m/s] (magnitude, >= 0)
+``beta``       (nb,) float64, increasing      debris area-fraction axis beta [-]
+``mu``         (nP, nv, nb) float64, >= 0     friction coefficient mu(P, v, beta) [-]
+``metadata``   0-d str (JSON object)          see below
+=============  =============================  ===============================================
+
+``metadata`` always holds ``format`` (``"tribocosim-friction-table"``), ``format_version``,
+``units`` (axis -> unit), ``provenance`` (``"closed_form"`` or ``"mesoscale"``),
+``beta_threshold`` (the cap of beta, Eq. 24) and ``content_hash``: the SHA-256 of the axes and
+values (float64, little-endian, C order) and of the canonical JSON of the other metadata. A file
+whose hash or format version does not match is refused.
+
+Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
+follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
+caller can report them) or ``"error"`` (raise :class:`~components.errors.TableDomainError`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from components.errors import ParameterError, TableDomainError, TableError
+
+FORMAT = "tribocosim-friction-table"
+FORMAT_VERSION = 1
+AXES = ("pressure", "velocity", "beta")
+UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1"}
+
+
+def _as_axis(name: str, values) -> np.ndarray:
+    a = np.ascontiguousarray(values, dtype=np.float64)
+    if a.ndim != 1 or a.size < 1:
+        raise ParameterError(f"table axis {name} must be a non-empty 1-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"table axis {name} has non-finite values")
+    if a.size > 1 and not np.all(np.diff(a) > 0):
+        raise ParameterError(f"table axis {name} must be strictly increasing")
+    if name != "pressure" and a[0] < 0:
+        raise ParameterError(f"table axis {name} starts at {a[0]!r}; it must be >= 0")
+    return a
+
+
+@dataclass(frozen=True)
+class FrictionTable:
+    """A friction table mu(P, v, beta) with its metadata.
+
+    Parameters
+    ----------
+    pressure, velocity, beta : array_like
+        Strictly increasing axes [Pa], [m/s], [-].
+    mu : array_like
+        Friction coefficients, shape ``(len(pressure), len(velocity), len(beta))``.
+    metadata : dict
+        Free-form JSON-serialisable metadata; ``beta_threshold`` is required.
+    """
+
+    pressure: np.ndarray
+    velocity: np.ndarray
+    beta: np.ndarray
+    mu: np.ndarray
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in AXES:
+            object.__setattr__(self, name, _as_axis(name, getattr(self, name)))
+        mu = np.ascontiguousarray(self.mu, dtype=np.float64)
+        shape = (self.pressure.size, self.velocity.size, self.beta.size)
+        if mu.shape != shape:
+            raise ParameterError(f"table mu has shape {mu.shape}; the axes need {shape}")
+        if not np.all(np.isfinite(mu)) or np.any(mu < 0):
+            raise ParameterError("table mu must be finite and >= 0 everywhere")
+        object.__setattr__(self, "mu", mu)
+        bt = self.metadata.get("beta_threshold")
+        if bt is None or not (0 < float(bt) <= 1):
+            raise ParameterError(f"table metadata beta_threshold = {bt!r}; a value in (0, 1] is required")
+        object.__setattr__(self, "metadata", dict(self.metadata))
+
+    @property
+    def beta_threshold(self) -> float:
+        """Cap of the debris fraction beta recorded with the table (Eq. 24)."""
+        return float(self.metadata["beta_threshold"])
+
+    @property
+    def provenance(self) -> str:
+        """Where the values come from (``closed_form`` or ``mesoscale``)."""
+        return str(self.metadata.get("provenance", "unknown"))
+
+    def content_hash(self) -> str:
+        """SHA-256 of the axes, the values and the metadata (without its ``content_hash``)."""
+        h = hashlib.sha256()
+        h.update(f"{FORMAT}:{FORMAT_VERSION}".encode())
+        for name in (*AXES, "mu"):
+            arr = np.ascontiguousarray(getattr(self, name), dtype="<f8")
+            h.update(name.encode())
+            h.update(str(arr.shape).encode())
+            h.update(arr.tobytes())
+        meta = {k: v for k, v in self.metadata.items() if k != "content_hash"}
+        h.update(json.dumps(meta, sort_keys=True, separators=(",", ":")).encode())
+        return h.hexdigest()
+
+    def interpolate(self, pressure, velocity, beta, policy: str = "clamp") -> tuple[np.ndarray, np.ndarray]:
+        """Trilinear interpolation of mu at the query points (broadcast together).
+
+        Parameters
+        ----------
+        pressure, velocity, beta : array_like
+            Query points [Pa], [m/s] (the magnitude is used), [-].
+        policy : {"clamp", "error"}
+            What to do with queries outside the axes.
+
+        Returns
+        -------
+        mu : ndarray
+            Interpolated friction coefficients.
+        clamped : ndarray of bool
+            Which queries were outside the axes (and clamped).
+
+        Raises
+        ------
+        TableDomainError
+            Under ``policy="error"``, naming the quantity, the value and the table's range.
+        """
+        if policy not in ("clamp", "error"):
+            raise ParameterError(f"table policy = {policy!r} is not allowed; choose clamp or error")
+        p, v, b = np.broadcast_arrays(
+            np.asarray(pressure, float), np.abs(np.asarray(velocity, float)), np.asarray(beta, float)
+        )
+        clamped = np.zeros(p.shape, dtype=bool)
+        idx, wts = [], []
+        for name, q in zip(AXES, (p, v, b)):
+            axis = getattr(self, name)
+            out = (q < axis[0]) | (q > axis[-1])
+            if policy == "error" and np.any(out):
+                bad = float(q[out].flat[0])
+                raise TableDomainError(
+                    f"friction table lookup {name} = {bad!r} {UNITS[name]} is outside the table's "
+                    f"range [{axis[0]:g}, {axis[-1]:g}] {UNITS[name]}"
+                )
+            clamped |= out
+            qc = np.clip(q, axis[0], axis[-1])
+            if axis.size == 1:
+                idx.append(np.zeros(q.shape, dtype=np.intp))
+                wts.append(np.zeros(q.shape))
+                continue
+            i = np.clip(np.searchsorted(axis, qc, side="right") - 1, 0, axis.size - 2)
+            t = (qc - axis[i]) / (axis[i + 1] - axis[i])
+            idx.append(i)
+            wts.append(t)
+        mu = np.zeros(p.shape)
+        (ip, iv, ib), (tp, tv, tb) = idx, wts
+        sp, sv, sb = (min(1, getattr(self, n).size - 1) for n in AXES)
+        for dp in (0, sp):
+            wp = tp if dp else 1.0 - tp
+            for dv in (0, sv):
+                wv = tv if dv else 1.0 - tv
+                for db in (0, sb):
+                    wb = tb if db else 1.0 - tb
+                    mu += wp * wv * wb * self.mu[ip + dp, iv + dv, ib + db]
+        return mu, clamped
+
+
+def write_table(path: str | os.PathLike, table: FrictionTable) -> str:
+    """Write ``table`` to ``path`` (``.npz``) atomically and return its content hash."""
+    meta = dict(table.metadata)
+    meta.update(format=FORMAT, format_version=FORMAT_VERSION, units=UNITS)
+    meta.pop("content_hash", None)
+    stamped = FrictionTable(table.pressure, table.velocity, table.beta, table.mu, meta)
+    digest = stamped.content_hash()
+    meta["content_hash"] = digest
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(
+        tmp,
+        pressure=stamped.pressure,
+        velocity=stamped.velocity,
+        beta=stamped.beta,
+        mu=stamped.mu,
+        metadata=np.array(json.dumps(meta, sort_keys=True)),
+    )
+    os.replace(tmp, path)
+    return digest
+
+
+def read_table(path: str | os.PathLike) -> FrictionTable:
+    """Read and verify a friction table written by :func:`write_table`.
+
+    Raises
+    ------
+    TableError
+        If the file is missing or malformed, its format version is not supported, or its
+        content hash does not match; the message names the path.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise TableError(f"friction table file not found: {path}")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: np.array(data[k]) for k in (*AXES, "mu", "metadata")}
+        meta = json.loads(str(arrays["metadata"]))
+        if not isinstance(meta, dict):
+            raise ValueError("metadata is not a JSON object")
+    except Exception as exc:  # noqa: BLE001 - any parse failure is a malformed file
+        raise TableError(f"friction table {path} is malformed: {exc}") from exc
+    if meta.get("format") != FORMAT or meta.get("format_version") != FORMAT_VERSION:
+        raise TableError(
+            f"friction table {path} has format {meta.get('format')!r} version "
+            f"{meta.get('format_version')!r}; this version reads {FORMAT!r} version {FORMAT_VERSION}"
+        )
+    try:
+        table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta)
+    except ParameterError as exc:
+        raise TableError(f"friction table {path} is malformed: {exc}") from exc
+    if table.content_hash() != meta.get("content_hash"):
+        raise TableError(f"friction table {path} fails its content hash check (modified or corrupt)")
+    return table

@@ -1,0 +1,173 @@
+"""Strip-draw model: physics against closed forms, conservation, convergence order, state, bad input."""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from components.errors import ParameterError
+from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
+
+PAD = 0.035
+P_N = 10e6
+F_N = P_N * PAD * PAD
+
+
+def _model(**kw):
+    p = StripDrawParameters(**kw)
+    return StripDrawModel(p, make_friction_law(p))
+
+
+def _ramp(t, v=0.08, t_ramp=0.01):
+    return v * min(1.0, t / t_ramp)
+
+
+def _drive(model, t_end, dt, fn=F_N, v=0.08, t_ramp=0.01):
+    """Step with the grip velocity ramped (a velocity step excites undamped elastic waves)."""
+    outs = []
+    for k in range(int(round(t_end / dt))):
+        outs.append(model.step(dt, {"normal_force": fn, "grip_velocity": _ramp((k + 0.5) * dt, v, t_ramp)}))
+    return outs
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+def test_steady_sliding_pull_force_is_two_mu_normal_force(integrator):
+    model = _model(friction_model="constant", mu_const=0.15, integrator=integrator, draw_length=0.01, n_elements=160)
+    outs = _drive(model, 0.03, 1e-3)
+    pull = np.array([o["pull_force"] for o in outs[-10:]])
+    assert_allclose(pull.mean(), 2 * 0.15 * F_N, rtol=5e-3, err_msg=f"{integrator}: pull_force vs 2 mu F_N")
+    assert_allclose(outs[-1]["mu_mean"], 0.15, rtol=5e-3)
+
+
+def test_explicit_velocity_step_travels_at_the_bar_wave_speed():
+    model = _model(integrator="explicit", n_elements=400, draw_length=0.1, friction_model="constant")
+    m = model.mesh
+    c = model.params.wave_speed
+    probe = m.n_nodes - 1 - 200  # 200 elements from the grip
+    distance = m.X[-1] - m.X[probe]
+    dt = 0.25 * distance / c / 40
+    arrival = None
+    for k in range(1, 200):
+        model.step(dt, {"normal_force": 0.0, "grip_velocity": 0.08})
+        if model.V[probe] >= 0.04:  # half the velocity step: the front has arrived
+            t1, v1 = k * dt, model.V[probe]
+            arrival = t1 - dt * (v1 - 0.04) / (v1 - v_prev)
+            break
+        v_prev = model.V[probe]
+    assert arrival is not None
+    assert_allclose(arrival, distance / c, rtol=0.02, err_msg="wave front arrival time")
+
+
+def test_debris_without_transport_grows_with_sliding_under_the_pad_then_saturates():
+    """zeta = 0, constant P and mu: beta_max = K P min(s, L_T) / (H h_p) (Eq. 37 integrated)."""
+    kw = dict(friction_model="constant", zeta=0.0, draw_length=0.06, n_elements=660, archard_k=1e-4, hardness=0.8e9)
+    model = _model(**kw, beta_threshold=1.0)
+    le = model.mesh.element_length
+    rate = 1e-4 * P_N / (0.8e9 * 0.5e-6)
+    checked = 0
+    for o in _drive(model, 0.7, 5e-3):
+        s = o["sliding_distance"]
+        if abs(s - PAD) > 3 * le and s > 5 * le:
+            assert_allclose(o["beta_max"], rate * min(s, PAD), rtol=0.01, err_msg=f"s = {s}")
+            checked += 1
+    assert checked > 100
+    cap = 0.05
+    capped = _model(**kw, beta_threshold=cap)
+    for o in _drive(capped, 0.7, 5e-3):
+        s = o["sliding_distance"]
+        if rate * s < cap * 0.99 and s > 5 * le:
+            assert_allclose(o["beta_max"], rate * s, rtol=0.01)
+        elif rate * s > cap * 1.01:
+            assert o["beta_max"] == cap, "beta is capped at exactly beta_threshold"
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+def test_transport_conserves_debris_without_source(integrator):
+    p = StripDrawParameters(friction_model="constant", zeta=0.7, archard_k=0.0, integrator=integrator, draw_length=0.01, n_elements=120)
+    rng = np.random.default_rng(7)
+    model = StripDrawModel(p, make_friction_law(p), beta_field=rng.uniform(0.0, 0.2, p.n_elements + 1))
+    total0 = model.beta.sum()
+    before = model.beta.copy()
+    _drive(model, 0.04 if integrator == "implicit" else 0.02, 1e-3)
+    assert not np.array_equal(model.beta, before), "debris must have moved"
+    assert_allclose(model.beta.sum(), total0, rtol=1e-12, err_msg="total debris")
+    assert model.beta.min() >= 0.0
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+def test_grip_at_rest_gives_no_slip_and_no_debris(integrator):
+    model = _model(integrator=integrator, friction_model="closed_form", draw_length=0.01, n_elements=100)
+    for _ in range(5):
+        out = model.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.0})
+    assert np.all(model.U == 0.0) and np.all(model.Up == 0.0)
+    assert out["beta_max"] == 0.0 and out["pull_force"] == 0.0 and out["friction_force"] == 0.0
+
+
+def test_implicit_integrator_is_second_order_in_time():
+    """Generalized-alpha is second order: error(dt) ~ dt^2 on a smooth dynamic problem.
+
+    The grip moves smoothly (velocity sin^2 pulse sampled at mid-step, so its displacement is
+    second-order accurate); no contact, so the problem is linear; reference: dt / 64.
+    """
+    t_end = 4e-4
+    period = 2e-4
+
+    def run(dt):
+        model = _model(integrator="implicit", n_elements=40, draw_length=0.01, rho_inf=0.5, friction_model="constant")
+        for k in range(int(round(t_end / dt))):
+            t = (k + 0.5) * dt
+            v = 0.08 * math.sin(math.pi * min(t, period) / period) ** 2
+            model.step(dt, {"normal_force": 0.0, "grip_velocity": v})
+        return model.U.copy()
+
+    dts = np.array([4e-6, 2e-6, 1e-6, 5e-7])
+    ref = run(dts[-1] / 16)
+    errors = np.array([np.max(np.abs(run(dt) - ref)) for dt in dts])
+    order = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert abs(order - 2.0) < 0.15, f"observed order {order:.3f}, errors {errors}"
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+def test_state_restore_replays_bit_identically(integrator):
+    model = _model(integrator=integrator, friction_model="closed_form", draw_length=0.01, n_elements=80)
+    _drive(model, 0.012, 1e-3)
+    state = model.get_state()
+    first = _drive(model, 0.005, 1e-3)
+    fields_first = model.get_state()
+    model.set_state(state)
+    second = _drive(model, 0.005, 1e-3)
+    assert first == second
+    for k, v in model.get_state().items():
+        assert np.array_equal(v, fields_first[k]), k
+
+
+@pytest.mark.parametrize(
+    "inputs, name",
+    [
+        ({"normal_force": float("nan"), "grip_velocity": 0.08}, "normal_force"),
+        ({"normal_force": -1.0, "grip_velocity": 0.08}, "normal_force"),
+        ({"normal_force": float("inf"), "grip_velocity": 0.08}, "normal_force"),
+        ({"normal_force": 100.0, "grip_velocity": float("nan")}, "grip_velocity"),
+        ({"normal_force": 100.0, "grip_velocity": float("-inf")}, "grip_velocity"),
+    ],
+)
+def test_bad_inputs_are_rejected_and_leave_the_state_unchanged(inputs, name):
+    model = _model(draw_length=0.01, n_elements=50, friction_model="constant")
+    _drive(model, 0.003, 1e-3)
+    before = model.get_state()
+    with pytest.raises(ParameterError, match=name):
+        model.step(1e-3, inputs)
+    for k, v in model.get_state().items():
+        assert np.array_equal(v, before[k]), k
+    with pytest.raises(ParameterError, match="dt"):
+        model.step(-1e-3, {"normal_force": 1.0, "grip_velocity": 0.0})
+
+
+def test_bad_parameters_name_the_parameter_and_the_range():
+    with pytest.raises(ParameterError, match=r"density = -5.0 .* allowed: \(1, 100000\]"):
+        StripDrawParameters(density=-5.0)
+    with pytest.raises(ParameterError, match="zeta = nan"):
+        StripDrawParameters(zeta=float("nan"))
+    with pytest.raises(ParameterError, match="friction_model"):
+        StripDrawParameters(friction_model="coulomb")

@@ -1,0 +1,96 @@
+"""Friction table format: round trip with hash, refusal of tampered files, exact interpolation."""
+
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from components.errors import TableDomainError, TableError
+from components.stripdraw.friction import closed_form_table
+from components.stripdraw.parameters import StripDrawParameters
+from components.stripdraw.table import FrictionTable, read_table, write_table
+
+
+def _trilinear_table():
+    P = np.array([1e6, 5e6, 2e7])
+    v = np.array([0.0, 0.1, 1.0, 10.0])
+    b = np.array([0.0, 0.1, 0.3])
+    PP, VV, BB = np.meshgrid(P, v, b, indexing="ij")
+    # a trilinear function of (P, v, beta) is reproduced exactly by trilinear interpolation
+    mu = 0.2 + 1e-9 * PP - 0.003 * VV - 0.1 * BB + 1e-10 * PP * BB
+    return FrictionTable(P, v, b, mu, {"beta_threshold": 0.3, "provenance": "test"})
+
+
+def test_round_trip_keeps_values_and_checks_hash(tmp_path):
+    table = _trilinear_table()
+    path = tmp_path / "t.npz"
+    digest = write_table(path, table)
+    back = read_table(path)
+    for name in ("pressure", "velocity", "beta", "mu"):
+        assert_allclose(getattr(back, name), getattr(table, name), rtol=0, atol=0, err_msg=name)
+    assert back.metadata["content_hash"] == digest
+    assert back.content_hash() == digest
+    assert back.beta_threshold == 0.3
+
+
+def test_tampered_table_is_refused(tmp_path):
+    path = tmp_path / "t.npz"
+    write_table(path, _trilinear_table())
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays["mu"] = arrays["mu"] * 1.01
+    np.savez(path, **arrays)
+    with pytest.raises(TableError, match="hash"):
+        read_table(path)
+
+
+def test_wrong_format_version_and_missing_file_are_refused(tmp_path):
+    path = tmp_path / "t.npz"
+    write_table(path, _trilinear_table())
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["metadata"]))
+    meta["format_version"] = 99
+    arrays["metadata"] = np.array(json.dumps(meta))
+    np.savez(path, **arrays)
+    with pytest.raises(TableError, match="version"):
+        read_table(path)
+    with pytest.raises(TableError, match="not found"):
+        read_table(tmp_path / "missing.npz")
+    (tmp_path / "garbage.npz").write_bytes(b"not a zip file")
+    with pytest.raises(TableError, match="malformed"):
+        read_table(tmp_path / "garbage.npz")
+
+
+def test_interpolation_is_exact_on_nodes_and_for_trilinear_functions():
+    table = _trilinear_table()
+    PP, VV, BB = np.meshgrid(table.pressure, table.velocity, table.beta, indexing="ij")
+    mu, clamped = table.interpolate(PP, VV, BB)
+    assert_allclose(mu, table.mu, rtol=0, atol=0, err_msg="grid nodes must be reproduced exactly")
+    assert not clamped.any()
+    rng = np.random.default_rng(3)
+    p = rng.uniform(1e6, 2e7, 200)
+    v = rng.uniform(0, 10, 200)
+    b = rng.uniform(0, 0.3, 200)
+    exact = 0.2 + 1e-9 * p - 0.003 * v - 0.1 * b + 1e-10 * p * b
+    assert_allclose(table.interpolate(p, v, b)[0], exact, rtol=1e-12, err_msg="trilinear function")
+    # negative velocity: the magnitude is used
+    assert_allclose(table.interpolate(p, -v, b)[0], exact, rtol=1e-12)
+
+
+def test_out_of_range_policy():
+    table = _trilinear_table()
+    mu, clamped = table.interpolate([5e5, 5e6, 5e6], [0.1, 20.0, 0.1], [0.1, 0.1, 0.1], policy="clamp")
+    assert clamped.tolist() == [True, True, False]
+    edge, _ = table.interpolate([1e6, 5e6], [0.1, 10.0], [0.1, 0.1])
+    assert_allclose(mu[:2], edge, err_msg="clamped lookups take the edge value")
+    with pytest.raises(TableDomainError, match=r"pressure = 500000.0 Pa is outside .*\[1e\+06, 2e\+07\]"):
+        table.interpolate([5e5], [0.1], [0.1], policy="error")
+
+
+def test_closed_form_table_says_where_it_comes_from():
+    table = closed_form_table(StripDrawParameters())
+    assert table.provenance == "closed_form"
+    assert table.velocity[0] == 0.0 and table.beta[-1] == pytest.approx(table.beta_threshold)
+    assert np.all(table.mu >= 0)
