@@ -39,7 +39,7 @@ except ImportError:  # pragma: no cover - exercised in the numpy-only FMU enviro
     USE_NUMBA = False
 
 
-def _jit(func):
+def jit(func):
     """The one jit policy: nopython, cached; identity without numba."""
     if numba is None:
         return func
@@ -390,11 +390,11 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
     return it, float(np.sum(T * wT * ov)), float(f[N])
 
 
-_thomas_k = _jit(_thomas_loop)
-_galpha_eval_k = _jit(_galpha_eval)
+_thomas_k = jit(_thomas_loop)
+_galpha_eval_k = jit(_galpha_eval)
 if USE_NUMBA:
-    explicit_kernel = _jit(_explicit_loop)
-    galpha_kernel = _jit(_galpha_loop)
+    explicit_kernel = jit(_explicit_loop)
+    galpha_kernel = jit(_galpha_loop)
     thomas = _thomas_k
 else:  # pragma: no cover - numpy-only environment
     explicit_kernel = explicit_numpy
@@ -402,5 +402,5 @@ else:  # pragma: no cover - numpy-only environment
     thomas = thomas_numpy
 
 #: the loop forms, compiled or not, for tests that compare them with the NumPy references
-explicit_loop = _jit(_explicit_loop)
-galpha_loop = _jit(_galpha_loop)
+explicit_loop = jit(_explicit_loop)
+galpha_loop = jit(_galpha_loop)

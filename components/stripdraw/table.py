@@ -139,32 +139,27 @@ class FrictionTable:
         """
         if policy not in ("clamp", "error"):
             raise ParameterError(f"table policy = {policy!r} is not allowed; choose clamp or error")
-        p, v, b = np.broadcast_arrays(
-            np.asarray(pressure, float), np.abs(np.asarray(velocity, float)), np.asarray(beta, float)
-        )
-        clamped = np.zeros(p.shape, dtype=bool)
-        idx, wts = [], []
-        for name, q in zip(AXES, (p, v, b)):
-            axis = getattr(self, name)
-            out = (q < axis[0]) | (q > axis[-1])
-            if policy == "error" and np.any(out):
-                bad = float(q[out].flat[0])
-                raise TableDomainError(
-                    f"friction table lookup {name} = {bad!r} {UNITS[name]} is outside the table's "
-                    f"range [{axis[0]:g}, {axis[-1]:g}] {UNITS[name]}"
-                )
-            clamped |= out
-            qc = np.clip(q, axis[0], axis[-1])
-            if axis.size == 1:
-                idx.append(np.zeros(q.shape, dtype=np.intp))
-                wts.append(np.zeros(q.shape))
-                continue
-            i = np.clip(np.searchsorted(axis, qc, side="right") - 1, 0, axis.size - 2)
-            t = (qc - axis[i]) / (axis[i + 1] - axis[i])
-            idx.append(i)
-            wts.append(t)
+        p = np.asarray(pressure, float)
+        v = np.abs(np.asarray(velocity, float))
+        b = np.asarray(beta, float)
+        if p.ndim == 0:
+            # one pressure for all queries (the strip-draw case): interpolate in P once, then
+            # bilinearly in (v, beta)
+            ip, tp, outp = self._locate("pressure", p, policy)
+            ip, tp = int(ip), float(tp)
+            plane = self.mu[ip] if self.pressure.size == 1 else (1.0 - tp) * self.mu[ip] + tp * self.mu[ip + 1]
+            v, b = np.broadcast_arrays(v, b)
+            iv, tv, outv = self._locate("velocity", v, policy)
+            ib, tb, outb = self._locate("beta", b, policy)
+            sv = min(1, self.velocity.size - 1)
+            sb = min(1, self.beta.size - 1)
+            mu = ((1.0 - tv) * ((1.0 - tb) * plane[iv, ib] + tb * plane[iv, ib + sb])
+                  + tv * ((1.0 - tb) * plane[iv + sv, ib] + tb * plane[iv + sv, ib + sb]))
+            return mu, outv | outb | bool(outp)
+        p, v, b = np.broadcast_arrays(p, v, b)
+        located = [self._locate(name, q, policy) for name, q in zip(AXES, (p, v, b))]
+        (ip, tp, op), (iv, tv, ov), (ib, tb, ob) = located
         mu = np.zeros(p.shape)
-        (ip, iv, ib), (tp, tv, tb) = idx, wts
         sp, sv, sb = (min(1, getattr(self, n).size - 1) for n in AXES)
         for dp in (0, sp):
             wp = tp if dp else 1.0 - tp
@@ -173,7 +168,24 @@ class FrictionTable:
                 for db in (0, sb):
                     wb = tb if db else 1.0 - tb
                     mu += wp * wv * wb * self.mu[ip + dp, iv + dv, ib + db]
-        return mu, clamped
+        return mu, op | ov | ob
+
+    def _locate(self, name: str, q: np.ndarray, policy: str):
+        """Cell index, local coordinate in [0, 1] and out-of-range mask of queries on one axis."""
+        axis = getattr(self, name)
+        out = (q < axis[0]) | (q > axis[-1])
+        if policy == "error" and np.any(out):
+            bad = float(np.asarray(q)[out].flat[0]) if np.ndim(q) else float(q)
+            raise TableDomainError(
+                f"friction table lookup {name} = {bad!r} {UNITS[name]} is outside the table's "
+                f"range [{axis[0]:g}, {axis[-1]:g}] {UNITS[name]}"
+            )
+        qc = np.minimum(np.maximum(q, axis[0]), axis[-1])
+        if axis.size == 1:
+            return np.zeros(np.shape(q), dtype=np.intp), np.zeros(np.shape(q)), out
+        i = np.minimum(np.searchsorted(axis, qc, side="right") - 1, axis.size - 2)
+        t = (qc - axis[i]) / (axis[i + 1] - axis[i])
+        return i, t, out
 
 
 def write_table(path: str | os.PathLike, table: FrictionTable) -> str:

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from components.stripdraw.kernels import thomas
+from components.stripdraw.kernels import USE_NUMBA, jit, thomas
 
 
 def archard_source(dU, weight, pressure, archard_k, hardness, particle_thickness):
@@ -38,7 +38,7 @@ def archard_source(dU, weight, pressure, archard_k, hardness, particle_thickness
     return archard_k * pressure * np.abs(dU) * weight / (hardness * particle_thickness)
 
 
-def advect_implicit(beta, dU, weight, zeta, element_length):
+def advect_implicit_numpy(beta, dU, weight, zeta, element_length):
     """Implicit upwind advection of ``beta`` with the tool-carried flux (Eq. 13-14).
 
     Parameters
@@ -82,6 +82,44 @@ def advect_implicit(beta, dU, weight, zeta, element_length):
     sub[1:] -= neg
     out[lo:hi] = thomas(sub, diag, sup, b.copy())
     return out
+
+
+def _advect_loop(beta, dU, weight, zeta, element_length):
+    """Loop form of :func:`advect_implicit_numpy` (compiled with numba; same result)."""
+    out = beta.copy()
+    n_all = beta.size
+    lo = -1
+    hi = -1
+    for i in range(n_all):
+        if weight[i] > 0.0:
+            if lo < 0:
+                lo = i
+            hi = i + 1
+    if zeta == 0.0 or lo < 0 or hi - lo < 2:
+        return out
+    n = hi - lo
+    diag = np.ones(n)
+    sub = np.zeros(n)
+    sup = np.zeros(n)
+    for k in range(n - 1):
+        a, b = lo + k, lo + k + 1
+        if weight[a] > 0.0 and weight[b] > 0.0:
+            c = zeta * 0.5 * (dU[a] + dU[b]) / element_length
+            if c > 0.0:
+                diag[k + 1] += c
+                sup[k] -= c
+            else:
+                diag[k] -= c
+                sub[k + 1] += c
+    x = _thomas_for_advect(sub, diag, sup, beta[lo:hi].copy())
+    for k in range(n):
+        out[lo + k] = x[k]
+    return out
+
+
+_thomas_for_advect = thomas
+advect_loop = jit(_advect_loop)
+advect_implicit = advect_loop if USE_NUMBA else advect_implicit_numpy
 
 
 def transport_step(beta, dU, weight, pressure, params, element_length, beta_cap):

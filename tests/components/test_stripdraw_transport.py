@@ -3,7 +3,7 @@
 import numpy as np
 from numpy.testing import assert_allclose
 
-from components.stripdraw.transport import advect_implicit, archard_source
+from components.stripdraw.transport import advect_implicit, advect_implicit_numpy, advect_loop, archard_source
 
 
 def test_advection_moves_debris_backwards_at_zeta_times_slip_and_conserves_it():
@@ -37,3 +37,14 @@ def test_no_flux_across_the_pad_edges_and_large_steps_stay_bounded():
 def test_archard_source_is_eq_37():
     src = archard_source(np.array([2e-3, -2e-3, 1e-3]), np.array([1.0, 1.0, 0.5]), 1e7, 1e-4, 0.8e9, 0.5e-6)
     assert_allclose(src, 1e-4 * 1e7 / (0.8e9 * 0.5e-6) * np.array([2e-3, 2e-3, 0.5e-3]))
+
+
+def test_compiled_advection_matches_numpy_reference():
+    rng = np.random.default_rng(5)
+    n = 80
+    weight = np.zeros(n)
+    weight[20:60] = rng.uniform(0.2, 1.0, 40)
+    beta = rng.uniform(0, 0.3, n)
+    dU = rng.normal(0.0, 1e-3, n)  # slip in both directions: both upwind branches
+    assert_allclose(advect_loop(beta, dU, weight, 0.4, 1e-3), advect_implicit_numpy(beta, dU, weight, 0.4, 1e-3),
+                    rtol=1e-13, atol=1e-16)
