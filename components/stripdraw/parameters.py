@@ -15,26 +15,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from components.errors import ParameterError, check_range
+from components.params import param, validate_fields
 
 FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
 TABLE_POLICIES = ("clamp", "error")
 
 
-def _p(default, unit: str, description: str, low=None, high=None, low_inclusive=True, **extra):
-    """A dataclass field with its unit, description and allowed range in the metadata."""
-    meta = {
-        "unit": unit,
-        "description": description,
-        "low": low,
-        "high": high,
-        "low_inclusive": low_inclusive,
-    }
-    meta.update(extra)
-    return field(default=default, metadata=meta)
+_p = param
 
 
 @dataclass(frozen=True)
@@ -94,29 +84,7 @@ class StripDrawParameters:
     )
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            meta = f.metadata
-            if "choices" in meta:
-                if value not in meta["choices"]:
-                    raise ParameterError(
-                        f"{f.name} = {value!r} is not allowed; choose one of {', '.join(meta['choices'])}"
-                    )
-                continue
-            if meta.get("integer"):
-                if isinstance(value, bool) or int(value) != value:
-                    raise ParameterError(f"{f.name} = {value!r} must be an integer")
-                object.__setattr__(self, f.name, int(value))
-            elif isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ParameterError(f"{f.name} = {value!r} must be a number")
-            check_range(
-                f.name,
-                value,
-                meta["low"],
-                meta["high"],
-                low_inclusive=meta["low_inclusive"],
-                unit=meta["unit"] if meta["unit"] not in ("", "1") else "",
-            )
+        validate_fields(self)
 
     # --- derived quantities ---------------------------------------------------------------
     @property
