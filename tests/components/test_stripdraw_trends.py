@@ -1,0 +1,46 @@
+"""The paper's trends from the strip-draw model alone (Sec. 7, Fig. 2, 17-19), at cheap settings.
+
+mu_bar falls with pressure and with pad length; more debris sticking to the tool (zeta) and more
+wear (K) lower it, with saturation at large K (the cap beta_thres); a second pass over the same
+strip, starting from the debris the first pass left, gives a lower mu_bar.
+"""
+
+import numpy as np
+
+from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
+
+BASE = dict(friction_model="closed_form", draw_length=0.06, n_elements=120, window_courant=2.0)
+
+
+def mu_bar(pressure=10e6, beta_field=None, **kw):
+    """Mean of mu over the last 20 % of a 60 mm draw; also returns the final beta field."""
+    p = StripDrawParameters(**{**BASE, **kw})
+    model = StripDrawModel(p, make_friction_law(p), beta_field=beta_field)
+    fn = pressure * p.tool_length * p.tool_width
+    mus = []
+    n = int(round(p.draw_length / 0.08 / 0.01))
+    for k in range(n):
+        mus.append(model.step(0.01, {"normal_force": fn, "grip_velocity": 0.08})["mu_mean"])
+    return float(np.mean(mus[int(0.8 * n):])), model.beta.copy()
+
+
+def test_mu_bar_falls_with_pressure_and_pad_length():
+    by_pressure = [mu_bar(P)[0] for P in (2e6, 10e6, 30e6)]
+    assert by_pressure[0] > by_pressure[1] > by_pressure[2]
+    by_pad = [mu_bar(tool_length=L)[0] for L in (0.035, 0.07)]
+    assert by_pad[0] > by_pad[1]
+
+
+def test_zeta_and_archard_k_lower_mu_bar_with_saturation_at_large_k():
+    by_zeta = [mu_bar(zeta=z)[0] for z in (0.0, 0.5, 1.0)]
+    assert by_zeta[0] > by_zeta[1] > by_zeta[2]
+    by_k = [mu_bar(30e6, archard_k=k)[0] for k in (1e-5, 1e-4, 1e-2, 1e-1)]
+    assert by_k[0] > by_k[1] > by_k[2]
+    # beyond saturation beta sits at the cap under the whole pad and mu_bar stops changing
+    assert abs(by_k[3] - by_k[2]) < 0.02 * by_k[2]
+
+
+def test_second_pass_has_lower_friction():
+    first, beta = mu_bar()
+    second, _ = mu_bar(beta_field=beta)
+    assert second < first
