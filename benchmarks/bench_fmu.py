@@ -1,0 +1,198 @@
+"""Cost of the StripDraw FMU against calling the strip-draw model directly.
+
+Measures, for the default parameters (table friction, implicit integrator, 450 elements):
+
+1. overhead per doStep: ``setReal(inputs) + doStep + getReal(outputs)`` through fmpy's
+   ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
+2. the default 140 mm draw at V0 = 0.08 m/s (1.75 s) with a 1 ms communication step:
+   ``fmpy.simulate_fmu`` on the extracted FMU against a plain loop over ``model.step`` that
+   records the same outputs. Target: FMU <= 1.2 x model.
+3. cold start in a fresh process (``--cold``): ``fmpy simulate StripDraw.fmu`` from the command
+   line (extraction, imports, numba compilation of the bundled kernels) against a fresh process
+   that imports the model and runs the same draw.
+
+In this process the FMU reuses the already imported ``components`` package (see
+components/fmus/StripDraw.py), so (1) and (2) measure the FMI layer, not a second compilation.
+
+    python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold]
+
+Without ``--fmu`` the FMU is built into a temporary folder first. Times are wall-clock minima
+over ``--repeat`` runs (the machine may be shared: report the load with the figures).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+F10 = 10e6 * 0.035 * 0.035  # N: 10 MPa on the 35 x 35 mm pad (the FMU's default input)
+V0 = 0.08  # m/s
+DT = 1e-3  # s, communication step
+N_DRAW = 1750  # steps: 140 mm at 0.08 m/s
+
+
+def _model():
+    from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+
+    params = StripDrawParameters()
+    return StripDrawModel(params, make_friction_law(params, read_table(PROJECT_ROOT / "models" / "friction_table.npz")))
+
+
+def _slave(unzipped: str, md):
+    from fmpy.fmi2 import FMU2Slave
+
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="StripDraw", instanceName="bench")
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    return slave
+
+
+def per_step(unzipped: str, md, n_warm: int, n: int, repeat: int) -> tuple[float, float]:
+    """Seconds per step: (model.step, FMU set+doStep+get), minimum over ``repeat`` runs."""
+    from components.stripdraw.model import OUTPUT_NAMES
+
+    names = {v.name: v.valueReference for v in md.modelVariables}
+    real_vrs = [names[n_] for n_ in OUTPUT_NAMES if n_ != "table_clamp_count"]
+    in_vrs = [names["normal_force"], names["grip_velocity"]]
+    t_model, t_fmu = [], []
+    for _ in range(repeat):
+        model = _model()
+        inputs = {"normal_force": F10, "grip_velocity": V0}
+        for _k in range(n_warm):
+            model.step(DT, inputs)
+        t0 = time.perf_counter()
+        for _k in range(n):
+            model.step(DT, inputs)
+        t_model.append((time.perf_counter() - t0) / n)
+
+        slave = _slave(unzipped, md)
+        for k in range(n_warm):
+            slave.setReal(in_vrs, [F10, V0])
+            slave.doStep(k * DT, DT)
+        t0 = time.perf_counter()
+        for k in range(n_warm, n_warm + n):
+            slave.setReal(in_vrs, [F10, V0])
+            slave.doStep(k * DT, DT)
+            slave.getReal(real_vrs)
+            slave.getInteger([names["table_clamp_count"]])
+        t_fmu.append((time.perf_counter() - t0) / n)
+        slave.terminate()
+        slave.freeInstance()
+    return min(t_model), min(t_fmu)
+
+
+def full_draw(unzipped: str, md, repeat: int) -> tuple[float, float, float]:
+    """Wall time of the default draw: (model loop, fmpy.simulate_fmu), and the largest relative
+    difference of pull_force between the two."""
+    from fmpy import simulate_fmu
+
+    from components.stripdraw.model import OUTPUT_NAMES
+
+    t_model, t_fmu = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        model = _model()
+        rec = np.empty((N_DRAW + 1, len(OUTPUT_NAMES) + 1))
+        rec[0] = 0.0
+        inputs = {"normal_force": F10, "grip_velocity": V0}
+        for k in range(N_DRAW):
+            out = model.step(DT, inputs)
+            rec[k + 1, 0] = (k + 1) * DT
+            rec[k + 1, 1:] = [out[n] for n in OUTPUT_NAMES]
+        t_model.append(time.perf_counter() - t0)
+
+        t0 = time.perf_counter()
+        res = simulate_fmu(
+            unzipped, model_description=md, stop_time=N_DRAW * DT, output_interval=DT, output=list(OUTPUT_NAMES)
+        )
+        t_fmu.append(time.perf_counter() - t0)
+    j = 1 + OUTPUT_NAMES.index("pull_force")
+    diff = np.max(np.abs(res["pull_force"][1:] - rec[1:, j]) / np.abs(rec[1:, j]))
+    return min(t_model), min(t_fmu), float(diff)
+
+
+_COLD_MODEL = """
+import time; t0 = time.perf_counter()
+from pathlib import Path
+from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+p = StripDrawParameters()
+m = StripDrawModel(p, make_friction_law(p, read_table(Path({root!r}) / "models" / "friction_table.npz")))
+for k in range({n}):
+    m.step({dt}, {{"normal_force": {f}, "grip_velocity": {v}}})
+"""
+
+
+def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
+    """Fresh-process wall times: (model script, `fmpy simulate` first run, second run on a
+    pre-extracted FMU whose numba cache is warm)."""
+    fmpy_exe = str(Path(sys.executable).with_name("fmpy"))
+    script = _COLD_MODEL.format(root=str(PROJECT_ROOT), n=N_DRAW, dt=DT, f=F10, v=V0)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", script], check=True, cwd=PROJECT_ROOT)
+    t_model = time.perf_counter() - t0
+    out = tmp / "cold.csv"
+    t0 = time.perf_counter()
+    subprocess.run([fmpy_exe, "simulate", str(fmu), "--output-file", str(out)], check=True, cwd=tmp)
+    t_fmu = time.perf_counter() - t0
+    from fmpy import extract
+
+    unzipped = str(extract(str(fmu), str(tmp / "cold_unzipped")))
+    runner = f"from fmpy import simulate_fmu; simulate_fmu({unzipped!r})"
+    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)  # fills the numba cache
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)
+    t_warm_cache = time.perf_counter() - t0
+    return t_model, t_fmu, t_warm_cache
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--fmu", type=Path, help="a built StripDraw.fmu (default: build one)")
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--steps", type=int, default=1000, help="steps timed for the per-step figure")
+    parser.add_argument("--cold", action="store_true", help="also time fresh processes")
+    args = parser.parse_args(argv)
+    from fmpy import extract, read_model_description
+
+    with tempfile.TemporaryDirectory(prefix="bench-fmu-") as tmp:
+        tmp = Path(tmp)
+        fmu = args.fmu
+        if fmu is None:
+            from components.fmus.build import build_fmus
+
+            fmu = build_fmus(tmp / "fmus")["StripDraw"]
+        md = read_model_description(str(fmu))
+        unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
+        _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # compile/load the kernels
+
+        load = os.getloadavg()
+        print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
+              f"{os.cpu_count()} CPUs")  # fmt: skip
+        tm, tf = per_step(unzipped, md, n_warm=200, n=args.steps, repeat=args.repeat)
+        print(f"per step     model.step {tm * 1e6:8.1f} us   FMU set+doStep+get {tf * 1e6:8.1f} us   "
+              f"overhead {(tf - tm) * 1e6:6.1f} us ({tf / tm:.2f}x)")  # fmt: skip
+        dm, df, diff = full_draw(unzipped, md, repeat=args.repeat)
+        verdict = "meets" if df <= 1.2 * dm else "MISSES"
+        print(f"140 mm draw  model loop {dm:8.3f} s    fmpy.simulate_fmu  {df:8.3f} s    "
+              f"ratio {df / dm:.2f} ({verdict} the 1.2x target); max rel. diff of pull_force {diff:.1e}")  # fmt: skip
+        if args.cold:
+            cm, cf, cw = cold(Path(fmu), tmp)
+            print(f"fresh process  model script {cm:6.2f} s   `fmpy simulate` {cf:6.2f} s   "
+                  f"simulate_fmu on a pre-extracted FMU with warm numba cache {cw:6.2f} s")  # fmt: skip
+        load = os.getloadavg()
+        print(f"load average after: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,227 @@
+"""The StripDraw FMU outside this project's environment and through a second FMI importer.
+
+- a throwaway virtual environment with only numpy and fmpy (pip, from the package registry):
+  the FMU must run on what it bundles, without numba, scipy, pyfftw, matplotlib or this project;
+- libcosimpy (OSP's libcosim, a C++ co-simulation master) as an importer independent of fmpy.
+
+Both run in subprocesses: a separate interpreter is the point of the first, and a crash of a
+native importer must not take the test session down.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from numpy.testing import assert_allclose, assert_array_equal
+
+from components.stripdraw.friction import make_friction_law
+from components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
+from components.stripdraw.parameters import StripDrawParameters
+from components.stripdraw.table import read_table
+
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
+TABLE = PROJECT_ROOT / "models" / "friction_table.npz"
+REAL_OUTPUTS = OUTPUT_NAMES[:-1]  # table_clamp_count is an Integer output
+FORBIDDEN = ("numba", "scipy", "pyfftw", "matplotlib", "surrogate", "cosim")
+F10 = 10e6 * 0.035 * 0.035
+
+CASES = [
+    # (parameters, [(dt, normal_force, grip_velocity), ...])
+    ({}, [(1e-3, F10 * (1 + 0.1 * (k % 3)), 0.08 * min(1.0, (k + 1) / 10)) for k in range(40)]),
+    ({"integrator": "explicit", "n_elements": 60}, [(2e-4, F10, 0.08 * min(1.0, (k + 1) / 5)) for k in range(10)]),
+]
+
+_VENV_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu, cases, real_outputs = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3])
+    md = read_model_description(fmu)
+    unzipped = extract(fmu)
+    var = {v.name: v for v in md.modelVariables}
+    results = []
+    for i, (params, schedule) in enumerate(cases):
+        s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="StripDraw", instanceName=f"i{i}")
+        s.instantiate(loggingOn=True)
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for name, value in params.items():
+            vr = [var[name].valueReference]
+            {"Real": s.setReal, "Integer": s.setInteger, "String": s.setString}[var[name].type](vr, [value])
+        s.exitInitializationMode()
+        rows, t = [], 0.0
+        for dt, f, v in schedule:
+            s.setReal([var["normal_force"].valueReference, var["grip_velocity"].valueReference], [f, v])
+            s.doStep(t, dt)
+            t += dt
+            reals = s.getReal([var[n].valueReference for n in real_outputs])
+            rows.append(list(reals) + [float(s.getInteger([var["table_clamp_count"].valueReference])[0])])
+        results.append(rows)
+        s.terminate()
+        s.freeInstance()
+    import components.stripdraw.kernels as kernels
+    print(json.dumps({
+        "results": results,
+        "unzipped": str(unzipped),
+        "components": sys.modules["components"].__file__,
+        "use_numba": kernels.USE_NUMBA,
+        "modules": sorted(sys.modules),
+    }))
+    """
+)
+
+
+def _model_rows(parameters, schedule) -> np.ndarray:
+    params = StripDrawParameters(**parameters)
+    table = read_table(TABLE) if params.friction_model == "table" else None
+    model = StripDrawModel(params, make_friction_law(params, table))
+    rows = []
+    for dt, f, v in schedule:
+        out = model.step(dt, {"normal_force": f, "grip_velocity": v})
+        rows.append([out[n] for n in OUTPUT_NAMES])
+    return np.array(rows)
+
+
+def _clean_env() -> dict:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "VIRTUAL_ENV", "NUMBA"))}
+    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
+    return env
+
+
+def test_fmu_runs_in_a_venv_with_only_numpy_and_fmpy(stripdraw_fmu_file, tmp_path):
+    venv = tmp_path / "venv"
+    env = _clean_env()
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env, timeout=300)
+    python = venv / "bin" / "python"
+    pip = subprocess.run(
+        [str(python), "-m", "pip", "install", "--quiet", "numpy", "fmpy"],
+        env=env, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert pip.returncode == 0, f"pip install numpy fmpy failed (the registry must be reachable):\n{pip.stderr}"
+    script = tmp_path / "run_fmu.py"
+    script.write_text(_VENV_SCRIPT)
+    proc = subprocess.run(
+        [str(python), str(script), str(stripdraw_fmu_file), json.dumps(CASES), json.dumps(list(REAL_OUTPUTS))],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    # the model code came from the FMU's resources, and nothing heavy was imported
+    assert report["components"].startswith(report["unzipped"]), report["components"]
+    assert report["use_numba"] is False
+    heavy = [m for m in report["modules"] if m.split(".")[0] in FORBIDDEN]
+    assert heavy == [], heavy
+    for (params, schedule), rows in zip(CASES, report["results"]):
+        got, want = np.array(rows), _model_rows(params, schedule)
+        for j, name in enumerate(OUTPUT_NAMES):
+            # NumPy fallback kernels in the venv vs numba here: same arithmetic up to rounding
+            assert_allclose(got[:, j], want[:, j], rtol=1e-12, atol=1e-15, err_msg=f"{name} {params}")
+
+
+_COSIM_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.WARNING)
+    fmu, step_ns, inputs, real_outputs = sys.argv[1], int(sys.argv[2]), json.loads(sys.argv[3]), json.loads(sys.argv[4])
+    ex = CosimExecution.from_step_size(step_size=step_ns)  # integer nanoseconds
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=fmu, instance_name="stripdraw"))
+    vr = {v.name.decode(): v.reference for v in ex.slave_variables(idx)}
+    observer = CosimObserver.create_last_value()
+    ex.add_observer(observer=observer)
+    override = CosimManipulator.create_override()
+    ex.add_manipulator(manipulator=override)
+    rows = []
+    for f, v in inputs:
+        override.slave_real_values(idx, [vr["normal_force"], vr["grip_velocity"]], [f, v])
+        assert ex.step(1), "libcosim step failed"
+        reals = observer.last_real_values(idx, [vr[n] for n in real_outputs])
+        count = observer.last_integer_values(idx, [vr["table_clamp_count"]])[0]
+        rows.append(list(reals) + [float(count)])
+    print(json.dumps(rows))
+    """
+)
+
+
+def test_libcosimpy_gives_the_same_outputs_as_fmpy(stripdraw_fmu_file, stripdraw_fmu_instance, tmp_path):
+    params, schedule = CASES[0]
+    step_ns = 1_000_000
+    script = tmp_path / "run_libcosim.py"
+    script.write_text(_COSIM_SCRIPT)
+    inputs = [(f, v) for _, f, v in schedule]
+    proc = subprocess.run(
+        [sys.executable, str(script), str(stripdraw_fmu_file), str(step_ns), json.dumps(inputs), json.dumps(list(REAL_OUTPUTS))],
+        cwd=tmp_path, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert proc.returncode == 0, f"libcosimpy run failed (exit {proc.returncode}):\n{proc.stdout}\n{proc.stderr}"
+    got = np.array(json.loads(proc.stdout.strip().splitlines()[-1]))
+    # libcosim keeps time in integer nanoseconds and passes doStep the difference of the two
+    # time points in seconds, t_(k+1)/1e9 - t_k/1e9, which is not always exactly 1e-3
+    steps = [((k + 1) * step_ns) / 1e9 - (k * step_ns) / 1e9 for k in range(len(inputs))]
+    assert any(dt != 1e-3 for dt in steps), "the replay below would not test the step sizes"
+    inst = stripdraw_fmu_instance("fmpy", params).initialize()
+    want = np.array([inst.step(dt, f, v) for dt, (f, v) in zip(steps, inputs)])
+    assert got.shape == want.shape
+    for j, name in enumerate(OUTPUT_NAMES):
+        assert_array_equal(got[:, j], want[:, j], err_msg=f"{name}: libcosim differs from fmpy")
+
+
+_EXIT_SCRIPT = textwrap.dedent(
+    """
+    import sys
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    unzipped = sys.argv[1]
+    md = read_model_description(unzipped + "/modelDescription.xml")
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="StripDraw", instanceName="x")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    s.doStep(0.0, 1e-3)
+    s.terminate()
+    s.freeInstance()
+    """
+)
+
+
+def test_python_host_exits_cleanly_after_freeing_the_fmu(stripdraw_fmu_unzipped, tmp_path):
+    """Regression test of components/fmus/exitguard.py: without the guard, a fresh Python
+    process that ran the FMU (bundled model, numba and scipy loaded) and freed it aborted at
+    exit in about one run of three ("corrupted double-linked list")."""
+    script = tmp_path / "run_and_exit.py"
+    script.write_text(_EXIT_SCRIPT)
+    codes = []
+    for _ in range(8):
+        proc = subprocess.run(
+            [sys.executable, str(script), str(stripdraw_fmu_unzipped)],
+            cwd=tmp_path, capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+        codes.append((proc.returncode, proc.stderr[-300:]))
+    assert all(code == 0 for code, _ in codes), codes
+
+
+def test_exit_guard_registers_only_for_a_real_fmu_binary(tmp_path, stripdraw_fmu_unzipped):
+    from components.fmus import exitguard
+
+    assert not exitguard.guard_pythonfmu_exit(None, "StripDraw")
+    assert not exitguard.guard_pythonfmu_exit(str(tmp_path), "StripDraw"), "no binary at build time"
+    resources = str(Path(stripdraw_fmu_unzipped) / "resources")
+    if sys.platform.startswith("linux"):
+        assert exitguard.guard_pythonfmu_exit(resources, "StripDraw")
+        n = len(exitguard._guarded)
+        assert exitguard.guard_pythonfmu_exit(resources, "StripDraw") and len(exitguard._guarded) == n
