@@ -320,8 +320,8 @@ def thomas_numpy(sub, diag, sup, rhs):
 
 
 def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, am, af, beta, gamma, max_iter, rtol):
-    """Reference of the generalized-alpha kernel: vectorised Pi and residual, dense tangent and
-    ``numpy.linalg.solve``; the same Newton/line-search logic and convergence test."""
+    """Reference of the generalized-alpha kernel (and its fallback without numba): vectorised Pi,
+    residual and tangent, Thomas solve; the same Newton/line-search logic and convergence test."""
     n = U.size
     N = n - 1
     Upn = Up.copy()
@@ -332,12 +332,6 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
     u = U + dt * vg
     u0 = u.copy()
     fscale = ke * abs(dt * vg) + 1e-300 + np.sum(tmax * wT * ov)
-    K = np.zeros((n, n))
-    i = np.arange(N)
-    K[i, i] += ke
-    K[i + 1, i + 1] += ke
-    K[i, i + 1] -= ke
-    K[i + 1, i] -= ke
     lin = am * m[:N] * A[:N] + af * fprev[:N]
     inside = ov > 0
 
@@ -348,9 +342,11 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         T = np.where(slipping, np.sign(trial) * tmax, trial) * inside
         state = np.where(inside, np.where(slipping, np.where(trial > 0, 2, 3), 1), 0).astype(np.int8)
         phi = np.where(slipping, tmax * np.abs(x) - 0.5 * tmax**2 / ks, 0.5 * ks * x**2) * inside
-        f = K @ u + T * wT * ov
-        r = cm * m[:N] * (u[:N] - upred[:N]) + lin + (1 - af) * f[:N]
         d = np.diff(u)
+        f = T * wT * ov
+        f[:-1] -= ke * d
+        f[1:] += ke * d
+        r = cm * m[:N] * (u[:N] - upred[:N]) + lin + (1 - af) * f[:N]
         pot = (np.sum(0.5 * cm * m[:N] * (u[:N] - upred[:N]) ** 2 + lin * (u[:N] - u0[:N]))
                + (1 - af) * (0.5 * ke * np.sum(d * d) + np.sum((wT * ov * phi)[:N])))
         return pot, r, T, state, f
@@ -361,8 +357,9 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         if it >= max_iter:
             return -1, 0.0, 0.0
         used = state
-        J = cm * np.diag(m[:N]) + (1 - af) * (K[:N, :N] + np.diag(ks * wT * ov[:N] * (state[:N] == 1)))
-        du = np.linalg.solve(J, -r)
+        diag = cm * m[:N] + (1 - af) * (ke * np.where(np.arange(N) > 0, 2.0, 1.0) + ks * wT * ov[:N] * (state[:N] == 1))
+        off = np.full(N, -(1 - af) * ke)
+        du = thomas_numpy(off, diag, off, -r)
         slope = float(r @ du)
         alpha = 1.0
         while True:
@@ -398,7 +395,7 @@ if USE_NUMBA:
     thomas = _thomas_k
 else:  # pragma: no cover - numpy-only environment
     explicit_kernel = explicit_numpy
-    galpha_kernel = _galpha_loop
+    galpha_kernel = galpha_numpy
     thomas = thomas_numpy
 
 #: the loop forms, compiled or not, for tests that compare them with the NumPy references
