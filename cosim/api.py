@@ -1,0 +1,320 @@
+"""Python API: ``cosim.run(scene) -> Result``, and the assembly of a master from a scene.
+
+:func:`build` turns a validated :class:`~cosim.validate.Plan` into a ready
+:class:`~cosim.master.Master` (FMUs extracted and wrapped in :class:`~cosim.slave.FmpySlave`,
+links, algorithm, step controller, recorder); :func:`run` loads a scene, runs it, and writes
+the CSV and the metadata JSON. The command line (``tribocosim run``) is a thin layer over
+:func:`run`.
+"""
+
+from __future__ import annotations
+
+import atexit
+import datetime as _dt
+import hashlib
+import json
+import shutil
+import tempfile
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
+from cosim.graph import gauss_seidel_order
+from cosim.master import Master
+from cosim.recorder import Progress, Recorder
+from cosim.slave import FmpySlave
+from cosim.stepcontrol import EnergyControl, FixedStep, StepDoubling
+from cosim.system import CoupledSystem, LinkSpec
+from cosim.timegrid import TimeGrid
+from cosim.validate import Plan, load_scene
+
+
+@dataclass
+class Result:
+    """The outcome of a run.
+
+    Attributes
+    ----------
+    time : ndarray
+        Times of the recorded communication points [s].
+    columns : dict of str -> ndarray
+        Recorded variables by 'instance.variable', in the scene's order.
+    metadata : dict
+        Scene, settings, steps taken and rejected, wall times (the content of the JSON file).
+    csv_path, metadata_path : Path or None
+        Files written, if any.
+    """
+
+    time: np.ndarray
+    columns: dict[str, np.ndarray]
+    metadata: dict[str, Any]
+    csv_path: Path | None = None
+    metadata_path: Path | None = None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name == "time":
+            return self.time
+        return self.columns[name]
+
+
+@dataclass
+class Build:
+    """A master assembled from a plan, plus what is needed to clean up afterwards."""
+
+    master: Master
+    plan: Plan
+    names: list[str]
+    parameters: list[dict]
+    notes: list[str] = field(default_factory=list)
+
+    def close(self) -> None:
+        """Terminate and free every slave."""
+        for s in self.master.system.slaves:
+            try:
+                s.terminate()
+            except Exception:  # keep freeing the others
+                pass
+
+
+#: FMU file (path, size, mtime) -> folder it is extracted to, for the life of the process
+_EXTRACTED: dict[tuple[str, int, int], Path] = {}
+
+
+def _cleanup_extracted() -> None:
+    for d in _EXTRACTED.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+atexit.register(_cleanup_extracted)
+
+
+def extracted_fmu(path: Path) -> Path:
+    """The folder ``path`` is extracted to, extracting it once per process (sweeps reuse it).
+
+    The key includes the file's size and modification time, so a rebuilt FMU is extracted
+    again. (pythonfmu FMUs import their Python class by module name, so a rebuilt pythonfmu
+    FMU's code is only picked up by a new process.)
+    """
+    from fmpy import extract
+
+    st = Path(path).stat()
+    key = (str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+    d = _EXTRACTED.get(key)
+    if d is None or not d.is_dir():
+        d = Path(tempfile.mkdtemp(prefix=f"tribocosim-{Path(path).stem}-"))
+        extract(str(path), str(d))
+        _EXTRACTED[key] = d
+    return d
+
+
+def build(plan: Plan, slave_factory=None) -> Build:
+    """Assemble a master for a validated scene (FMUs extracted, not yet instantiated).
+
+    Parameters
+    ----------
+    plan : Plan
+        From :func:`cosim.validate.load_scene`.
+    slave_factory : callable, optional
+        ``(name, FmuModel, unzip_dir) -> Slave``; default :class:`FmpySlave`.
+    """
+    scene = plan.scene
+    names = list(plan.fmus)
+    index = {n: i for i, n in enumerate(names)}
+    slaves = []
+    for n in names:
+        model = plan.fmus[n]
+        factory = slave_factory or (lambda name, mdl, unzip: FmpySlave(name, unzip, mdl.md))
+        slaves.append(factory(n, model, extracted_fmu(model.path)))
+
+    links = []
+    for l in plan.links:
+        tmodel = plan.fmus[l.target.instance]
+        der = tmodel.derivative_inputs.get(l.target.variable, {})
+        links.append(LinkSpec(index[l.source.instance], l.source_vr, l.source_type, index[l.target.instance],
+                              l.target_vr, l.target_type, l.continuous, f"{l.source} -> {l.target}",
+                              (der.get(1), der.get(2))))
+    m = len(links)
+    structure = np.ones((m, m), dtype=bool)
+    for k, lk in enumerate(plan.links):
+        deps = plan.fmus[lk.source.instance].dependencies.get(lk.source.variable)
+        for j, lj in enumerate(plan.links):
+            same = lj.target.instance == lk.source.instance
+            structure[k, j] = same and (deps is None or lj.target.variable in deps)
+    feed = [plan.fmus[n].feedthrough for n in names]
+
+    ms = scene.master
+    notes = list(plan.notes)
+    order = ms.extrapolation
+    mean_hold = [str(l.target) for l, spec in zip(plan.links, links) if spec.continuous and spec.derivative_vrs[0] is None
+                 and not plan.fmus[l.target.instance].can_interpolate_inputs]
+    p = order + 1
+    if order >= 1 and mean_hold:
+        notes.append(f"inputs {', '.join(mean_hold)} cannot take input derivatives (no canInterpolateInputs, no der() inputs): "
+                     "they hold the step mean of the extrapolation polynomial, which caps the order at 2")
+        p = min(p, 2)
+    system = CoupledSystem(slaves, links, order, feed, structure)
+    propagate = ms.output_update == "propagate"
+    pairs = [(sp.source, sp.target) for sp in links]
+    gs = gauss_seidel_order(len(names), pairs, [index[o] for o in ms.order] if ms.order else None)
+    if ms.algorithm == "jacobi":
+        algorithm = Jacobi(order, propagate)
+    elif ms.algorithm == "gauss-seidel":
+        algorithm = GaussSeidel(order, gs.order, propagate)
+        for cycle in gs.cycles:
+            back = [links[k].label for k in sorted(gs.backward) if links[k].target in cycle]
+            notes.append(f"Gauss-Seidel: instances {' -> '.join(names[i] for i in cycle)} form a cycle; stepping order "
+                         f"{', '.join(names[i] for i in gs.order)}, so {', '.join(back)} {'is' if len(back) == 1 else 'are'} "
+                         "extrapolated")
+    else:
+        algorithm = IterativeCoupling(order, ms.iterative)
+
+    ex = scene.experiment
+    if ms.adaptive is None:
+        grid = TimeGrid.fixed(ex.start, ex.stop, ex.step)
+        controller = FixedStep(grid.macro_ticks)
+    else:
+        grid = TimeGrid.variable(ex.start, ex.stop, ms.adaptive.min_step)
+        if ms.adaptive.estimator == "step-doubling":
+            controller = StepDoubling(ms.adaptive, grid.even_ticks(ex.step), p)
+        else:
+            controller = EnergyControl(ms.adaptive, grid.ticks(ex.step), plan.bonds)
+    recorder = Recorder(slaves, index, plan.recorded, system)
+    master = Master(system, algorithm, controller, grid, recorder, names)
+    master.gauss_seidel = gs
+    master.accuracy_order = p
+    params = []
+    for n in names:
+        model = plan.fmus[n]
+        d = {}
+        for pname, value in scene.fmus[n].parameters.items():
+            var = model.variables[pname]
+            d[var.valueReference] = (var.type, value)
+        params.append(d)
+    return Build(master, plan, names, params, notes)
+
+
+def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, overrides: dict | None = None,
+        progress: bool = False, write: bool = True, slave_factory=None) -> Result:
+    """Load, validate and run a scene.
+
+    Parameters
+    ----------
+    scene : str, Path or Plan
+        A scene file (or an already validated plan).
+    out_dir : str or Path, optional
+        Folder for the output files; default: the scene file's folder. ``[output] file`` is
+        relative to it; the metadata JSON goes next to the CSV (same stem, ``.json``).
+    overrides : dict, optional
+        Dotted scene keys to override, e.g. ``{"master.extrapolation": 2}``.
+    progress : bool
+        Show a progress bar on stderr for runs longer than two seconds.
+    write : bool
+        Write the CSV and JSON files (False: only return the result).
+    slave_factory : callable, optional
+        Replace the fmpy slaves (tests).
+
+    Returns
+    -------
+    Result
+    """
+    plan = scene if isinstance(scene, Plan) else load_scene(scene, overrides)
+    b = build(plan, slave_factory)
+    m = b.master
+    ex = plan.scene.experiment
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    bar = Progress(ex.start, ex.stop) if progress else None
+    t0 = time.perf_counter()
+    try:
+        m.initialize(ex.start, ex.stop, b.parameters)
+        m.run(bar)
+    finally:
+        if bar is not None:
+            bar.close()
+        total = time.perf_counter() - t0
+        fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
+        calls = {n: dict(getattr(s, "calls", {})) for n, s in zip(b.names, m.system.slaves)}
+        b.close()
+    meta = _metadata(b, started, total, fmu_times, calls)
+    result = Result(m.recorder.time, m.recorder.columns(), meta)
+    if write:
+        out = Path(out_dir) if out_dir is not None else plan.scene.folder
+        out.mkdir(parents=True, exist_ok=True)
+        if plan.scene.output.file:
+            result.csv_path = m.recorder.write_csv(out / plan.scene.output.file)
+            result.metadata_path = result.csv_path.with_suffix(".json")
+        else:
+            result.metadata_path = out / f"{plan.scene.path.stem}.run.json"
+        meta["outputs"]["csv"] = str(result.csv_path) if result.csv_path else None
+        result.metadata_path.write_text(json.dumps(meta, indent=2, default=_json_default), encoding="utf-8")
+    return result
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict) -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+
+    def ver(pkg):
+        try:
+            return version(pkg)
+        except PackageNotFoundError:
+            return None
+
+    plan, m = b.plan, b.master
+    scene = plan.scene
+    sysm = m.system
+    st = m.stats
+    gs = m.gauss_seidel
+    ms = scene.master
+    return {
+        "scene": str(scene.path),
+        "scene_sha256": hashlib.sha256(scene.path.read_bytes()).hexdigest(),
+        "started": started,
+        "versions": {"tribocosim": ver("tribocosim"), "fmpy": ver("fmpy")},
+        "experiment": asdict(scene.experiment),
+        "master": {
+            "algorithm": ms.algorithm,
+            "extrapolation": ms.extrapolation,
+            "output_update": ms.output_update,
+            "step_control": m.controller.name,
+            "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
+            "iterative": asdict(ms.iterative) if ms.algorithm == "iterative" else None,
+            "order_of_accuracy": m.accuracy_order,
+            "time_tick": m.grid.tick,
+        },
+        "fmus": {n: {"path": str(plan.fmus[n].path), "can_roll_back": plan.fmus[n].can_roll_back,
+                     "feedthrough": sysm.feedthrough[i]} for i, n in enumerate(b.names)},
+        "gauss_seidel": {
+            "order": [b.names[i] for i in gs.order],
+            "extrapolated_links": [sysm.links[k].label for k in sorted(gs.backward)],
+            "cycles": [[b.names[i] for i in c] for c in gs.cycles],
+        },
+        "algebraic_loops": [{"links": [sysm.links[k].label for k in lp.links], "contraction": lp.contraction}
+                            for lp in sysm.loops],
+        "input_hold_mean": sorted(sysm.hold_mean),
+        "steps": {
+            "accepted": st.steps,
+            "rejected_error": st.rejected_error,
+            "rejected_failure": st.rejected_failures,
+            "iterations": st.iterations,
+            "observed_contraction": st.observed_contraction if st.observed_contraction == st.observed_contraction else None,
+            "min_step": st.min_step if st.steps else None,
+            "max_step": st.max_step if st.steps else None,
+        },
+        "fmi_calls": calls,
+        "wall_time": {"total": total, "loop": st.wall_time, "fmus": fmu_times,
+                      "master": total - sum(fmu_times.values())},
+        "warnings": plan.warnings + m.warnings,
+        "notes": b.notes,
+        "outputs": {"columns": ["time", *m.recorder.names]},
+    }

@@ -1,0 +1,88 @@
+"""``tribocosim run SCENE [--out DIR] [--plot]``: run a co-simulation scene.
+
+A thin layer over :func:`cosim.api.run`: validates the scene (all problems at once), runs it
+with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
+JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables.
+
+Exit codes: 0 success, 1 the run failed (FMU error, divergence), 2 the scene has problems.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from components.errors import SceneError, TribocosimError
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="tribocosim run", description="Run a co-simulation scene (TOML).")
+    p.add_argument("scene", type=Path, help="scene file (TOML)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output folder (default: the scene's folder); [output] file is written there")
+    p.add_argument("--plot", action="store_true", help="also write a PNG plot of the recorded variables")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key, e.g. --set master.extrapolation=1 (TOML value syntax)")
+    return p
+
+
+def _overrides(items: list[str]) -> dict:
+    import tomllib
+
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise SceneError(f"--set {item!r}: expected KEY=VALUE")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``tribocosim run``."""
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
+    from cosim.api import run
+
+    try:
+        result = run(args.scene, args.out, overrides=_overrides(args.set), progress=not args.quiet)
+    except SceneError as exc:
+        print(f"tribocosim run: {exc}", file=sys.stderr)
+        return 2
+    except TribocosimError as exc:
+        print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
+        return 1
+    meta = result.metadata
+    if args.plot and result.csv_path is not None:
+        from cosim.plotting import plot_result
+
+        png = plot_result(result, result.csv_path.with_suffix(".png"))
+        if not args.quiet:
+            print(f"plot:     {png}")
+    if not args.quiet:
+        st, wt = meta["steps"], meta["wall_time"]
+        for w in meta["warnings"]:
+            print(f"warning:  {w}", file=sys.stderr)
+        for n in meta["notes"]:
+            print(f"note:     {n}", file=sys.stderr)
+        print(f"scene:    {meta['scene']}")
+        print(f"master:   {meta['master']['algorithm']}, extrapolation {meta['master']['extrapolation']}, "
+              f"{meta['master']['step_control']} step")
+        print(f"steps:    {st['accepted']} accepted, {st['rejected_error']} rejected (error), "
+              f"{st['rejected_failure']} rejected (discard / non-finite)")
+        fmus = ", ".join(f"{n} {t:.3f} s" for n, t in wt["fmus"].items())
+        print(f"time:     {wt['total']:.3f} s (master {wt['master']:.3f} s; {fmus})")
+        if result.csv_path is not None:
+            print(f"results:  {result.csv_path}")
+        print(f"metadata: {result.metadata_path}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,469 @@
+"""Scene files (TOML): the schema, its dataclasses and the first validation pass.
+
+A scene names the FMUs of a co-simulation, their parameters, the connections, the master
+settings and the outputs to record; nothing else is loaded, computed or written. Example::
+
+    [experiment]
+    start = 0.0
+    stop = 1.75
+    step = 1e-3                 # communication step; the initial one when adaptive
+
+    [master]
+    algorithm = "jacobi"        # jacobi | gauss-seidel | iterative
+    extrapolation = 0           # input extrapolation (interpolation for iterative) order: 0, 1, 2
+    # output_update = "propagate"   # or "none": outputs read right after doStep (as libcosim)
+    # order = ["press", "strip"]    # Gauss-Seidel order (default: from the connection graph)
+
+    # [master.adaptive]
+    # tolerance = 1e-4
+    # min_step = 1e-7
+    # max_step = 1e-2
+    # estimator = "step-doubling"   # or "energy" (needs [[power_bonds]])
+
+    # [master.iterative]
+    # method = "quasi-newton"       # or "fixed-point"
+    # relaxation = 1.0              # fixed-point relaxation factor, or "aitken"
+    # tolerance = 1e-8
+    # max_iterations = 50
+
+    [fmus.strip]
+    path = "StripDraw.fmu"      # relative to the scene file, or: component = "stripdraw"
+    parameters = { tool_length = 0.035 }
+    # feedthrough = false       # outputs never depend directly on inputs (default: from the
+                                # model description, else probed numerically at the start)
+
+    [[connections]]
+    from = "press.normal_force"
+    to = "strip.normal_force"
+
+    # [[power_bonds]]           # effort/flow pairs, for the energy estimator
+    # effort = ["press.force", "strip.force"]
+    # flow = ["strip.velocity", "press.velocity"]
+
+    [output]
+    file = "results.csv"        # columns: time, then "instance.variable" in the order given
+    variables = ["strip.pull_force", "strip.mu_mean"]
+
+:func:`parse_scene` checks the structure (keys, types, ranges) and returns every problem it
+found together with whatever could be parsed; :mod:`cosim.validate` then checks the scene
+against the FMUs' model descriptions and raises one :class:`~components.errors.SceneError`
+listing all problems, each with the file and the key.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+ALGORITHMS = ("jacobi", "gauss-seidel", "iterative")
+ESTIMATORS = ("step-doubling", "energy")
+ITERATION_METHODS = ("fixed-point", "quasi-newton")
+OUTPUT_UPDATES = ("propagate", "none")
+
+_TOP_KEYS = ("experiment", "master", "fmus", "connections", "power_bonds", "output")
+_EXPERIMENT_KEYS = ("start", "stop", "step")
+_MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive", "iterative")
+_ADAPTIVE_KEYS = ("tolerance", "absolute_tolerance", "min_step", "max_step", "estimator", "safety")
+_ITERATIVE_KEYS = ("method", "relaxation", "tolerance", "max_iterations", "reuse")
+_FMU_KEYS = ("path", "component", "parameters", "feedthrough")
+_CONNECTION_KEYS = ("from", "to")
+_BOND_KEYS = ("effort", "flow")
+_OUTPUT_KEYS = ("file", "variables")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """[experiment]: start and stop time [s], communication step [s] (initial step if adaptive)."""
+
+    start: float = 0.0
+    stop: float = 1.0
+    step: float = 1e-3
+
+
+@dataclass(frozen=True)
+class Adaptive:
+    """[master.adaptive]: error-controlled variable step.
+
+    ``tolerance`` is relative, ``absolute_tolerance`` (default: ``tolerance``) absolute.
+    Step doubling accepts a step H whose local error estimates e_i of the coupling signals y_i
+    satisfy max_i |e_i| / (H (absolute_tolerance + tolerance |y_i|)) <= 1 (error per unit
+    step: the tolerance is per second of simulated time); the energy estimator normalises the
+    energy residual of each power bond by absolute_tolerance + tolerance * energy level.
+    """
+
+    tolerance: float = 1e-4
+    absolute_tolerance: float | None = None
+    min_step: float = 1e-7
+    max_step: float = 1e-2
+    estimator: str = "step-doubling"
+    safety: float = 0.9
+
+    @property
+    def atol(self) -> float:
+        return self.tolerance if self.absolute_tolerance is None else self.absolute_tolerance
+
+
+@dataclass(frozen=True)
+class Iterative:
+    """[master.iterative]: the fixed-point / quasi-Newton iteration of a macro step."""
+
+    method: str = "quasi-newton"
+    relaxation: float | str = 1.0
+    tolerance: float = 1e-8
+    max_iterations: int = 50
+    reuse: int = 2
+
+
+@dataclass(frozen=True)
+class MasterSettings:
+    """[master]."""
+
+    algorithm: str = "jacobi"
+    extrapolation: int = 0
+    output_update: str = "propagate"
+    order: tuple[str, ...] | None = None
+    adaptive: Adaptive | None = None
+    iterative: Iterative = field(default_factory=Iterative)
+
+
+@dataclass(frozen=True)
+class FmuSpec:
+    """[fmus.NAME]: where the FMU comes from and the parameters to set before initialization."""
+
+    name: str
+    path: Path | None = None
+    component: str | None = None
+    parameters: dict[str, Any] = field(default_factory=dict)
+    feedthrough: bool | None = None
+
+
+@dataclass(frozen=True)
+class VariableRef:
+    """``instance.variable`` (the instance name is everything before the first dot)."""
+
+    instance: str
+    variable: str
+
+    def __str__(self) -> str:
+        return f"{self.instance}.{self.variable}"
+
+
+@dataclass(frozen=True)
+class Connection:
+    """[[connections]]: an output feeding an input."""
+
+    source: VariableRef
+    target: VariableRef
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class PowerBond:
+    """[[power_bonds]]: an effort connection and the opposite flow connection."""
+
+    effort: Connection
+    flow: Connection
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """[output]: the CSV file and the recorded variables (in column order)."""
+
+    file: str | None = None
+    variables: tuple[VariableRef, ...] = ()
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A parsed scene."""
+
+    path: Path
+    experiment: Experiment
+    master: MasterSettings
+    fmus: dict[str, FmuSpec]
+    connections: tuple[Connection, ...]
+    power_bonds: tuple[PowerBond, ...]
+    output: OutputSpec
+
+    @property
+    def folder(self) -> Path:
+        return self.path.parent
+
+
+def known(names, given: str | None = None, limit: int = 40) -> str:
+    """'did you mean ...; known: a, b, c' for an unknown name."""
+    names = sorted(names)
+    hint = ""
+    if given is not None:
+        close = difflib.get_close_matches(given, names, n=3, cutoff=0.6)
+        if close:
+            hint = "did you mean " + " or ".join(repr(c) for c in close) + "? "
+    shown = ", ".join(names[:limit]) + (f", ... ({len(names)} in all)" if len(names) > limit else "")
+    return f"{hint}known: {shown or '(none)'}"
+
+
+class _Problems:
+    """Collects scene problems as 'file: key: message'."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.items: list[str] = []
+
+    def add(self, key: str, message: str) -> None:
+        self.items.append(f"{self.path}: {key}: {message}")
+
+    def unknown_keys(self, table: dict, allowed, key: str) -> None:
+        for k in table:
+            if k not in allowed:
+                self.add(f"{key}.{k}" if key else k, f"unknown key; {known(allowed, k)}")
+
+
+def _number(p: _Problems, table: dict, name: str, key: str, default, *, positive=False, integer=False):
+    if name not in table:
+        return default
+    v = table[name]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
+        p.add(f"{key}.{name}", f"must be {'an integer' if integer else 'a number'}, got {v!r}")
+        return default
+    if not math.isfinite(v) or (positive and v <= 0):
+        p.add(f"{key}.{name}", f"must be finite{' and > 0' if positive else ''}, got {v!r}")
+        return default
+    return v
+
+
+def _choice(p: _Problems, table: dict, name: str, key: str, choices, default):
+    if name not in table:
+        return default
+    v = table[name]
+    if v not in choices:
+        p.add(f"{key}.{name}", f"{v!r} is not allowed; allowed: {', '.join(map(str, choices))}")
+        return default
+    return v
+
+
+def _table(p: _Problems, doc: dict, name: str, key: str) -> dict:
+    v = doc.get(name, {})
+    if not isinstance(v, dict):
+        p.add(key, f"must be a table, got {type(v).__name__}")
+        return {}
+    return v
+
+
+def parse_ref(p: _Problems, text: Any, key: str) -> VariableRef | None:
+    """Parse 'instance.variable' (reports a problem and returns None if malformed)."""
+    if not isinstance(text, str) or "." not in text or text.startswith(".") or text.endswith("."):
+        p.add(key, f"must be 'instance.variable', got {text!r}")
+        return None
+    inst, var = text.split(".", 1)
+    return VariableRef(inst, var)
+
+
+def apply_overrides(doc: dict, overrides: dict[str, Any]) -> dict:
+    """Set dotted keys (``"master.extrapolation"``) in a parsed TOML document, in place."""
+    for dotted, value in overrides.items():
+        node = doc
+        *parents, last = dotted.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[last] = value
+    return doc
+
+
+def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tuple[Scene | None, list[str]]:
+    """Read and structurally check a scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML scene file.
+    overrides : dict, optional
+        Dotted keys to set before checking, e.g. ``{"experiment.step": 1e-2}`` (for sweeps).
+
+    Returns
+    -------
+    scene : Scene or None
+        What could be parsed (None if the file is unreadable or not TOML).
+    problems : list of str
+        Every structural problem, as 'file: key: message'.
+    """
+    path = Path(path).resolve()
+    p = _Problems(path)
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        p.add("(file)", "scene file not found")
+        return None, p.items
+    except (OSError, UnicodeDecodeError) as exc:
+        p.add("(file)", f"cannot read: {exc}")
+        return None, p.items
+    except tomllib.TOMLDecodeError as exc:
+        p.add("(syntax)", f"not valid TOML: {exc}")
+        return None, p.items
+    if overrides:
+        apply_overrides(doc, overrides)
+
+    p.unknown_keys(doc, _TOP_KEYS, "")
+    exp = _table(p, doc, "experiment", "experiment")
+    p.unknown_keys(exp, _EXPERIMENT_KEYS, "experiment")
+    for k in ("stop", "step"):
+        if k not in exp:
+            p.add(f"experiment.{k}", "missing (required)")
+    start = _number(p, exp, "start", "experiment", 0.0)
+    stop = _number(p, exp, "stop", "experiment", start + 1.0)
+    step = _number(p, exp, "step", "experiment", 1e-3, positive=True)
+    if stop <= start:
+        p.add("experiment.stop", f"must be greater than start = {start!r}, got {stop!r}")
+        stop = start + 1.0
+    elif step > stop - start:
+        p.add("experiment.step", f"{step!r} is longer than the experiment ({stop - start!r} s)")
+    experiment = Experiment(float(start), float(stop), float(step))
+
+    master = _parse_master(p, _table(p, doc, "master", "master"), experiment)
+
+    fmus: dict[str, FmuSpec] = {}
+    fmu_doc = _table(p, doc, "fmus", "fmus")
+    if not fmu_doc:
+        p.add("fmus", "no FMUs given; add at least one [fmus.NAME] table")
+    for name, spec in fmu_doc.items():
+        key = f"fmus.{name}"
+        if "." in name or not name:
+            p.add(key, "instance names must be non-empty and contain no '.'")
+            continue
+        if not isinstance(spec, dict):
+            p.add(key, "must be a table")
+            continue
+        p.unknown_keys(spec, _FMU_KEYS, key)
+        fpath, comp = spec.get("path"), spec.get("component")
+        if (fpath is None) == (comp is None):
+            p.add(key, "give exactly one of 'path' (an .fmu file) or 'component' (built on demand)")
+        if fpath is not None and not isinstance(fpath, str):
+            p.add(f"{key}.path", f"must be a string, got {fpath!r}")
+            fpath = None
+        if comp is not None and not isinstance(comp, str):
+            p.add(f"{key}.component", f"must be a string, got {comp!r}")
+            comp = None
+        params = spec.get("parameters", {})
+        if not isinstance(params, dict):
+            p.add(f"{key}.parameters", "must be a table of name = value")
+            params = {}
+        ft = spec.get("feedthrough")
+        if ft is not None and not isinstance(ft, bool):
+            p.add(f"{key}.feedthrough", f"must be true or false, got {ft!r}")
+            ft = None
+        resolved = (path.parent / fpath).resolve() if fpath else None
+        fmus[name] = FmuSpec(name, resolved, comp, dict(params), ft)
+
+    connections = []
+    conn_doc = doc.get("connections", [])
+    if not isinstance(conn_doc, list):
+        p.add("connections", "must be an array of tables ([[connections]])")
+        conn_doc = []
+    for i, c in enumerate(conn_doc):
+        key = f"connections[{i}]"
+        if not isinstance(c, dict):
+            p.add(key, "must be a table with 'from' and 'to'")
+            continue
+        p.unknown_keys(c, _CONNECTION_KEYS, key)
+        src = parse_ref(p, c.get("from"), f"{key}.from")
+        dst = parse_ref(p, c.get("to"), f"{key}.to")
+        if src and dst:
+            connections.append(Connection(src, dst, key))
+
+    bonds = []
+    bond_doc = doc.get("power_bonds", [])
+    if not isinstance(bond_doc, list):
+        p.add("power_bonds", "must be an array of tables ([[power_bonds]])")
+        bond_doc = []
+    for i, b in enumerate(bond_doc):
+        key = f"power_bonds[{i}]"
+        if not isinstance(b, dict):
+            p.add(key, "must be a table with 'effort' and 'flow'")
+            continue
+        p.unknown_keys(b, _BOND_KEYS, key)
+        pair = {}
+        for part in _BOND_KEYS:
+            v = b.get(part)
+            if not (isinstance(v, list) and len(v) == 2):
+                p.add(f"{key}.{part}", f"must be [\"from.instance_variable\", \"to.instance_variable\"], got {v!r}")
+                continue
+            src, dst = parse_ref(p, v[0], f"{key}.{part}[0]"), parse_ref(p, v[1], f"{key}.{part}[1]")
+            if src and dst:
+                pair[part] = Connection(src, dst, f"{key}.{part}")
+        if len(pair) == 2:
+            bonds.append(PowerBond(pair["effort"], pair["flow"], key))
+
+    out = _table(p, doc, "output", "output")
+    p.unknown_keys(out, _OUTPUT_KEYS, "output")
+    ofile = out.get("file")
+    if ofile is not None and not isinstance(ofile, str):
+        p.add("output.file", f"must be a file name, got {ofile!r}")
+        ofile = None
+    ovars = out.get("variables", [])
+    refs = []
+    if not isinstance(ovars, list):
+        p.add("output.variables", "must be an array of 'instance.variable' strings")
+        ovars = []
+    for i, v in enumerate(ovars):
+        r = parse_ref(p, v, f"output.variables[{i}]")
+        if r:
+            refs.append(r)
+
+    scene = Scene(path, experiment, master, fmus, tuple(connections), tuple(bonds), OutputSpec(ofile, tuple(refs)))
+    if master.adaptive is not None and master.adaptive.estimator == "energy" and not bonds:
+        p.add("master.adaptive.estimator", "'energy' needs at least one [[power_bonds]] entry")
+    return scene, p.items
+
+
+def _parse_master(p: _Problems, m: dict, experiment: Experiment) -> MasterSettings:
+    p.unknown_keys(m, _MASTER_KEYS, "master")
+    algorithm = _choice(p, m, "algorithm", "master", ALGORITHMS, "jacobi")
+    extrapolation = _choice(p, m, "extrapolation", "master", (0, 1, 2), 0)
+    output_update = _choice(p, m, "output_update", "master", OUTPUT_UPDATES, "propagate")
+    order = m.get("order")
+    if order is not None and not (isinstance(order, list) and all(isinstance(o, str) for o in order)):
+        p.add("master.order", f"must be a list of instance names, got {order!r}")
+        order = None
+    adaptive = None
+    if "adaptive" in m:
+        a = m["adaptive"] if isinstance(m["adaptive"], dict) else {}
+        if not isinstance(m["adaptive"], dict):
+            p.add("master.adaptive", "must be a table")
+        key = "master.adaptive"
+        p.unknown_keys(a, _ADAPTIVE_KEYS, key)
+        d = Adaptive()
+        tol = _number(p, a, "tolerance", key, d.tolerance, positive=True)
+        atol = _number(p, a, "absolute_tolerance", key, None, positive=True)
+        hmin = _number(p, a, "min_step", key, min(d.min_step, experiment.step), positive=True)
+        hmax = _number(p, a, "max_step", key, max(d.max_step, experiment.step), positive=True)
+        est = _choice(p, a, "estimator", key, ESTIMATORS, d.estimator)
+        safety = _number(p, a, "safety", key, d.safety, positive=True)
+        if not hmin <= experiment.step <= hmax:
+            p.add(key, f"need min_step <= experiment.step <= max_step, got {hmin!r} <= {experiment.step!r} <= {hmax!r}")
+        if safety >= 1.0:
+            p.add(f"{key}.safety", f"must be in (0, 1), got {safety!r}")
+        adaptive = Adaptive(float(tol), atol if atol is None else float(atol), float(hmin), float(hmax), est, float(safety))
+    it = m.get("iterative", {})
+    if not isinstance(it, dict):
+        p.add("master.iterative", "must be a table")
+        it = {}
+    key = "master.iterative"
+    p.unknown_keys(it, _ITERATIVE_KEYS, key)
+    d = Iterative()
+    method = _choice(p, it, "method", key, ITERATION_METHODS, d.method)
+    relax = it.get("relaxation", d.relaxation)
+    if relax != "aitken" and (isinstance(relax, bool) or not isinstance(relax, (int, float)) or not 0 < relax <= 2):
+        p.add(f"{key}.relaxation", f"must be a number in (0, 2] or \"aitken\", got {relax!r}")
+        relax = d.relaxation
+    iterative = Iterative(
+        method,
+        relax if relax == "aitken" else float(relax),
+        float(_number(p, it, "tolerance", key, d.tolerance, positive=True)),
+        int(_number(p, it, "max_iterations", key, d.max_iterations, positive=True, integer=True)),
+        int(_number(p, it, "reuse", key, d.reuse, integer=True)),
+    )
+    return MasterSettings(algorithm, int(extrapolation), output_update, tuple(order) if order else None, adaptive, iterative)

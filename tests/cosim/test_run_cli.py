@@ -1,0 +1,69 @@
+"""Tests of ``tribocosim run`` (cosim.run_cli) and of the result files (cosim.api, cosim.recorder)."""
+
+import io
+import json
+
+import numpy as np
+from fmpy.util import read_csv
+
+from cosim import run
+from cosim.cli import main as tribocosim
+from cosim.recorder import Progress
+
+
+def test_run_writes_csv_readable_by_fmpy_and_metadata(tmp_path, osc_scene, capsys):
+    scene = osc_scene(tmp_path, stop=1.0, step=0.01, extrapolation=1)
+    out = tmp_path / "out"
+    assert tribocosim(["run", str(scene), "--out", str(out), "--plot"]) == 0
+    printed = capsys.readouterr().out
+    assert "steps:    100 accepted" in printed and "results:" in printed, printed
+    traj = read_csv(out / "results.csv")
+    assert traj.dtype.names == ("time", "a.x1", "b.x2", "b.force"), "time, then the scene's order"
+    assert len(traj) == 101 and traj["time"][-1] == 1.0
+    meta = json.loads((out / "results.json").read_text())
+    assert meta["scene"] == str(scene) and meta["master"]["algorithm"] == "jacobi"
+    assert meta["master"]["extrapolation"] == 1 and meta["steps"]["accepted"] == 100
+    assert meta["steps"]["rejected_error"] == 0 and meta["fmi_calls"]["a"]["doStep"] == 100
+    assert set(meta["wall_time"]["fmus"]) == {"a", "b"} and meta["wall_time"]["master"] > 0
+    assert meta["outputs"]["columns"] == ["time", "a.x1", "b.x2", "b.force"]
+    assert (out / "results.png").stat().st_size > 1000
+    api = run(scene, write=False)
+    for name in ("a.x1", "b.x2", "b.force"):
+        np.testing.assert_array_equal(traj[name], api[name], err_msg=f"CSV round trip of {name}")
+
+
+def test_set_overrides_a_scene_key(tmp_path, osc_scene):
+    scene = osc_scene(tmp_path, stop=0.5, step=0.01)
+    assert tribocosim(["run", str(scene), "--quiet", "--set", "experiment.step=0.05", "--set", 'master.algorithm="gauss-seidel"']) == 0
+    meta = json.loads((tmp_path / "results.json").read_text())
+    assert meta["experiment"]["step"] == 0.05 and meta["master"]["algorithm"] == "gauss-seidel"
+    assert meta["steps"]["accepted"] == 10
+
+
+def test_scene_problems_exit_with_2_and_one_message(tmp_path, osc_scene, capsys):
+    scene = osc_scene(tmp_path)
+    scene.write_text(scene.read_text().replace('"b.x2"', '"b.xx2"'))
+    assert tribocosim(["run", str(scene), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "1 problem in scene" in err and "output.variables[1]: unknown variable 'xx2'" in err, err
+
+
+def test_progress_bar_appears_only_after_the_delay():
+    stream = io.StringIO()
+    bar = Progress(0.0, 10.0, delay=0.0, stream=stream)
+    bar(5.0)
+    bar.close()
+    assert "50.0%" in stream.getvalue() and stream.getvalue().endswith("\n")
+    quiet = io.StringIO()
+    bar = Progress(0.0, 10.0, delay=60.0, stream=quiet)
+    bar(5.0)
+    bar.close()
+    assert quiet.getvalue() == ""
+
+
+def test_gauss_seidel_reports_the_cycle_it_breaks(tmp_path, osc_scene):
+    res = run(osc_scene(tmp_path, stop=0.1, algorithm="gauss-seidel"), write=False)
+    gs = res.metadata["gauss_seidel"]
+    assert gs["order"] == ["a", "b"] and gs["cycles"] == [["a", "b"]]
+    assert gs["extrapolated_links"] == ["b.force -> a.force"]
+    assert any("a -> b form a cycle" in n and "b.force -> a.force is extrapolated" in n for n in res.metadata["notes"])

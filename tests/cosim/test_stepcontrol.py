@@ -1,0 +1,109 @@
+"""Tests of cosim.stepcontrol: step doubling, the energy (ECCO) estimator, rejection and rollback."""
+
+import numpy as np
+import pytest
+
+from components.errors import CosimStepError
+from cosim import run
+from cosim.reference import TwoMassOscillator, coupling_error
+
+BOND = """
+[[power_bonds]]
+effort = ["b.force", "a.force"]
+flow = ["a.v1", "b.v1"]
+"""
+
+
+def _sup_error(res):
+    return max(coupling_error(res, TwoMassOscillator(), ["a.x1", "b.x2"]).values())
+
+
+def test_step_doubling_reaches_the_tolerance_with_fewer_do_steps_than_a_fixed_step(tmp_path, osc_scene):
+    """Over 30 s the oscillator decays; the controller lengthens the step, a fixed step cannot."""
+    tol = 1e-3
+    ada = run(osc_scene(tmp_path, name="ada.toml", stop=30.0, step=0.01, extrapolation=1,
+                        extra_master=f'[master.adaptive]\ntolerance = {tol}\nmin_step = 1e-6\nmax_step = 1.0\n'
+                                     'estimator = "step-doubling"'), write=False)
+    err_ada = _sup_error(ada)
+    calls = ada.metadata["fmi_calls"]["a"]["doStep"]  # every attempt, rejected ones and the step-H probes included
+    assert err_ada <= tol, f"largest error {err_ada:.3g} over the run exceeds the requested tolerance {tol}"
+    assert ada.metadata["steps"]["rejected_error"] > 0 and ada.metadata["fmi_calls"]["a"]["setFMUstate"] > 0
+    # a fixed step with the same number of doStep calls is clearly less accurate
+    h_same = 30.0 / calls
+    fixed = run(osc_scene(tmp_path, name="fix.toml", stop=30.0, step=float(h_same), extrapolation=1), write=False)
+    err_fixed = _sup_error(fixed)
+    print(f"\nstep doubling: {calls} doStep calls per FMU, error {err_ada:.3g}; "
+          f"fixed h = {h_same:.4g}: {fixed.metadata['fmi_calls']['a']['doStep']} calls, error {err_fixed:.3g}")
+    assert fixed.metadata["fmi_calls"]["a"]["doStep"] <= calls + 1
+    assert err_fixed > 2.0 * err_ada, "a fixed step needs more doStep calls than step doubling for the same error"
+    steps = np.diff(ada.time)
+    assert steps.max() > 4 * steps[len(steps) // 10], "the step grows as the motion decays"
+
+
+def test_energy_estimator_is_rollback_free_and_tolerance_driven(tmp_path, osc_scene, fmu_dir):
+    errors, calls = [], []
+    for tol in (1e-2, 1e-3, 1e-4):
+        res = run(osc_scene(tmp_path, fmus=fmu_dir / "nostate", name=f"e{tol}.toml", step=0.01, extra=BOND,
+                            extra_master=f'[master.adaptive]\ntolerance = {tol}\nmin_step = 1e-5\nmax_step = 0.5\n'
+                                         'estimator = "energy"'), write=False)
+        assert res.metadata["fmi_calls"]["a"]["getFMUstate"] == 0 and res.metadata["steps"]["rejected_error"] == 0
+        assert not res.metadata["fmus"]["a"]["can_roll_back"]
+        errors.append(_sup_error(res))
+        calls.append(res.metadata["fmi_calls"]["a"]["doStep"])
+        steps = np.diff(res.time)
+        assert steps.max() > 3 * steps.min(), "the step adapts"
+    assert errors[0] > errors[1] > errors[2], f"error must fall with the tolerance: {errors}"
+    assert calls[0] < calls[1] < calls[2], f"and cost more steps: {calls}"
+
+
+def fragile_scene(make_scene, folder, fmus, mode, extra_master="", step=0.05):
+    return make_scene(folder, f"fragile{mode}.toml", f"""
+        [experiment]
+        stop = 1.0
+        step = {step!r}
+
+        [master]
+        algorithm = "jacobi"
+        {extra_master}
+
+        [fmus.f]
+        path = "{fmus / 'Fragile.fmu'}"
+        parameters = {{ tau = 0.5, max_step = 0.01, t_on = 0.3, t_off = 0.6, mode = {mode} }}
+
+        [output]
+        variables = ["f.y"]
+        """)
+
+
+@pytest.mark.parametrize("mode", [0, 1], ids=["discard", "non-finite"])
+def test_refused_steps_are_rolled_back_and_halved(tmp_path, make_scene, fmu_dir, mode):
+    res = run(fragile_scene(make_scene, tmp_path, fmu_dir, mode), write=False)
+    np.testing.assert_allclose(res["f.y"], 1.0 - np.exp(-res.time / 0.5), rtol=1e-12, atol=1e-15,
+                               err_msg="exact lag response through the retried steps")
+    steps = np.round(np.diff(res.time), 12)
+    mid = res.time[:-1] + steps / 2
+    inside = (mid >= 0.3) & (mid < 0.6)
+    assert set(steps[inside]) == {0.00625}, "0.05 halved three times inside the window"
+    assert set(steps[~inside]) == {0.05}, "full macro steps outside the window"
+    assert res.metadata["steps"]["rejected_failure"] == 6 * 3
+
+
+@pytest.mark.parametrize("mode, what", [(0, "discarded the step"), (1, "non-finite output f.y")])
+def test_refused_step_without_rollback_stops_with_a_clear_error(tmp_path, make_scene, fmu_dir, mode, what):
+    with pytest.raises(CosimStepError) as info:
+        run(fragile_scene(make_scene, tmp_path, fmu_dir / "nostate", mode), write=False)
+    msg = str(info.value)
+    assert "'f'" in msg and what in msg and "t = 0.3" in msg and "cannot roll back" in msg, msg
+
+
+def test_step_doubling_shrinks_on_discard(tmp_path, make_scene, fmu_dir):
+    res = run(fragile_scene(make_scene, tmp_path, fmu_dir, 0, step=0.02, extra_master=(
+        '[master.adaptive]\ntolerance = 1e-3\nmin_step = 1e-4\nmax_step = 0.1\nestimator = "step-doubling"')),
+        write=False)
+    np.testing.assert_allclose(res["f.y"], 1.0 - np.exp(-res.time / 0.5), rtol=1e-12, atol=1e-15,
+                               err_msg="exact response with adaptive steps")
+    steps = np.diff(res.time)
+    mid = res.time[:-1] + steps / 2
+    inside = (mid >= 0.3) & (mid < 0.6)  # where Fragile refuses steps longer than 0.01
+    assert steps[inside].max() <= 0.01 + 1e-12 and steps[~inside].max() > 0.02
+    assert res.metadata["steps"]["rejected_failure"] > 0
