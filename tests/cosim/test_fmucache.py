@@ -56,7 +56,7 @@ def test_unknown_component_and_missing_builder_are_scene_errors(tmp_path, fmu_di
         fmucache.component_fmu("stripdraw", cache=tmp_path)
 
 
-SCENE = ROOT / "cosim" / "scenes" / "stripdraw.toml"
+SCENE = ROOT / "models" / "scenes" / "stripdraw.toml"
 
 
 @pytest.fixture(scope="module")
