@@ -170,7 +170,7 @@ def main(argv=None) -> int:
         if fmu is None:
             from components.fmus.build import build_fmus
 
-            fmu = build_fmus(tmp / "fmus")["StripDraw"]
+            fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))
         unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
         _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # compile/load the kernels

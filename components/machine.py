@@ -102,6 +102,8 @@ class MachineModel:
         for a, b in zip(cuts[:-1], cuts[1:]):
             va, vb = self.setpoint(a), self.setpoint(b)
             z = self._prop.step(z, b - a, [va, fp], [(vb - va) / (b - a), 0.0])
+        if not np.all(np.isfinite(z)):
+            raise ParameterError(f"pull_force = {fp!r} N drove the drive state to non-finite values at t = {t1:.9g} s")
         self.state, self.time, self.pull_force = z, t1, fp
         return self.outputs()
 

@@ -13,10 +13,15 @@ For each FMU the build
 4. checks the result with ``fmpy.validate_fmu`` and moves it into place atomically (a reader
    never sees a half-written FMU), next to a small JSON record of its source digest.
 
-The FMU's ``resources/`` then holds the adapter, ``components/__init__.py``, ``errors.py``, the
-strip-draw modules the adapter imports, ``components/fmus/statecodec.py`` and
-``friction_table.npz``, plus the copy of pythonfmu's Python files that pythonfmu always adds;
-nothing from ``surrogate/`` or ``cosim/``, and no numba, scipy, pyfftw or matplotlib.
+Before building anything, every selected FMU's files and import closure are checked, so that a
+missing file fails the whole build without leaving some of the FMUs built.
+
+An FMU's ``resources/`` then holds its adapter, ``components/__init__.py``, ``errors.py``, the
+shared plumbing ``components/fmus/{adapter,statecodec,exitguard}.py``, the model modules the
+adapter imports (StripDraw: ``components/stripdraw/*`` and ``friction_table.npz``; Press:
+``press.py``, ``linear.py``, ``params.py``; DrawingMachine: ``machine.py``, ``linear.py``,
+``params.py``), plus the copy of pythonfmu's Python files that pythonfmu always adds; nothing
+from ``surrogate/`` or ``cosim/``, and no numba, scipy, pyfftw or matplotlib.
 
 Python API: :func:`build_fmus`; command line: ``tribocosim fmu build [--out DIR]``.
 """
@@ -55,6 +60,8 @@ class FmuSpec:
 #: Every FMU of the project, by model identifier.
 FMUS: dict[str, FmuSpec] = {
     "StripDraw": FmuSpec(adapter="components/fmus/StripDraw.py", data=("models/friction_table.npz",)),
+    "Press": FmuSpec(adapter="components/fmus/Press.py"),
+    "DrawingMachine": FmuSpec(adapter="components/fmus/DrawingMachine.py"),
 }
 
 
@@ -111,10 +118,14 @@ def build_fmus(out_dir: str | os.PathLike, names=None, *, root: str | os.PathLik
     """
     out = Path(out_dir).resolve()  # the build subprocess runs in another folder
     out.mkdir(parents=True, exist_ok=True)
+    root = Path(root).resolve()
     selected = list(FMUS) if names is None else list(names)
     for name in selected:
         _spec(name)
-    return {name: _build_one(name, out, Path(root).resolve()) for name in selected}
+    for name in selected:  # every FMU's files and imports, before building any of them
+        _check_files(name, root)
+        runtime_files(name, root)
+    return {name: _build_one(name, out, root) for name in selected}
 
 
 def _spec(name: str) -> FmuSpec:
@@ -124,11 +135,16 @@ def _spec(name: str) -> FmuSpec:
         raise FmuBuildError(f"unknown FMU {name!r}; this project builds: {', '.join(FMUS)}") from None
 
 
-def _build_one(name: str, out: Path, root: Path) -> Path:
+def _check_files(name: str, root: Path) -> None:
     spec = _spec(name)
     for rel in (spec.adapter, *spec.data):
         if not (root / rel).is_file():
             raise FmuBuildError(f"FMU {name}: required file {root / rel} is missing")
+
+
+def _build_one(name: str, out: Path, root: Path) -> Path:
+    spec = _spec(name)
+    _check_files(name, root)
     digest = source_digest(name, root)
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-fmu-{name}-") as tmp:
         stage = Path(tmp) / "stage"

@@ -1,11 +1,18 @@
-"""Session fixtures for the FMU tests: the StripDraw FMU is built once per session, in a subprocess.
+"""Session fixtures for the FMU tests: all FMUs are built once per session, in a subprocess.
 
-Fixture names start with ``stripdraw_fmu`` so that they do not collide with other fixtures of
-``tests/components``.
+- ``built_fmus``: ``tribocosim fmu build --out TMP`` (the command line) -> ``{name: path}``;
+- ``stripdraw_fmu_*``: the StripDraw FMU (file, extracted folder, model description, instances);
+- ``fmu_unzipped``, ``fmu_description``, ``fmu_instance``: the same for any FMU, by name;
+- ``numpy_fmpy_venv``: a throwaway virtual environment with only numpy and fmpy (from the
+  package registry), shared by the tests that run the FMUs outside this project's environment.
+
+Fixture names start with ``stripdraw_fmu``/``fmu_``/``built_fmus`` so that they do not collide with
+other fixtures of ``tests/components``.
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -14,8 +21,10 @@ import numpy as np
 import pytest
 
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
+#: the FMUs ``tribocosim fmu build`` builds, in its order
+FMU_NAMES = ("StripDraw", "Press", "DrawingMachine")
 
-#: Real outputs of the FMU, in the model's order (``table_clamp_count`` is an Integer output)
+#: Real outputs of the StripDraw FMU, in the model's order (``table_clamp_count`` is an Integer output)
 REAL_OUTPUTS = (
     "pull_force",
     "friction_force",
@@ -29,8 +38,8 @@ REAL_OUTPUTS = (
 
 
 @pytest.fixture(scope="session")
-def stripdraw_fmu_file(tmp_path_factory) -> Path:
-    """``tribocosim fmu build --out TMP`` (the command line, in a subprocess); the built FMU."""
+def built_fmus(tmp_path_factory) -> dict[str, Path]:
+    """``tribocosim fmu build --out TMP`` (the command line, in a subprocess); ``{name: FMU file}``."""
     out = tmp_path_factory.mktemp("fmus")
     proc = subprocess.run(
         [sys.executable, "-m", "cosim.cli", "fmu", "build", "--out", str(out)],
@@ -41,36 +50,69 @@ def stripdraw_fmu_file(tmp_path_factory) -> Path:
     )
     assert proc.returncode == 0, f"tribocosim fmu build failed:\n{proc.stdout}\n{proc.stderr}"
     printed = [Path(line) for line in proc.stdout.split()]
-    assert printed == [out.resolve() / "StripDraw.fmu"], f"unexpected output of fmu build: {proc.stdout!r}"
-    return printed[0]
+    expected = [out.resolve() / f"{name}.fmu" for name in FMU_NAMES]
+    assert printed == expected, f"unexpected output of fmu build: {proc.stdout!r}"
+    return dict(zip(FMU_NAMES, printed))
 
 
 @pytest.fixture(scope="session")
-def stripdraw_fmu_unzipped(stripdraw_fmu_file, tmp_path_factory) -> Path:
-    """The FMU extracted once (fmpy loads its binary from here)."""
+def stripdraw_fmu_file(built_fmus) -> Path:
+    """The built StripDraw FMU."""
+    return built_fmus["StripDraw"]
+
+
+@pytest.fixture(scope="session")
+def fmu_unzipped(built_fmus, tmp_path_factory):
+    """``unzipped(name) -> Path``: the FMU extracted once per session (fmpy loads its binary from here)."""
     from fmpy import extract
 
-    return Path(extract(str(stripdraw_fmu_file), str(tmp_path_factory.mktemp("fmu_unzipped"))))
+    cache: dict[str, Path] = {}
+
+    def unzipped(name: str) -> Path:
+        if name not in cache:
+            cache[name] = Path(extract(str(built_fmus[name]), str(tmp_path_factory.mktemp(f"{name}_unzipped"))))
+        return cache[name]
+
+    return unzipped
 
 
 @pytest.fixture(scope="session")
-def stripdraw_fmu_description(stripdraw_fmu_file):
-    """The FMU's model description (fmpy)."""
+def fmu_description(built_fmus):
+    """``description(name)``: the FMU's model description (fmpy), read once per session."""
     from fmpy import read_model_description
 
-    return read_model_description(str(stripdraw_fmu_file))
+    cache = {}
+
+    def description(name: str):
+        if name not in cache:
+            cache[name] = read_model_description(str(built_fmus[name]))
+        return cache[name]
+
+    return description
 
 
-class StripDrawFmuInstance:
-    """One fmpy ``FMU2Slave`` instance of StripDraw that collects its log messages.
+@pytest.fixture(scope="session")
+def stripdraw_fmu_unzipped(fmu_unzipped) -> Path:
+    """The StripDraw FMU extracted once (fmpy loads its binary from here)."""
+    return fmu_unzipped("StripDraw")
 
-    Parameters are set in initialization mode; :meth:`initialize` leaves it.
+
+@pytest.fixture(scope="session")
+def stripdraw_fmu_description(fmu_description):
+    """The StripDraw FMU's model description (fmpy)."""
+    return fmu_description("StripDraw")
+
+
+class FmuInstance:
+    """One fmpy ``FMU2Slave`` instance of one of our FMUs that collects its log messages.
+
+    Parameters are set in initialization mode; :meth:`initialize` leaves it. :meth:`step` sets
+    the inputs ``input_names`` (in that order), does one step and returns the Real outputs
+    ``output_names``.
     """
 
-    #: the columns of :meth:`outputs`
-    OUTPUT_NAMES = (*REAL_OUTPUTS, "table_clamp_count")
-
-    def __init__(self, unzipped: Path, description, name: str, parameters: dict | None = None):
+    def __init__(self, unzipped: Path, description, name: str, parameters: dict | None = None,
+                 input_names=(), output_names=()):  # fmt: skip
         from fmpy import calloc, free
         from fmpy.fmi2 import (
             FMU2Slave,
@@ -98,9 +140,8 @@ class StripDrawFmuInstance:
         self.slave.enterInitializationMode()
         for key, value in (parameters or {}).items():
             self.set(key, value)
-        self._real_vrs = [self.variables[n].valueReference for n in REAL_OUTPUTS]
-        self._clamp_vr = self.variables["table_clamp_count"].valueReference
-        self._input_vrs = [self.variables[n].valueReference for n in ("normal_force", "grip_velocity")]
+        self._real_vrs = [self.variables[n].valueReference for n in output_names]
+        self._input_vrs = [self.variables[n].valueReference for n in input_names]
         self.time = 0.0
 
     def _log(self, env, instance, status, category, message):
@@ -116,21 +157,21 @@ class StripDrawFmuInstance:
             self.slave.setInteger(vr, [int(value)])
         elif var.type == "String":
             self.slave.setString(vr, [str(value)])
-        else:  # pragma: no cover - the FMU has no Boolean variables
+        else:  # pragma: no cover - the FMUs have no Boolean variables
             raise TypeError(var.type)
 
-    def initialize(self) -> "StripDrawFmuInstance":
+    def initialize(self):
         self.slave.exitInitializationMode()
         return self
 
     def outputs(self) -> np.ndarray:
-        """Real outputs (REAL_OUTPUTS order) followed by table_clamp_count."""
-        reals = self.slave.getReal(self._real_vrs)
-        return np.array([*reals, float(self.slave.getInteger([self._clamp_vr])[0])])
+        """The Real outputs ``output_names``."""
+        return np.array(self.slave.getReal(self._real_vrs))
 
-    def step(self, dt: float, normal_force: float, grip_velocity: float) -> np.ndarray:
+    def step(self, dt: float, *inputs: float) -> np.ndarray:
         """Set the inputs, doStep from the instance's time by ``dt``, return :meth:`outputs`."""
-        self.slave.setReal(self._input_vrs, [normal_force, grip_velocity])
+        if self._input_vrs:
+            self.slave.setReal(self._input_vrs, list(inputs))
         self.slave.doStep(self.time, dt)
         self.time += dt
         return self.outputs()
@@ -141,6 +182,23 @@ class StripDrawFmuInstance:
         except Exception:  # noqa: BLE001 - an instance a test left in an error state
             pass
         self.slave.freeInstance()
+
+
+class StripDrawFmuInstance(FmuInstance):
+    """One instance of StripDraw: ``step(dt, normal_force, grip_velocity)`` returns the Real
+    outputs (REAL_OUTPUTS order) followed by ``table_clamp_count``."""
+
+    #: the columns of :meth:`outputs`
+    OUTPUT_NAMES = (*REAL_OUTPUTS, "table_clamp_count")
+
+    def __init__(self, unzipped: Path, description, name: str, parameters: dict | None = None):
+        super().__init__(unzipped, description, name, parameters, ("normal_force", "grip_velocity"), REAL_OUTPUTS)
+        self._clamp_vr = self.variables["table_clamp_count"].valueReference
+
+    def outputs(self) -> np.ndarray:
+        """Real outputs (REAL_OUTPUTS order) followed by table_clamp_count."""
+        reals = self.slave.getReal(self._real_vrs)
+        return np.array([*reals, float(self.slave.getInteger([self._clamp_vr])[0])])
 
 
 @pytest.fixture
@@ -159,3 +217,42 @@ def stripdraw_fmu_instance(stripdraw_fmu_unzipped, stripdraw_fmu_description):
     yield make
     for inst in made:
         inst.free()
+
+
+@pytest.fixture
+def fmu_instance(fmu_unzipped, fmu_description):
+    """Factory ``make(fmu, name, parameters=None, inputs=(), outputs=()) -> FmuInstance`` (in
+    initialization mode) for the FMU named ``fmu``. Every instance made is freed at the end of the test."""
+    made = []
+
+    def make(fmu: str, name: str, parameters: dict | None = None, inputs=(), outputs=()) -> FmuInstance:
+        inst = FmuInstance(fmu_unzipped(fmu), fmu_description(fmu), name, parameters, inputs, outputs)
+        made.append(inst)
+        return inst
+
+    yield make
+    for inst in made:
+        inst.free()
+
+
+def clean_env() -> dict:
+    """The environment without Python/virtualenv/numba settings of this session (for other interpreters)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "VIRTUAL_ENV", "NUMBA"))}
+    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
+    return env
+
+
+@pytest.fixture(scope="session")
+def numpy_fmpy_venv(tmp_path_factory) -> tuple[Path, dict]:
+    """``(python, env)``: the interpreter of a throwaway virtual environment with only numpy and fmpy
+    (pip, from the package registry), and the environment to run it in (:func:`clean_env`)."""
+    venv = tmp_path_factory.mktemp("numpy_fmpy") / "venv"
+    env = clean_env()
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env, timeout=300)
+    python = venv / "bin" / "python"
+    pip = subprocess.run(
+        [str(python), "-m", "pip", "install", "--quiet", "numpy", "fmpy"],
+        env=env, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert pip.returncode == 0, f"pip install numpy fmpy failed (the registry must be reachable):\n{pip.stderr}"
+    return python, env

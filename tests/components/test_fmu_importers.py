@@ -11,7 +11,6 @@ native importer must not take the test session down.
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import textwrap
@@ -90,22 +89,8 @@ def _model_rows(parameters, schedule) -> np.ndarray:
     return np.array(rows)
 
 
-def _clean_env() -> dict:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "VIRTUAL_ENV", "NUMBA"))}
-    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
-    return env
-
-
-def test_fmu_runs_in_a_venv_with_only_numpy_and_fmpy(stripdraw_fmu_file, tmp_path):
-    venv = tmp_path / "venv"
-    env = _clean_env()
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env, timeout=300)
-    python = venv / "bin" / "python"
-    pip = subprocess.run(
-        [str(python), "-m", "pip", "install", "--quiet", "numpy", "fmpy"],
-        env=env, capture_output=True, text=True, timeout=900,
-    )  # fmt: skip
-    assert pip.returncode == 0, f"pip install numpy fmpy failed (the registry must be reachable):\n{pip.stderr}"
+def test_fmu_runs_in_a_venv_with_only_numpy_and_fmpy(stripdraw_fmu_file, numpy_fmpy_venv, tmp_path):
+    python, env = numpy_fmpy_venv
     script = tmp_path / "run_fmu.py"
     script.write_text(_VENV_SCRIPT)
     proc = subprocess.run(

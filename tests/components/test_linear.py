@@ -29,3 +29,19 @@ def test_affine_input_step_is_exact():
     # two half steps equal one step (no discretisation error)
     half = prop.step(prop.step(np.array([x0]), dt / 2, u0, u1), dt / 2, u0 + u1 * dt / 2, u1)
     assert_allclose(half, [exact], rtol=1e-13)
+
+
+def test_expm_is_accurate_entry_by_entry_on_a_badly_scaled_controller_matrix():
+    """The drive's matrix mixes entries of 1e-3 and 4e13 (PI integral state in physical units);
+    balancing keeps every entry of exp(A h) accurate (scipy's expm as the independent oracle)."""
+    scipy_linalg = __import__("pytest").importorskip("scipy.linalg")
+    from components.machine import MachineModel, MachineParameters
+
+    prop = MachineModel(MachineParameters())._prop
+    n = prop.A.shape[0]
+    for dt in (1e-3, 1e-2):
+        E = expm(prop.A * dt)
+        R = scipy_linalg.expm(prop.A * dt)
+        big = np.abs(R) > 1e-300
+        assert_allclose(E[big], R[big], rtol=1e-9, err_msg=f"dt = {dt}")
+        assert n == 6
