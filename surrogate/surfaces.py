@@ -1,0 +1,261 @@
+"""Periodic self-affine rough surfaces and their statistics (paper Sec. 5, 6.1; MODEL.md Sec. 5).
+
+Generation. On an ``n x n`` periodic grid of side ``L`` the height field is a sum of Fourier modes
+with wavevectors ``q = 2 pi k / L`` (``k`` integer pairs). The isotropic power spectral density is
+
+    C(q) = C0                                  for 2 pi / L <= |q| < q_r   (roll-off plateau)
+    C(q) = C0 (|q| / q_r) ** (-2 (1 + H))      for q_r <= |q| <= q_s        (self-affine part)
+    C(q) = 0                                   for |q| > q_s and for q = 0  (cutoff, zero mean)
+
+with Hurst exponent H (paper: H = 0.8, shortest-to-longest wavelength ratio 1/100 to 4/100). Each
+mode gets the amplitude ``sqrt(C(q))`` and a random phase (the phase of the FFT of seeded white
+noise, which is Hermitian so that the surface is real); ``C0`` is then fixed by the requested RMS
+height or RMS slope. This is the spectral method of Hyun et al., Phys. Rev. E 70 (2004) 026117,
+doi:10.1103/PhysRevE.70.026117, and of Persson et al., J. Phys.: Condens. Matter 17 (2005) R1,
+doi:10.1088/0953-8984/17/1/R01, with deterministic amplitudes (random phases only), which makes
+the PSD of every realisation exactly the prescribed one.
+
+Statistics (Jacobs, Junge & Pastewka, Surf. Topogr.: Metrol. Prop. 5 (2017) 013001,
+doi:10.1088/2051-672X/aa51f8):
+
+- RMS height ``h_rms = sqrt(<(h - <h>)^2>)``.
+- RMS slope ``h'_rms = sqrt(<|grad h|^2>)`` (both gradient components, the h'_rms of Eq. 8 and 24),
+  with two definitions: ``"spectral"``, the gradient of the trigonometric interpolant,
+  ``h'_rms^2 = sum_q |q|^2 |h_q|^2 / n^4`` (``h_q`` = unnormalised DFT), and
+  ``"finite_difference"``, periodic forward differences
+  ``((h[i+1, j] - h[i, j])^2 + (h[i, j+1] - h[i, j])^2) / dx^2`` averaged over the grid. The
+  finite-difference value is the smaller one (each mode is weighted by
+  ``(2 sin(q dx / 2) / dx)^2 <= q^2``).
+- Radially averaged PSD ``C(q) = L^2 |h_q|^2 / n^4``, normalised so that
+  ``h_rms^2 = sum_q C(q) / L^2 = (2 pi)^-2 * integral C(q) d^2q``.
+
+Axis convention: ``h[i, j]`` is the height at ``x = i L / n`` (axis 0, the sliding direction of
+the coupling loop) and ``y = j L / n``. Heights are in metres.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from components.errors import ParameterError, check_range
+
+#: the two RMS-slope definitions
+SLOPE_DEFINITIONS = ("spectral", "finite_difference")
+
+
+def validate_height_map(h, name: str = "heights", n: int | None = None) -> np.ndarray:
+    """Return ``h`` as a C-contiguous float64 square array, or raise ``ParameterError``.
+
+    Parameters
+    ----------
+    h : array_like
+        A 2D height (or gap, traction, displacement) map.
+    name : str
+        Argument name used in error messages.
+    n : int, optional
+        Required side length.
+    """
+    a = np.asarray(h)
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] < 2:
+        want = f"({n}, {n})" if n is not None else "a square (n, n) array with n >= 2"
+        raise ParameterError(f"{name} has shape {a.shape}; {want} is required")
+    if n is not None and a.shape != (n, n):
+        raise ParameterError(f"{name} has shape {a.shape}; ({n}, {n}) is required")
+    if not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+        raise ParameterError(f"{name} has dtype {a.dtype}; real numbers are required")
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        bad = int(np.size(a) - np.count_nonzero(np.isfinite(a)))
+        raise ParameterError(f"{name} has {bad} non-finite value(s); all values must be finite")
+    return a
+
+
+def _wavenumbers(n: int, size: float) -> np.ndarray:
+    """|q| [rad/m] on the rfft2 half-grid, shape (n, n // 2 + 1)."""
+    qx = 2.0 * np.pi * np.fft.fftfreq(n, d=size / n)
+    qy = 2.0 * np.pi * np.fft.rfftfreq(n, d=size / n)
+    return np.hypot(qx[:, None], qy[None, :])
+
+
+def _rfft_weights(n: int) -> np.ndarray:
+    """Multiplicity of each rfft2 column in the full spectrum (1 for the self-conjugate ones)."""
+    w = np.full(n // 2 + 1, 2.0)
+    w[0] = 1.0
+    if n % 2 == 0:
+        w[-1] = 1.0
+    return w
+
+
+def self_affine_surface(n: int, size: float, hurst: float, q_roll: float, q_cut: float,
+                        rms_height: float | None = None, rms_slope: float | None = None,
+                        seed: int = 0, slope_definition: str = "spectral") -> np.ndarray:
+    """Periodic isotropic self-affine random surface (heights in m), see the module docstring.
+
+    Parameters
+    ----------
+    n : int
+        Grid points per side (>= 4).
+    size : float
+        Side length L of the periodic square [m] (> 0).
+    hurst : float
+        Hurst exponent H, in (0, 1].
+    q_roll : float
+        Roll-off wavenumber q_r [rad/m] (> 0): the PSD is flat from 2 pi / L to q_r. A value
+        <= 2 pi / L gives a pure power law from the longest wavelength L.
+    q_cut : float
+        Short-wavelength cutoff q_s [rad/m]: q_r < q_s <= pi n / L (the grid's Nyquist
+        wavenumber, so that the spectrum stays isotropic), and q_s >= 2 pi / L.
+    rms_height, rms_slope : float, optional
+        Exactly one of them: the RMS height [m] or the RMS slope [-] of the result.
+    seed : int
+        Seed of the random phases (``numpy.random.default_rng``).
+    slope_definition : {"spectral", "finite_difference"}
+        Definition used when ``rms_slope`` is given (see :func:`rms_slope`).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Zero-mean heights [m].
+    """
+    if int(n) != n or n < 4:
+        raise ParameterError(f"n = {n!r} is not allowed; an integer >= 4 is required")
+    n = int(n)
+    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
+    hurst = check_range("hurst", hurst, 0.0, 1.0, low_inclusive=False)
+    q_roll = check_range("q_roll", q_roll, 0.0, low_inclusive=False, unit="rad/m")
+    q_nyq = math.pi * n / size
+    q_cut = check_range("q_cut", q_cut, max(q_roll, 2.0 * math.pi / size), q_nyq * (1 + 1e-12),
+                        low_inclusive=False, unit="rad/m")
+    if (rms_height is None) == (rms_slope is None):
+        raise ParameterError(f"rms_height = {rms_height!r}, rms_slope = {rms_slope!r}: give "
+                             "exactly one of them")
+    if slope_definition not in SLOPE_DEFINITIONS:
+        raise ParameterError(f"slope_definition = {slope_definition!r} is not allowed; "
+                             f"allowed: {SLOPE_DEFINITIONS}")
+    q = _wavenumbers(n, size)
+    psd = np.zeros_like(q)
+    mask = (q > 0) & (q <= q_cut)
+    psd[mask] = np.where(q[mask] < q_roll, 1.0, (q[mask] / q_roll) ** (-2.0 * (1.0 + hurst)))
+    noise = np.fft.rfft2(np.random.default_rng(seed).standard_normal((n, n)))
+    mag = np.abs(noise)
+    phase = np.divide(noise, mag, out=np.ones_like(noise), where=mag > 0)
+    h = np.fft.irfft2(np.sqrt(psd) * phase, s=(n, n))
+    if rms_height is not None:
+        target = check_range("rms_height", rms_height, 0.0, low_inclusive=False, unit="m")
+        current = _rms(h)
+    else:
+        target = check_range("rms_slope", rms_slope, 0.0, low_inclusive=False)
+        current = _slope(h, size, slope_definition)
+    return h * (target / current)
+
+
+def rms_height(h) -> float:
+    """RMS height about the mean, ``sqrt(<(h - <h>)^2>)`` [units of h]."""
+    return _rms(validate_height_map(h, "h"))
+
+
+def _rms(h: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((h - h.mean()) ** 2)))
+
+
+def rms_slope(h, size: float, definition: str = "spectral") -> float:
+    """RMS slope ``sqrt(<|grad h|^2>)`` of a periodic map (both gradient components).
+
+    Parameters
+    ----------
+    h : array_like, shape (n, n)
+        Heights [m].
+    size : float
+        Side length L [m].
+    definition : {"spectral", "finite_difference"}
+        Gradient of the trigonometric interpolant, or periodic forward differences (module
+        docstring).
+    """
+    h = validate_height_map(h, "h")
+    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
+    return _slope(h, size, definition)
+
+
+def _slope(h: np.ndarray, size: float, definition: str) -> float:
+    n = h.shape[0]
+    if definition == "spectral":
+        spec = np.fft.rfft2(h)
+        q = _wavenumbers(n, size)
+        s2 = np.sum(_rfft_weights(n)[None, :] * q**2 * np.abs(spec) ** 2) / float(n) ** 4
+    elif definition == "finite_difference":
+        dx = size / n
+        s2 = np.mean((np.roll(h, -1, 0) - h) ** 2 + (np.roll(h, -1, 1) - h) ** 2) / dx**2
+    else:
+        raise ParameterError(f"definition = {definition!r} is not allowed; "
+                             f"allowed: {SLOPE_DEFINITIONS}")
+    return float(np.sqrt(s2))
+
+
+def radial_psd(h, size: float) -> tuple[np.ndarray, np.ndarray]:
+    """Radially averaged 2D PSD ``C(q) = L^2 |h_q|^2 / n^4`` of a periodic height map.
+
+    Modes are binned by ``k = |q| L / (2 pi)`` into unit-wide rings centred on the integers
+    ``1 .. n // 2`` (rings that fit inside the grid's Nyquist circle).
+
+    Parameters
+    ----------
+    h : array_like, shape (n, n)
+        Heights [m].
+    size : float
+        Side length L [m].
+
+    Returns
+    -------
+    q : ndarray
+        Mean |q| of the modes in each non-empty ring [rad/m].
+    psd : ndarray
+        Mean C(q) in each ring [m^4].
+    """
+    h = validate_height_map(h, "h")
+    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
+    n = h.shape[0]
+    c = size**2 * np.abs(np.fft.fft2(h)) ** 2 / float(n) ** 4
+    kx = np.fft.fftfreq(n, d=1.0 / n)
+    k = np.hypot(kx[:, None], kx[None, :])
+    ring = np.rint(k).astype(np.int64).ravel()
+    keep = (ring >= 1) & (ring <= n // 2)
+    count = np.bincount(ring[keep], minlength=n // 2 + 1)
+    csum = np.bincount(ring[keep], weights=c.ravel()[keep], minlength=n // 2 + 1)
+    ksum = np.bincount(ring[keep], weights=k.ravel()[keep], minlength=n // 2 + 1)
+    ok = count > 0
+    return 2.0 * np.pi / size * ksum[ok] / count[ok], csum[ok] / count[ok]
+
+
+def load_height_map(path) -> np.ndarray:
+    """Load a measured or generated height map (m) from ``.npy`` or a plain-text grid.
+
+    Text files are read with ``numpy.loadtxt`` (whitespace- or comma-separated numbers, ``#``
+    comments). The map must be square, at least 2 x 2, and finite; it is treated as periodic.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        File name.
+
+    Returns
+    -------
+    ndarray, shape (n, n), float64
+    """
+    p = os.fspath(path)
+    if not os.path.isfile(p):
+        raise ParameterError(f"path = {p!r} does not name an existing file")
+    try:
+        if p.lower().endswith(".npy"):
+            data = np.load(p, allow_pickle=False)
+        else:
+            with open(p, encoding="utf-8") as fh:
+                first = next((ln for ln in fh
+                              if ln.strip() and not ln.lstrip().startswith("#")), "")
+            data = np.loadtxt(p, delimiter="," if "," in first else None, ndmin=2)
+    except (ValueError, OSError) as exc:
+        raise ParameterError(f"path = {p!r} is not a readable .npy or text height map: "
+                             f"{exc}") from exc
+    return validate_height_map(data, f"height map {p!r}")
