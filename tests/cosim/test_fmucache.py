@@ -51,7 +51,11 @@ def test_unknown_component_and_missing_builder_are_scene_errors(tmp_path, fmu_di
     with pytest.raises(SceneError, match="unknown component 'press'; this installation builds: Demo"):
         fmucache.component_fmu("press", cache=tmp_path)
     monkeypatch.undo()
-    monkeypatch.setitem(sys.modules, "components.fmus.build", None)  # import fails
+    import components.fmus
+
+    # the import fails: no module, and no attribute left by an earlier import in this session
+    monkeypatch.delattr(components.fmus, "build", raising=False)
+    monkeypatch.setitem(sys.modules, "components.fmus.build", None)
     with pytest.raises(SceneError, match="FMU builder components.fmus.build is not available"):
         fmucache.component_fmu("stripdraw", cache=tmp_path)
 
