@@ -1,9 +1,16 @@
-"""``tribocosim demo``: the default strip-draw case, printing the steady-state mean friction mu_bar.
+"""``tribocosim demo``: the strip-draw test as a co-simulation, with its figures and mu_bar.
 
-Default case (paper Sec. 2.1, 7): 35 x 35 mm pad, P_N = 10 MPa, 140 mm draw at 0.08 m/s, the
-shipped friction table, the implicit bar integrator. The grip velocity is ramped over 10 ms
-(a drive cannot jump in velocity). mu_bar is the mean of mu(t) = pull_force / (2 F_N) (Eq. 1)
-over the last 20 % of the draw, the steady-state region where the paper reads it (Sec. 7).
+The demo runs ``models/scenes/demo.toml`` (paper Sec. 2.1, 7): the press FMU holds F_N = 10 MPa on
+the 35 x 35 mm pad, the drawing-machine FMU pulls at 0.08 m/s for 140 mm, the strip-draw FMU
+(shipped friction table, implicit bar integrator) returns the pull force. The FMUs are built into
+the FMU cache (:mod:`cosim.fmucache`) when missing; a failed build stops the demo with the
+builder's message. It writes the results (CSV + JSON), the strip's beta field (``field_output``)
+and three figures: mu against sliding distance, the beta(X, t) map (like Fig. 17a), and the
+press and drive signals; it prints mu_bar, the mean of mu(t) = pull_force / (2 F_N) (Eq. 1) over
+the last 20 % of the draw, the steady-state region where the paper reads it (Sec. 7).
+
+:func:`run_strip_draw` and :func:`steady_mean` run the pure strip-draw model alone (no FMI;
+used by the benchmarks).
 """
 
 from __future__ import annotations
@@ -11,6 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -70,23 +78,127 @@ def steady_mean(outs, key: str = "mu_mean", fraction: float = 0.2) -> float:
     return float(values[int((1.0 - fraction) * values.size):].mean())
 
 
+def demo_scene() -> Path:
+    """The shipped demo scene, ``models/scenes/demo.toml``."""
+    from components.paths import MODELS_DIR
+
+    return MODELS_DIR / "scenes" / "demo.toml"
+
+
+def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print) -> dict[str, Path]:
+    """Find the components' FMUs in the cache, building the missing ones; ``{component: path}``.
+
+    Raises
+    ------
+    SceneError
+        Saying which FMU could not be built and why (the builder's message).
+    """
+    from cosim.fmucache import cache_dir, component_fmu
+
+    found = {}
+    for comp in components:
+        before = set(cache_dir().glob("*/*.fmu")) if cache_dir().is_dir() else set()
+        t0 = time.perf_counter()
+        found[comp] = component_fmu(comp)
+        if found[comp] not in before:
+            echo(f"built {found[comp].name} into the FMU cache {cache_dir()} ({time.perf_counter() - t0:.1f} s)")
+    return found
+
+
+def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | None = None, overrides=None,
+             plot: bool = True, field_interval: float = 0.01):
+    """Run the demo scene; write the results and the figures into ``out_dir``.
+
+    Returns ``(result, summary, figures)``: the :class:`cosim.api.Result`, a dict with mu_bar
+    (Eq. 1 over the last 20 % of the draw), the strip's mean mu_mean over the same window, the
+    press's largest relative set-point error and the drive's velocity error in steady state, and
+    the figure files.
+    """
+    from cosim.api import run
+    from cosim.plotting import plot_demo
+    from cosim.reference_components import load_component_scene, steady_ratio
+
+    out = Path(out_dir).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    field_file = out / "beta_field.npz"
+    over = {"fmus.strip.parameters.field_output": str(field_file),
+            "fmus.strip.parameters.field_output_interval": field_interval}
+    if tool_length is not None:
+        over["fmus.strip.parameters.tool_length"] = tool_length
+    if pressure is not None or tool_length is not None:
+        from cosim.scene import parse_scene
+
+        scene, _ = parse_scene(demo_scene())
+        strip = scene.fmus["strip"].parameters
+        length = tool_length if tool_length is not None else strip.get("tool_length", 0.035)
+        p = pressure if pressure is not None else scene.fmus["press"].parameters["force_setpoint"] / (
+            strip.get("tool_length", 0.035) * strip.get("tool_width", 0.035))
+        over["fmus.press.parameters.force_setpoint"] = p * length * strip.get("tool_width", 0.035)
+    over.update(overrides or {})
+    plan = load_component_scene(demo_scene(), over)
+    result = run(plan, out)
+    t = result.time
+    steady = t >= t[-1] - 0.2 * (t[-1] - t[0])
+    fn, fset = result["press.normal_force"], result["press.force_reference"]
+    vg, vset = result["drive.grip_velocity"], result["drive.velocity_reference"]
+    summary = {
+        "mu_bar": steady_ratio(t, result["strip.pull_force"], fn),
+        "mu_mean_strip": float(np.mean(result["strip.mu_mean"][steady])),
+        "press_error": float(np.max(np.abs(fn[steady] - fset[steady]) / fset[steady])),
+        "velocity_error": float(np.max(np.abs(vg[steady] - vset[steady]) / np.abs(vset[steady]))),
+        "pressure": float(fset[-1] / (plan.scene.fmus["strip"].parameters.get("tool_length", 0.035)
+                                      * plan.scene.fmus["strip"].parameters.get("tool_width", 0.035))),
+        "sliding_distance": float(result["strip.sliding_distance"][-1]),
+        "beta_mean_end": float(result["strip.beta_mean"][-1]),
+        "field_file": str(field_file),
+    }
+    figures = plot_demo(result, field_file, out, summary["mu_bar"]) if plot else []
+    return result, summary, figures
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the default case and print mu_bar."""
-    ap = argparse.ArgumentParser(prog="tribocosim demo", description=__doc__.splitlines()[0])
-    ap.add_argument("--pressure-mpa", type=float, default=10.0, help="nominal pressure P_N [MPa]")
-    ap.add_argument("--tool-length", type=float, default=0.035, help="pad length [m]")
-    ap.add_argument("--integrator", choices=("implicit", "explicit"), default="implicit")
+    """``tribocosim demo``: the strip-draw test as a co-simulation of press, strip and drawing machine."""
+    ap = argparse.ArgumentParser(
+        prog="tribocosim demo",
+        description="Run models/scenes/demo.toml (press + strip draw + drawing machine, 35 mm pad, 10 MPa, "
+                    "140 mm at 0.08 m/s; the FMUs are built into the cache if missing), write the results and "
+                    "three figures, and print mu_bar.")
+    ap.add_argument("--out", type=Path, default=Path("tribocosim-demo"), help="output folder (default: ./tribocosim-demo)")
+    ap.add_argument("--pressure-mpa", type=float, default=None, help="nominal pressure P_N [MPa] (default: the scene's, 10)")
+    ap.add_argument("--tool-length", type=float, default=None, help="pad length [m] (default: the scene's, 0.035)")
+    ap.add_argument("--no-plot", action="store_true", help="skip the figures")
     args = ap.parse_args(argv)
+    from components.errors import SceneError, TribocosimError
+
     t0 = time.perf_counter()
-    _, outs, model = run_strip_draw(args.pressure_mpa * 1e6, args.tool_length, integrator=args.integrator)
+    try:
+        ensure_fmus()
+    except SceneError as exc:
+        print(f"tribocosim demo: the FMUs could not be built, so the demo cannot run:\n{exc}", file=sys.stderr)
+        return 1
+    try:
+        result, s, figures = run_demo(args.out, pressure=None if args.pressure_mpa is None else args.pressure_mpa * 1e6,
+                                      tool_length=args.tool_length, plot=not args.no_plot)
+    except SceneError as exc:
+        print(f"tribocosim demo: {exc}", file=sys.stderr)
+        return 2
+    except TribocosimError as exc:
+        print(f"tribocosim demo: the run failed: {exc}", file=sys.stderr)
+        return 1
     wall = time.perf_counter() - t0
-    mu_bar = steady_mean(outs)
-    last = outs[-1]
-    print(f"strip draw: pad {args.tool_length * 1e3:.0f} mm, P_N = {args.pressure_mpa:g} MPa, "
-          f"{model.params.draw_length * 1e3:.0f} mm at 0.08 m/s, {args.integrator} integrator, "
-          f"friction table {model.law.name} ({getattr(getattr(model.law, 'table', None), 'provenance', '-')})")
-    print(f"beta under the pad at the end: mean {last['beta_mean']:.4f}, max {last['beta_max']:.4f}")
-    print(f"mu_bar = {mu_bar:.4f}   (steady state, last 20 % of the draw; wall time {wall:.2f} s)")
+    strip = result.metadata["fmus"]
+    print(f"strip draw co-simulation: press + strip + drawing machine ({len(strip)} FMUs, "
+          f"{result.metadata['master']['algorithm']}, step {result.metadata['experiment']['step']:g} s)")
+    print(f"P_N = {s['pressure'] / 1e6:.4g} MPa, sliding distance {s['sliding_distance'] * 1e3:.1f} mm, "
+          f"beta under the pad at the end {s['beta_mean_end']:.4f}")
+    print(f"press holds its set-point within {100 * s['press_error']:.3f} %, the drive its velocity within "
+          f"{100 * s['velocity_error']:.3f} % (last 20 % of the draw)")
+    print(f"mu_bar = {s['mu_bar']:.4f}   (pull_force / (2 normal_force), last 20 % of the draw; "
+          f"strip's mu_mean there: {s['mu_mean_strip']:.4f})")
+    print(f"results:  {result.csv_path}  (+ {result.metadata_path.name}, beta field {Path(s['field_file']).name})")
+    for f in figures:
+        print(f"figure:   {f}")
+    print(f"wall time {wall:.1f} s")
     return 0
 
 

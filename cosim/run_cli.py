@@ -2,7 +2,8 @@
 
 A thin layer over :func:`cosim.api.run`: validates the scene (all problems at once), runs it
 with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
-JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables.
+JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
+base scene, :mod:`cosim.sweep`) runs its cases in parallel processes instead.
 
 Exit codes: 0 success, 1 the run failed (FMU error, divergence), 2 the scene has problems.
 """
@@ -26,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scene key, e.g. --set master.extrapolation=1 (TOML value syntax)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="sweep files ([sweep] table, cosim.sweep): parallel processes (default: the file's, else one per CPU)")
     return p
 
 
@@ -49,9 +52,20 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
     from cosim.api import run
+    from cosim.sweep import is_sweep_file
 
     try:
-        result = run(args.scene, args.out, overrides=_overrides(args.set), progress=not args.quiet)
+        if is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
+            if args.set:
+                raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
+            from cosim.sweep import main as sweep_main
+
+            return sweep_main(args)
+        from cosim.reference_components import load_component_scene
+
+        # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
+        plan = load_component_scene(args.scene, _overrides(args.set))
+        result = run(plan, args.out, progress=not args.quiet)
     except SceneError as exc:
         print(f"tribocosim run: {exc}", file=sys.stderr)
         return 2

@@ -17,6 +17,10 @@ Life cycle
     ``__init__`` only registers variables (pythonfmu instantiates the class at build time).
     ``exit_initialization_mode`` builds the model (:meth:`ModelAdapter.make_model`, which
     validates the parameters); ``do_step`` calls ``model.step(step_size, inputs)``.
+    Optional hooks for side outputs (the strip-draw FMU's ``field_output`` file):
+    :meth:`~ModelAdapter.after_initialization`, :meth:`~ModelAdapter.after_step` (after every
+    successful step), :meth:`~ModelAdapter.after_restore` (after ``fmi2SetFMUstate``) and
+    :meth:`~ModelAdapter.on_terminate` (``fmi2Terminate``); all default to doing nothing.
 
 Errors
     pythonfmu 0.7.0 turns a Python exception escaping an FMI callback into fmi2Fatal, and the
@@ -246,6 +250,19 @@ class ModelAdapter(Fmi2Slave):
         """Facts about the model's data that a restored FMU state must match (e.g. a table hash)."""
         return {}
 
+    def after_initialization(self) -> None:
+        """Called once the model is built (end of initialization); may raise TribocosimError."""
+
+    def after_step(self) -> None:
+        """Called after every successful ``doStep`` (e.g. to record a field); must be cheap
+        when it has nothing to do. An exception marks the instance unusable."""
+
+    def after_restore(self) -> None:
+        """Called after ``fmi2SetFMUstate`` restored the model (e.g. to drop recorded rows)."""
+
+    def on_terminate(self) -> None:
+        """Called by ``fmi2Terminate`` (e.g. to write a result file); errors are logged."""
+
     # ------------------------------------------------------------------ declaration
     def _key(self, output_name: str) -> str:
         return self.OUTPUTS[output_name].key or output_name
@@ -312,6 +329,7 @@ class ModelAdapter(Fmi2Slave):
     def exit_initialization_mode(self):
         try:
             self._build_model()
+            self.after_initialization()
         except TribocosimError as exc:
             self._fail(f"initialization failed: {exc}")
         except Exception as exc:  # noqa: BLE001 - nothing may escape into pythonfmu (see module doc)
@@ -335,7 +353,20 @@ class ModelAdapter(Fmi2Slave):
                 + "the FMU state is unchanged"
             )
             return False
+        try:
+            self.after_step()
+        except Exception as exc:  # noqa: BLE001 - nothing may escape into pythonfmu (see module doc)
+            what = str(exc) if isinstance(exc, TribocosimError) else f"{type(exc).__name__}: {exc}"
+            self._fail(f"after the step to t = {current_time + step_size!r} s: {what}")
+            return False
         return True
+
+    def terminate(self):
+        try:
+            self.on_terminate()
+        except Exception as exc:  # noqa: BLE001 - nothing may escape into pythonfmu (see module doc)
+            what = str(exc) if isinstance(exc, TribocosimError) else f"{type(exc).__name__}: {exc}"
+            self._error(f"terminate: {what}")
 
     def set_parameter(self, name: str, convert, value) -> None:
         """Setter of a parameter: ``fixed`` variability, so it is ignored after initialization."""
@@ -415,6 +446,7 @@ class ModelAdapter(Fmi2Slave):
         self._inputs = dict(state["inputs"])
         self._outputs = dict(state["outputs"])
         self._failure = state["failure"]
+        self.after_restore()
 
     @staticmethod
     def _fmu_state_to_bytes(state: dict) -> bytes:

@@ -1,0 +1,248 @@
+"""The shipped scenes (models/scenes) through the master with the real FMUs: the paper's trends,
+the equalities of the coupled rig, the sweep and multi-pass machinery, and bad input.
+
+Cheap settings (a 50 mm draw on a 100-element bar, 2.5 ms communication step) keep the runs short;
+the trends are those of the paper (Sec. 2.1, 7; Fig. 2, 17-19): mu_bar falls with P_N and with pad
+length; more debris sticking to the tool (zeta) and more wear (K) lower it, saturating at large K
+(beta at its cap under the whole pad); a second and a third pass over the same strip lower it.
+Sweeps run in parallel processes (cosim.sweep), every case written to its own folder.
+"""
+
+from __future__ import annotations
+
+import json
+import textwrap
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from components.errors import SceneError
+from cosim.api import run
+from cosim.cli import main as tribocosim
+from cosim.reference_components import load_component_scene, steady_ratio
+from cosim.sweep import load_sweep, run_sweep
+
+SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
+DEMO = SCENES / "demo.toml"
+DRAW = 0.05  # m
+CHEAP = {
+    "fmus.strip.parameters.n_elements": 100,
+    "fmus.strip.parameters.draw_length": DRAW,
+    "experiment.stop": DRAW / 0.08 + 0.01,
+    "experiment.step": 2.5e-3,
+}
+
+
+def cheap_sweep(folder: Path, name: str, body: str) -> Path:
+    """A sweep file over the shipped demo scene with the cheap settings."""
+    sets = "\n".join(f'"{k}" = {v!r}' for k, v in CHEAP.items())
+    text = textwrap.dedent(body).replace("[sweep.set]", f"[sweep.set]\n{sets}")
+    path = folder / name
+    path.write_text(f'[sweep]\nscene = "{DEMO}"\n' + text, encoding="utf-8")
+    return path
+
+
+def by(rows, key, **where):
+    """{row[key]: row['mu_bar']} over the rows matching ``where``."""
+    return {r[key]: r["mu_bar"] for r in rows if all(r[k] == v for k, v in where.items())}
+
+
+@pytest.fixture(scope="module")
+def demo_run():
+    """The demo scene at the cheap settings (Jacobi, 2.5 ms)."""
+    return run(load_component_scene(DEMO, CHEAP), write=False)
+
+
+def test_shipped_scenes_and_sweeps_are_valid():
+    for path in sorted(SCENES.glob("*.toml")):
+        doc = tomllib.loads(path.read_text())
+        if "sweep" in doc:
+            sweep = load_sweep(path)
+            assert sweep.scene.is_file() and sweep.cases(), path.name
+        else:
+            load_component_scene(path)  # raises SceneError on any problem
+    names = {p.stem for p in SCENES.glob("*.toml")}
+    assert {"demo", "pressure_sweep", "multipass", "zeta_sweep", "archard_sweep", "stiff_drive"} <= names
+
+
+def test_pull_force_over_twice_the_normal_force_is_the_strips_mu(demo_run):
+    r = demo_run
+    ratio = steady_ratio(r.time, r["strip.pull_force"], r["press.normal_force"])
+    t = r.time
+    steady = t >= t[-1] - 0.2 * (t[-1] - t[0])
+    mu_mean = float(np.mean(r["strip.mu_mean"][steady]))
+    # Eq. 1 against Eq. 28: the grip reaction equals the friction force in (quasi-)steady sliding
+    np.testing.assert_allclose(ratio, mu_mean, rtol=2e-3, err_msg="pull_force / (2 F_N) vs the strip's mu_mean")
+    assert 0.05 < ratio < 0.15, "mu_bar between the fully covered and the particle-free value (mu0 = 0.15)"
+
+
+def test_press_holds_its_setpoint_and_the_drive_reaches_its_velocity(demo_run):
+    r = demo_run
+    t = r.time
+    steady = t >= 0.3
+    fn, fset = r["press.normal_force"][steady], r["press.force_reference"][steady]
+    assert np.all(np.abs(fn - fset) <= 0.01 * fset), f"press off by {np.max(np.abs(fn / fset - 1)):.2%}"
+    assert fset[-1] == 12250.0
+    v, vset = r["drive.grip_velocity"][steady], r["drive.velocity_reference"][steady]
+    assert vset[-1] == 0.08 and np.all(np.abs(v - vset) <= 0.01 * vset), f"drive off by {np.max(np.abs(v / vset - 1)):.2%}"
+    # the machine pulled the strip through: the grip travelled the draw (+ the ramp's lag)
+    assert r["drive.grip_position"][-1] == pytest.approx(0.08 * (t[-1] - 0.01), rel=0.01)
+
+
+def test_mu_bar_falls_with_pressure_and_pad_length(tmp_path):
+    path = cheap_sweep(tmp_path, "p.toml", """
+        workers = 2
+        [sweep.variables]
+        tool_length = [0.035, 0.07]
+        pressure_mpa = [2, 10, 20]
+        [sweep.set]
+        "fmus.strip.parameters.tool_length" = { expr = "tool_length" }
+        "fmus.press.parameters.force_setpoint" = { expr = "pressure_mpa * 1e6 * tool_length * 0.035" }
+        [sweep.summary]
+        mu_bar = { mean = "strip.pull_force / (2 * press.normal_force)", last = 0.2 }
+        """)
+    res = run_sweep(path, tmp_path / "out")
+    for length in (0.035, 0.07):
+        mu = by(res.rows, "pressure_mpa", tool_length=length)
+        assert mu[2] > mu[10] > mu[20], f"pad {length}: {mu}"
+    for p in (2, 10, 20):
+        mu = by(res.rows, "tool_length", pressure_mpa=p)
+        assert mu[0.035] > mu[0.07], f"{p} MPa: {mu}"
+    # every case written to its own folder, the table in sweep.csv; a second call reuses them
+    cases = sorted((tmp_path / "out" / "cases").iterdir())
+    assert len(cases) == 6 and all((c / "summary.json").is_file() and (c / "pass-1" / "demo.csv").is_file()
+                                   for c in cases)
+    assert res.csv_path.read_text().count("\n") == 7
+    stamp = [(c / "summary.json").stat().st_mtime_ns for c in cases]
+    again = run_sweep(path, tmp_path / "out", workers=1)
+    assert [(c / "summary.json").stat().st_mtime_ns for c in cases] == stamp, "finished cases are not run again"
+    assert [r["mu_bar"] for r in again.rows] == [r["mu_bar"] for r in res.rows]
+
+
+def test_zeta_and_archard_k_lower_mu_bar_with_saturation_at_large_k(tmp_path):
+    zeta = cheap_sweep(tmp_path, "zeta.toml", """
+        workers = 2
+        [sweep.variables]
+        zeta = [0.0, 0.5, 1.0]
+        [sweep.set]
+        "fmus.strip.parameters.zeta" = { expr = "zeta" }
+        [sweep.summary]
+        mu_bar = { mean = "strip.mu_mean", last = 0.2 }
+        """)
+    mu = by(run_sweep(zeta, tmp_path / "zeta").rows, "zeta")
+    assert mu[0.0] > mu[0.5] > mu[1.0], mu
+    k = cheap_sweep(tmp_path, "k.toml", """
+        workers = 2
+        [sweep.variables]
+        archard_k = [1e-5, 1e-4, 1e-2, 1e-1]
+        [sweep.set]
+        "fmus.strip.parameters.archard_k" = { expr = "archard_k" }
+        "fmus.press.parameters.force_setpoint" = 36750.0
+        [sweep.summary]
+        mu_bar = { mean = "strip.mu_mean", last = 0.2 }
+        beta = { final = "strip.beta_mean" }
+        """)
+    res = run_sweep(k, tmp_path / "k")
+    mu = by(res.rows, "archard_k")
+    assert mu[1e-5] > mu[1e-4] > mu[1e-2], mu
+    assert abs(mu[1e-1] - mu[1e-2]) < 0.02 * mu[1e-2], f"no saturation at large K: {mu}"
+    beta = {r["archard_k"]: r["beta"] for r in res.rows}
+    assert beta[1e-1] == pytest.approx(beta[1e-2], rel=0.02) and beta[1e-1] > 0.2, f"beta at the cap: {beta}"
+
+
+def test_each_later_pass_has_lower_mu_bar(tmp_path):
+    path = cheap_sweep(tmp_path, "passes.toml", """
+        passes = 3
+        field_instance = "strip"
+        field_interval = 0.05
+        [sweep.set]
+        [sweep.summary]
+        mu_bar = { mean = "strip.pull_force / (2 * press.normal_force)", last = 0.2 }
+        beta_start = { mean = "strip.beta_max", last = 1.0 }
+        """)
+    rows = run_sweep(path, tmp_path / "out").rows
+    mu = [r["mu_bar"] for r in rows]
+    assert [r["pass"] for r in rows] == [1, 2, 3]
+    assert mu[0] > mu[1] > mu[2], f"mu_bar per pass: {mu}"
+    # pass k + 1 really started from what pass k left: its field file's first row is pass k's last
+    folder = tmp_path / "out" / "cases" / "case-000"
+    for k in (1, 2):
+        with np.load(folder / f"pass-{k}.field.npz") as a, np.load(folder / f"pass-{k + 1}.field.npz") as b:
+            np.testing.assert_array_equal(b["beta"][0], a["beta"][-1], err_msg=f"hand-over {k} -> {k + 1}")
+
+
+BAD = {
+    "fmus.drive.parameters.drive_stiffness": (-5e7, "outside the declared range"),
+    "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's pressure axis"),
+    "fmus.strip.parameters.friction_model": ("tabel", "is not allowed; choose one of table"),
+    "fmus.press.parameters.setpoint_table": ("0 0; 0.1", "is malformed"),
+    "fmus.strip.parameters.beta_initial": (0.5, "exceeds the cap of beta"),
+}
+
+
+def test_impossible_parameters_stop_before_running_naming_scene_instance_and_parameter(tmp_path, capsys):
+    out = tmp_path / "out"
+    args = ["run", str(DEMO), "--out", str(out), "--quiet"]
+    for key, (value, _) in BAD.items():
+        args += ["--set", f"{key}={json.dumps(value)}"]
+    assert tribocosim(args) == 2
+    err = capsys.readouterr().err
+    assert f"{len(BAD)} problems in scene {DEMO}" in err, err
+    for key, (_, message) in BAD.items():
+        line = next((ln for ln in err.splitlines() if f"{DEMO}: {key}: " in ln), None)
+        assert line is not None and message in line, f"{key}: {err}"
+    assert not out.exists(), "nothing ran, nothing was written"
+
+
+def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
+    from components.stripdraw import StripDrawParameters, closed_form_table, write_table
+
+    small = tmp_path / "small.npz"
+    write_table(small, closed_form_table(StripDrawParameters(), velocity=np.linspace(0.0, 1.0, 5)))
+    over = {"fmus.strip.parameters.table_file": str(small), "fmus.drive.parameters.velocity_setpoint": 2.0}
+    with pytest.raises(SceneError, match=r"fmus.drive.parameters.velocity_setpoint: \|velocity_setpoint\| = 2 m/s is "
+                                         r"above the friction table's velocity axis \(up to 1 m/s\)"):
+        load_component_scene(DEMO, over)
+    load_component_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
+
+
+def test_sweep_file_problems_are_reported_at_once(tmp_path):
+    path = tmp_path / "bad_sweep.toml"
+    path.write_text(textwrap.dedent(f"""
+        [sweep]
+        scene = "{DEMO}"
+        passes = 0
+        [sweep.variables]
+        p = [1, 2]
+        [sweep.set]
+        "fmus.press.parameters.force_setpoint" = {{ expr = "q * 1e6" }}
+        "fmus.strip.parameters.zeta" = {{ expr = "__import__('os')" }}
+        [sweep.summary]
+        mu_bar = {{ average = "strip.mu_mean" }}
+        """))
+    with pytest.raises(SceneError) as exc:
+        load_sweep(path)
+    text = str(exc.value)
+    for key in ("sweep.passes", "sweep.set.fmus.press.parameters.force_setpoint", "sweep.set.fmus.strip.parameters.zeta",
+                "sweep.summary.mu_bar"):
+        assert f"{path}: {key}:" in text, text
+    assert "unknown variables ['q']" in text
+
+
+def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
+    """models/scenes/stiff_drive.toml: the strip sticks (creep draw), its free length is a 2e8 N/m
+    spring on a 20 kg grip through the coupling. Jacobi at 1 ms rings at the friction limit;
+    Jacobi at 50 us and the iterative scheme at 1 ms give the smooth build-up of the pull force."""
+    scene = SCENES / "stiff_drive.toml"
+    small = run(load_component_scene(scene, {"experiment.step": 5e-5}), write=False)
+    pull = small["strip.pull_force"]
+    assert np.all(np.diff(pull[small.time > 0.05]) > 0) and 150 < pull[-1] < 300, "smooth build-up while sticking"
+    jac = run(load_component_scene(scene), write=False)
+    assert np.max(np.abs(jac["strip.pull_force"])) > 10 * pull[-1], "Jacobi at 1 ms should ring (unstable loop)"
+    assert np.min(jac["drive.grip_velocity"]) < -0.01, "... with the grip reversing"
+    it = run(load_component_scene(scene, {"master.algorithm": "iterative"}), write=False)
+    np.testing.assert_allclose(it["strip.pull_force"][-1], pull[-1], rtol=0.1, err_msg="iterative at 1 ms")
+    ref = np.interp(it.time, small.time, pull)
+    assert np.max(np.abs(it["strip.pull_force"] - ref)) < 0.1 * pull[-1]
