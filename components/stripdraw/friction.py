@@ -11,7 +11,8 @@ removes tau0 and E*:
     mu = mu0 (1 - alpha(v) beta h'_rms / kappa),   alpha(v) = b (1 - exp(-|v| / v_ref)).
 
 b and v_ref are PROVISIONAL defaults (the paper does not print them; Fig. 15): the surrogate
-issue fits them to mesoscale runs. v is the local nodal slip rate (MODEL.md section 7).
+issue fits them to mesoscale runs. Which velocity v is (the pulling speed or each node's slip
+rate) is the model's ``friction_velocity`` parameter (see :mod:`components.stripdraw.model`).
 
 The cap of beta (Eq. 24, A_p <= A_c) is beta_thres = kappa / (alpha h'_rms). We evaluate it with
 the largest alpha, its saturation value b, so that A_p <= A_c holds at every velocity and mu never

@@ -22,6 +22,14 @@ Time integration. Two integrators for the bar, selected by ``integrator``:
     numerical damping (``rho_inf`` < 1) removes the unresolved elastic waves, so that at
     V0 << sqrt(E/rho) it converges to the quasi-static answer with steps of milliseconds.
 
+Velocity in mu(P, v, beta) (``friction_velocity``). ``grip`` (default): the pulling speed |V0|,
+the same for every node, as the paper does ("alpha was extrapolated from Figure 15 using the pulling
+velocity v0 = 0.08 m/s", Fig. 19). ``slip_rate``: each node's own slip rate of the last coupling
+interval (MODEL.md section 7 lists this as the open choice). With ``slip_rate`` a sticking node has
+alpha = 0 and mu = mu0 whatever its debris, so at high debris coverage the law is strongly
+velocity-weakening and the strip goes into stick-slip (measured: 70 mm pad at 30 MPa, mu swinging
+between ~0 and 0.146); the paper's steady friction curves need ``grip``.
+
 Coupling of bar, friction and debris (our choice; MODEL.md section 7): a requested step is split
 into coupling intervals in which the pad slides at most ``window_courant`` elements. In each
 interval mu is evaluated per node from (P, slip rate of the last interval, beta) and held, the bar
@@ -207,7 +215,8 @@ class StripDrawModel:
             lo, hi = 0, m.n_nodes
             if inside.size:
                 lo, hi = max(0, inside[0] - reach), min(m.n_nodes, inside[-1] + 1 + reach)
-            mu, clamped = self.law.mu(pressure, self.slip_rate[lo:hi], self.beta[lo:hi])
+            v = abs(vg) if p.friction_velocity == "grip" else self.slip_rate[lo:hi]
+            mu, clamped = self.law.mu(pressure, v, self.beta[lo:hi])
             self.clamp_count += int(np.count_nonzero(clamped & (self._w[lo:hi] > 0)))
             tmax[lo:hi] = mu * pressure
         U0 = self.U.copy()

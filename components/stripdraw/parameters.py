@@ -22,6 +22,7 @@ from components.params import param, validate_fields
 FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
 TABLE_POLICIES = ("clamp", "error")
+FRICTION_VELOCITIES = ("grip", "slip_rate")
 
 
 _p = param
@@ -71,6 +72,10 @@ class StripDrawParameters:
     )
     alpha_v_ref: float = _p(
         0.05, "m/s", "PROVISIONAL velocity scale v_ref of alpha(v) (Fig. 15)", 1e-9, 1e6, False
+    )
+    friction_velocity: str = _p(
+        "grip", "", "velocity in mu(P, v, beta): grip (the pulling speed, as the paper) | slip_rate (each node's)",
+        choices=FRICTION_VELOCITIES,
     )
     table_policy: str = _p(
         "clamp", "", "lookups outside the table: clamp (counted) | error", choices=TABLE_POLICIES
