@@ -30,7 +30,7 @@ from cosim.slave import FmpySlave
 from cosim.stepcontrol import EnergyControl, FixedStep, StepDoubling
 from cosim.system import CoupledSystem, LinkSpec
 from cosim.timegrid import TimeGrid
-from cosim.validate import Plan, load_scene
+from cosim.validate import Plan
 
 
 @dataclass
@@ -221,7 +221,12 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     -------
     Result
     """
-    plan = scene if isinstance(scene, Plan) else load_scene(scene, overrides)
+    if not isinstance(scene, Plan):
+        from cosim.reference_components import load_component_scene
+
+        # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
+        scene = load_component_scene(scene, overrides)
+    plan = scene
     b = build(plan, slave_factory)
     m = b.master
     ex = plan.scene.experiment
