@@ -85,7 +85,7 @@ class StripDrawParameters:
     cfl_safety: float = _p(0.9, "1", "explicit step as a fraction of the CFL limit", 1e-3, 1.0, False)
     rho_inf: float = _p(0.5, "1", "spectral radius at infinity of the generalized-alpha scheme", 0.0, 1.0)
     window_courant: float = _p(
-        1.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0, False
+        2.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0, False
     )
 
     def __post_init__(self) -> None:
