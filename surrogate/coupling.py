@@ -1,0 +1,348 @@
+"""The staggered BEM-DEM sliding loop (Sec. 5, Fig. 7; Eq. 17-19, 22).
+
+Frames and signs. z points up; all heights are in the lab frame of the sheet. The sheet (elastic-
+plastic, below) has the undeformed profile h_def0 and, after a contact solve, the surface
+h_low = h_def0 - u_p - (u_e - <u_e>) (u positive into the sheet; the mean of the periodic
+elastic field is the rigid approach and is carried by the tool instead). The rigid tool (above)
+has the profile h_tool0 (tool frame), slides by s in +x and sits at the height z_top:
+h_top(x, y) = h_tool0(x - s, y) + z_top. After one pixel of sliding (integer shift k, on the
+grid: h_tool0 rolled by k along x) the loop
+
+1. DEM (:mod:`surrogate.dem`) with both surfaces rigid while the tool advances one pixel at v0,
+   n_sub steps with n_sub v0 dt = dx;
+2. classifies each flake: *blocked* if the pixels of its footprint where its upper surface
+   z_hi exceeds the tool h_top form >= 3 spatially distinct 8-connected clusters (Fig. 8), else
+   free. Our addition (MODEL.md Sec. 7 leaves the criterion open): a flake is also blocked when
+   it is *pinched*, i.e. the tool and the sheet both cut into it by more than
+   ``pinch_overlap_fraction`` h_p (on the grid: max(z_hi - h_top) and max(h_low - z_lo) over its
+   footprint). A smooth tool asperity wider than the flake overlaps it in one cluster only,
+   however hard it squeezes it; without this rule such a flake, ignored by the contact solve, is
+   crushed between the two rigid surfaces until the DEM stops with an overlap > 50 % h_p. A
+   pinched flake made part of the tool lets the solve dent the sheet under it (u_p), which is
+   the sheet's real answer. With this rule on, a blocked flake also stays blocked while the
+   tool still touches it (>= 1 overlap cluster): released earlier, the elastic part of its dent
+   springs back and crushes it against the tool again. Both A_p (all blocked flakes) and A_p by the cluster
+   rule alone are recorded;
+3. builds the modified tool (Eq. 18) h*_top = min(h_top, min_j z_lo_j) over the blocked flakes j
+   (z_lo: the flake's lower surface: the blocked flake becomes part of the tool). A blocked flake
+   enters the solve attached to the tool's underside (Fig. 7: "the particles are rigidly
+   attached to the tool"): moved down by the depth the tool cuts into it (the penalty overlap of
+   the DEM), so that the rigid tool + flake body has no interpenetration and the solve dents the
+   sheet by the flake's full thickness; its faces are rasterised pixel-consistently with the
+   DEM's bilinear surfaces (:func:`attach_to_tool`). The DEM flake itself is not moved: the
+   tool's cut pushes it into the dent as the sheet moves there in the next DEM phase. Without
+   this a flake sitting in its dent while the tool slides over it is cut deeper at each pixel
+   (by about slope * dx) until the DEM stops; with it the flake is pressed (ploughed) into the
+   sheet step by step;
+4. solves the contact (Eq. 19-21) of the rigid profile g* = h*_top - h_def0 (Eq. 19; gap
+   between the modified tool and the *undeformed* sheet) pressed with the mean pressure p on a
+   flat elastic half-space with plastic saturation p_crit, passing and receiving the accumulated
+   u_p; the new tool height z_top is the one where the modified tool meets the new sheet
+   surface h_low at the contact pixels. Neither surface jumps there: during the next DEM phase
+   the tool height moves linearly from the old to the new z_top and the sheet from the old to
+   the new h_low (the surfaces move continuously; a jump of the order of h_p, e.g. the elastic
+   spring-back under a released flake or the tool landing after it, would otherwise hit the
+   flakes at once). The blocked flakes are not moved
+   by the solve: the DEM pushes them with the tool into the sheet's dent;
+5. measures A_c = area with traction > 0 and A_p = area with traction > 0 under a blocked flake
+   (Sec. 6.2).
+
+<A_p>/A0 is the mean of A_p/A0 over the steps (Eq. 22).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from components.errors import ConvergenceError
+
+from . import dem
+from .flakes import Footprint, footprints, random_placement
+from .slide_config import SlideConfig
+
+#: a flake is blocked when it overlaps the tool in at least this many distinct clusters
+MIN_CLUSTERS_BLOCKED = 3
+_EIGHT = np.ones((3, 3), dtype=bool)
+
+
+def overlap_clusters(fp: Footprint, h_top) -> int:
+    """Number of 8-connected clusters of the footprint pixels where z_hi > h_top (Fig. 8)."""
+    window = h_top[np.ix_(fp.ix, fp.iy)]
+    mask = fp.inside & (np.nan_to_num(fp.z_hi, nan=-np.inf) > window)
+    # the window is smaller than the domain, so the periodic labelling reduces to a plain one
+    return int(ndimage.label(mask, structure=_EIGHT)[1])
+
+
+def classify(fps: list[Footprint], h_top) -> tuple[np.ndarray, np.ndarray]:
+    """Blocked flags (cluster rule, Fig. 8) and overlap-cluster counts against the tool ``h_top``."""
+    counts = np.array([overlap_clusters(fp, h_top) for fp in fps], dtype=np.int64)
+    return counts >= MIN_CLUSTERS_BLOCKED, counts
+
+
+def attach_to_tool(fp: Footprint, h_top) -> tuple[Footprint, float]:
+    """The footprint of a blocked flake as the contact solve sees it, and its drop [m].
+
+    Pixel-consistent rasterisation: the DEM reads the surfaces by bilinear interpolation, so a
+    surface lying below a flake's lower face at the pixels can still cut it between them (at the
+    steep rim by up to ~c). The flake's lower face is therefore replaced by its 3 x 3 pixel
+    minimum (grey erosion; the footprint grows by one pixel ring) and its upper face by its
+    3 x 3 maximum. The flake is dropped by the depth that dilated upper face cuts into the tool
+    (if positive), lower face included.
+    """
+    z_lo = ndimage.minimum_filter(np.nan_to_num(fp.z_lo, nan=np.inf), size=3, mode="constant",
+                                  cval=np.inf)
+    z_hi = ndimage.maximum_filter(np.nan_to_num(fp.z_hi, nan=-np.inf), size=3, mode="constant",
+                                  cval=-np.inf)
+    drop = max(0.0, float(np.max(z_hi - h_top[np.ix_(fp.ix, fp.iy)])))
+    z_lo = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
+    z_hi = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
+    return Footprint(fp.ix, fp.iy, z_lo, z_hi), drop
+
+
+def pinched(fps: list[Footprint], h_top, h_low, limit: float) -> np.ndarray:
+    """Flakes into which both the tool and the sheet cut by more than ``limit`` [m] (grid)."""
+    out = np.zeros(len(fps), dtype=bool)
+    for j, fp in enumerate(fps):
+        win = np.ix_(fp.ix, fp.iy)
+        inside = fp.inside
+        top = np.max((fp.z_hi - h_top[win])[inside])
+        low = np.max((h_low[win] - fp.z_lo)[inside])
+        out[j] = top > limit and low > limit
+    return out
+
+
+def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:
+    """Eq. 18: min of the tool and the lower surface of every blocked flake."""
+    h_star = np.array(h_top, dtype=np.float64, copy=True)
+    for fp, b in zip(fps, blocked):
+        if b:
+            sub = h_star[np.ix_(fp.ix, fp.iy)]
+            h_star[np.ix_(fp.ix, fp.iy)] = np.fmin(sub, fp.z_lo)
+    return h_star
+
+
+def blocked_mask(fps: list[Footprint], blocked, n: int) -> np.ndarray:
+    """Boolean (n, n) mask of the pixels under a blocked flake."""
+    mask = np.zeros((n, n), dtype=bool)
+    for fp, b in zip(fps, blocked):
+        if b:
+            mask[np.ix_(fp.ix, fp.iy)] |= fp.inside
+    return mask
+
+
+def particle_area_fraction(traction, mask) -> float:
+    """A_p/A0: fraction of pixels with traction > 0 under a blocked flake (Sec. 6.2)."""
+    return float(np.count_nonzero((np.asarray(traction) > 0.0) & mask)) / mask.size
+
+
+@dataclass
+class SlideResult:
+    """Time series of a slide (one entry per one-pixel step) and optional snapshots."""
+
+    config: SlideConfig
+    slide_distance: np.ndarray
+    contact_fraction: np.ndarray
+    particle_fraction: np.ndarray
+    particle_fraction_clusters: np.ndarray
+    n_blocked: np.ndarray
+    n_blocked_clusters: np.ndarray
+    bem_iterations: np.ndarray
+    tool_height: np.ndarray
+    snapshots: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    info: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """<A_p>/A0 (Eq. 22; all blocked flakes, and by the cluster rule alone), <A_c>/A0,
+        fraction of steps with a blocked flake, timings."""
+        return {
+            "mean_particle_fraction": float(np.mean(self.particle_fraction)),
+            "mean_particle_fraction_clusters": float(np.mean(self.particle_fraction_clusters)),
+            "mean_contact_fraction": float(np.mean(self.contact_fraction)),
+            "fraction_steps_blocked": float(np.mean(self.n_blocked > 0)),
+            "beta": self.config.beta,
+            "steps": int(len(self.slide_distance)),
+            **{f"time_{k}_s": v for k, v in self.timings.items()},
+            **self.info,
+        }
+
+
+class SlideSimulation:
+    """One BEM-DEM slide (Fig. 7) for a :class:`SlideConfig`.
+
+    Parameters
+    ----------
+    config : SlideConfig
+    solver : object, optional
+        A contact solver with ``solve(gap, pressure, u_plastic=, warm_start=)`` returning an
+        object with ``traction``, ``u_elastic``, ``u_plastic``, ``converged``, ``iterations``
+        (default: :class:`surrogate.bem.ContactSolver` built from the configuration).
+    surfaces : (ndarray, ndarray), optional
+        (h_def0, h_tool0) instead of generated self-affine surfaces.
+    """
+
+    def __init__(self, config: SlideConfig, solver=None, surfaces=None):
+        self.cfg = c = config
+        if surfaces is None:
+            surfaces = _generate_surfaces(c)
+        self.h_def0 = np.ascontiguousarray(surfaces[0], dtype=np.float64)
+        self.h_tool0 = np.ascontiguousarray(surfaces[1], dtype=np.float64)
+        if solver is None:
+            from .bem import ContactSolver
+
+            solver = ContactSolver(c.n, c.size, c.e_star, p_crit=c.p_crit, tol=c.bem_tol,
+                                   max_iter=c.bem_max_iter, threads=c.threads)
+        self.solver = solver
+        self.shape = dem.FlakeShape(c.flake_diameter, c.flake_thickness, c.flake_density)
+        params = dem.DemParams.build(self.shape, c.size, c.dx, c.e_star, c.v0, c.damping_rate,
+                                     spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety)
+        self.n_sub = max(1, math.ceil(c.dx / (c.v0 * params.dt)))
+        self.params = dem.DemParams(params.shape, c.size, c.dx, params.k_area, c.damping_rate,
+                                    c.dx / (c.v0 * self.n_sub), params.samples, params.weights)
+        self.k = 0  # pixels slid so far
+        self.u_p = np.zeros_like(self.h_def0)
+        self.z_top = 0.0
+        self.z_prev = 0.0  # tool height at the start of the next DEM phase
+        self._last = None
+        self.timings = {"dem": 0.0, "bem": 0.0, "classify": 0.0}
+        t0 = time.perf_counter()
+        self.traction = self._contact(self.h_tool0 + self.z_top)
+        self.z_prev, self.h_low_prev = self.z_top, self.h_low
+        self.timings["bem"] += time.perf_counter() - t0
+        pos = random_placement(c.n_flakes, self.shape, c.size, self.h_low, self.tool_grid(),
+                               c.flake_seed)
+        self.state = dem.DemState.at_rest(pos)
+        self.blocked_prev = np.zeros(len(pos), dtype=bool)
+
+    def tool_grid(self) -> np.ndarray:
+        """The tool on the grid at the current integer shift, lab frame [m]."""
+        return np.roll(self.h_tool0, self.k, axis=0) + self.z_top
+
+    def _contact(self, h_star) -> np.ndarray:
+        """Step 4: solve on g* = h* - h_def0, update u_p, h_low and z_top."""
+        try:
+            res = self.solver.solve(h_star - self.h_def0, self.cfg.pressure, u_plastic=self.u_p,
+                                    warm_start=self._last)
+        except ConvergenceError as exc:
+            raise ConvergenceError(f"contact solve at sliding step {self.k}: {exc}") from exc
+        if not res.converged:
+            raise ConvergenceError(
+                f"contact solver did not converge at sliding step {self.k}: residual "
+                f"{res.residual:.3e} after {res.iterations} iterations (tol {self.cfg.bem_tol:g})")
+        self._last = res
+        self.u_p = np.asarray(res.u_plastic, dtype=np.float64)
+        u_e = np.asarray(res.u_elastic, dtype=np.float64)
+        self.h_low = np.ascontiguousarray(self.h_def0 - self.u_p - (u_e - u_e.mean()))
+        touching = np.asarray(res.traction) > 0.0
+        dz = float(np.median((self.h_low - h_star)[touching])) if touching.any() else 0.0
+        self.z_top += dz
+        self.h_star = h_star + dz  # the modified tool where the solve left it
+        self.last_result = res
+        return np.asarray(res.traction)
+
+    def step(self) -> dict:
+        """One iteration of Fig. 7 (one pixel of sliding); returns the step's record."""
+        self.dem_phase()
+        return self.contact_phase()
+
+    def dem_phase(self) -> None:
+        """Step 1: DEM with rigid surfaces while the tool advances one pixel."""
+        c = self.cfg
+        t0 = time.perf_counter()
+        try:
+            dem.advance(self.state, self.params, self.h_low_prev, self.h_tool0, self.n_sub,
+                        shift0=self.k * c.dx, dshift=c.dx / self.n_sub, top_offset=self.z_prev,
+                        dtop=(self.z_top - self.z_prev) / self.n_sub,
+                        dh_low=self.h_low - self.h_low_prev, step_offset=self.k * self.n_sub)
+        except dem.DemBlowUpError as exc:
+            raise dem.DemBlowUpError(f"sliding step {self.k + 1} of {c.steps}: {exc}") from None
+        self.z_prev = self.z_top
+        self.h_low_prev = self.h_low
+        self.k += 1
+        self.timings["dem"] += time.perf_counter() - t0
+
+    def contact_phase(self) -> dict:
+        """Steps 2-5: classify, modified tool (Eq. 18), contact solve, A_c and A_p."""
+        c = self.cfg
+        t1 = time.perf_counter()
+        h_top = self.tool_grid()
+        fps = footprints(self.state.pos, self.state.quat, self.shape, c.n, c.size)
+        by_clusters, counts = classify(fps, h_top)
+        blocked = by_clusters.copy()
+        if c.pinch_overlap_fraction > 0.0:
+            blocked |= pinched(fps, h_top, self.h_low, c.pinch_overlap_fraction * c.flake_thickness)
+            blocked |= self.blocked_prev & (counts >= 1)  # held until the tool lets go
+        attached = list(fps)
+        for j in np.flatnonzero(blocked):  # the solve sees it attached to the tool's underside
+            attached[j] = attach_to_tool(fps[j], h_top)[0]
+        h_star = modified_tool(h_top, attached, blocked)
+        self.blocked_prev = blocked
+        t2 = time.perf_counter()
+        self.traction = self._contact(h_star)
+        t3 = time.perf_counter()
+        mask = blocked_mask(fps, blocked, c.n)
+        self.timings["classify"] += t2 - t1 + time.perf_counter() - t3
+        self.timings["bem"] += t3 - t2
+        return {
+            "slide_distance": self.k * c.dx,
+            "contact_fraction": float(np.mean(self.traction > 0.0)),
+            "particle_fraction": particle_area_fraction(self.traction, mask),
+            "particle_fraction_clusters": particle_area_fraction(
+                self.traction, blocked_mask(fps, by_clusters, c.n)),
+            "n_blocked": int(blocked.sum()),
+            "n_blocked_clusters": int(by_clusters.sum()),
+            "bem_iterations": int(self.last_result.iterations),
+            "tool_height": self.z_top,
+            "blocked": blocked,
+        }
+
+    def snapshot(self) -> dict:
+        """Flake state and the deformed sheet (float32) at the current step."""
+        return {"step": self.k, "pos": self.state.pos.copy(), "quat": self.state.quat.copy(),
+                "sheet": self.h_low.astype(np.float32)}
+
+    def run(self, progress=None) -> SlideResult:
+        """Slide ``config.steps`` pixels; ``progress(k, record)`` is called after each step."""
+        c = self.cfg
+        wall0 = time.perf_counter()
+        recs, snaps = [], {0: self.snapshot()}
+        init = {"contact_fraction0": float(np.mean(self.traction > 0.0))}
+        for _ in range(c.steps):
+            rec = self.step()
+            recs.append(rec)
+            if (c.snapshot_every and self.k % c.snapshot_every == 0) or self.k == c.steps:
+                snap = self.snapshot()
+                snap["blocked"] = rec["blocked"]
+                snaps[self.k] = snap
+            if progress is not None:
+                progress(self.k, rec)
+        self.timings["wall"] = time.perf_counter() - wall0
+        keys = ("slide_distance", "contact_fraction", "particle_fraction",
+                "particle_fraction_clusters", "n_blocked", "n_blocked_clusters",
+                "bem_iterations", "tool_height")
+        cols = {k: np.array([r[k] for r in recs]) for k in keys}
+        info = {**init, "dem_dt": self.params.dt, "dem_steps_per_pixel": self.n_sub,
+                "penalty_k_area": self.params.k_area, "face_samples": len(self.params.samples)}
+        return SlideResult(c, **cols, snapshots=snaps, timings=dict(self.timings), info=info)
+
+
+def _generate_surfaces(c: SlideConfig):
+    from .surfaces import self_affine_surface
+
+    q_roll = 2.0 * math.pi / c.size
+    q_cut = q_roll / c.wavelength_ratio
+    h_def0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
+                                 rms_height=c.sheet_rms_height, seed=c.sheet_seed)
+    h_tool0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
+                                  rms_height=c.tool_rms_height, seed=c.tool_seed)
+    return h_def0, h_tool0
+
+
+def run_slide(config: SlideConfig, solver=None, surfaces=None, progress=None) -> SlideResult:
+    """Build a :class:`SlideSimulation` and run it to the end."""
+    return SlideSimulation(config, solver=solver, surfaces=surfaces).run(progress)

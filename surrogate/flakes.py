@@ -1,0 +1,181 @@
+"""Geometry of oblate-spheroid flakes on a pixel grid, and their random initial placement.
+
+A flake with centre r, rotation R (body -> space) and semi-axes (a, a, c) is the set
+(p - r)^T M (p - r) <= 1, M = R diag(a^-2, a^-2, c^-2) R^T. The vertical line through a grid
+point (X, Y) meets it where M33 t^2 + 2 t (M13 dX + M23 dY) + (M11 dX^2 + 2 M12 dX dY + M22 dY^2 - 1)
+= 0 with t = z - r_z, (dX, dY) the periodic (minimum-image) offset of the grid point from the
+centre. Grid points with a real root are the flake's footprint; the smaller root gives the
+flake's lower surface z_lo(X, Y) (used in Eq. 18) and the larger its upper surface
+z_hi(X, Y) (z_p of Fig. 8, compared with the tool to classify the flake).
+
+Grid convention: arrays are indexed [ix, iy], the value of pixel (ix, iy) sits at (ix dx, iy dx).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from components.errors import ParameterError
+
+from .dem import FlakeShape, face_samples
+
+
+def rotation_matrices(quat) -> np.ndarray:
+    """Rotation matrices (nf, 3, 3), body -> space, of unit quaternions (w, x, y, z)."""
+    q = np.asarray(quat, dtype=np.float64).reshape(-1, 4)
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)
+
+
+def axis_angle_quaternion(axis, angle) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` [rad] about ``axis``."""
+    u = np.asarray(axis, dtype=np.float64)
+    u = u / np.linalg.norm(u)
+    return np.concatenate([[math.cos(0.5 * angle)], math.sin(0.5 * angle) * u])
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """The part of the grid under one flake.
+
+    Attributes
+    ----------
+    ix, iy : ndarray (wx,), (wy,)
+        Global pixel indices of the window's rows/columns (already wrapped mod n).
+    z_lo, z_hi : ndarray (wx, wy)
+        Lower and upper surface heights over each window pixel [m]; NaN outside the footprint.
+    """
+
+    ix: np.ndarray
+    iy: np.ndarray
+    z_lo: np.ndarray
+    z_hi: np.ndarray
+
+    @property
+    def inside(self) -> np.ndarray:
+        """Boolean (wx, wy) mask of the footprint."""
+        return np.isfinite(self.z_lo)
+
+
+def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> list[Footprint]:
+    """Rasterise every flake on the n x n grid of a periodic domain of side ``size``.
+
+    Returns
+    -------
+    list of Footprint
+        One per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
+    """
+    dx = size / n
+    a, c = shape.a, shape.c
+    rot = rotation_matrices(quat)
+    half = int(math.ceil(a / dx)) + 1
+    offs = np.arange(-half, half + 1)
+    out = []
+    for r, R in zip(np.asarray(pos, dtype=np.float64).reshape(-1, 3), rot):
+        m = R @ np.diag([a**-2, a**-2, c**-2]) @ R.T
+        i0, j0 = int(math.floor(r[0] / dx)), int(math.floor(r[1] / dx))
+        gx = (i0 + offs) * dx - r[0]
+        gy = (j0 + offs) * dx - r[1]
+        dX, dY = np.meshgrid(gx, gy, indexing="ij")
+        qa = m[2, 2]
+        qb = 2.0 * (m[0, 2] * dX + m[1, 2] * dY)
+        qc = m[0, 0] * dX**2 + 2.0 * m[0, 1] * dX * dY + m[1, 1] * dY**2 - 1.0
+        disc = qb * qb - 4.0 * qa * qc
+        root = np.sqrt(np.where(disc >= 0.0, disc, np.nan))
+        z_lo = r[2] + (-qb - root) / (2.0 * qa)
+        z_hi = r[2] + (-qb + root) / (2.0 * qa)
+        out.append(Footprint((i0 + offs) % n, (j0 + offs) % n, z_lo, z_hi))
+    return out
+
+
+def _bilinear_np(h, x, y, dx):
+    n0, n1 = h.shape
+    u, v = x / dx, y / dx
+    fu, fv = np.floor(u), np.floor(v)
+    tx, ty = u - fu, v - fv
+    i0, j0 = fu.astype(np.int64) % n0, fv.astype(np.int64) % n1
+    i1, j1 = (i0 + 1) % n0, (j0 + 1) % n1
+    return ((1 - tx) * (1 - ty) * h[i0, j0] + tx * (1 - ty) * h[i1, j0]
+            + (1 - tx) * ty * h[i0, j1] + tx * ty * h[i1, j1])
+
+
+def random_placement(n_flakes: int, shape: FlakeShape, size: float, h_low, h_top,
+                     seed: int, clearance: float | None = None,
+                     max_attempts: int = 200) -> np.ndarray:
+    """Seeded random flat placement of flakes resting on the lower surface, inside the gap.
+
+    Each flake is laid flat (symmetry axis along z) at a uniformly random (x, y); its centre
+    height is the lowest at which no face point is below ``h_low`` plus ``clearance``. A
+    candidate is rejected if its upper face comes within ``clearance`` of the tool ``h_top``
+    (the gap is too thin there) or if its centre is closer than d_p (in plane, periodic) to an
+    already placed flake.
+
+    Parameters
+    ----------
+    n_flakes : int
+    shape : FlakeShape
+    size : float
+        Domain side L [m].
+    h_low, h_top : ndarray (n, n)
+        Lower surface and tool (in its current vertical position) [m].
+    seed : int
+    clearance : float, optional
+        Gap left to both surfaces [m]; default 2 % of h_p.
+    max_attempts : int
+        Candidates tried per flake before giving up.
+
+    Returns
+    -------
+    ndarray (n_flakes, 3)
+        Centre positions [m].
+
+    Raises
+    ------
+    ParameterError
+        If the flakes cannot cover the domain without overlap, or if no admissible place is
+        found within the attempts.
+    """
+    if n_flakes < 0:
+        raise ParameterError(f"number of flakes = {n_flakes} is negative; allowed: >= 0")
+    if shape.diameter >= 0.5 * size:
+        raise ParameterError(f"flake diameter d_p = {shape.diameter:g} m does not fit the domain "
+                             f"L = {size:g} m; allowed: d_p < L/2")
+    beta = n_flakes * shape.area / size**2
+    if beta > 0.5:
+        raise ParameterError(f"flake area fraction beta = n_flakes pi a^2 / L^2 = {beta:.3g} "
+                             f"is too large for a non-overlapping placement; allowed: <= 0.5")
+    h_low = np.asarray(h_low, dtype=np.float64)
+    h_top = np.asarray(h_top, dtype=np.float64)
+    n = h_low.shape[0]
+    dx = size / n
+    clearance = 0.02 * shape.thickness if clearance is None else float(clearance)
+    pts, _ = face_samples(shape, 0.5 * dx)
+    zb = shape.c * np.sqrt(np.maximum(0.0, 1.0 - np.sum(pts**2, axis=1) / shape.a**2))
+    rng = np.random.default_rng(seed)
+    placed: list[np.ndarray] = []
+    for k in range(n_flakes):
+        for _ in range(max_attempts):
+            x, y = rng.uniform(0.0, size, 2)
+            if placed:
+                d = np.asarray(placed)[:, :2] - (x, y)
+                d -= size * np.round(d / size)
+                if np.min(np.hypot(d[:, 0], d[:, 1])) < shape.diameter:
+                    continue
+            px, py = x + pts[:, 0], y + pts[:, 1]
+            z = np.max(_bilinear_np(h_low, px, py, dx) + zb) + clearance
+            if np.all(_bilinear_np(h_top, px, py, dx) - (z + zb) >= clearance):
+                placed.append(np.array([x, y, z]))
+                break
+        else:
+            raise ParameterError(
+                f"could not place flake {k} of {n_flakes} (d_p = {shape.diameter:g} m, "
+                f"h_p = {shape.thickness:g} m) in the gap without overlap after {max_attempts} "
+                f"attempts; use fewer/smaller flakes or a lower pressure")
+    return np.asarray(placed, dtype=np.float64).reshape(-1, 3)

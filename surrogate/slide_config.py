@@ -1,0 +1,174 @@
+"""Configuration of one mesoscale sliding run (BEM-DEM, Sec. 5-6): a frozen dataclass in SI units.
+
+A TOML file holds the same keys, either at the top level or under a ``[slide]`` table, e.g.::
+
+    [slide]
+    n = 256
+    size = 500e-6          # m
+    pressure = 10e6        # Pa
+    flake_diameter = 12e-6 # m
+
+Unknown keys are reported all at once.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+from components.errors import ParameterError, check_range
+
+
+@dataclass(frozen=True)
+class SlideConfig:
+    """Parameters of a sliding run (defaults: MODEL.md Sec. 5-6 and the paper's Fig. 10 case).
+
+    Attributes
+    ----------
+    n : int
+        Grid points per side (pixel dx = size/n).
+    size : float
+        Side L of the periodic square domain [m].
+    pressure : float
+        Mean contact pressure p imposed on the tool [Pa].
+    v0 : float
+        Sliding velocity of the tool, +x [m/s].
+    e_star, p_crit : float
+        Effective modulus and plastic saturation pressure of the sheet [Pa].
+    hurst : float
+        Hurst exponent of both surfaces.
+    wavelength_ratio : float
+        Shortest / longest wavelength of the surfaces (longest = size).
+    sheet_rms_height, tool_rms_height : float
+        RMS heights of the aluminium sheet (below) and of the rigid tool (above) [m].
+    sheet_seed, tool_seed, flake_seed : int
+        Seeds of the two surfaces and of the flake placement.
+    n_flakes : int
+        Number of flakes.
+    flake_diameter, flake_thickness : float
+        d_p and h_p [m].
+    flake_density : float
+        [kg/m^3] (Al: 2700).
+    damping_rate : float
+        gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I). Default 5e7: Stokes drag 16 mu a v of a
+        12 um disc in an oil of 0.05 Pa s over its mass.
+    dt_safety : float
+        Safety factor on the Verlet limit 2/omega_max.
+    sample_spacing_px : float
+        Spacing of the flake-face sample points in pixels.
+    pinch_overlap_fraction : float
+        A flake into which both surfaces cut deeper than this fraction of h_p is blocked too
+        (see :mod:`surrogate.coupling`); 0 disables the rule (the paper's cluster rule only).
+    n_slide_steps : int or None
+        Number of one-pixel sliding steps; default 2n (the tool slides 2L).
+    snapshot_every : int
+        Store flakes and sheet every this many steps (0: first and last only).
+    bem_tol, bem_max_iter, threads
+        Passed to the contact solver.
+    """
+
+    n: int = 256
+    size: float = 500e-6
+    pressure: float = 10e6
+    v0: float = 50.0
+    e_star: float = 55e9
+    p_crit: float = 340e6
+    hurst: float = 0.8
+    wavelength_ratio: float = 0.02
+    sheet_rms_height: float = 1.40e-6
+    tool_rms_height: float = 0.60e-6
+    sheet_seed: int = 1
+    tool_seed: int = 2
+    flake_seed: int = 3
+    n_flakes: int = 20
+    flake_diameter: float = 12e-6
+    flake_thickness: float = 0.5e-6
+    flake_density: float = 2700.0
+    damping_rate: float = 5e7
+    dt_safety: float = 0.1
+    sample_spacing_px: float = 1.0
+    pinch_overlap_fraction: float = 0.1
+    n_slide_steps: int | None = None
+    snapshot_every: int = 0
+    bem_tol: float = 1e-8
+    bem_max_iter: int = 10000
+    threads: int = 1
+
+    def __post_init__(self):
+        _int("n", self.n, 8)
+        pos = dict(low=0.0, low_inclusive=False)
+        check_range("size", self.size, unit="m", **pos)
+        check_range("pressure", self.pressure, high=self.p_crit, unit="Pa", **pos)
+        check_range("v0", self.v0, unit="m/s", **pos)
+        check_range("e_star", self.e_star, unit="Pa", **pos)
+        check_range("p_crit", self.p_crit, unit="Pa", **pos)
+        check_range("hurst", self.hurst, 0.0, 1.0, low_inclusive=False)
+        check_range("wavelength_ratio", self.wavelength_ratio, 2.0 / self.n, 1.0)
+        check_range("sheet_rms_height", self.sheet_rms_height, unit="m", **pos)
+        check_range("tool_rms_height", self.tool_rms_height, unit="m", **pos)
+        _int("n_flakes", self.n_flakes, 0)
+        check_range("flake_diameter", self.flake_diameter, high=0.5 * self.size,
+                    high_inclusive=False, unit="m", **pos)
+        check_range("flake_thickness", self.flake_thickness, high=self.flake_diameter,
+                    high_inclusive=False, unit="m", **pos)
+        check_range("flake_density", self.flake_density, unit="kg/m^3", **pos)
+        check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
+        check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
+        check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)
+        check_range("pinch_overlap_fraction", self.pinch_overlap_fraction, 0.0, 0.5)
+        if self.n_slide_steps is not None:
+            _int("n_slide_steps", self.n_slide_steps, 1)
+        _int("snapshot_every", self.snapshot_every, 0)
+        check_range("bem_tol", self.bem_tol, 0.0, 1.0, low_inclusive=False)
+        _int("bem_max_iter", self.bem_max_iter, 1)
+        _int("threads", self.threads, 1)
+
+    @property
+    def dx(self) -> float:
+        """Pixel size [m]."""
+        return self.size / self.n
+
+    @property
+    def steps(self) -> int:
+        """Number of one-pixel sliding steps."""
+        return 2 * self.n if self.n_slide_steps is None else self.n_slide_steps
+
+    @property
+    def beta(self) -> float:
+        """Flake area fraction beta = N_p pi (d_p/2)^2 / L^2 (Eq. 10)."""
+        return self.n_flakes * 3.141592653589793 * (0.5 * self.flake_diameter) ** 2 / self.size**2
+
+    def to_dict(self) -> dict:
+        """Plain dict of the fields (for metadata)."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "SlideConfig":
+        """Build from a dict, reporting every unknown key at once."""
+        data = dict(data.get("slide", data))
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise ParameterError(f"unknown slide configuration keys {unknown}; "
+                                 f"allowed: {sorted(names)}")
+        return cls(**data)
+
+    @classmethod
+    def from_toml(cls, path) -> "SlideConfig":
+        """Read a TOML file (keys at the top level or under ``[slide]``)."""
+        path = Path(path)
+        try:
+            with path.open("rb") as fh:
+                data = tomllib.load(fh)
+        except FileNotFoundError:
+            raise ParameterError(f"configuration file {str(path)!r} does not exist") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ParameterError(f"configuration file {str(path)!r} is not valid TOML: {exc}") \
+                from None
+        return cls.from_dict(data)
+
+
+def _int(name: str, value, low: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+        raise ParameterError(f"{name} = {value!r} must be an integer >= {low}")

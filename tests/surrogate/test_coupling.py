@@ -1,0 +1,268 @@
+"""Tests of surrogate.coupling: blocked classification, Eq. 18, A_p, and the sliding loop."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
+                                modified_tool, particle_area_fraction, run_slide)
+from surrogate.dem import DemState, FlakeShape
+from surrogate.flakes import Footprint, footprints
+from surrogate.slide_config import SlideConfig
+
+SHAPE = FlakeShape(12e-6, 0.5e-6)
+N, L = 32, 32e-6  # dx = 1 um: the flake spans 12 pixels
+CENTRE = np.array([[16e-6, 16e-6, 0.0]])
+FLAT = [[1.0, 0.0, 0.0, 0.0]]
+
+
+def tool_with_bumps(offsets, depth=0.1e-6):
+    """A flat tool above the flake (no overlap) with single-pixel bumps reaching down to depth."""
+    h = np.full((N, N), SHAPE.c + 0.1e-6)
+    for di, dj in offsets:
+        h[16 + di, 16 + dj] = depth
+    return h
+
+
+BUMPS = [(-3, 0), (3, 0), (0, 3), (0, -3)]
+
+
+@pytest.mark.parametrize("n_bumps", [0, 1, 2, 3, 4])
+def test_blocked_needs_three_distinct_overlap_clusters(n_bumps):
+    fps = footprints(CENTRE, FLAT, SHAPE, N, L)
+    blocked, counts = classify(fps, tool_with_bumps(BUMPS[:n_bumps]))
+    assert counts[0] == n_bumps, f"{n_bumps} separated bumps must give {n_bumps} clusters"
+    assert blocked[0] == (n_bumps >= 3)
+
+
+def test_clusters_are_eight_connected_and_bumps_outside_do_not_count():
+    fps = footprints(CENTRE, FLAT, SHAPE, N, L)
+    # two diagonal neighbours form one cluster; a bump outside the disc (r = 8 px) is ignored
+    h = tool_with_bumps([(-3, 0), (-2, 1), (3, 0), (8, 0), (0, 3)])
+    assert classify(fps, h)[1][0] == 3
+    # a bump too shallow to reach the flake's upper face does not count
+    h = tool_with_bumps([(-3, 0), (3, 0)])
+    h[16, 19] = 0.3e-6  # above z_hi = c sqrt(1 - 9/36) = 0.217 um
+    assert classify(fps, h)[1][0] == 2
+
+
+def test_modified_tool_is_min_of_tool_and_blocked_flake_lower_surface():
+    pos = np.vstack([CENTRE, [[4e-6, 4e-6, 0.0]]])  # second flake wraps around the corner
+    fps = footprints(pos, FLAT * 2, SHAPE, N, L)
+    h_top = tool_with_bumps(BUMPS)
+    h_star = modified_tool(h_top, fps, np.array([True, False]))
+    X, Y = np.meshgrid(np.arange(N) * 1e-6, np.arange(N) * 1e-6, indexing="ij")
+    r2 = (X - 16e-6) ** 2 + (Y - 16e-6) ** 2
+    under = r2 <= SHAPE.a**2
+    z_lo = -SHAPE.c * np.sqrt(np.clip(1 - r2 / SHAPE.a**2, 0, None))
+    expect = np.where(under, np.minimum(h_top, z_lo), h_top)
+    assert_allclose(h_star, expect, atol=1e-18, err_msg="Eq. 18 for the blocked flake only")
+    assert np.all(h_star <= h_top)
+    mask = blocked_mask(fps, [True, False], N)
+    assert np.array_equal(mask, under)
+
+
+def test_particle_area_is_traction_under_blocked_flakes_only():
+    fps = footprints(CENTRE, FLAT, SHAPE, N, L)
+    traction = np.zeros((N, N))
+    traction[14:18, 10:20] = 1e8  # 40 pixels, 4 x 7 = 28 of them under the flake (r <= 6)
+    mask = blocked_mask(fps, [True], N)
+    assert particle_area_fraction(traction, mask) == np.count_nonzero(mask[14:18, 10:20]) / N**2
+    assert particle_area_fraction(traction, blocked_mask(fps, [False], N)) == 0.0
+
+
+class FlatPunchSolver:
+    """Test double of the contact solver (unit tests only): contact on the pixels of smallest
+    gap, count = ceil(p/p_crit n^2), traction p_crit there, no displacements."""
+
+    def __init__(self, p_crit):
+        self.p_crit = p_crit
+
+    def solve(self, gap, pressure, u_plastic=None, warm_start=None):
+        k = math.ceil(pressure / self.p_crit * gap.size)
+        idx = np.argsort(gap, axis=None, kind="stable")[:k]
+        t = np.zeros(gap.size)
+        t[idx] = pressure * gap.size / k
+        z = np.zeros_like(gap)
+        return SimpleNamespace(traction=t.reshape(gap.shape), u_elastic=z, u_plastic=z,
+                               iterations=1, residual=0.0, converged=True)
+
+
+def wavy_surfaces(n, size):
+    x = np.arange(n) / n * 2 * np.pi
+    h_def0 = 0.6e-6 * (np.sin(3 * x)[:, None] + np.cos(2 * x)[None, :])
+    h_tool0 = 0.3e-6 * np.cos(5 * x)[:, None] * np.sin(4 * x)[None, :]
+    return h_def0, h_tool0
+
+
+def small_config(**kw):
+    base = dict(n=64, size=200e-6, wavelength_ratio=0.1, n_flakes=6, n_slide_steps=6, v0=50.0, pressure=20e6)
+    base.update(kw)
+    return SlideConfig(**base)
+
+
+def test_slide_with_stand_in_solver_is_reproducible_and_consistent():
+    cfg = small_config()
+    runs = [run_slide(cfg, solver=FlatPunchSolver(cfg.p_crit), surfaces=wavy_surfaces(64, 200e-6))
+            for _ in range(2)]
+    a, b = runs
+    for name in ("contact_fraction", "particle_fraction", "n_blocked", "tool_height"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert np.array_equal(a.snapshots[6]["pos"], b.snapshots[6]["pos"]), "bit-for-bit flakes"
+    assert_allclose(a.slide_distance, cfg.dx * np.arange(1, 7), rtol=1e-15, err_msg="distance")
+    assert np.all(a.particle_fraction <= a.contact_fraction)
+    # A_p is zero whenever no flake is blocked
+    assert np.all(a.particle_fraction[a.n_blocked == 0] == 0.0)
+    s = a.summary()
+    assert s["steps"] == 6 and 0.0 <= s["fraction_steps_blocked"] <= 1.0
+
+
+def test_dem_substeps_cover_exactly_one_pixel():
+    cfg = small_config(n_slide_steps=1)
+    sim = SlideSimulation(cfg, solver=FlatPunchSolver(cfg.p_crit),
+                          surfaces=wavy_surfaces(64, 200e-6))
+    assert_allclose(sim.n_sub * sim.params.dt * cfg.v0, cfg.dx, rtol=1e-12,
+                    err_msg="n_sub v0 dt = dx")
+    rec = sim.step()
+    assert sim.k == 1 and np.all(np.isfinite(sim.state.pos))
+    assert_allclose(rec["slide_distance"], cfg.dx, rtol=1e-15, err_msg="one pixel")
+
+
+# ------------------------------------------------------------------------------------------
+# integration with the real contact solver (issue 4)
+# ------------------------------------------------------------------------------------------
+
+
+def integration_config(**kw):
+    base = dict(n=64, size=125e-6, wavelength_ratio=0.1, n_flakes=5, n_slide_steps=5,
+                pressure=20e6, snapshot_every=1)
+    base.update(kw)
+    return SlideConfig(**base)
+
+
+def test_real_slide_is_reproducible_bit_for_bit():
+    cfg = integration_config()
+    a, b = run_slide(cfg), run_slide(cfg)
+    for name in ("contact_fraction", "particle_fraction", "n_blocked", "tool_height",
+                 "bem_iterations"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    for k in a.snapshots:
+        for name in ("pos", "quat", "sheet"):
+            assert np.array_equal(a.snapshots[k][name], b.snapshots[k][name]), (k, name)
+
+
+def test_real_contact_step_puts_the_tool_on_the_deformed_sheet():
+    """After each BEM solve the (modified) tool touches the new sheet surface at every contact
+    pixel: this checks the sign convention h_low = h_def0 - u_p - (u_e - <u_e>)."""
+    cfg = integration_config(n_slide_steps=3)
+    sim = SlideSimulation(cfg)
+    rms = float(np.std(sim.h_def0))
+    for _ in range(3):
+        z_before = sim.z_top
+        rec = sim.step()
+        dz = sim.z_top - z_before
+        t = sim.traction
+        h_star = sim.h_star
+        # the solved profile is Eq. 18, lifted with the tool by the solve's dz
+        lifted = sim.state.pos + [0.0, 0.0, dz]
+        fps = footprints(lifted, sim.state.quat, sim.shape, cfg.n, cfg.size)
+        fps = [attach_to_tool(fp, sim.tool_grid())[0] if b else fp
+               for fp, b in zip(fps, rec["blocked"])]
+        assert_allclose(h_star, modified_tool(sim.tool_grid(), fps, rec["blocked"]), rtol=0,
+                        atol=1e-12 * rms, err_msg="solved profile = Eq. 18")
+        touch = t > 0
+        assert touch.any()
+        assert_allclose((sim.h_low - h_star)[touch], 0.0, atol=1e-3 * rms,
+                        err_msg="tool and sheet must coincide where the traction is positive")
+        assert np.all((sim.h_low - h_star)[~touch] <= 1e-3 * rms), "no interpenetration"
+        assert_allclose(np.mean(t), cfg.pressure, rtol=1e-6, err_msg="mean traction = p")
+        assert rec["particle_fraction"] <= rec["contact_fraction"]
+        if rec["n_blocked"] == 0:
+            assert rec["particle_fraction"] == 0.0
+
+
+def test_pinched_flake_is_detected_only_when_both_surfaces_cut_in():
+    from surrogate.coupling import pinched
+
+    fps = footprints(CENTRE, FLAT, SHAPE, N, L)
+    limit = 0.1 * SHAPE.thickness
+    cut = 0.15 * SHAPE.thickness
+    tool = np.full((N, N), SHAPE.c - cut)  # one broad cluster: the cluster rule says free
+    sheet_in = np.full((N, N), -SHAPE.c + cut)
+    sheet_clear = np.full((N, N), -SHAPE.c - 0.01e-6)
+    assert classify(fps, tool)[1][0] == 1
+    assert pinched(fps, tool, sheet_in, limit)[0]
+    assert not pinched(fps, tool, sheet_clear, limit)[0]
+    assert not pinched(fps, tool, sheet_in, 0.2 * SHAPE.thickness)[0]
+
+
+def test_real_solve_with_a_blocked_flake_gives_particle_area():
+    """A flake cut by four tool bumps is blocked; the solve then carries load through it."""
+    n, size = 64, 128e-6  # dx = 2 um
+    cfg = SlideConfig(n=n, size=size, wavelength_ratio=0.1, n_flakes=0, pressure=10e6,
+                      n_slide_steps=1)
+    x = np.arange(n) / n * 2 * np.pi
+    h_def0 = 0.2e-6 * np.sin(x)[:, None] * np.cos(2 * x)[None, :]
+    h_tool0 = np.full((n, n), 1e-6)
+    bumps = [(34, 32), (30, 32), (32, 34), (32, 30)]  # 4 um from the centre pixel (32, 32)
+    for ij in bumps:
+        h_tool0[ij] = 0.0
+    sim = SlideSimulation(cfg, surfaces=(h_def0, h_tool0))
+    bottom = sim.tool_grid()[34, 32]  # a bump, lab frame
+    # flat flake on pixel (32, 32): its upper face at r = 4 um (z + 0.745 c) cuts the bumps by
+    # 50 nm and stays below the flat part of the tool elsewhere
+    face = SHAPE.c * math.sqrt(1 - (4e-6 / SHAPE.a) ** 2)
+    sim.state = DemState.at_rest([[64e-6, 64e-6, bottom - face + 0.05e-6]])
+    sim.blocked_prev = np.zeros(1, dtype=bool)
+    z0 = sim.state.pos[0, 2]
+    rec = sim.contact_phase()
+    assert rec["n_blocked_clusters"] == 1 and rec["blocked"][0], "4 clusters: blocked"
+    fps = footprints(sim.state.pos, sim.state.quat, SHAPE, n, size)
+    under = blocked_mask(fps, [True], n)
+    expect = np.count_nonzero((sim.traction > 0) & under) / n**2
+    assert rec["particle_fraction"] == expect > 0.0, "load must pass through the flake"
+    assert sim.state.pos[0, 2] == z0, "the solve does not move the DEM flake"
+    # the solve saw it attached: dropped by the tool's cut into its (3x3-dilated) upper face
+    drop = attach_to_tool(fps[0], sim.tool_grid() - (sim.z_top - sim.z_prev))[1]
+    assert 0.05e-6 <= drop < 0.05e-6 + 0.2e-6
+    assert rec["particle_fraction"] <= rec["contact_fraction"]
+
+
+def test_blow_up_in_the_loop_names_sliding_step_and_flake():
+    from surrogate.dem import DemBlowUpError
+
+    cfg = small_config(n_slide_steps=1)
+    sim = SlideSimulation(cfg, solver=FlatPunchSolver(cfg.p_crit),
+                          surfaces=wavy_surfaces(64, 200e-6))
+    sim.state.pos[2, 2] = np.nan
+    with pytest.raises(DemBlowUpError, match=r"sliding step 1 of 1: .*DEM step \d+.*flake 2"):
+        sim.step()
+
+
+def test_attached_flake_is_pixel_consistent_with_the_bilinear_dem_surfaces():
+    """A sheet dented to the attached flake's rasterised lower face (what the solve does) and the
+    tool above its rasterised upper face do not cut the flake between pixels in the DEM."""
+    from surrogate import dem
+
+    pos = np.array([[16.3e-6, 15.8e-6, 0.0]])
+    quat = [list(np.r_[np.cos(0.02), np.sin(0.02) * np.array([0.6, 0.8, 0.0])])]
+    fp = footprints(pos, quat, SHAPE, N, L)[0]
+    flat_top = np.full((N, N), SHAPE.c - 0.05e-6)  # cuts 50 nm into the flake
+    att, drop = attach_to_tool(fp, flat_top)
+    assert drop > 0.05e-6 - 1e-12
+    high = np.full((N, N), 0.3e-6)  # a sheet above the flake, dented where the flake lies
+    sheet = modified_tool(high, [att], [True])
+    raw = modified_tool(high, [Footprint(fp.ix, fp.iy, fp.z_lo - drop, fp.z_hi - drop)], [True])
+    p = dem.DemParams.build(SHAPE, L, L / N, 55e9, 50.0, 0.0, spacing=0.1e-6)
+    state = DemState.at_rest(pos - [0.0, 0.0, drop], np.array(quat))
+    far = np.full((N, N), 1.0)
+    ov_dented = dem.compute_forces(state, p, sheet, far)[2][0]
+    ov_raw = dem.compute_forces(state, p, raw, far)[2][0]
+    ov_tool = dem.compute_forces(state, p, -far, flat_top)[2][0]
+    assert ov_raw > 0.1 * SHAPE.thickness, "plain rasterisation cuts the rim between pixels"
+    assert ov_dented < 0.01 * SHAPE.thickness and ov_tool < 0.01 * SHAPE.thickness
