@@ -1,0 +1,401 @@
+"""A mesoscale campaign: every case of a sweep run through the BEM-DEM slide, resumable.
+
+A *case* is one :class:`~surrogate.slide_config.SlideConfig` (one pressure, velocity, debris
+level, flake placement seed and surface pair) run through :func:`surrogate.coupling.run_slide`.
+Its id is the first 16 hex digits of the SHA-256 of the canonical JSON of the configuration, so
+the same case has the same id in every run and on every machine.
+
+Layout of the output folder ``OUT``:
+
+- ``OUT/campaign.json``: the sweep and the list of its cases (ids and labels);
+- ``OUT/cases/<id>.json``: one finished case: labels, configuration, ``summary()`` of the slide
+  (<A_p>/A0 of Eq. 22, <A_c>/A0, ...), wall time, host, code version and a computation token;
+  ``OUT/cases/<id>.npz``: its per-step series (A_c/A0, A_p/A0, blocked flakes, BEM iterations);
+- ``OUT/cases/<id>.error.json``: a failed case with its error and traceback;
+- ``OUT/campaign.log``: one JSON line per event (start, done, failed, skip).
+
+Each file is written to a temporary name and renamed (``os.replace``), the ``.json`` of a case
+last: a case counts as finished when its ``.json`` reads back with its id, so a campaign killed at
+any moment resumes by rerunning only the cases without one. Failed cases are retried by a rerun
+unless ``retry_failed=False``. If the environment variable ``TRIBOCOSIM_CASE_LOG`` names a file,
+every computed case appends its id there (an audit of computations across runs).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import math
+import os
+import socket
+import sys
+import time
+import traceback
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from components.errors import TribocosimError
+
+from .slide_config import SlideConfig
+from .sweep import Sweep
+
+CASE_FORMAT = 1
+CASE_LOG_ENV = "TRIBOCOSIM_CASE_LOG"
+SERIES = ("slide_distance", "contact_fraction", "particle_fraction", "particle_fraction_clusters",
+          "n_blocked", "n_blocked_clusters", "bem_iterations", "tool_height")
+
+
+def code_version() -> str:
+    """Installed tribocosim version, plus the git commit of the source tree when there is one."""
+    try:
+        from importlib.metadata import version
+
+        ver = version("tribocosim")
+    except Exception:  # noqa: BLE001 - not installed
+        ver = "unknown"
+    head = Path(__file__).resolve().parent.parent / ".git" / "HEAD"
+    try:
+        ref = head.read_text().strip()
+        if ref.startswith("ref:"):
+            ref = (head.parent / ref.split(" ", 1)[1]).read_text().strip()
+        return f"{ver}+g{ref[:12]}"
+    except OSError:
+        return ver
+
+
+@functools.lru_cache(maxsize=1)
+def source_digest() -> str:
+    """SHA-256 (12 hex digits) of the mesoscale sources (surrogate/*.py) and the table module.
+
+    The git commit does not see uncommitted edits; this digest does. It is read once per process
+    (a worker computes it at its first case, when it imports the slide code), recorded with every
+    case and table, and not part of the case id (a rerun after an unrelated edit resumes).
+    """
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for path in sorted(root.glob("*.py")) + [root.parent / "components" / "stripdraw" / "table.py"]:
+        try:
+            h.update(path.name.encode())
+            h.update(path.read_bytes())
+        except OSError:
+            continue
+    return h.hexdigest()[:12]
+
+
+def case_id(config: SlideConfig) -> str:
+    """Deterministic id of a case: SHA-256 of the canonical JSON of its configuration."""
+    blob = json.dumps({"case_format": CASE_FORMAT, "config": config.to_dict()}, sort_keys=True,
+                      separators=(",", ":"))
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One slide of a campaign with the labels the fits group by."""
+
+    config: SlideConfig
+    labels: dict = field(default_factory=dict)
+
+    @property
+    def case_id(self) -> str:
+        """Deterministic id (see :func:`case_id`)."""
+        return case_id(self.config)
+
+    def payload(self) -> dict:
+        """What a worker needs: the id and the configuration as a plain dict."""
+        return {"case_id": self.case_id, "config": self.config.to_dict()}
+
+
+def expand_cases(sweep: Sweep) -> list[Case]:
+    """Every case of ``sweep``: P x v x (flake levels x seeds [+ particle-free]) x surfaces.
+
+    Particle-free cases (n_flakes = 0, beta = 0) do not depend on the placement seed: one per
+    (P, v, surface). Labels: pressure, velocity, beta, n_flakes, flake_diameter, seed (None for
+    particle-free cases) and surface (index into ``sweep.surfaces``).
+    """
+    base = sweep.slide
+    cases: dict[str, Case] = {}
+    for s_idx, surf in enumerate(sweep.surfaces):
+        for p in sweep.pressures:
+            for v in sweep.velocities:
+                levels = [(count, d, seed) for count, d in sweep.flakes for seed in sweep.seeds]
+                if sweep.particle_free:
+                    levels.insert(0, (0, None, None))
+                for count, d, seed in levels:
+                    kw = {**base, **surf, "pressure": p, "v0": v, "n_flakes": count,
+                          "flake_seed": 0 if seed is None else seed}
+                    if d is not None:
+                        kw["flake_diameter"] = d
+                    cfg = SlideConfig(**kw)
+                    labels = {"pressure": p, "velocity": v, "beta": cfg.beta, "n_flakes": count,
+                              "flake_diameter": cfg.flake_diameter if count else None,
+                              "seed": seed, "surface": s_idx}
+                    case = Case(cfg, labels)
+                    cases.setdefault(case.case_id, case)
+    return list(cases.values())
+
+
+def run_case(payload: dict) -> dict:
+    """Run one case in a worker; returns a JSON-able dict (``status`` "done" or "failed").
+
+    Never raises for a failing slide: the error type, message and traceback come back instead,
+    so that one case cannot take a pool down.
+    """
+    t0 = time.perf_counter()
+    base = {"case_id": payload["case_id"], "host": socket.gethostname(), "pid": os.getpid(),
+            "token": uuid.uuid4().hex, "code_version": code_version()}
+    try:
+        from .coupling import run_slide
+
+        base["source_digest"] = source_digest()  # of the code this process has just imported
+        result = run_slide(SlideConfig(**payload["config"]))
+        summary = result.summary()
+        series = {k: np.asarray(getattr(result, k)).tolist() for k in SERIES if hasattr(result, k)}
+    except Exception as exc:  # noqa: BLE001 - recorded with the case, the campaign goes on
+        return {**base, "status": "failed", "wall_s": time.perf_counter() - t0,
+                "error": {"type": type(exc).__name__, "message": str(exc),
+                          "traceback": traceback.format_exc()}}
+    out = {**base, "status": "done", "wall_s": time.perf_counter() - t0, "summary": summary,
+           "series": series}
+    log = os.environ.get(CASE_LOG_ENV)
+    if log:
+        with open(log, "a") as fh:
+            fh.write(f"{payload['case_id']} {base['token']}\n")
+    return out
+
+
+def _atomic_write(path: Path, write) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_json(path: Path, data) -> None:
+    """Write ``data`` as JSON to ``path`` atomically."""
+    _atomic_write(Path(path), lambda tmp: tmp.write_text(json.dumps(data, indent=1, sort_keys=True)))
+
+
+class CampaignStore:
+    """The files of a campaign folder (see the module docstring)."""
+
+    def __init__(self, out: str | Path):
+        self.out = Path(out)
+        self.cases_dir = self.out / "cases"
+
+    def case_path(self, cid: str) -> Path:
+        return self.cases_dir / f"{cid}.json"
+
+    def error_path(self, cid: str) -> Path:
+        return self.cases_dir / f"{cid}.error.json"
+
+    def is_finished(self, cid: str) -> bool:
+        """Whether a complete result of case ``cid`` is on disk."""
+        try:
+            return json.loads(self.case_path(cid).read_text()).get("case_id") == cid
+        except (OSError, ValueError):
+            return False
+
+    def read_case(self, cid: str) -> dict:
+        return json.loads(self.case_path(cid).read_text())
+
+    def write_manifest(self, sweep: Sweep | None, cases: list[Case]) -> None:
+        self.cases_dir.mkdir(parents=True, exist_ok=True)
+        write_json(self.out / "campaign.json", {
+            "sweep": None if sweep is None else sweep.to_dict(),
+            "cases": [{"case_id": c.case_id, "labels": c.labels} for c in cases],
+        })
+
+    def read_manifest(self) -> dict:
+        path = self.out / "campaign.json"
+        try:
+            return json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            raise TribocosimError(f"{path} cannot be read ({exc}); is {self.out} a campaign folder?") \
+                from None
+
+    def write_done(self, case: Case, outcome: dict) -> None:
+        """The series (.npz), then the record (.json, the 'finished' marker); drop an old error."""
+        cid = case.case_id
+        series = outcome.pop("series", None)
+        if series is not None:
+            def save(tmp):
+                with open(tmp, "wb") as fh:
+                    np.savez_compressed(fh, **{k: np.asarray(v) for k, v in series.items()})
+            _atomic_write(self.cases_dir / f"{cid}.npz", save)
+        record = {**outcome, "labels": case.labels, "config": case.config.to_dict(),
+                  "finished_at": _now()}
+        write_json(self.case_path(cid), record)
+        if self.error_path(cid).exists():
+            self.error_path(cid).unlink()
+
+    def write_failed(self, case: Case, outcome: dict) -> None:
+        write_json(self.error_path(case.case_id), {**outcome, "labels": case.labels,
+                                                  "config": case.config.to_dict(),
+                                                  "failed_at": _now()})
+
+    def log(self, event: str, cid: str | None = None, **extra) -> None:
+        line = json.dumps({"t": _now(), "event": event, "case_id": cid, "pid": os.getpid(), **extra})
+        with open(self.out / "campaign.log", "a") as fh:
+            fh.write(line + "\n")
+            fh.flush()
+
+
+def _now() -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+
+
+class Progress:
+    """A one-line progress bar with elapsed time and ETA on ``stream`` (stderr by default)."""
+
+    def __init__(self, total: int, skipped: int = 0, stream=None, enabled: bool = True, width: int = 30):
+        self.total, self.skipped, self.width = total, skipped, width
+        self.stream = sys.stderr if stream is None else stream
+        self.enabled = enabled
+        self.done = self.failed = 0
+        self.t0 = time.perf_counter()
+        self._last = 0.0
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+
+    def update(self, ok: bool) -> None:
+        if ok:
+            self.done += 1
+        else:
+            self.failed += 1
+        self.render()
+
+    def line(self) -> str:
+        finished = self.skipped + self.done + self.failed
+        frac = finished / self.total if self.total else 1.0
+        bar = "#" * int(round(frac * self.width))
+        elapsed = time.perf_counter() - self.t0
+        computed = self.done + self.failed
+        remaining = self.total - finished
+        eta = "--:--" if computed == 0 else _hms(elapsed / computed * remaining)
+        return (f"[{bar:<{self.width}}] {finished}/{self.total} cases ({self.skipped} skipped, "
+                f"{self.failed} failed) elapsed {_hms(elapsed)} ETA {eta}")
+
+    def render(self, final: bool = False) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if not (final or self.tty or now - self._last >= 2.0):
+            return
+        self._last = now
+        end = "\n" if (final or not self.tty) else ""
+        self.stream.write(("\r" if self.tty else "") + self.line() + end)
+        self.stream.flush()
+
+
+def _hms(seconds: float) -> str:
+    s = int(round(seconds))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+
+
+@dataclass
+class CampaignReport:
+    """What a campaign run did."""
+
+    total: int
+    skipped: list
+    computed: list
+    failed: list
+    wall_s: float
+    executor: dict
+
+    def summary(self) -> str:
+        return (f"{self.total} cases: {len(self.skipped)} already finished, {len(self.computed)} "
+                f"computed, {len(self.failed)} failed in {self.wall_s:.1f} s on {self.executor}")
+
+
+def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep | None = None,
+                 retry_failed: bool = True, progress: bool = True, case_fn=run_case,
+                 stream=None) -> CampaignReport:
+    """Run every unfinished case of ``cases`` through ``executor``, writing each as it finishes.
+
+    Parameters
+    ----------
+    cases : list of Case
+        Typically :func:`expand_cases` of a sweep.
+    out : path
+        Campaign folder (created).
+    executor
+        A :mod:`surrogate.executors` executor.
+    sweep : Sweep, optional
+        Recorded in ``OUT/campaign.json``.
+    retry_failed : bool
+        Rerun cases that failed in an earlier run (default) or leave them failed.
+    progress : bool
+        Progress bar with ETA on stderr.
+    case_fn : callable
+        The worker function (importable; default :func:`run_case`).
+    """
+    store = CampaignStore(out)
+    store.write_manifest(sweep, cases)
+    by_id = {c.case_id: c for c in cases}
+    skipped = [cid for cid in by_id if store.is_finished(cid)]
+    done_before = set(skipped)
+    todo = [cid for cid in by_id if cid not in done_before
+            and (retry_failed or not store.error_path(cid).exists())]
+    left_failed = sorted(set(by_id) - done_before - set(todo))
+    store.log("start", None, total=len(by_id), skipped=len(skipped), todo=len(todo),
+              executor=executor.describe())
+    bar = Progress(len(by_id), len(skipped) + len(left_failed), stream=stream, enabled=progress)
+    bar.render()
+    computed, failed = [], list(left_failed)
+    t0 = time.perf_counter()
+    for cid, outcome in executor.map_unordered(case_fn, [(cid, by_id[cid].payload()) for cid in todo]):
+        case = by_id[cid]
+        if isinstance(outcome, BaseException):
+            outcome = {"case_id": cid, "status": "failed",
+                       "error": {"type": type(outcome).__name__, "message": str(outcome),
+                                 "traceback": "".join(traceback.format_exception(outcome))}}
+        if outcome.get("status") == "done":
+            store.write_done(case, outcome)
+            store.log("done", cid, wall_s=outcome.get("wall_s"))
+            computed.append(cid)
+            bar.update(True)
+        else:
+            store.write_failed(case, outcome)
+            err = outcome.get("error", {})
+            store.log("failed", cid, error=f"{err.get('type')}: {err.get('message')}")
+            failed.append(cid)
+            bar.update(False)
+    bar.render(final=True)
+    report = CampaignReport(len(by_id), skipped, computed, failed, time.perf_counter() - t0,
+                            executor.describe())
+    store.log("end", None, computed=len(computed), failed=len(failed), wall_s=report.wall_s)
+    return report
+
+
+def load_records(out: str | Path) -> tuple[dict, list[dict], list[dict]]:
+    """The manifest, the finished case records and the failed ones of a campaign folder.
+
+    Only the cases listed in ``OUT/campaign.json`` count (old files of another sweep are ignored).
+    """
+    store = CampaignStore(out)
+    manifest = store.read_manifest()
+    done, failed = [], []
+    for entry in manifest["cases"]:
+        cid = entry["case_id"]
+        if store.is_finished(cid):
+            rec = store.read_case(cid)
+            rec["labels"] = entry["labels"]
+            done.append(rec)
+        elif store.error_path(cid).exists():
+            failed.append(json.loads(store.error_path(cid).read_text()))
+        else:
+            failed.append({"case_id": cid, "labels": entry["labels"], "status": "missing"})
+    return manifest, done, failed
+
+
+def case_cpu_seconds(records: list[dict]) -> float:
+    """Sum of the wall times of the cases (one core each): the cost of a campaign."""
+    return float(sum(r.get("wall_s", 0.0) for r in records if math.isfinite(r.get("wall_s", 0.0))))

@@ -1,0 +1,250 @@
+"""Ensemble averages and the fits of Sec. 6 over the finished cases of a campaign.
+
+- Ensemble (Sec. 6.2): per grid point (P, v, beta), the mean and standard deviation (ddof = 1)
+  over the members (placement seeds x surfaces) of <A_p>/A0 (Eq. 22) and <A_c>/A0.
+- Eq. 23 per velocity: <A_p>/A0 = alpha beta P / E*, a line through the origin in
+  x = beta P / E* over every (P, beta > 0) point of that velocity: alpha = sum(x y) / sum(x^2),
+  its standard error from the residuals, R^2 = 1 - SS_res / SS_tot (SS_tot about the mean of y;
+  it can be negative for a poor fit), and, as in Fig. 15, the standard deviation of the alphas
+  fitted to each member (placement seed) separately.
+- Fig. 15: alpha(v) = b (1 - exp(-v / v_ref)) fitted to the alphas with
+  ``scipy.optimize.curve_fit`` (weights: the member spread of alpha, absolute), b and v_ref with
+  their standard uncertainties from the covariance. With two velocities the fit is exact and
+  the uncertainties are not defined (reported as NaN).
+- Eq. 8: <A_c>/A0 = s_c P through the origin (s_c [1/Pa], R^2). With the composite RMS slope
+  h'_rms of the gap, kappa = s_c E* h'_rms (Eq. 8 read backwards). In the plastic regime of
+  MODEL.md Sec. 4 s_c ~ 1/p_crit.
+
+Everything here is plain arithmetic on the case records: no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.optimize import curve_fit
+
+from components.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class EnsemblePoint:
+    """Ensemble statistics at one grid point."""
+
+    pressure: float
+    velocity: float
+    beta: float
+    n: int
+    ap_mean: float
+    ap_std: float
+    ac_mean: float
+    ac_std: float
+    members: tuple  # ((member key, ap, ac), ...)
+
+
+def _key(x: float) -> float:
+    return float(f"{x:.12g}")
+
+
+def member_key(labels: dict) -> str:
+    """Which ensemble member a case is: surface index and placement seed."""
+    return f"s{labels.get('surface', 0)}/f{labels.get('seed')}"
+
+
+def ensemble(records: list[dict]) -> dict:
+    """Group finished case records by (P, v, beta) -> :class:`EnsemblePoint`."""
+    groups: dict = {}
+    for r in records:
+        lab, s = r["labels"], r["summary"]
+        k = (_key(lab["pressure"]), _key(lab["velocity"]), _key(lab["beta"]))
+        groups.setdefault(k, []).append((member_key(lab), float(s["mean_particle_fraction"]),
+                                         float(s["mean_contact_fraction"])))
+    out = {}
+    for k, mem in sorted(groups.items()):
+        ap = np.array([m[1] for m in mem])
+        ac = np.array([m[2] for m in mem])
+        sd = (lambda a: float(np.std(a, ddof=1)) if a.size > 1 else 0.0)
+        out[k] = EnsemblePoint(k[0], k[1], k[2], len(mem), float(ap.mean()), sd(ap),
+                               float(ac.mean()), sd(ac), tuple(sorted(mem)))
+    return out
+
+
+def _r2(y, yhat) -> float:
+    y, yhat = np.asarray(y, float), np.asarray(yhat, float)
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    ss_res = float(np.sum((y - yhat) ** 2))
+    if ss_tot == 0.0:
+        return 1.0 if ss_res == 0.0 else float("nan")
+    return 1.0 - ss_res / ss_tot
+
+
+def fit_through_origin(x, y) -> tuple[float, float, float]:
+    """Least-squares slope of y = a x, its standard error and R^2."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    sxx = float(np.sum(x * x))
+    if x.size == 0 or sxx == 0.0:
+        raise ParameterError("a fit through the origin needs at least one point with x != 0")
+    a = float(np.sum(x * y) / sxx)
+    res = y - a * x
+    se = float(math.sqrt(np.sum(res**2) / (x.size - 1) / sxx)) if x.size > 1 else float("nan")
+    return a, se, _r2(y, a * x)
+
+
+@dataclass(frozen=True)
+class AlphaFit:
+    """Eq. 23 at one velocity."""
+
+    velocity: float
+    alpha: float
+    alpha_stderr: float
+    alpha_member_std: float
+    r2: float
+    n_points: int
+    member_alphas: dict
+
+
+def fit_alpha(ens: dict, e_star: float) -> list[AlphaFit]:
+    """Eq. 23 fitted per velocity over the points with beta > 0 (see the module docstring)."""
+    fits = []
+    for v in sorted({k[1] for k in ens}):
+        pts = [p for k, p in ens.items() if k[1] == v and p.beta > 0]
+        if not pts:
+            continue
+        x = np.array([p.beta * p.pressure / e_star for p in pts])
+        y = np.array([p.ap_mean for p in pts])
+        a, se, r2 = fit_through_origin(x, y)
+        per_member: dict = {}
+        for p in pts:
+            for mk, ap, _ in p.members:
+                per_member.setdefault(mk, ([], []))
+                per_member[mk][0].append(p.beta * p.pressure / e_star)
+                per_member[mk][1].append(ap)
+        member_alphas = {mk: fit_through_origin(xs, ys)[0] for mk, (xs, ys) in sorted(per_member.items())}
+        vals = np.array(list(member_alphas.values()))
+        msd = float(np.std(vals, ddof=1)) if vals.size > 1 else float("nan")
+        fits.append(AlphaFit(v, a, se, msd, r2, len(pts), member_alphas))
+    return fits
+
+
+def alpha_law(v, b, v_ref):
+    """alpha(v) = b (1 - exp(-v / v_ref)) (Fig. 15)."""
+    return b * -np.expm1(-np.asarray(v, float) / v_ref)
+
+
+@dataclass(frozen=True)
+class AlphaLawFit:
+    """b, v_ref of alpha(v) with standard uncertainties and R^2 over the per-velocity alphas."""
+
+    b: float
+    b_err: float
+    v_ref: float
+    v_ref_err: float
+    r2: float
+    n_velocities: int
+    note: str = ""
+
+    def __call__(self, v):
+        if self.b == 0.0:
+            return np.zeros(np.shape(v))
+        return alpha_law(v, self.b, self.v_ref)
+
+
+def fit_alpha_law(velocity, alpha, sigma=None) -> AlphaLawFit:
+    """Fit alpha(v) = b (1 - exp(-v / v_ref)) to per-velocity alphas (``sigma``: their spreads).
+
+    b >= 0 and v_ref > 0 are enforced through bounds. If every alpha is 0 (no blocked flake in
+    the whole campaign), b = 0 and v_ref is undefined (NaN).
+    """
+    v = np.asarray(velocity, float)
+    a = np.asarray(alpha, float)
+    if v.size < 2:
+        raise ParameterError(f"alpha(v) needs alphas at >= 2 velocities; got {v.size}")
+    if np.all(a <= 0):
+        return AlphaLawFit(0.0, 0.0, float("nan"), float("nan"), float("nan"), v.size,
+                           "no blocked flake at any velocity: alpha = 0")
+    s = None
+    if sigma is not None:
+        s = np.asarray(sigma, float)
+        good = np.isfinite(s) & (s > 0)
+        if not np.all(good):
+            s = None if not np.any(good) else np.where(good, s, np.max(s[good]))
+    # a saturated law (v_ref << min v) is the best fit when alpha does not grow: start from both
+    # ends and keep the better one
+    best = None
+    for v_ref0 in (float(np.median(v)), float(v.min()) / 5.0, float(v.max())):
+        p0 = (max(float(a.max()), 1e-30), v_ref0)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                popt, pcov = curve_fit(alpha_law, v, a, p0=p0, sigma=s, absolute_sigma=s is not None,
+                                       bounds=([0.0, 1e-6 * float(v.min())], [np.inf, 1e3 * float(v.max())]),
+                                       maxfev=20000)
+        except (RuntimeError, ValueError):
+            continue
+        w = 1.0 if s is None else 1.0 / s**2
+        cost = float(np.sum(w * (a - alpha_law(v, *popt)) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, popt, pcov)
+    if best is None:
+        raise ParameterError("the alpha(v) fit did not converge for any start value")
+    _, popt, pcov = best
+    err = np.sqrt(np.diag(pcov)) if np.all(np.isfinite(pcov)) else np.full(2, np.nan)
+    err = np.array(err, dtype=float)
+    if v.size <= 2:
+        err = np.full(2, np.nan)
+    note = ""
+    if popt[1] < 0.5 * v.min():
+        note = (f"v_ref = {popt[1]:.3g} m/s lies below the smallest campaign velocity "
+                f"{v.min():g} m/s: alpha is saturated over the campaign and v_ref is only bounded "
+                "from above by the data (its uncertainty is not defined)")
+        err[1] = np.nan
+    return AlphaLawFit(float(popt[0]), float(err[0]), float(popt[1]), float(err[1]),
+                       _r2(a, alpha_law(v, *popt)), int(v.size), note)
+
+
+@dataclass(frozen=True)
+class ContactFit:
+    """<A_c>/A0 = s_c P (Eq. 8 with the measured slope), and kappa = s_c E* h'_rms."""
+
+    slope: float
+    slope_err: float
+    r2: float
+    kappa: float
+    rms_slope: float
+    source: str
+    n_points: int
+
+
+def fit_contact(ens: dict, e_star: float, rms_slope: float) -> ContactFit:
+    """s_c from the particle-free points if there are any, else from all points."""
+    free = [p for p in ens.values() if p.beta == 0]
+    pts, source = (free, "particle-free cases (beta = 0)") if free else (list(ens.values()), "all cases")
+    s, se, r2 = fit_through_origin([p.pressure for p in pts], [p.ac_mean for p in pts])
+    return ContactFit(s, se, r2, s * e_star * rms_slope, rms_slope, source, len(pts))
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """All fits of a campaign."""
+
+    alpha: list
+    law: AlphaLawFit
+    contact: ContactFit
+
+    def to_dict(self) -> dict:
+        return {"alpha_per_velocity": [asdict(a) for a in self.alpha], "alpha_law": asdict(self.law),
+                "contact_area": asdict(self.contact)}
+
+
+def fit_all(ens: dict, e_star: float, rms_slope: float) -> FitReport:
+    """Eq. 23 per velocity, alpha(v) and the A_c slope."""
+    alphas = fit_alpha(ens, e_star)
+    if len(alphas) < 2:
+        raise ParameterError(f"alpha(v) needs results at >= 2 velocities with beta > 0; got {len(alphas)}")
+    sig = [a.alpha_member_std if math.isfinite(a.alpha_member_std) and a.alpha_member_std > 0
+           else a.alpha_stderr for a in alphas]
+    law = fit_alpha_law([a.velocity for a in alphas], [a.alpha for a in alphas], sig)
+    return FitReport(alphas, law, fit_contact(ens, e_star, rms_slope))

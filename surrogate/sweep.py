@@ -1,0 +1,329 @@
+"""The sweep of a mesoscale campaign: a TOML file over P, v, beta, placements and surfaces.
+
+A sweep names the grid of the friction table (Sec. 6; MODEL.md Sec. 4-5) and the settings shared
+by every slide. Example (SI units everywhere)::
+
+    name = "quick"
+    description = "64^2, 250 um: the default table"
+
+    [grid]
+    pressure = [5e6, 15e6, 30e6]   # mean contact pressure p [Pa]
+    velocity = [1.0, 10.0, 50.0]   # sliding velocity v0 [m/s]
+    seeds = [11, 12, 13]           # flake placements per point (>= 3, Sec. 6.2)
+    particle_free = true           # also run n_flakes = 0 (beta = 0) per (P, v, surface)
+
+    [[flakes]]                     # one debris level each: beta = count pi (d/2)^2 / L^2 (Eq. 10)
+    count = 5
+    diameter = 12e-6
+
+    [[surfaces]]                   # surface pairs; the ensemble runs over surfaces x seeds
+    sheet_seed = 1
+    tool_seed = 2                  # optional here: wavelength_ratio, hurst, *_rms_height
+
+    [slide]                        # every other SlideConfig key (surrogate.slide_config)
+    n = 64
+    size = 250e-6
+
+    [table]
+    mu0 = 0.15                     # particle-free friction coefficient (calibration, Eq. 6)
+    low_velocities = [0.0, 0.02, 0.08, 0.3]  # table rows below the grid, from the alpha(v) fit
+    beta_extension = 4             # table nodes above the largest campaign beta (Eq. 23); 0: none
+
+The keys that the grid sweeps (``pressure``, ``v0``, ``n_flakes``, ``flake_diameter``,
+``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
+as a :class:`~components.errors.ParameterError` naming the file, the line, the key, its value and
+what is allowed.
+
+Presets live in ``surrogate/presets/<name>.toml`` (:func:`preset_path`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+from components.errors import ParameterError
+
+from .slide_config import SlideConfig
+
+PRESET_DIR = Path(__file__).resolve().parent / "presets"
+
+#: SlideConfig keys the grid sets per case (not allowed in [slide])
+SWEPT_KEYS = ("pressure", "v0", "n_flakes", "flake_diameter", "flake_seed", "sheet_seed", "tool_seed")
+#: SlideConfig keys a [[surfaces]] entry may set besides the two seeds
+SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_rms_height",
+                "tool_rms_height")
+_TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table")
+_GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
+_FLAKE_KEYS = ("count", "diameter")
+_TABLE_KEYS = ("mu0", "low_velocities", "beta_extension")
+MIN_SEEDS = 3
+
+
+@dataclass(frozen=True)
+class TableSettings:
+    """How the table is made from the campaign (see :mod:`surrogate.table_build`).
+
+    Attributes
+    ----------
+    mu0 : float
+        Particle-free friction coefficient, the calibration of tau0 (Eq. 6, MODEL.md Sec. 4).
+    low_velocities : tuple of float
+        Velocity nodes [m/s] below the campaign's smallest velocity; their A_p comes from the
+        fitted alpha(v) law (Fig. 15), because the meso runs are too slow at the macro velocity.
+    beta_extension : int
+        Number of beta nodes added above the largest campaign beta, up to beta_thres (Eq. 24),
+        with A_p linear in beta (Eq. 23); 0 adds none (lookups above are clamped).
+    """
+
+    mu0: float = 0.15
+    low_velocities: tuple = (0.0, 0.02, 0.08, 0.3)
+    beta_extension: int = 4
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A validated sweep definition (see the module docstring for the file format)."""
+
+    name: str
+    description: str
+    pressures: tuple
+    velocities: tuple
+    seeds: tuple
+    flakes: tuple  # ((count, diameter), ...)
+    surfaces: tuple  # (dict of SURFACE_KEYS, ...)
+    slide: dict
+    particle_free: bool = True
+    table: TableSettings = TableSettings()
+    source: str = ""
+
+    def base_config(self) -> SlideConfig:
+        """The SlideConfig of the [slide] section alone (domain, moduli and other shared settings)."""
+        return SlideConfig(**self.slide)
+
+    def flake_beta(self, count: int, diameter: float) -> float:
+        """beta = count pi (d/2)^2 / L^2 (Eq. 10) on this sweep's domain."""
+        size = self.base_config().size
+        return count * math.pi * (0.5 * diameter) ** 2 / size**2
+
+    def to_dict(self) -> dict:
+        """Plain dict (JSON-serialisable) of the whole definition, for the table metadata."""
+        d = asdict(self)
+        d["flakes"] = [{"count": c, "diameter": dm, "beta": self.flake_beta(c, dm)}
+                       for c, dm in self.flakes]
+        return d
+
+
+def preset_path(name: str) -> Path:
+    """Path of the preset ``name`` (``surrogate/presets/<name>.toml``)."""
+    known = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+    if name not in known:
+        raise ParameterError(f"preset = {name!r} is not known; available: {known}")
+    return PRESET_DIR / f"{name}.toml"
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and validate a sweep file.
+
+    Raises
+    ------
+    ParameterError
+        Naming the file, the line, the key, its value and what is allowed.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ParameterError(f"sweep file {str(path)!r} does not exist") from None
+    return parse_sweep(text, source=str(path))
+
+
+def load_preset(name: str) -> Sweep:
+    """The sweep of the preset ``name``."""
+    return load_sweep(preset_path(name))
+
+
+class _Lines:
+    """Line numbers of the keys of a TOML text: (section, entry index, key) -> line."""
+
+    _header = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-]+)\s*\]\]?")
+    _key = re.compile(r"^\s*([A-Za-z0-9_\-]+|\"[^\"]*\")\s*=")
+
+    def __init__(self, text: str):
+        self.lines: dict = {}
+        self.headers: dict = {}
+        section, index, counts = "", 0, {}
+        for no, line in enumerate(text.splitlines(), start=1):
+            m = self._header.match(line)
+            if m:
+                section = m.group(2)
+                if m.group(1) == "[[":
+                    index = counts.get(section, -1) + 1
+                    counts[section] = index
+                else:
+                    index = 0
+                self.headers.setdefault((section, index), no)
+                continue
+            m = self._key.match(line)
+            if m:
+                self.lines.setdefault((section, index, m.group(1).strip('"')), no)
+
+    def of(self, section: str, key: str | None = None, index: int = 0) -> int | None:
+        if key is None:
+            return self.headers.get((section, index))
+        return self.lines.get((section, index, key)) or self.headers.get((section, index))
+
+
+class _Checker:
+    def __init__(self, text: str, source: str):
+        self.where = _Lines(text)
+        self.source = source
+
+    def fail(self, section: str, key: str | None, message: str, index: int = 0):
+        line = self.where.of(section, key, index)
+        at = f", line {line}" if line else ""
+        sec = f"[{section}]" if section else "top level"
+        if section in ("flakes", "surfaces"):
+            sec = f"[[{section}]] entry {index + 1}"
+        name = f" {key}" if key else ""
+        raise ParameterError(f"sweep file {self.source}{at}: {sec}{name}: {message}")
+
+    def unknown(self, section: str, data: dict, allowed, index: int = 0):
+        bad = sorted(set(data) - set(allowed))
+        if bad:
+            self.fail(section, bad[0], f"unknown key {bad[0]!r}; allowed: {sorted(allowed)}", index)
+
+    def numbers(self, section, key, value, *, positive=True, allow_zero=False, integer=False,
+                min_len=1, unique=True) -> tuple:
+        kind = "integers" if integer else "numbers"
+        if not isinstance(value, list) or len(value) < min_len:
+            self.fail(section, key, f"= {value!r}; a list of at least {min_len} {kind} is required")
+        for x in value:
+            ok_type = (isinstance(x, int) and not isinstance(x, bool)) if integer else (
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x))
+            if not ok_type or (positive and (x < 0 or (x == 0 and not allow_zero))):
+                need = ">= 0" if allow_zero else "> 0"
+                self.fail(section, key, f"has the value {x!r}; every entry must be one of the "
+                          f"finite {kind} {need}" if positive else f"has the value {x!r}")
+        if unique and len(set(value)) != len(value):
+            self.fail(section, key, f"= {value!r} has repeated values; each value once")
+        return tuple(sorted(value)) if not integer else tuple(value)
+
+
+def parse_sweep(text: str, source: str = "<string>") -> Sweep:
+    """Validate the TOML ``text`` of a sweep (``source`` names it in messages)."""
+    chk = _Checker(text, source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"sweep file {source}: not valid TOML: {exc}") from None
+    chk.unknown("", data, _TOP_KEYS)
+    for key in ("name", "description"):
+        if key in data and not isinstance(data[key], str):
+            chk.fail("", key, f"= {data[key]!r}; a string is required")
+    for key in ("grid", "slide", "table"):
+        if key in data and not isinstance(data[key], dict):
+            chk.fail("", key, f"must be a table [{key}]")
+    grid = data.get("grid")
+    if grid is None:
+        chk.fail("", "grid", "the [grid] table (pressure, velocity, seeds) is missing")
+    chk.unknown("grid", grid, _GRID_KEYS)
+    for key in ("pressure", "velocity", "seeds"):
+        if key not in grid:
+            chk.fail("grid", None, f"key {key!r} is missing")
+
+    slide = dict(data.get("slide", {}))
+    allowed_slide = {f.name for f in fields(SlideConfig)} - set(SWEPT_KEYS)
+    for key in slide:
+        if key in SWEPT_KEYS:
+            chk.fail("slide", key, f"is swept by the grid/flakes/surfaces and is not allowed in [slide]")
+    chk.unknown("slide", slide, allowed_slide)
+    try:
+        base = SlideConfig(**slide)
+    except ParameterError as exc:
+        key = str(exc).split(" ", 1)[0]
+        chk.fail("slide", key if key in slide else None, str(exc))
+    except TypeError as exc:  # pragma: no cover - unknown keys are caught above
+        chk.fail("slide", None, str(exc))
+
+    pressures = chk.numbers("grid", "pressure", grid["pressure"])
+    for p in pressures:
+        if p > base.p_crit:
+            chk.fail("grid", "pressure", f"has the value {p!r} Pa; pressures in (0, p_crit = "
+                     f"{base.p_crit:g}] Pa are allowed")
+    velocities = chk.numbers("grid", "velocity", grid["velocity"])
+    seeds = chk.numbers("grid", "seeds", grid["seeds"], integer=True, allow_zero=True, min_len=MIN_SEEDS)
+    particle_free = grid.get("particle_free", True)
+    if not isinstance(particle_free, bool):
+        chk.fail("grid", "particle_free", f"= {particle_free!r}; true or false is required")
+
+    flakes_raw = data.get("flakes")
+    if not isinstance(flakes_raw, list) or not flakes_raw:
+        chk.fail("", "flakes", "at least one [[flakes]] entry (count, diameter) is required")
+    flakes = []
+    for i, fl in enumerate(flakes_raw):
+        chk.unknown("flakes", fl, _FLAKE_KEYS, i)
+        for key in _FLAKE_KEYS:
+            if key not in fl:
+                chk.fail("flakes", None, f"key {key!r} is missing", i)
+        c, d = fl["count"], fl["diameter"]
+        if isinstance(c, bool) or not isinstance(c, int) or c < 1:
+            chk.fail("flakes", "count", f"= {c!r}; an integer >= 1 is required", i)
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not (0 < d < 0.5 * base.size):
+            chk.fail("flakes", "diameter", f"= {d!r} m; a diameter in (0, size/2 = "
+                     f"{0.5 * base.size:g}) m is required", i)
+        if (c, float(d)) in flakes:
+            chk.fail("flakes", "count", f"entry (count {c}, diameter {d!r}) is repeated", i)
+        flakes.append((c, float(d)))
+
+    surfaces_raw = data.get("surfaces", [{"sheet_seed": base.sheet_seed, "tool_seed": base.tool_seed}])
+    if not isinstance(surfaces_raw, list) or not surfaces_raw:
+        chk.fail("", "surfaces", "must be one or more [[surfaces]] entries")
+    surfaces = []
+    for i, s in enumerate(surfaces_raw):
+        chk.unknown("surfaces", s, SURFACE_KEYS, i)
+        for key in ("sheet_seed", "tool_seed"):
+            if key not in s:
+                chk.fail("surfaces", None, f"key {key!r} is missing", i)
+            if isinstance(s[key], bool) or not isinstance(s[key], int) or s[key] < 0:
+                chk.fail("surfaces", key, f"= {s[key]!r}; an integer >= 0 is required", i)
+        try:
+            SlideConfig(**{**slide, **s})
+        except ParameterError as exc:
+            key = str(exc).split(" ", 1)[0]
+            chk.fail("surfaces", key if key in s else None, str(exc), i)
+        if dict(s) in surfaces:
+            chk.fail("surfaces", "sheet_seed", "entry is repeated", i)
+        surfaces.append(dict(s))
+
+    tbl = data.get("table", {})
+    chk.unknown("table", tbl, _TABLE_KEYS)
+    mu0 = tbl.get("mu0", TableSettings.mu0)
+    if isinstance(mu0, bool) or not isinstance(mu0, (int, float)) or not (0 < mu0 <= 5):
+        chk.fail("table", "mu0", f"= {mu0!r}; a friction coefficient in (0, 5] is required")
+    low = tbl.get("low_velocities", list(TableSettings.low_velocities))
+    low = chk.numbers("table", "low_velocities", low, allow_zero=True, min_len=0) if low else ()
+    for v in low:
+        if v >= velocities[0]:
+            chk.fail("table", "low_velocities", f"has the value {v!r} m/s; values below the "
+                     f"smallest grid velocity {velocities[0]!r} m/s are allowed")
+    ext = tbl.get("beta_extension", TableSettings.beta_extension)
+    if isinstance(ext, bool) or not isinstance(ext, int) or not (0 <= ext <= 100):
+        chk.fail("table", "beta_extension", f"= {ext!r}; an integer in [0, 100] is required")
+
+    return Sweep(
+        name=data.get("name", Path(source).stem),
+        description=data.get("description", ""),
+        pressures=tuple(float(p) for p in pressures),
+        velocities=tuple(float(v) for v in velocities),
+        seeds=tuple(int(s) for s in seeds),
+        flakes=tuple(flakes),
+        surfaces=tuple(surfaces),
+        slide=slide,
+        particle_free=particle_free,
+        table=TableSettings(float(mu0), tuple(float(v) for v in low), int(ext)),
+        source=source,
+    )

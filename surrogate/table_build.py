@@ -1,0 +1,373 @@
+"""The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; MODEL.md Sec. 4).
+
+Law (Eq. 7): mu = tau0 (A_c - A_p) / (P A0), with <A_c>/A0 and <A_p>/A0 ensemble-averaged
+over the members (placement seeds x surfaces) of each grid point. Each member gives
+mu_m = tau0 (A_c,m - A_p,m) / (P A0); the table holds their mean (clipped at 0) and the metadata
+their standard deviation (``ensemble.mu_std``) and count.
+
+Calibration (Eq. 6). tau0 = mu0 / s_c: ONE shear strength for all pressures, with s_c the
+through-origin slope of <A_c>/A0 against P (:func:`surrogate.fit.fit_contact`; particle-free
+cases when the sweep has them). mu at beta = 0 is then mu0 (A_c/A0) / (s_c P), i.e. mu0 up to the
+departure of the measured A_c from a line.
+
+Axes.
+
+- P: the campaign pressures.
+- v: the campaign velocities, and below them ``table.low_velocities`` (e.g. the macro test's
+  0.08 m/s, far below the meso runs at m/s to tens of m/s): there
+  A_p(v) = A_p(v_min) alpha(v) / alpha(v_min) with the fitted alpha(v) = b (1 - exp(-v/v_ref))
+  (Fig. 15), A_c = A_c(v_min) (the contact is quasi-static), so the rows meet the measured row
+  at v_min continuously.
+- beta: 0 (particle-free cases, or A_p = 0 with the members' A_c when the sweep has none), the
+  campaign's debris levels, and ``table.beta_extension`` nodes above the largest level up to
+  beta_thres, with A_p linear in beta (Eq. 23; per member the through-origin slope over the
+  levels) and A_c the members' mean over the levels. Such nodes are extrapolated, and the
+  metadata say where measurement stops (``axes.beta.measured_max``).
+
+beta_thres (Eq. 24) = kappa / (alpha h'_rms) = s_c E* / alpha with the largest alpha (b, or the
+largest per-velocity alpha if that is larger), so that A_p <= A_c at every velocity; limited to 1.
+It does not depend on which h'_rms is used, as long as kappa is measured with the same one.
+
+Out-of-range lookups follow the table module's policy (``clamp`` by default, or ``error``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from components.errors import TableError
+from components.stripdraw.table import UNITS, FrictionTable
+
+from .fit import FitReport, _key, ensemble, fit_all
+from .slide_config import SlideConfig
+
+
+def surface_statistics(slide: dict, surfaces: list[dict]) -> dict:
+    """RMS heights and slopes of the sheet, the tool and the gap (tool - sheet) per surface pair."""
+    from . import coupling
+    from .surfaces import rms_height, rms_slope
+
+    gen = getattr(coupling, "generate_surfaces", None) or coupling._generate_surfaces
+    pairs = []
+    for surf in surfaces:
+        cfg = SlideConfig(**{**slide, **surf})
+        sheet, tool = gen(cfg)
+        entry = {**surf}
+        for name, h in (("sheet", sheet), ("tool", tool), ("gap", tool - sheet)):
+            entry[name] = {"rms_height": rms_height(h),
+                           "rms_slope": rms_slope(h, cfg.size, "spectral"),
+                           "rms_slope_finite_difference": rms_slope(h, cfg.size, "finite_difference")}
+        pairs.append(entry)
+    mean_gap_slope = float(np.mean([p["gap"]["rms_slope"] for p in pairs]))
+    return {"pairs": pairs, "gap_rms_slope_mean": mean_gap_slope,
+            "rms_slope_definition": "spectral (gradient of the trigonometric interpolant); "
+                                    "kappa uses the gap's"}
+
+
+def _members(ens: dict, p: float, v: float, beta: float) -> dict:
+    pt = ens.get((_key(p), _key(v), _key(beta)))
+    if pt is None:
+        return {}
+    return {mk: (ap, ac) for mk, ap, ac in pt.members}
+
+
+class _Row:
+    """Member values (A_p/A0, A_c/A0) of every beta node at one (P, campaign v)."""
+
+    def __init__(self, ens: dict, p: float, v: float, levels: list, particle_free: bool):
+        self.levels = {b: _members(ens, p, v, b) for b in levels}
+        for b, m in self.levels.items():
+            if not m:
+                raise TableError(f"no finished case at P = {p:g} Pa, v = {v:g} m/s, beta = {b:.6g}: "
+                                 "rerun the campaign (failed cases are retried) before building the table")
+        keys = sorted(set().union(*[set(m) for m in self.levels.values()]))
+        self.keys = keys
+        self.slope, self.ac = {}, {}
+        for mk in keys:
+            bs = [b for b in levels if mk in self.levels[b]]
+            aps = [self.levels[b][mk][0] for b in bs]
+            self.slope[mk] = float(np.dot(bs, aps) / np.dot(bs, bs))
+            self.ac[mk] = float(np.mean([self.levels[b][mk][1] for b in bs]))
+        self.free = _members(ens, p, v, 0.0) if particle_free else {}
+        if particle_free and not self.free:
+            raise TableError(f"no finished particle-free case at P = {p:g} Pa, v = {v:g} m/s")
+
+    def at(self, beta: float) -> dict:
+        if beta == 0.0:
+            return self.free or {mk: (0.0, ac) for mk, ac in self.ac.items()}
+        if beta in self.levels:
+            return self.levels[beta]
+        return {mk: (beta * self.slope[mk], self.ac[mk]) for mk in self.keys}
+
+
+def build_table(records: list[dict], manifest: dict, *, failed: list | None = None,
+                campaign_info: dict | None = None, surface_stats: dict | None = None) -> tuple[FrictionTable, FitReport]:
+    """The friction table and the fits from the finished case ``records`` of a campaign.
+
+    Parameters
+    ----------
+    records : list of dict
+        Finished case records (:func:`surrogate.campaign.load_records`).
+    manifest : dict
+        ``OUT/campaign.json``: the sweep (``manifest["sweep"]``) and its cases.
+    failed : list of dict, optional
+        Failed/missing case records (listed in the metadata).
+    campaign_info : dict, optional
+        Executor, wall time, ... (recorded as is).
+    surface_stats : dict, optional
+        :func:`surface_statistics` (computed if not given).
+
+    Raises
+    ------
+    TableError
+        If a grid point has no finished case.
+    """
+    from .campaign import case_cpu_seconds, code_version, source_digest
+
+    sweep = manifest["sweep"]
+    if not records:
+        raise TableError("the campaign has no finished case; nothing to build a table from")
+    base = SlideConfig(**sweep["slide"])
+    e_star, p_crit = base.e_star, base.p_crit
+    tset = sweep["table"]
+    mu0 = float(tset["mu0"])
+    if surface_stats is None:
+        surface_stats = surface_statistics(sweep["slide"], sweep["surfaces"])
+    h_rms_slope = surface_stats["gap_rms_slope_mean"]
+
+    ens = ensemble(records)
+    fits = fit_all(ens, e_star, h_rms_slope)
+    s_c = fits.contact.slope
+    if not s_c > 0:
+        raise TableError(f"the A_c/A0-vs-P slope is {s_c!r}; a positive slope is needed for tau0")
+    tau0 = mu0 / s_c
+
+    pressures = sorted(float(p) for p in sweep["pressures"])
+    v_camp = sorted(float(v) for v in sweep["velocities"])
+    v_low = sorted(float(v) for v in tset["low_velocities"])
+    levels = sorted({_key(f["beta"]) for f in sweep["flakes"]})
+    alpha_max = max([fits.law.b] + [a.alpha for a in fits.alpha])
+    beta_thres = 1.0 if alpha_max <= 0 else min(1.0, s_c * e_star / alpha_max)
+    ext = []
+    if tset["beta_extension"] > 0 and beta_thres > levels[-1] * (1 + 1e-9):
+        ext = list(np.linspace(levels[-1], beta_thres, tset["beta_extension"] + 1)[1:])
+    beta_axis = [0.0] + levels + ext
+    vel_axis = v_low + v_camp
+
+    law = fits.law
+    a_min = float(law(v_camp[0])) if law.b > 0 else 0.0
+    ratio = {v: (float(law(v)) / a_min if a_min > 0 else 0.0) for v in v_low}
+
+    shape = (len(pressures), len(vel_axis), len(beta_axis))
+    mu = np.zeros(shape)
+    mu_std = np.zeros(shape)
+    n_mem = np.zeros(shape, dtype=int)
+    for i, p in enumerate(pressures):
+        rows = {v: _Row(ens, p, v, levels, sweep["particle_free"]) for v in v_camp}
+        for j, v in enumerate(vel_axis):
+            row, scale = (rows[v], 1.0) if v in rows else (rows[v_camp[0]], ratio[v])
+            for k, b in enumerate(beta_axis):
+                mem = row.at(b)
+                vals = np.array([tau0 * (ac - scale * ap) / p for ap, ac in mem.values()])
+                mu[i, j, k] = max(0.0, float(vals.mean()))
+                mu_std[i, j, k] = float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0
+                n_mem[i, j, k] = vals.size
+
+    flakes = sweep["flakes"]
+    seeds = sweep["seeds"]
+    meta = {
+        "provenance": "mesoscale",
+        "title": f"friction table from the mesoscale campaign '{sweep['name']}'",
+        "law": "mu = tau0 (A_c - A_p) / (P A0) (Eq. 7) with ensemble-averaged <A_c>/A0 and <A_p>/A0 "
+               "(Eq. 22) of BEM-DEM slides (Sec. 5-6); see surrogate.table_build",
+        "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under "
+                          "every blocked flake (the cluster rule of Fig. 8 and the pinch rule of "
+                          "surrogate.coupling); A_c from 'mean_contact_fraction'",
+        "beta_threshold": beta_thres,
+        "beta_threshold_note": "Eq. 24: beta_thres = kappa / (alpha h'_rms) = s_c E* / alpha with the "
+                               f"largest alpha ({alpha_max:.6g}), limited to 1",
+        "calibration": {"mu0": mu0, "tau0": tau0, "tau0_unit": "Pa",
+                        "tau0_source": "tau0 = mu0 / s_c, s_c the through-origin slope of <A_c>/A0 "
+                                       f"vs P of the {fits.contact.source} (one tau0 for all pressures)"},
+        "e_star": e_star, "p_crit": p_crit,
+        "axes": {
+            "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
+            "velocity": {"unit": UNITS["velocity"], "campaign": v_camp, "below_campaign": v_low,
+                         "note": f"The mesoscale runs slide at {v_camp[0]:g} to {v_camp[-1]:g} m/s; the "
+                                 "macro strip-draw test runs at 0.08 m/s. Rows below "
+                                 f"{v_camp[0]:g} m/s are NOT simulated: A_p there is the measured "
+                                 f"A_p at {v_camp[0]:g} m/s times alpha(v)/alpha({v_camp[0]:g}) of the "
+                                 "fitted alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15), A_c the "
+                                 f"measured A_c at {v_camp[0]:g} m/s."},
+            "beta": {"unit": UNITS["beta"], "measured": levels, "measured_max": levels[-1],
+                     "extrapolated": ext,
+                     "note": "beta = N pi (d/2)^2 / L^2 (Eq. 10). beta = 0: "
+                             + ("particle-free cases" if sweep["particle_free"] else
+                                "A_p = 0 with the members' A_c (no particle-free cases)")
+                             + "; nodes above measured_max are extrapolated with A_p linear in "
+                               "beta (Eq. 23) up to beta_threshold"},
+            "order": ["pressure", "velocity", "beta"],
+        },
+        "fits": fits.to_dict(),
+        "campaign": {
+            "sweep": sweep,
+            "seeds": seeds,
+            "flake_levels": flakes,
+            "cases_total": len(manifest["cases"]),
+            "cases_finished": len(records),
+            "cases_failed": [{"case_id": f.get("case_id"), "labels": f.get("labels"),
+                              "error": f.get("error", {}).get("message", f.get("status"))}
+                             for f in (failed or [])],
+            "case_cpu_seconds": case_cpu_seconds(records),
+            **(campaign_info or {}),
+        },
+        "surfaces": surface_stats,
+        "ensemble": {"mu_std": mu_std.tolist(), "n_members": n_mem.tolist(),
+                     "note": "standard deviation (ddof 1) of the member values of mu at each node, "
+                             "same (pressure, velocity, beta) order as mu"},
+        "out_of_range_policy": "clamp (default: nearest edge, counted) or error "
+                               "(components.stripdraw.table)",
+        "code_version": code_version(),
+        "source_digest": source_digest(),
+        "case_code_versions": sorted({r.get("code_version", "unknown") for r in records}),
+        "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu,
+                          json_clean(meta))
+    return table, fits
+
+
+def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:
+    """Differences of two tables on the same axes, against the uncertainty recorded with ``a``.
+
+    The tolerance per node is the larger of the recorded ensemble std of mu and one contact
+    pixel, tau0 / (P n^2) (a rebuild with the same seeds may differ in the last bits of the FFT
+    plans, which can flip one pixel). Returns max |mu_a - mu_b|, the largest ratio to the
+    tolerance, the number of nodes beyond it and ``within_uncertainty``.
+    """
+    for name in ("pressure", "velocity", "beta"):
+        x, y = getattr(a, name), getattr(b, name)
+        if x.shape != y.shape or not np.allclose(x, y, rtol=1e-9, atol=0.0):
+            raise TableError(f"the tables have different {name} axes; they cannot be compared node by node")
+    d = np.abs(a.mu - b.mu)
+    std = np.asarray(a.metadata.get("ensemble", {}).get("mu_std", np.zeros_like(a.mu)), float)
+    # one contact pixel more or less (last-bit differences of FFT plans can flip one): tau0/(P n^2)
+    tau0 = a.metadata.get("calibration", {}).get("tau0")
+    n = a.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("n", 256)
+    pixel = tau0 / (a.pressure[:, None, None] * n * n) if tau0 else np.zeros_like(a.mu)
+    tol = np.maximum(np.maximum(std, pixel), 1e-12)
+    return {"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
+            "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
+            "tolerance": "max(recorded ensemble std, one contact pixel tau0/(P n^2))",
+            "within_uncertainty": bool(np.all(d <= tol))}
+
+
+def table_at(table: FrictionTable, pressure: float, velocity: float, betas) -> np.ndarray:
+    """mu at one (P, v) for several beta (clamped lookups)."""
+    return table.interpolate(pressure, velocity, np.asarray(betas, float), "clamp")[0]
+
+
+def _f(x, spec: str) -> str:
+    """Format a number that may be None (a NaN in the JSON metadata)."""
+    return "n/a" if x is None else format(x, spec)
+
+
+def describe(table: FrictionTable) -> str:
+    """A human-readable summary of a table (used by ``tribocosim surrogate show``)."""
+    m = table.metadata
+    lines = [f"friction table  provenance={table.provenance}  format_version={m.get('format_version')}",
+             f"  content hash   {m.get('content_hash', '')}",
+             f"  created        {m.get('created', '?')}  code {m.get('code_version', '?')}",
+             f"  pressure [Pa]  {len(table.pressure)} nodes {table.pressure[0]:.4g} .. {table.pressure[-1]:.4g}",
+             f"  velocity [m/s] {len(table.velocity)} nodes " + " ".join(f"{v:g}" for v in table.velocity),
+             f"  beta [-]       {len(table.beta)} nodes " + " ".join(f"{b:.4g}" for b in table.beta),
+             f"  beta_threshold {table.beta_threshold:.6g}",
+             f"  mu range       {table.mu.min():.4f} .. {table.mu.max():.4f}"]
+    cal = m.get("calibration")
+    if cal:
+        lines.append(f"  mu0 = {cal['mu0']:g}, tau0 = {cal['tau0'] / 1e6:.4g} MPa ({cal['tau0_source']})")
+    fits = m.get("fits")
+    if fits:
+        lines.append("  Eq. 23 per velocity: A_p/A0 = alpha beta P / E*")
+        for a in fits["alpha_per_velocity"]:
+            lines.append(f"    v = {_f(a['velocity'], '>6g')} m/s  alpha = {_f(a['alpha'], '.4g')} +- {_f(a['alpha_stderr'], '.2g')} "
+                         f"(member std {_f(a['alpha_member_std'], '.2g')})  R^2 = {_f(a['r2'], '.3f')}  ({a['n_points']} points)")
+        law = fits["alpha_law"]
+        lines.append(f"  alpha(v) = b (1 - exp(-v/v_ref)): b = {_f(law['b'], '.4g')} +- {_f(law['b_err'], '.2g')}, "
+                     f"v_ref = {_f(law['v_ref'], '.4g')} +- {_f(law['v_ref_err'], '.2g')} m/s, R^2 = {_f(law['r2'], '.3f')}")
+        if law.get("note"):
+            lines.append(f"    note: {law['note']}")
+        c = fits["contact_area"]
+        lines.append(f"  A_c/A0 = s_c P: s_c = {_f(c['slope'], '.4g')} +- {_f(c['slope_err'], '.2g')} 1/Pa "
+                     f"(1/s_c = {1 / c['slope'] / 1e6:.4g} MPa), R^2 = {_f(c['r2'], '.4f')}; kappa = "
+                     f"{_f(c['kappa'], '.4g')} with h'_rms = {_f(c['rms_slope'], '.4g')} ({c['source']})")
+    ax = m.get("axes", {}).get("velocity", {})
+    if ax.get("note"):
+        lines.append(f"  velocity note: {ax['note']}")
+    digests = m.get("case_source_digests") or []
+    if len(digests) > 1:
+        lines.append(f"  WARNING: the cases were computed with {len(digests)} different source versions "
+                     f"({', '.join(digests)}): rerun the campaign in a fresh folder for a consistent table")
+    camp = m.get("campaign")
+    if camp:
+        lines.append(f"  campaign '{camp['sweep']['name']}': {camp['cases_finished']}/{camp['cases_total']} "
+                     f"cases, {len(camp['cases_failed'])} failed, {camp['case_cpu_seconds']:.0f} core-s")
+    if m.get("note"):
+        lines.append(f"  note: {m['note']}")
+    v08 = 0.08
+    if table.velocity[0] <= v08 <= table.velocity[-1]:
+        lines.append(f"  mu at v = {v08} m/s:")
+        for p in table.pressure:
+            mus = table_at(table, p, v08, table.beta)
+            lines.append(f"    P = {p / 1e6:6.3g} MPa: " + " ".join(f"{x:.4f}" for x in mus))
+    return "\n".join(lines)
+
+
+def plot_table(table: FrictionTable, path, velocities=None) -> None:
+    """mu vs P per beta, one panel per velocity (default: 0.08 m/s if in range and the grid's)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if velocities is None:
+        camp = table.metadata.get("axes", {}).get("velocity", {}).get("campaign")
+        velocities = list(camp) if camp else list(table.velocity)
+        if table.velocity[0] <= 0.08 <= table.velocity[-1] and 0.08 not in velocities:
+            velocities = [0.08] + velocities
+        velocities = velocities[:4]
+    fig, axes = plt.subplots(1, len(velocities), figsize=(4.2 * len(velocities), 3.6),
+                             sharey=True, constrained_layout=True, squeeze=False)
+    p = np.linspace(table.pressure[0], table.pressure[-1], 60)
+    cmap = plt.get_cmap("viridis")
+    for ax, v in zip(axes[0], velocities):
+        for k, b in enumerate(table.beta):
+            mu = table.interpolate(p, v, b, "clamp")[0]
+            ax.plot(p / 1e6, mu, color=cmap(k / max(1, len(table.beta) - 1)), label=f"beta = {b:.3g}")
+            if v in table.velocity:
+                j = int(np.searchsorted(table.velocity, v))
+                ax.plot(table.pressure / 1e6, table.mu[:, j, k], "o", ms=3,
+                        color=cmap(k / max(1, len(table.beta) - 1)))
+        ax.set(xlabel="P [MPa]", title=f"v = {v:g} m/s")
+    axes[0][0].set_ylabel("mu")
+    axes[0][-1].legend(fontsize=7)
+    fig.suptitle(f"friction table ({table.provenance})")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def json_clean(obj):
+    """``obj`` with NaN/inf floats replaced by None (strict JSON) and tuples as lists."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): json_clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_clean(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return json_clean(obj.item())
+    return obj

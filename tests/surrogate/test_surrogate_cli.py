@@ -1,0 +1,111 @@
+"""Tests of ``tribocosim surrogate`` (surrogate.surrogate_cli): build from a sweep file with a
+real pool and real slides (tiny), show, compare, and the messages for bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from components.stripdraw.table import read_table
+from cosim.cli import main as tribocosim
+from surrogate import surrogate_cli
+
+TINY = """
+name = "tiny-cli"
+[grid]
+pressure = [5e6, 20e6]
+velocity = [5.0, 50.0]
+seeds = [1, 2, 3]
+[[flakes]]
+count = 2
+diameter = 12e-6
+[slide]
+n = 16
+size = 64e-6
+wavelength_ratio = 0.25
+n_slide_steps = 4
+[table]
+low_velocities = [0.0, 0.08]
+beta_extension = 2
+"""
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    (d / "sweep.toml").write_text(TINY)
+    rc = tribocosim(["surrogate", "build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
+                     "--workers", "1", "--quiet"])
+    return d, rc
+
+
+def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
+    d, rc = built
+    assert rc == 0
+    table = read_table(d / "out" / "friction_table.npz")
+    assert table.provenance == "mesoscale" and table.mu.shape == (2, 4, 4)
+    assert len(list((d / "out" / "cases").glob("*.json"))) == 2 * 2 * 4
+    fits = json.loads((d / "out" / "fits.json").read_text())
+    assert fits["content_hash"] == table.metadata["content_hash"]
+    assert {"alpha_per_velocity", "alpha_law", "contact_area"} <= set(fits)
+    camp = table.metadata["campaign"]
+    assert camp["executor"] == {"executor": "process-pool", "workers": 1} and camp["cases_failed"] == []
+    # a rerun computes nothing and rebuilds the same numbers
+    rc2 = surrogate_cli.main(["build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
+                              "--table", str(d / "again.npz"), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc2 == 0 and "16 already finished, 0 computed" in err
+    assert np.array_equal(read_table(d / "again.npz").mu, table.mu)
+
+
+def test_show_prints_summary_and_plots(built, tmp_path, capsys):
+    d, _ = built
+    png = tmp_path / "mu.png"
+    assert surrogate_cli.main(["show", str(d / "out" / "friction_table.npz"), "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "provenance=mesoscale" in out and "alpha(v) = b (1 - exp(-v/v_ref))" in out
+    assert "mu at v = 0.08 m/s" in out and png.stat().st_size > 1000
+
+
+def test_compare_same_table_is_within_uncertainty(built, capsys):
+    d, _ = built
+    t = str(d / "out" / "friction_table.npz")
+    assert surrogate_cli.main(["compare", t, str(d / "again.npz")]) == 0
+    assert json.loads(capsys.readouterr().out)["within_uncertainty"] is True
+
+
+def test_show_refuses_a_modified_table(built, tmp_path, capsys):
+    d, _ = built
+    with np.load(d / "out" / "friction_table.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["mu"] = arrays["mu"] * 1.01
+    np.savez(tmp_path / "bad.npz", **arrays)
+    assert surrogate_cli.main(["show", str(tmp_path / "bad.npz"), "--no-plot"]) == 1
+    assert "fails its content hash check" in capsys.readouterr().err
+
+
+def test_bad_sweep_and_usage_errors(tmp_path, capsys):
+    f = tmp_path / "s.toml"
+    f.write_text(TINY.replace("seeds = [1, 2, 3]", "seeds = [1, 2, 3]\nbetas = [0.1]"))
+    assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert f"sweep file {f}, line 7: [grid] betas: unknown key 'betas'" in err
+    assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 1
+    assert "preset = 'nope' is not known; available: ['paper', 'quick']" in capsys.readouterr().err
+    assert surrogate_cli.main(["frobnicate"]) == 2
+    assert surrogate_cli.main(["build"]) == 2
+    assert tribocosim(["surrogate", "--help"]) == 0
+
+
+def test_build_where_every_case_fails_reports_it(tmp_path, capsys):
+    f = tmp_path / "s.toml"
+    f.write_text(TINY.replace("pressure = [5e6, 20e6]", "pressure = [5e6]").replace(
+        "velocity = [5.0, 50.0]", "velocity = [5.0, 50.0]").replace("n_slide_steps = 4",
+                                                                      "n_slide_steps = 4\nbem_max_iter = 1"))
+    assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o"), "--workers", "2",
+                               "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "8 failed" in err and "no finished case" in err
+    assert len(list((tmp_path / "o" / "cases").glob("*.error.json"))) == 8
