@@ -20,21 +20,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from components.stripdraw.model import OUTPUT_NAMES
+
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
 #: the FMUs ``tribocosim fmu build`` builds, in its order
 FMU_NAMES = ("StripDraw", "Press", "DrawingMachine")
 
 #: Real outputs of the StripDraw FMU, in the model's order (``table_clamp_count`` is an Integer output)
-REAL_OUTPUTS = (
-    "pull_force",
-    "friction_force",
-    "mu_mean",
-    "sliding_distance",
-    "beta_mean",
-    "beta_max",
-    "contact_pressure",
-    "grip_position",
-)
+REAL_OUTPUTS = tuple(name for name in OUTPUT_NAMES if name != "table_clamp_count")
 
 
 @pytest.fixture(scope="session")
