@@ -37,7 +37,9 @@ Almqvist et al. and Weber et al., Nat. Commun. 9 (2018) 888, doi:10.1038/s41467-
    penetration in y, so that the least-penetrating are the first to be released). If the
    contact points cannot carry p even at p_crit, a shift t = clip(y - lambda, 0, p_crit) over the
    whole grid brings in the zero points closest to contact. CG restarts unless only a few points
-   changed. The work of this step scales with |F| + |S| + #violators; the displacement is then
+   changed. If a kept direction is no longer a descent direction (r.d <= 0, conjugacy lost in a
+   kept active-set change), CG restarts with d = r (it used to stop there as if converged). The
+   work of this step scales with |F| + |S| + #violators; the displacement is then
    corrected by direct summation of the real-space kernel when at most a dozen points changed,
    otherwise by one more FFT pair.
 
@@ -54,13 +56,15 @@ rolled by the sliding increment). The convergence measure is the RMS complementa
     residual = sqrt(mean(r^2)) / max(rms(g + u_p), p dx / E*),
     r = G on F,  min(G, 0) where t = 0,  max(G, 0) where t = p_crit,
 
-checked on an exact re-evaluation of K t (one FFT pair) before a result is returned. A solve that
-does not reach ``tol`` in ``max_iter`` iterations raises ``ConvergenceError`` (or, with
+checked on an exact re-evaluation of K t (one FFT pair) before a result is returned. A
+warm-started solve that ends unverified is redone once from the cold start (iterations and FFT
+pairs of both are reported). A solve that does not reach ``tol`` in ``max_iter`` iterations raises ``ConvergenceError`` (or, with
 ``on_failure="flag"``, returns ``converged=False`` and warns).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -451,7 +455,18 @@ class ContactSolver:
         else:
             t = self._initial_guess(h, p, pc)
         t = self._feasible(np.clip(t, 0.0, pc).ravel(), p, pc)
-        return self._iterate(t, h, up0, p, pc, scale)
+        if warm_start is None:
+            return self._iterate(t, h, up0, p, pc, scale)
+        out = self._iterate(t, h, up0, p, pc, scale, final=False)
+        if out is not None:
+            return out
+        # the warm start did not lead to a verified solution: start again from the cold guess
+        used = self._transforms
+        t = self._feasible(np.clip(self._initial_guess(h, p, pc), 0.0, pc).ravel(), p, pc)
+        self._transforms = 0
+        out = self._iterate(t, h, up0, p, pc, scale)
+        return dataclasses.replace(out, iterations=out.iterations + self._failed_iterations,
+                                   fft_pairs=out.fft_pairs + used // 2)
 
     # -- internals ----------------------------------------------------------------------
     def _initial_guess(self, h: np.ndarray, p: float, pc: float) -> np.ndarray:
@@ -505,7 +520,8 @@ class ContactSolver:
             lam += (_shift_sum(y, lam, pc) - target) / free
         return 1.0, lam, True
 
-    def _iterate(self, t, h, up0, p, pc, scale) -> ContactResult:
+    def _iterate(self, t, h, up0, p, pc, scale, final=True) -> ContactResult | None:
+        """The CG loop from the feasible t; None if not ``final`` and not converged."""
         n, N = self.n, self.n * self.n
         hf = h.ravel()
         f = self._fft
@@ -533,7 +549,10 @@ class ContactSolver:
             it += 1
             ncross, stepped = 0, False
             if fidx.size > 1 and gn > 0.0:
-                rd = _direction(fidx, g, d, delta, gn / gn_old if beta_ok else 0.0)
+                beta = gn / gn_old if beta_ok else 0.0
+                rd = _direction(fidx, g, d, delta, beta)
+                if rd <= 0.0 < beta:  # not a descent direction: restart CG (steepest descent)
+                    rd = _direction(fidx, g, d, delta, 0.0)
                 gn_old = gn
                 dkd = self._apply(None, f.real_out)
                 if dkd > 0.0 and rd > 0.0:
@@ -560,6 +579,9 @@ class ContactSolver:
                                                              delta, tau_v, p, pc)
             beta_ok = beta_ok and keep
             res = math.sqrt((gn + viol) / N) / scale
+        if not final and not (verified and res <= self.tol):
+            self._failed_iterations = it
+            return None
         u_e = (g - hf).reshape(n, n)
         return self._result(t.reshape(n, n), u_e, up0, h, delta, it, res, state, verified)
 

@@ -261,3 +261,64 @@ def test_fft_pair_matches_numpy_and_wisdom_round_trips(tmp_path):
     assert_allclose(pair.backward(), 24 * 24 * x, rtol=0, atol=1e-9, err_msg="unnormalised irfft2")
     export_wisdom(tmp_path / "w.json")
     assert import_wisdom(tmp_path / "w.json") and not import_wisdom(tmp_path / "none.json")
+
+
+# --------------------------------------------------------------------------- sliding regression
+def _flake_slide_case(seed=3, steps=8, n=32, size=64e-6):
+    """A tiny sliding loop like surrogate/coupling.py's: a rough tool with a flake plateau (a disc
+    lowered by 0.8 um) rolled by one pixel a step, u_plastic accumulating and warm starts; at this
+    seed nearly every contact point saturates and the last solve is left with a free set of a
+    few points.  Returns the solver, the last solve's inputs and the previous result."""
+    rng = np.random.default_rng(seed)
+    h = rng.standard_normal((n, n))
+    k = np.fft.fftfreq(n)
+    q = np.hypot(k[:, None], k[None, :])
+    q[0, 0] = 1.0
+    h = np.real(np.fft.ifft2(np.fft.fft2(h) * q**-1.8))
+    h *= 0.5e-6 / h.std()
+    a, b = rng.integers(0, n, 2)
+    r = rng.integers(2, 4)
+    x, y = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    flake = ((x - a) % n) ** 2 + ((y - b) % n) ** 2 <= r * r
+    p = 340e6 * rng.uniform(0.005, 0.05)
+    solver = ContactSolver(n, size, 55e9, p_crit=340e6)
+    up, last = np.zeros((n, n)), None
+    for step in range(steps):
+        gap = np.roll(h, step, 0) - np.where(np.roll(flake, step, 0), 0.8e-6, 0.0)
+        if step == steps - 1:
+            return solver, gap, p, up, last
+        last = solver.solve(gap, p, u_plastic=up, warm_start=last)
+        up = last.u_plastic
+
+
+def test_warm_started_slide_with_flake_plateau_converges_and_satisfies_eq21():
+    """Regression: after an active-set change that keeps the CG direction, the new direction
+    r + beta d_old need not be a descent direction (r.d <= 0).  The solver took that for "no
+    free residual" and stopped with ConvergenceError after 5 iterations (campaign cases with
+    flakes: "did not converge ... after 4-17 iterations"); it must restart CG instead."""
+    solver, gap, p, up, last = _flake_slide_case()
+    n, pc = solver.n, solver.p_crit
+    res = solver.solve(gap, p, u_plastic=up, warm_start=last)  # raised before the fix
+    assert res.converged and res.residual <= solver.tol
+    assert res.iterations < 50, "CG should restart, not need the cold-start fallback"
+    t = res.traction
+    assert res.saturated_area_fraction > 0.5 * res.contact_area_fraction > 0
+    # Eq. 21 / KKT on the returned state
+    assert t.min() >= 0.0 and t.max() <= pc
+    assert_allclose(t.mean(), p, rtol=1e-12, err_msg="mean traction != p")
+    k = 2 * np.pi * np.fft.fftfreq(n, d=solver.size / n)
+    q = np.hypot(k[:, None], k[None, :])
+    kern = np.divide(2.0, 55e9 * q, out=np.zeros_like(q), where=q > 0)
+    assert_allclose(res.u_elastic, np.real(np.fft.ifft2(np.fft.fft2(t) * kern)), rtol=0,
+                    atol=1e-12 * np.ptp(res.u_elastic), err_msg="u_e != K t")
+    before = gap + up + res.u_elastic - res.approach  # G, before the plastic increment
+    after = gap + res.u_plastic + res.u_elastic - res.approach
+    scale = (gap + up).std()
+    free, sat = (t > 0) & (t < pc), t >= pc
+    assert after.min() > -1e-7 * scale, "interpenetration left after the solve"
+    assert before[t <= 0].min() > -1e-7 * scale, "penetration at zero traction"
+    assert np.abs(before[free]).max() < 1e-7 * scale, "free points off contact (complementarity)"
+    assert before[sat].max() < 1e-7 * scale, "saturated points with an open gap"
+    assert np.all(res.u_plastic >= up) and np.all(res.u_plastic[~sat] == up[~sat])
+    cold = solver.solve(gap, p, u_plastic=up)
+    assert_allclose(t, cold.traction, rtol=0, atol=1e-6 * pc, err_msg="warm != cold answer")
