@@ -136,6 +136,22 @@ class RealWithUnit(Real):
         return node
 
 
+def add_unit_definitions(root: Element, variables, owner: str = "FMU") -> Element:
+    """Insert ``<UnitDefinitions>`` (after ``<CoSimulation>``) for the units of the
+    :class:`RealWithUnit` variables, with their SI base-unit exponents from :data:`BASE_UNITS`."""
+    used = sorted({v.unit for v in variables if isinstance(v, RealWithUnit)})
+    unknown = [u for u in used if u not in BASE_UNITS]
+    if unknown:  # a packaging error, found at build time
+        raise TribocosimError(f"{owner}: units {unknown} are missing from adapter.BASE_UNITS")
+    units = Element("UnitDefinitions")
+    for unit in used:
+        node = SubElement(units, "Unit", {"name": unit})
+        if BASE_UNITS[unit]:
+            SubElement(node, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[unit].items()})
+    root.insert(list(root).index(root.find("CoSimulation")) + 1, units)
+    return root
+
+
 def use_bundled_packages(resources: str | None, package: str = "components") -> list[str]:
     """Let the already imported ``package`` (and its imported subpackages) find this FMU's modules.
 
@@ -304,19 +320,7 @@ class ModelAdapter(Fmi2Slave):
 
     def to_xml(self, model_options=None) -> Element:
         """pythonfmu's model description plus the UnitDefinitions the variables refer to."""
-        root = super().to_xml(model_options or {})
-        used = sorted({v.unit for v in self.vars.values() if isinstance(v, RealWithUnit)})
-        unknown = [u for u in used if u not in BASE_UNITS]
-        if unknown:  # a packaging error, found at build time
-            raise TribocosimError(f"{type(self).__name__}: units {unknown} are missing from adapter.BASE_UNITS")
-        units = Element("UnitDefinitions")
-        for unit in used:
-            node = SubElement(units, "Unit", {"name": unit})
-            if BASE_UNITS[unit]:
-                SubElement(node, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[unit].items()})
-        position = list(root).index(root.find("CoSimulation")) + 1
-        root.insert(position, units)
-        return root
+        return add_unit_definitions(super().to_xml(model_options or {}), self.vars.values(), type(self).__name__)
 
     def get_real(self, vrs):
         """pythonfmu's ``get_real`` without its per-variable type dispatch (called every step)."""

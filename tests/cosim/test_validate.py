@@ -89,7 +89,7 @@ def test_unconnected_inputs_are_warnings_with_the_value_used(tmp_path, make_scen
         """)
     plan = load_scene(path)
     assert "input b.x1 is not connected; its scene value 0.25 is used" in plan.warnings
-    assert "input b.v1 is not connected; its start value 0 is used" in plan.warnings
+    assert "input b.v1 is not connected; its start value 0.0 is used" in plan.warnings
     assert not any("der(" in w for w in plan.warnings), "derivative companions are not reported"
 
 

@@ -5,56 +5,16 @@
 Input ``force`` F with companion inputs ``der(force)`` and ``der(force,2)``: over a step the
 force is the polynomial F + F' tau + F'' tau^2 / 2 (the master's extrapolation), and the step is
 integrated exactly: the augmented linear system z = [x1, v1, F, F', F''] has z' = M z, so
-z(h) = expm(M h) z(0) (scaling and squaring with a degree-18 Taylor series, cached per h).
+z(h) = expm(M h) z(0) (components.linear.expm, cached per h).
 Outputs x1, v1 (no direct feedthrough). The FMU state covers x1, v1, the inputs and time.
 """
-
-import math
-from xml.etree.ElementTree import Element, SubElement
 
 import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
-
-class UReal(Real):
-    """A pythonfmu Real that also writes its unit into the model description."""
-
-    def __init__(self, name, unit=None, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        node = super().to_xml()
-        if self.unit:
-            node.find("Real").set("unit", self.unit)
-        return node
-
-
-def add_unit_definitions(root, variables):
-    """Insert <UnitDefinitions> (after <CoSimulation>) for the units the variables use."""
-    units = sorted({v.unit for v in variables if getattr(v, "unit", None)})
-    if units:
-        defs = Element("UnitDefinitions")
-        for u in units:
-            SubElement(defs, "Unit", name=u)
-        root.insert(list(root).index(root.find("CoSimulation")) + 1, defs)
-    return root
-
-
-def expm(a):
-    """Matrix exponential by scaling and squaring (Taylor degree 18)."""
-    norm = float(np.abs(a).sum(axis=1).max())
-    s = max(0, int(math.ceil(math.log2(norm))) + 1) if norm > 0.5 else 0
-    a = a / 2.0**s
-    e = np.eye(a.shape[0])
-    term = np.eye(a.shape[0])
-    for k in range(1, 19):
-        term = term @ a / k
-        e = e + term
-    for _ in range(s):
-        e = e @ e
-    return e
+from components.fmus.adapter import RealWithUnit, add_unit_definitions
+from components.linear import expm
 
 
 class OscMassA(Fmi2Slave):
@@ -77,19 +37,19 @@ class OscMassA(Fmi2Slave):
         self.time = 0.0
         self._cache = {}
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
-        self.register_variable(UReal("m", unit="kg", **fixed))
-        self.register_variable(UReal("k", unit="N/m", **fixed))
-        self.register_variable(UReal("c", unit="N.s/m", **fixed))
-        self.register_variable(UReal("x0", unit="m", **fixed))
-        self.register_variable(UReal("v0", unit="m/s", **fixed))
-        self.register_variable(UReal("force", unit="N", causality=Fmi2Causality.input, start=0.0))
-        self.register_variable(UReal("der(force)", causality=Fmi2Causality.input, start=0.0,
+        self.register_variable(RealWithUnit("m", unit="kg", **fixed))
+        self.register_variable(RealWithUnit("k", unit="N/m", **fixed))
+        self.register_variable(RealWithUnit("c", unit="N s/m", **fixed))
+        self.register_variable(RealWithUnit("x0", unit="m", **fixed))
+        self.register_variable(RealWithUnit("v0", unit="m/s", **fixed))
+        self.register_variable(RealWithUnit("force", unit="N", causality=Fmi2Causality.input, start=0.0))
+        self.register_variable(Real("der(force)", causality=Fmi2Causality.input, start=0.0,
                                     getter=lambda: self.dforce, setter=lambda v: setattr(self, "dforce", v)))
-        self.register_variable(UReal("der(force,2)", causality=Fmi2Causality.input, start=0.0,
+        self.register_variable(Real("der(force,2)", causality=Fmi2Causality.input, start=0.0,
                                     getter=lambda: self.ddforce, setter=lambda v: setattr(self, "ddforce", v)))
         out = dict(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous, initial=Fmi2Initial.exact)
-        self.register_variable(UReal("x1", unit="m", start=0.0, getter=lambda: self.x, **out))
-        self.register_variable(UReal("v1", unit="m/s", start=0.0, getter=lambda: self.v, **out))
+        self.register_variable(RealWithUnit("x1", unit="m", start=0.0, getter=lambda: self.x, **out))
+        self.register_variable(RealWithUnit("v1", unit="m/s", start=0.0, getter=lambda: self.v, **out))
 
     def to_xml(self, model_options=None):
         root = super().to_xml(model_options if model_options is not None else {})

@@ -9,52 +9,12 @@ the augmented linear system [x2, v2, x1, x1', x1'', v1, v1', v1''] is integrated
 matrix exponential (cached per step size). The FMU state covers x2, v2, the inputs and time.
 """
 
-import math
-from xml.etree.ElementTree import Element, SubElement
-
 import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
-
-class UReal(Real):
-    """A pythonfmu Real that also writes its unit into the model description."""
-
-    def __init__(self, name, unit=None, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        node = super().to_xml()
-        if self.unit:
-            node.find("Real").set("unit", self.unit)
-        return node
-
-
-def add_unit_definitions(root, variables):
-    """Insert <UnitDefinitions> (after <CoSimulation>) for the units the variables use."""
-    units = sorted({v.unit for v in variables if getattr(v, "unit", None)})
-    if units:
-        defs = Element("UnitDefinitions")
-        for u in units:
-            SubElement(defs, "Unit", name=u)
-        root.insert(list(root).index(root.find("CoSimulation")) + 1, defs)
-    return root
-
-
-def expm(a):
-    """Matrix exponential by scaling and squaring (Taylor degree 18)."""
-    norm = float(np.abs(a).sum(axis=1).max())
-    s = max(0, int(math.ceil(math.log2(norm))) + 1) if norm > 0.5 else 0
-    a = a / 2.0**s
-    e = np.eye(a.shape[0])
-    term = np.eye(a.shape[0])
-    for k in range(1, 19):
-        term = term @ a / k
-        e = e + term
-    for _ in range(s):
-        e = e @ e
-    return e
+from components.fmus.adapter import RealWithUnit, add_unit_definitions
+from components.linear import expm
 
 
 class OscMassB(Fmi2Slave):
@@ -79,18 +39,18 @@ class OscMassB(Fmi2Slave):
         self.time = 0.0
         self._cache = {}
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
-        for name, unit in (("m", "kg"), ("k3", "N/m"), ("c3", "N.s/m"), ("k2", "N/m"), ("c2", "N.s/m"),
+        for name, unit in (("m", "kg"), ("k3", "N/m"), ("c3", "N s/m"), ("k2", "N/m"), ("c2", "N s/m"),
                            ("x0", "m"), ("v0", "m/s")):
-            self.register_variable(UReal(name, unit=unit, **fixed))
-        self.register_variable(UReal("x1", unit="m", causality=Fmi2Causality.input, start=0.0))
-        self.register_variable(UReal("v1", unit="m/s", causality=Fmi2Causality.input, start=0.0))
+            self.register_variable(RealWithUnit(name, unit=unit, **fixed))
+        self.register_variable(RealWithUnit("x1", unit="m", causality=Fmi2Causality.input, start=0.0))
+        self.register_variable(RealWithUnit("v1", unit="m/s", causality=Fmi2Causality.input, start=0.0))
         for j, name in enumerate(("der(x1)", "der(x1,2)", "der(v1)", "der(v1,2)")):
-            self.register_variable(UReal(name, causality=Fmi2Causality.input, start=0.0,
+            self.register_variable(Real(name, causality=Fmi2Causality.input, start=0.0,
                                         getter=lambda j=j: self.d[j], setter=lambda v, j=j: self.d.__setitem__(j, v)))
         out = dict(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous, initial=Fmi2Initial.exact)
-        self.register_variable(UReal("force", unit="N", start=0.0, getter=self._force, **out))
-        self.register_variable(UReal("x2", unit="m", start=0.0, getter=lambda: self.x, **out))
-        self.register_variable(UReal("v2", unit="m/s", start=0.0, getter=lambda: self.v, **out))
+        self.register_variable(RealWithUnit("force", unit="N", start=0.0, getter=self._force, **out))
+        self.register_variable(RealWithUnit("x2", unit="m", start=0.0, getter=lambda: self.x, **out))
+        self.register_variable(RealWithUnit("v2", unit="m/s", start=0.0, getter=lambda: self.v, **out))
 
     def _force(self):
         return self.k2 * (self.x - self.x1) + self.c2 * (self.v - self.v1)
