@@ -199,7 +199,8 @@ class SlideSimulation:
                                    max_iter=c.bem_max_iter, threads=c.threads)
         self.solver = solver
         self.shape = dem.FlakeShape(c.flake_diameter, c.flake_thickness, c.flake_density)
-        params = dem.DemParams.build(self.shape, c.size, c.dx, c.e_star, c.v0, c.damping_rate,
+        params = dem.DemParams.build(self.shape, c.size, c.dx, c.e_star, c.penalty_velocity,
+                                     c.damping_rate,
                                      spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety)
         self.n_sub = max(1, math.ceil(c.dx / (c.v0 * params.dt)))
         self.params = dem.DemParams(params.shape, c.size, c.dx, params.k_area, c.damping_rate,

@@ -50,6 +50,11 @@ class SlideConfig:
         d_p and h_p [m].
     flake_density : float
         [kg/m^3] (Al: 2700).
+    penalty_velocity : float
+        Impact speed [m/s] of the Hertz rule that sets the flake penalty stiffness (and so the DEM
+        time step); must be >= v0. It is one value for every run that is to be compared (default
+        50 m/s, the paper's highest sliding speed): were it v0, the contact law itself would change
+        with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
     damping_rate : float
         gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I). Default 5e7: Stokes drag 16 mu a v of a
         12 um disc in an oil of 0.05 Pa s over its mass.
@@ -85,6 +90,7 @@ class SlideConfig:
     flake_diameter: float = 12e-6
     flake_thickness: float = 0.5e-6
     flake_density: float = 2700.0
+    penalty_velocity: float = 50.0
     damping_rate: float = 5e7
     dt_safety: float = 0.1
     sample_spacing_px: float = 1.0
@@ -113,6 +119,7 @@ class SlideConfig:
         check_range("flake_thickness", self.flake_thickness, high=self.flake_diameter,
                     high_inclusive=False, unit="m", **pos)
         check_range("flake_density", self.flake_density, unit="kg/m^3", **pos)
+        check_range("penalty_velocity", self.penalty_velocity, low=self.v0, unit="m/s")
         check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
         check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)

@@ -14,10 +14,11 @@ Axes.
 
 - P: the campaign pressures.
 - v: the campaign velocities, and below them ``table.low_velocities`` (e.g. the macro test's
-  0.08 m/s, far below the meso runs at m/s to tens of m/s): there
-  A_p(v) = A_p(v_min) alpha(v) / alpha(v_min) with the fitted alpha(v) = b (1 - exp(-v/v_ref))
-  (Fig. 15), A_c = A_c(v_min) (the contact is quasi-static), so the rows meet the measured row
-  at v_min continuously.
+  0.08 m/s, far below the meso runs at m/s to tens of m/s): there A_c = A_c(v_min) (the contact
+  is quasi-static) and A_p(v) = A_p(v_min) alpha(v) / alpha(v_min) with the fitted
+  alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15) when that law describes the campaign, else
+  A_p(v_min) (held; :func:`low_velocity_policy` says when and the metadata say which), so the
+  rows meet the measured row at v_min continuously.
 - beta: 0 (particle-free cases, or A_p = 0 with the members' A_c when the sweep has none), the
   campaign's debris levels, and ``table.beta_extension`` nodes above the largest level up to
   beta_thres, with A_p linear in beta (Eq. 23; per member the through-origin slope over the
@@ -158,8 +159,12 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     vel_axis = v_low + v_camp
 
     law = fits.law
-    a_min = float(law(v_camp[0])) if law.b > 0 else 0.0
-    ratio = {v: (float(law(v)) / a_min if a_min > 0 else 0.0) for v in v_low}
+    policy, policy_reason = low_velocity_policy(fits)
+    if policy == "alpha_law":
+        a_min = float(law(v_camp[0]))
+        ratio = {v: float(law(v)) / a_min for v in v_low}
+    else:
+        ratio = {v: 1.0 for v in v_low}
 
     shape = (len(pressures), len(vel_axis), len(beta_axis))
     mu = np.zeros(shape)
@@ -196,12 +201,15 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "axes": {
             "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
             "velocity": {"unit": UNITS["velocity"], "campaign": v_camp, "below_campaign": v_low,
+                         "below_campaign_policy": policy, "below_campaign_policy_reason": policy_reason,
                          "note": f"The mesoscale runs slide at {v_camp[0]:g} to {v_camp[-1]:g} m/s; the "
                                  "macro strip-draw test runs at 0.08 m/s. Rows below "
-                                 f"{v_camp[0]:g} m/s are NOT simulated: A_p there is the measured "
-                                 f"A_p at {v_camp[0]:g} m/s times alpha(v)/alpha({v_camp[0]:g}) of the "
-                                 "fitted alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15), A_c the "
-                                 f"measured A_c at {v_camp[0]:g} m/s."},
+                                 f"{v_camp[0]:g} m/s are NOT simulated: A_c there is the measured "
+                                 f"A_c at {v_camp[0]:g} m/s and A_p "
+                                 + (f"the measured A_p at {v_camp[0]:g} m/s times alpha(v)/alpha("
+                                    f"{v_camp[0]:g}) of the fitted alpha(v) = b (1 - exp(-v/v_ref)) "
+                                    "(Fig. 15)." if policy == "alpha_law" else
+                                    f"the measured A_p at {v_camp[0]:g} m/s (held: {policy_reason}).")},
             "beta": {"unit": UNITS["beta"], "measured": levels, "measured_max": levels[-1],
                      "extrapolated": ext,
                      "note": "beta = N pi (d/2)^2 / L^2 (Eq. 10). beta = 0: "
@@ -239,6 +247,30 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu,
                           json_clean(meta))
     return table, fits
+
+
+def low_velocity_policy(fits: FitReport) -> tuple[str, str]:
+    """How the rows below the campaign's velocities get A_p, and why.
+
+    ``"alpha_law"``: scaled by alpha(v)/alpha(v_min) of the fitted law b (1 - exp(-v/v_ref)),
+    used only when the law describes the campaign: alpha rises from the smallest to the largest
+    campaign velocity, R^2 of the law >= 0.5, and v_ref is resolved (not below v_min/2, where the
+    law is flat over the campaign and says nothing about slower sliding). Otherwise ``"hold"``:
+    A_p as measured at the smallest campaign velocity (the nearest data; no trend is invented).
+    """
+    law, per_v = fits.law, sorted(fits.alpha, key=lambda a: a.velocity)
+    if not law.b > 0:
+        return "hold", "no blocked flake in the campaign (alpha = 0)"
+    if not per_v[-1].alpha > per_v[0].alpha:
+        return "hold", (f"alpha does not rise with v over the campaign (alpha = {per_v[0].alpha:.4g} at "
+                        f"{per_v[0].velocity:g} m/s, {per_v[-1].alpha:.4g} at {per_v[-1].velocity:g} m/s), "
+                        "unlike the paper's Fig. 15, so the saturating law cannot be extrapolated")
+    if not (math.isfinite(law.r2) and law.r2 >= 0.5):
+        return "hold", f"the alpha(v) law fits the campaign poorly (R^2 = {law.r2:.3g} < 0.5)"
+    if law.note:
+        return "hold", law.note
+    return "alpha_law", (f"alpha(v) = b (1 - exp(-v/v_ref)), b = {law.b:.4g}, v_ref = {law.v_ref:.4g} m/s, "
+                         f"R^2 = {law.r2:.3f}")
 
 
 def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:

@@ -11,6 +11,8 @@ from numpy.testing import assert_allclose
 
 from surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
                                 modified_tool, particle_area_fraction, run_slide)
+from components.errors import ParameterError
+from surrogate import dem
 from surrogate.dem import DemState, FlakeShape
 from surrogate.flakes import Footprint, footprints
 from surrogate.slide_config import SlideConfig
@@ -131,6 +133,26 @@ def test_dem_substeps_cover_exactly_one_pixel():
     rec = sim.step()
     assert sim.k == 1 and np.all(np.isfinite(sim.state.pos))
     assert_allclose(rec["slide_distance"], cfg.dx, rtol=1e-15, err_msg="one pixel")
+
+
+def test_flake_contact_law_does_not_change_with_the_sliding_speed():
+    """k_A comes from the Hertz rule at penalty_velocity, not at v0: runs at different speeds
+    share one contact law (else k_A ~ v0^1.2 and the overlaps the blocking rules read would
+    change with the speed); the DEM step is that law's, cut to whole sub-steps per pixel."""
+    sims = {v: SlideSimulation(small_config(v0=v, n_slide_steps=1), solver=FlatPunchSolver(340e6),
+                               surfaces=wavy_surfaces(64, 200e-6)) for v in (5.0, 50.0)}
+    k = dem.penalty_stiffness(sims[5.0].shape, 55e9, 50.0)
+    for v, sim in sims.items():
+        assert sim.params.k_area == k, v
+        dt_law = dem.stable_time_step(sim.shape, k, sim.cfg.dt_safety)
+        assert dt_law / sim.params.dt == pytest.approx(1.0, abs=1.0 / sim.n_sub), v
+    assert sims[5.0].n_sub >= 9 * sims[50.0].n_sub  # the slower slide needs ~10x the steps
+
+
+def test_sliding_faster_than_the_penalty_velocity_is_refused():
+    with pytest.raises(ParameterError, match=r"penalty_velocity = 50.0 m/s is out of range; allowed: \[60"):
+        small_config(v0=60.0)
+    assert small_config(v0=60.0, penalty_velocity=60.0).v0 == 60.0
 
 
 # ------------------------------------------------------------------------------------------

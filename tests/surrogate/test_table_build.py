@@ -43,7 +43,7 @@ beta_extension = 3
 """
 
 
-def campaign(noise=0.03, seed=0):
+def campaign(noise=0.03, seed=0, alpha=lambda v: alpha_law(v, B, VREF)):
     """Manifest and finished records of SWEEP with A_p = alpha(v) beta P/E*, A_c = P/p_crit (+ noise)."""
     sweep = parse_sweep(SWEEP)
     cases = expand_cases(sweep)
@@ -51,7 +51,7 @@ def campaign(noise=0.03, seed=0):
     records = []
     for c in cases:
         lab = c.labels
-        ap = float(alpha_law(lab["velocity"], B, VREF)) * lab["beta"] * lab["pressure"] / E_STAR
+        ap = float(alpha(lab["velocity"])) * lab["beta"] * lab["pressure"] / E_STAR
         ac = lab["pressure"] / P_CRIT
         records.append({"case_id": c.case_id, "labels": lab, "wall_s": 1.0, "code_version": "test",
                         "summary": {"mean_particle_fraction": ap * (1 + noise * rng.standard_normal()),
@@ -114,6 +114,23 @@ def test_low_velocity_rows_follow_the_fitted_alpha_law(built):
     x = t.mu[:, 0, :] - t.mu[:, j_min, :]  # = tau0 A_p(v_min) / P
     assert_allclose(t.mu[:, 1, :] - t.mu[:, j_min, :], (1 - r) * x, rtol=1e-9, atol=1e-15)
     assert 0 < r < 1
+    assert t.metadata["axes"]["velocity"]["below_campaign_policy"] == "alpha_law"
+
+
+def test_low_velocity_rows_hold_the_slowest_row_when_alpha_falls_with_v():
+    """A campaign whose alpha falls with v (as our meso model's does) cannot be extrapolated with
+    the saturating law: the rows below the campaign repeat the v_min row exactly, and say why."""
+    manifest, records = campaign(alpha=lambda v: 200.0 - 2.0 * v)  # 198, 190, 100
+    stats = surface_statistics(manifest["sweep"]["slide"], manifest["sweep"]["surfaces"])
+    t, fits = build_table(records, manifest, surface_stats=stats)
+    assert fits.alpha[0].alpha > fits.alpha[-1].alpha
+    j_min = list(t.velocity).index(1.0)
+    for j in range(j_min):
+        assert_allclose(t.mu[:, j, :], t.mu[:, j_min, :], rtol=0, atol=0)
+    vel = t.metadata["axes"]["velocity"]
+    assert vel["below_campaign_policy"] == "hold"
+    assert "does not rise" in vel["below_campaign_policy_reason"]
+    assert "held" in vel["note"]
 
 
 def test_beta_extension_is_linear_and_threshold_is_eq24(built):
