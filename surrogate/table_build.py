@@ -236,6 +236,12 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "ensemble": {"mu_std": mu_std.tolist(), "n_members": n_mem.tolist(),
                      "note": "standard deviation (ddof 1) of the member values of mu at each node, "
                              "same (pressure, velocity, beta) order as mu"},
+        "cases": [{"case_id": r["case_id"], "labels": r["labels"],
+                   "a_p": r["summary"]["mean_particle_fraction"],
+                   "a_c": r["summary"]["mean_contact_fraction"]}
+                  for r in sorted(records, key=lambda r: r["case_id"])],
+        "cases_note": "every finished case behind the table: its labels and <A_p>/A0, <A_c>/A0, so "
+                      "that any case can be rerun (surrogate.campaign.expand_cases) and checked",
         "out_of_range_policy": "clamp (default: nearest edge, counted) or error "
                                "(components.stripdraw.table)",
         "code_version": code_version(),
