@@ -3,9 +3,9 @@
 Three nested grids in (P, v) on the quick preset's slide settings (64^2, 128 um, the same two
 debris levels, 3 placements, particle-free cases):
 
-- ``coarse``: P {5, 30} MPa x v {2, 50} m/s
-- ``quick``:  P {5, 10, 20, 30} MPa x v {2, 10, 50} m/s (the quick preset)
-- ``fine``:   P {5, 10, 15, 20, 30} MPa x v {2, 5, 10, 25, 50} m/s
+- ``coarse``: P {1, 30} MPa x v {2, 50} m/s
+- ``quick``:  P {1, 2, 5, 10, 20, 30} MPa x v {2, 10, 50} m/s (the quick preset)
+- ``fine``:   P {1, 2, 5, 10, 15, 20, 30} MPa x v {2, 5, 10, 25, 50} m/s
 
 and held-out points on none of them: P {7.5, 12.5, 25} MPa x v {4, 35} m/s at every beta level
 (0 and the two debris levels). All cases run once in one campaign folder (case ids are hashes of
@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 GRIDS = {
-    "coarse": ([5e6, 30e6], [2.0, 50.0]),
-    "quick": ([5e6, 10e6, 20e6, 30e6], [2.0, 10.0, 50.0]),
-    "fine": ([5e6, 10e6, 15e6, 20e6, 30e6], [2.0, 5.0, 10.0, 25.0, 50.0]),
+    "coarse": ([1e6, 30e6], [2.0, 50.0]),
+    "quick": ([1e6, 2e6, 5e6, 10e6, 20e6, 30e6], [2.0, 10.0, 50.0]),
+    "fine": ([1e6, 2e6, 5e6, 10e6, 15e6, 20e6, 30e6], [2.0, 5.0, 10.0, 25.0, 50.0]),
 }
 HOLDOUT = ([7.5e6, 12.5e6, 25e6], [4.0, 35.0])
 

@@ -139,7 +139,7 @@ def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     for module in ("errors", "fmus/statecodec", "stripdraw/model", "stripdraw/friction", "stripdraw/table"):
         assert f"resources/components/{module}.py" in ours, module
     assert bundled_table == TABLE.read_bytes()
-    assert read_table(TABLE).provenance == "closed_form"
+    assert read_table(TABLE).provenance == "mesoscale"
 
 
 # ----------------------------------------------------------------------------------- command line

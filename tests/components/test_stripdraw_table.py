@@ -94,3 +94,19 @@ def test_closed_form_table_says_where_it_comes_from():
     assert table.provenance == "closed_form"
     assert table.velocity[0] == 0.0 and table.beta[-1] == pytest.approx(table.beta_threshold)
     assert np.all(table.mu >= 0)
+
+
+def test_make_table_writes_the_closed_form_but_never_over_the_shipped_table(tmp_path, capsys):
+    from components.paths import DEFAULT_TABLE
+    from components.stripdraw import make_table
+
+    shipped = DEFAULT_TABLE.read_bytes()
+    assert make_table.main([str(DEFAULT_TABLE)]) == 2
+    assert "shipped mesoscale table" in capsys.readouterr().err
+    assert DEFAULT_TABLE.read_bytes() == shipped
+    assert make_table.main([]) == 2
+    out = tmp_path / "closed.npz"
+    assert make_table.main([str(out)]) == 0
+    written = read_table(out)
+    assert written.provenance == "closed_form"
+    assert_allclose(written.mu, closed_form_table(StripDrawParameters()).mu, rtol=0, atol=0)

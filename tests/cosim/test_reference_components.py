@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 
 from components.errors import SceneError
+from components.paths import DEFAULT_TABLE
+from components.stripdraw.table import read_table
 from cosim.api import run
 from cosim.reference_components import (
     ComponentModel,
@@ -110,7 +112,7 @@ def test_component_problems_name_instance_and_parameter(tmp_path):
     scene, _ = parse_scene(DEMO, {
         "fmus.strip.parameters.friction_model": "tabel",
         "fmus.strip.parameters.field_input": str(tmp_path / "missing.npz"),
-        "fmus.press.parameters.force_setpoint": 50.0,  # 0.04 MPa: below the table's 0.1 MPa
+        "fmus.press.parameters.force_setpoint": 50.0,  # 0.04 MPa: below the shipped table's axis
         "fmus.drive.parameters.screw_lead": 0.0,
     })
     lines = component_problems(scene)
@@ -124,5 +126,6 @@ def test_component_problems_name_instance_and_parameter(tmp_path):
     ok, _ = parse_scene(DEMO, {"fmus.press.parameters.force_setpoint": 50.0})
     low = component_problems(ok)
     assert len(low) == 1 and "fmus.press.parameters.force_setpoint: the set-point, 50 N" in low[0]
-    assert "0.04082 MPa, outside the friction table's pressure axis [0.1, 100] MPa" in low[0]
+    axis = read_table(DEFAULT_TABLE).pressure / 1e6
+    assert f"0.04082 MPa, outside the friction table's pressure axis [{axis[0]:g}, {axis[-1]:g}] MPa" in low[0]
     assert component_problems(parse_scene(DEMO)[0]) == []

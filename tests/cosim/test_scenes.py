@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 
 from components.errors import SceneError
+from components.paths import DEFAULT_TABLE
+from components.stripdraw.table import read_table
 from cosim.api import run
 from cosim.cli import main as tribocosim
 from cosim.reference_components import load_component_scene, steady_ratio
@@ -75,7 +77,11 @@ def test_pull_force_over_twice_the_normal_force_is_the_strips_mu(demo_run):
     mu_mean = float(np.mean(r["strip.mu_mean"][steady]))
     # Eq. 1 against Eq. 28: the grip reaction equals the friction force in (quasi-)steady sliding
     np.testing.assert_allclose(ratio, mu_mean, rtol=2e-3, err_msg="pull_force / (2 F_N) vs the strip's mu_mean")
-    assert 0.05 < ratio < 0.15, "mu_bar between the fully covered and the particle-free value (mu0 = 0.15)"
+    # between the table's fully covered (beta_threshold) and particle-free values at the demo's
+    # 10 MPa and pulling speed (the scene's strip uses the shipped table)
+    table = read_table(DEFAULT_TABLE)
+    lo, hi = table.interpolate(10e6, 0.08, np.array([table.beta_threshold, 0.0]), "error")[0]
+    assert lo < ratio < hi, f"mu_bar {ratio} outside the table's range [{lo}, {hi}] at 10 MPa"
 
 
 def test_press_holds_its_setpoint_and_the_drive_reaches_its_velocity(demo_run):
@@ -178,7 +184,7 @@ BAD = {
     "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's pressure axis"),
     "fmus.strip.parameters.friction_model": ("tabel", "is not allowed; choose one of table"),
     "fmus.press.parameters.setpoint_table": ("0 0; 0.1", "is malformed"),
-    "fmus.strip.parameters.beta_initial": (0.5, "exceeds the cap of beta"),
+    "fmus.strip.parameters.beta_initial": (1.5, "outside the declared range"),
 }
 
 
@@ -194,6 +200,20 @@ def test_impossible_parameters_stop_before_running_naming_scene_instance_and_par
         line = next((ln for ln in err.splitlines() if f"{DEMO}: {key}: " in ln), None)
         assert line is not None and message in line, f"{key}: {err}"
     assert not out.exists(), "nothing ran, nothing was written"
+
+
+def test_initial_debris_above_the_tables_cap_is_refused(tmp_path):
+    from components.stripdraw import StripDrawParameters, closed_form_table, write_table
+
+    closed = tmp_path / "closed.npz"
+    table = closed_form_table(StripDrawParameters())
+    write_table(closed, table)
+    cap = table.beta_threshold  # Eq. 24 with the closed form's alpha: below 1
+    over = {"fmus.strip.parameters.table_file": str(closed),
+            "fmus.strip.parameters.beta_initial": min(1.0, 1.5 * cap)}
+    with pytest.raises(SceneError, match=r"fmus.strip.parameters.beta_initial: beta_initial = .* exceeds the cap of beta"):
+        load_component_scene(DEMO, over)
+    load_component_scene(DEMO, {**over, "fmus.strip.parameters.beta_initial": 0.5 * cap})
 
 
 def test_drive_faster_than_the_table_covers_is_refused(tmp_path):

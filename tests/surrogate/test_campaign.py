@@ -23,23 +23,9 @@ from surrogate.campaign import (Case, CampaignStore, Progress, case_id, expand_c
 from surrogate.executors import ProcessPoolCaseExecutor
 from surrogate.sweep import load_preset, parse_sweep
 
-TINY = """
-name = "tiny"
-[grid]
-pressure = [5e6, 20e6]
-velocity = [5.0, 50.0]
-seeds = [1, 2, 3]
-[[flakes]]
-count = 2
-diameter = 12e-6
-[slide]
-n = 16
-size = 64e-6
-wavelength_ratio = 0.25
-n_slide_steps = 4
-[table]
-low_velocities = [0.0, 0.08]
-"""
+#: a 16^2 sweep of 2 P x 2 v x (particle-free + 3 seeds) that runs in seconds (shared with the
+#: executor and CLI tests; the line numbers of its keys are asserted below)
+TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text()
 
 
 def test_case_ids_are_deterministic_distinct_and_particle_free_cases_deduplicated():

@@ -5,6 +5,7 @@ process pool from the same (tiny, real) campaign."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,21 +18,7 @@ from surrogate.table_build import build_table
 
 distributed = pytest.importorskip("distributed")
 
-TINY = """
-name = "tiny-dask"
-[grid]
-pressure = [5e6, 20e6]
-velocity = [5.0, 50.0]
-seeds = [1, 2, 3]
-[[flakes]]
-count = 2
-diameter = 12e-6
-[slide]
-n = 16
-size = 64e-6
-wavelength_ratio = 0.25
-n_slide_steps = 4
-"""
+TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-dask"')
 
 
 def test_process_pool_yields_results_and_exceptions_per_item():

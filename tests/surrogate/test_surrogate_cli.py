@@ -4,6 +4,7 @@ real pool and real slides (tiny), show, compare, and the messages for bad input.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,24 +13,8 @@ from components.stripdraw.table import read_table
 from cosim.cli import main as tribocosim
 from surrogate import surrogate_cli
 
-TINY = """
-name = "tiny-cli"
-[grid]
-pressure = [5e6, 20e6]
-velocity = [5.0, 50.0]
-seeds = [1, 2, 3]
-[[flakes]]
-count = 2
-diameter = 12e-6
-[slide]
-n = 16
-size = 64e-6
-wavelength_ratio = 0.25
-n_slide_steps = 4
-[table]
-low_velocities = [0.0, 0.08]
-beta_extension = 2
-"""
+TINY = ((Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-cli"')
+        + "beta_extension = 2\n")
 
 
 @pytest.fixture(scope="module")
