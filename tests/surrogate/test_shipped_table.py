@@ -27,7 +27,10 @@ def shipped():
 def test_shipped_table_is_the_quick_presets_mesoscale_table(shipped):
     meta = shipped.metadata
     assert shipped.provenance == "mesoscale"
-    assert meta["campaign"]["sweep"] == json.loads(json.dumps(load_preset("quick").to_dict())), \
+    recorded = {k: v for k, v in meta["campaign"]["sweep"].items() if k != "source"}  # a path
+    current = json.loads(json.dumps(load_preset("quick").to_dict()))
+    current.pop("source", None)
+    assert recorded == current, \
         "the quick preset changed since the table was built: rebuild and ship it (README)"
     assert meta["campaign"]["cases_finished"] == meta["campaign"]["cases_total"] == len(meta["cases"])
     assert not meta["campaign"]["cases_failed"]
