@@ -473,14 +473,14 @@ class ContactSolver:
         t = self._feasible(np.clip(t, 0.0, pc).ravel(), p, pc)
         used = failed = 0
         if warm_start is not None:
-            out = self._iterate(t, h, up0, p, pc, scale, final=False)
+            out = self._iterate(t, h, up0, p, pc, scale)
             if out is not None:
                 return out
             # the warm start did not lead to a verified solution: start again from the cold guess
             used, failed = self._transforms, self._failed_iterations
             t = self._feasible(np.clip(self._initial_guess(h, p, pc), 0.0, pc).ravel(), p, pc)
             self._transforms = 0
-        out = self._iterate(t, h, up0, p, pc, scale, final=False)
+        out = self._iterate(t, h, up0, p, pc, scale)
         if out is None:  # the CG stalled: the projected gradient from where it stopped
             failed += self._failed_iterations
             out = self._projected_gradient(t, h, up0, p, pc, scale)
@@ -587,8 +587,8 @@ class ContactSolver:
         out = self._result(x.reshape(n, n), u_e, up0, h, delta, it, res, state, res <= self.tol)
         return dataclasses.replace(out, fallback=True)
 
-    def _iterate(self, t, h, up0, p, pc, scale, final=True) -> ContactResult | None:
-        """The CG loop from the feasible t; None if not ``final`` and not converged."""
+    def _iterate(self, t, h, up0, p, pc, scale) -> ContactResult | None:
+        """The CG loop from the feasible t (updated in place); None if it did not converge."""
         n, N = self.n, self.n * self.n
         hf = h.ravel()
         f = self._fft
@@ -651,7 +651,7 @@ class ContactSolver:
                                                              delta, tau_v, p, pc)
             beta_ok = beta_ok and keep
             res = math.sqrt((gn + viol) / N) / scale
-        if not final and not (verified and res <= self.tol):
+        if not (verified and res <= self.tol):
             self._failed_iterations = it
             return None
         u_e = (g - hf).reshape(n, n)
