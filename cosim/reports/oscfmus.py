@@ -68,6 +68,21 @@ def oscillator_fmus(cache: Path | None = None) -> Path:
     return dest
 
 
+#: the force-displacement coupling of the two oscillator FMUs, as scene ``[[connections]]``
+CONNECTIONS = """[[connections]]
+from = "b.force"
+to = "a.force"
+
+[[connections]]
+from = "a.x1"
+to = "b.x1"
+
+[[connections]]
+from = "a.v1"
+to = "b.v1"
+"""
+
+
 def oscillator_scene(folder: Path, fmus: Path, *, step: float, stop: float, algorithm: str = "jacobi",
                      extrapolation: int = 0, k2: float = 10.0, adaptive: dict | None = None,
                      name: str = "osc.toml") -> Path:
@@ -99,18 +114,7 @@ parameters = {{ m = 1.0, k = 10.0, c = 0.2, x0 = 0.0, v0 = 0.0 }}
 path = "{(fmus / 'OscMassB.fmu').as_posix()}"
 parameters = {{ m = 1.0, k3 = 20.0, c3 = 0.3, k2 = {float(k2)!r}, c2 = 0.5, x0 = 0.5, v0 = 0.0 }}
 
-[[connections]]
-from = "b.force"
-to = "a.force"
-
-[[connections]]
-from = "a.x1"
-to = "b.x1"
-
-[[connections]]
-from = "a.v1"
-to = "b.v1"
-
+{CONNECTIONS}
 [[power_bonds]]
 effort = ["b.force", "a.force"]
 flow = ["a.v1", "b.v1"]

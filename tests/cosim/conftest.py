@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from cosim.reports.oscfmus import CONNECTIONS
+
 HERE = Path(__file__).resolve().parent
 SCRIPTS = HERE / "fmus"
 NAMES = ("OscMassA", "OscMassB", "LoopGain", "Fragile")
@@ -75,17 +77,7 @@ def oscillator_scene(folder: Path, fmus: Path, *, name: str = "osc.toml", stop: 
         path = "{fmus / 'OscMassB.fmu'}"
         parameters = {{ m = 1.0, k3 = 20.0, c3 = 0.3, k2 = {k2!r}, c2 = 0.5, x0 = 0.5, v0 = 0.0 }}
 
-        [[connections]]
-        from = "b.force"
-        to = "a.force"
-
-        [[connections]]
-        from = "a.x1"
-        to = "b.x1"
-
-        [[connections]]
-        from = "a.v1"
-        to = "b.v1"
+        {textwrap.indent(CONNECTIONS, ' ' * 8).lstrip()}
 
         {extra}
 

@@ -23,6 +23,7 @@ from scipy.linalg import expm
 from cosim import run
 from cosim.api import build
 from cosim.extrapolation import History
+from cosim.reports.oscfmus import CONNECTIONS
 from cosim.validate import load_scene
 
 K2 = 1e5
@@ -53,18 +54,7 @@ parameters = {{ x0 = {x[0]!r}, v0 = {x[1]!r} }}
 path = "{fmus / 'OscMassB.fmu'}"
 parameters = {{ k2 = {K2!r}, x0 = {x[2]!r}, v0 = {x[3]!r} }}
 
-[[connections]]
-from = "b.force"
-to = "a.force"
-
-[[connections]]
-from = "a.x1"
-to = "b.x1"
-
-[[connections]]
-from = "a.v1"
-to = "b.v1"
-
+{CONNECTIONS}
 [output]
 variables = ["a.x1", "a.v1", "b.x2", "b.v2"]
 """
