@@ -32,9 +32,9 @@ import time
 
 import numpy as np
 
-from surrogate.bem import ContactSolver, gap_against_flat
-from surrogate.fft import RFFT2Pair
-from surrogate.surfaces import rms_slope, self_affine_surface
+from tribocosim.surrogate.bem import ContactSolver, gap_against_flat
+from tribocosim.surrogate.fft import RFFT2Pair
+from tribocosim.surrogate.surfaces import rms_slope, self_affine_surface
 
 SIZE, HURST, SLOPE, E_STAR, P_CRIT = 500e-6, 0.8, 0.34, 55e9, 340e6
 K_ROLL, K_CUT = 2, 50

@@ -40,7 +40,7 @@ N_DRAW = 1750  # steps: 140 mm at 0.08 m/s
 
 
 def _model():
-    from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 
     params = StripDrawParameters()
     return StripDrawModel(params, make_friction_law(params, read_table(PROJECT_ROOT / "models" / "friction_table.npz")))
@@ -59,7 +59,7 @@ def _slave(unzipped: str, md):
 
 def per_step(unzipped: str, md, n_warm: int, n: int, repeat: int) -> tuple[float, float]:
     """Seconds per step: (model.step, FMU set+doStep+get), minimum over ``repeat`` runs."""
-    from components.stripdraw.model import OUTPUT_NAMES
+    from tribocosim.components.stripdraw.model import OUTPUT_NAMES
 
     names = {v.name: v.valueReference for v in md.modelVariables}
     real_vrs = [names[n_] for n_ in OUTPUT_NAMES if n_ != "table_clamp_count"]
@@ -96,7 +96,7 @@ def full_draw(unzipped: str, md, repeat: int) -> tuple[float, float, float]:
     difference of pull_force between the two."""
     from fmpy import simulate_fmu
 
-    from components.stripdraw.model import OUTPUT_NAMES
+    from tribocosim.components.stripdraw.model import OUTPUT_NAMES
 
     t_model, t_fmu = [], []
     for _ in range(repeat):
@@ -124,7 +124,7 @@ def full_draw(unzipped: str, md, repeat: int) -> tuple[float, float, float]:
 _COLD_MODEL = """
 import time; t0 = time.perf_counter()
 from pathlib import Path
-from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 p = StripDrawParameters()
 m = StripDrawModel(p, make_friction_law(p, read_table(Path({root!r}) / "models" / "friction_table.npz")))
 for k in range({n}):
@@ -168,7 +168,7 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         fmu = args.fmu
         if fmu is None:
-            from components.fmus.build import build_fmus
+            from tribocosim.components.fmus.build import build_fmus
 
             fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))

@@ -87,7 +87,7 @@ def scene(folder: Path, fmu: Path, n: int, steps: int, h: float) -> Path:
 
 
 def bench_cosim(folder, fmu, n, steps, h):
-    from cosim import run
+    from tribocosim.cosim import run
 
     res = run(scene(folder, fmu, n, steps, h), write=False)
     wt = res.metadata["wall_time"]

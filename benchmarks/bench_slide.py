@@ -31,8 +31,8 @@ import numpy as np
 
 def run_case(kw: dict) -> dict:
     """One slide for the SlideConfig keywords ``kw``; returns its summary plus the keywords."""
-    from surrogate.coupling import run_slide
-    from surrogate.slide_config import SlideConfig
+    from tribocosim.surrogate.coupling import run_slide
+    from tribocosim.surrogate.slide_config import SlideConfig
 
     cfg = SlideConfig(**kw)
     t0 = time.perf_counter()

@@ -41,7 +41,7 @@ HOLDOUT = ([7.5e6, 12.5e6, 25e6], [4.0, 35.0])
 
 def sweep_text(pressures, velocities, name: str) -> str:
     """The quick preset with another (P, v) grid."""
-    from surrogate.sweep import preset_path
+    from tribocosim.surrogate.sweep import preset_path
 
     lines = preset_path("quick").read_text().splitlines()
     out = []
@@ -72,11 +72,11 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default="bench_table.json")
     args = ap.parse_args(argv)
 
-    from surrogate.campaign import CampaignStore, expand_cases, run_campaign
-    from surrogate.executors import ProcessPoolCaseExecutor
-    from surrogate.fit import ensemble
-    from surrogate.sweep import parse_sweep
-    from surrogate.table_build import build_table, surface_statistics
+    from tribocosim.surrogate.campaign import CampaignStore, expand_cases, run_campaign
+    from tribocosim.surrogate.executors import ProcessPoolCaseExecutor
+    from tribocosim.surrogate.fit import ensemble
+    from tribocosim.surrogate.sweep import parse_sweep
+    from tribocosim.surrogate.table_build import build_table, surface_statistics
 
     sweeps = {name: parse_sweep(sweep_text(p, v, name), source=name) for name, (p, v) in GRIDS.items()}
     hold = parse_sweep(sweep_text(*HOLDOUT, "holdout"), source="holdout")

@@ -13,7 +13,7 @@ grip carriage of mass m_g, which the strip loads with ``pull_force`` F_p (the in
 The velocity set-point ramps from 0 to ``velocity_setpoint`` over ``ramp_time`` and then holds.
 With integral action the steady state is v_g = v_m = v_set, k_d (x_m - x_g) = F_p. Outputs:
 ``grip_velocity`` v_g and ``grip_position`` x_g. Linear, advanced exactly per step with F_p held
-and the set-point affine (split at the ramp's end; :mod:`components.linear`).
+and the set-point affine (split at the ramp's end; :mod:`tribocosim.components.linear`).
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from components.errors import ParameterError, check_finite
-from components.linear import AffineInputPropagator
-from components.params import param, validate_fields
+from tribocosim.components.errors import ParameterError, check_finite
+from tribocosim.components.linear import AffineInputPropagator
+from tribocosim.components.params import param, validate_fields
 
 
 @dataclass(frozen=True)

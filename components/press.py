@@ -12,7 +12,7 @@ The set-point ramps linearly from 0 to ``force_setpoint`` over ``ramp_time`` and
 follows ``setpoint_table`` ("t0 F0; t1 F1; ..." piecewise linear, held after the last point).
 With integral action the steady state is F_N = F_set exactly. The system is linear and the
 set-point piecewise linear, so each step is advanced exactly (matrix exponential, split at the
-set-point's breakpoints; :mod:`components.linear`).
+set-point's breakpoints; :mod:`tribocosim.components.linear`).
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from components.errors import ParameterError, check_finite
-from components.linear import AffineInputPropagator
-from components.params import param, validate_fields
+from tribocosim.components.errors import ParameterError, check_finite
+from tribocosim.components.linear import AffineInputPropagator
+from tribocosim.components.params import param, validate_fields
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 Public API (imported lazily, so that importing the package costs nothing)::
 
-    from cosim import run, load_scene
+    from tribocosim.cosim import run, load_scene
     result = run("scene.toml")            # -> cosim.api.Result
     result["strip.pull_force"], result.metadata["steps"]
 """
@@ -14,11 +14,11 @@ __all__ = ["run", "load_scene", "Result"]
 
 def __getattr__(name: str):
     if name in ("run", "Result"):
-        from cosim import api
+        from tribocosim.cosim import api
 
         return getattr(api, name)
     if name == "load_scene":
-        from cosim.validate import load_scene
+        from tribocosim.cosim.validate import load_scene
 
         return load_scene
     raise AttributeError(f"module 'cosim' has no attribute {name!r}")

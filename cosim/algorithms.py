@@ -1,11 +1,11 @@
-"""Coupling algorithms: one macro step from t to t + h on a :class:`~cosim.system.CoupledSystem`.
+"""Coupling algorithms: one macro step from t to t + h on a :class:`~tribocosim.cosim.system.CoupledSystem`.
 
 Jacobi
     Every slave gets the extrapolated inputs (polynomial of degree q through the last q + 1
     communication points), all slaves step, then the outputs are refreshed in feedthrough order.
 Gauss-Seidel
     Slaves step one after the other in an order from the instance graph
-    (:func:`cosim.graph.gauss_seidel_order`); a slave whose input comes from a slave already
+    (:func:`tribocosim.cosim.graph.gauss_seidel_order`); a slave whose input comes from a slave already
     stepped gets the *interpolation* through that slave's new output, other inputs are
     extrapolated. Same order of accuracy as Jacobi, smaller error constant, and better stability
     for stiff couplings when the "soft" subsystem goes first (Busch 2016,
@@ -41,11 +41,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from components.errors import ConvergenceError
-from cosim.extrapolation import StepPolynomial
-from cosim.scene import Iterative
-from cosim.slave import DISCARD
-from cosim.system import CoupledSystem
+from tribocosim.components.errors import ConvergenceError
+from tribocosim.cosim.extrapolation import StepPolynomial
+from tribocosim.cosim.scene import Iterative
+from tribocosim.cosim.slave import DISCARD
+from tribocosim.cosim.system import CoupledSystem
 
 
 @dataclass

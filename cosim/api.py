@@ -1,7 +1,7 @@
-"""Python API: ``cosim.run(scene) -> Result``, and the assembly of a master from a scene.
+"""Python API: ``tribocosim.cosim.run(scene) -> Result``, and the assembly of a master from a scene.
 
-:func:`build` turns a validated :class:`~cosim.validate.Plan` into a ready
-:class:`~cosim.master.Master` (FMUs extracted and wrapped in :class:`~cosim.slave.FmpySlave`,
+:func:`build` turns a validated :class:`~tribocosim.cosim.validate.Plan` into a ready
+:class:`~tribocosim.cosim.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.slave.FmpySlave`,
 links, algorithm, step controller, recorder); :func:`run` loads a scene, runs it, and writes
 the CSV and the metadata JSON. The command line (``tribocosim run``) is a thin layer over
 :func:`run`.
@@ -22,15 +22,15 @@ from typing import Any
 
 import numpy as np
 
-from cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
-from cosim.graph import gauss_seidel_order
-from cosim.master import Master
-from cosim.recorder import Progress, Recorder
-from cosim.slave import FmpySlave
-from cosim.stepcontrol import EnergyControl, FixedStep, StepDoubling
-from cosim.system import CoupledSystem, LinkSpec
-from cosim.timegrid import TimeGrid
-from cosim.validate import Plan
+from tribocosim.cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
+from tribocosim.cosim.graph import gauss_seidel_order
+from tribocosim.cosim.master import Master
+from tribocosim.cosim.recorder import Progress, Recorder
+from tribocosim.cosim.slave import FmpySlave
+from tribocosim.cosim.stepcontrol import EnergyControl, FixedStep, StepDoubling
+from tribocosim.cosim.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.timegrid import TimeGrid
+from tribocosim.cosim.validate import Plan
 
 
 @dataclass
@@ -117,7 +117,7 @@ def build(plan: Plan, slave_factory=None) -> Build:
     Parameters
     ----------
     plan : Plan
-        From :func:`cosim.validate.load_scene`.
+        From :func:`tribocosim.cosim.validate.load_scene`.
     slave_factory : callable, optional
         ``(name, FmuModel, unzip_dir) -> Slave``; default :class:`FmpySlave`.
     """
@@ -204,10 +204,12 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     Parameters
     ----------
     scene : str, Path or Plan
-        A scene file (or an already validated plan).
+        A scene file, the name of a packaged scene (``"demo"``, see
+        :func:`tribocosim.components.paths.scene_file`), or an already validated plan.
     out_dir : str or Path, optional
-        Folder for the output files; default: the scene file's folder. ``[output] file`` is
-        relative to it; the metadata JSON goes next to the CSV (same stem, ``.json``).
+        Folder for the output files; default: the scene file's folder, or ``./<scene name>`` for
+        a packaged scene. ``[output] file`` is relative to it; the metadata JSON goes next to the
+        CSV (same stem, ``.json``).
     overrides : dict, optional
         Dotted scene keys to override, e.g. ``{"master.extrapolation": 2}``.
     progress : bool
@@ -222,10 +224,11 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     Result
     """
     if not isinstance(scene, Plan):
-        from cosim.reference_components import load_component_scene
+        from tribocosim.components.paths import scene_file
+        from tribocosim.cosim.reference_components import load_component_scene
 
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
-        scene = load_component_scene(scene, overrides)
+        scene = load_component_scene(scene_file(scene), overrides)
     plan = scene
     b = build(plan, slave_factory)
     m = b.master
@@ -246,7 +249,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     meta = _metadata(b, started, total, fmu_times, calls)
     result = Result(m.recorder.time, m.recorder.columns(), meta)
     if write:
-        out = Path(out_dir) if out_dir is not None else plan.scene.folder
+        out = Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path)
         out.mkdir(parents=True, exist_ok=True)
         if plan.scene.output.file:
             result.csv_path = m.recorder.write_csv(out / plan.scene.output.file)
@@ -256,6 +259,14 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         meta["outputs"]["csv"] = str(result.csv_path) if result.csv_path else None
         result.metadata_path.write_text(json.dumps(meta, indent=2, default=_json_default), encoding="utf-8")
     return result
+
+
+def default_out_dir(scene_path: Path) -> Path:
+    """Where a run writes when no folder is given: the scene's folder, or ``./<stem>`` for a packaged scene
+    (an installed package's folder is no place for results)."""
+    from tribocosim.components.paths import is_packaged
+
+    return Path.cwd() / scene_path.stem if is_packaged(scene_path) else scene_path.parent
 
 
 def _json_default(o):

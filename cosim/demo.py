@@ -3,7 +3,7 @@
 The demo runs ``models/scenes/demo.toml`` (paper Sec. 2.1, 7): the press FMU holds F_N = 10 MPa on
 the 35 x 35 mm pad, the drawing-machine FMU pulls at 0.08 m/s for 140 mm, the strip-draw FMU
 (shipped friction table, implicit bar integrator) returns the pull force. The FMUs are built into
-the FMU cache (:mod:`cosim.fmucache`) when missing; a failed build stops the demo with the
+the FMU cache (:mod:`tribocosim.cosim.fmucache`) when missing; a failed build stops the demo with the
 builder's message. It writes the results (CSV + JSON), the strip's beta field (``field_output``)
 and three figures: mu against sliding distance, the beta(X, t) map (like Fig. 17a), and the
 press and drive signals; it prints mu_bar, the mean of mu(t) = pull_force / (2 F_N) (Eq. 1) over
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from components.paths import DEFAULT_TABLE
+from tribocosim.components.paths import DEFAULT_TABLE
 
 
 def run_strip_draw(
@@ -56,7 +56,7 @@ def run_strip_draw(
     **parameters
         Further :class:`StripDrawParameters` fields.
     """
-    from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 
     p = StripDrawParameters(tool_length=tool_length, draw_length=draw_length, **parameters)
     table = read_table(table_file) if p.friction_model == "table" else None
@@ -79,10 +79,10 @@ def steady_mean(outs, key: str = "mu_mean", fraction: float = 0.2) -> float:
 
 
 def demo_scene() -> Path:
-    """The shipped demo scene, ``models/scenes/demo.toml``."""
-    from components.paths import MODELS_DIR
+    """The shipped demo scene, ``models/scenes/demo.toml`` (package data of ``tribocosim.models``)."""
+    from tribocosim.components.paths import SCENES_DIR
 
-    return MODELS_DIR / "scenes" / "demo.toml"
+    return SCENES_DIR / "demo.toml"
 
 
 def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print) -> dict[str, Path]:
@@ -93,7 +93,7 @@ def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print)
     SceneError
         Saying which FMU could not be built and why (the builder's message).
     """
-    from cosim.fmucache import cache_dir, component_fmu
+    from tribocosim.cosim.fmucache import cache_dir, component_fmu
 
     found = {}
     for comp in components:
@@ -109,14 +109,14 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
              plot: bool = True, field_interval: float = 0.01):
     """Run the demo scene; write the results and the figures into ``out_dir``.
 
-    Returns ``(result, summary, figures)``: the :class:`cosim.api.Result`, a dict with mu_bar
+    Returns ``(result, summary, figures)``: the :class:`tribocosim.cosim.api.Result`, a dict with mu_bar
     (Eq. 1 over the last 20 % of the draw), the strip's mean mu_mean over the same window, the
     press's largest relative set-point error and the drive's velocity error in steady state, and
     the figure files.
     """
-    from cosim.api import run
-    from cosim.plotting import plot_demo
-    from cosim.reference_components import load_component_scene, steady_ratio
+    from tribocosim.cosim.api import run
+    from tribocosim.cosim.plotting import plot_demo
+    from tribocosim.cosim.reference_components import load_component_scene, steady_ratio
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -126,7 +126,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     if tool_length is not None:
         over["fmus.strip.parameters.tool_length"] = tool_length
     if pressure is not None or tool_length is not None:
-        from cosim.scene import parse_scene
+        from tribocosim.cosim.scene import parse_scene
 
         scene, _ = parse_scene(demo_scene())
         strip = scene.fmus["strip"].parameters
@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tool-length", type=float, default=None, help="pad length [m] (default: the scene's, 0.035)")
     ap.add_argument("--no-plot", action="store_true", help="skip the figures")
     args = ap.parse_args(argv)
-    from components.errors import SceneError, TribocosimError
+    from tribocosim.components.errors import SceneError, TribocosimError
 
     t0 = time.perf_counter()
     try:

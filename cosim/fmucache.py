@@ -1,7 +1,7 @@
 """FMUs of this project's components, built on demand and cached (scene key ``component = "..."``).
 
 ``component = "stripdraw"`` in a scene means: the FMU the project builds from its own
-components (``components.fmus.build.build_fmus``), built the first time it is needed and kept in
+components (``tribocosim.components.fmus.build.build_fmus``), built the first time it is needed and kept in
 a cache folder, ``$TRIBOCOSIM_CACHE`` or ``~/.cache/tribocosim/fmus``. The cache entry is keyed
 by the builder's source digest (adapter, the model modules it imports and its data files), so
 editing the model rebuilds the FMU and nothing else does. The build goes to a temporary folder
@@ -20,7 +20,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from components.errors import SceneError
+from tribocosim.components.errors import SceneError
 
 
 def cache_dir() -> Path:
@@ -35,14 +35,14 @@ def _normal(name: str) -> str:
 
 def _builder():
     try:
-        from components.fmus import build
+        from tribocosim.components.fmus import build
     except ImportError as exc:
         raise SceneError(
-            "the FMU builder components.fmus.build is not available in this installation "
+            "the FMU builder tribocosim.components.fmus.build is not available in this installation "
             f"({exc}); build the FMU elsewhere and give its file with path = \"...\" instead"
         ) from exc
     if not hasattr(build, "build_fmus"):
-        raise SceneError("components.fmus.build has no build_fmus(out_dir) function; cannot build components")
+        raise SceneError("tribocosim.components.fmus.build has no build_fmus(out_dir) function; cannot build components")
     return build
 
 

@@ -1,7 +1,7 @@
 """The execution: initialization, the time loop, rejection and rollback, statistics.
 
-:class:`Master` owns a :class:`~cosim.system.CoupledSystem`, a coupling algorithm
-(:mod:`cosim.algorithms`), a step controller (:mod:`cosim.stepcontrol`), the integer time
+:class:`Master` owns a :class:`~tribocosim.cosim.system.CoupledSystem`, a coupling algorithm
+(:mod:`tribocosim.cosim.algorithms`), a step controller (:mod:`tribocosim.cosim.stepcontrol`), the integer time
 grid and the recorder. Its primitives are what the controllers use:
 
 - ``attempt(n, k)``: one macro step from tick n over k ticks; False if an FMU discarded the
@@ -24,11 +24,11 @@ import logging
 import time
 from dataclasses import dataclass, field
 
-from components.errors import CosimStepError
-from cosim.algorithms import Algorithm
-from cosim.recorder import Recorder
-from cosim.system import CoupledSystem, NonFiniteOutput
-from cosim.timegrid import TimeGrid
+from tribocosim.components.errors import CosimStepError
+from tribocosim.cosim.algorithms import Algorithm
+from tribocosim.cosim.recorder import Recorder
+from tribocosim.cosim.system import CoupledSystem, NonFiniteOutput
+from tribocosim.cosim.timegrid import TimeGrid
 
 LOG = logging.getLogger("tribocosim.cosim")
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.scene import VariableRef
-from cosim.slave import Slave
+from tribocosim.cosim.scene import VariableRef
+from tribocosim.cosim.slave import Slave
 
 
 class Recorder:

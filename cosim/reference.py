@@ -9,7 +9,7 @@ coupling solved at every step, so that what remains is the models' own discretiz
 Interface
     :class:`Reference`: ``variables`` (the 'instance.variable' names it can produce) and
     ``solve(times) -> {name: values}``. :func:`coupling_error` compares a master
-    :class:`~cosim.api.Result` with a reference.
+    :class:`~tribocosim.cosim.api.Result` with a reference.
 
 Implementations
     :class:`TwoMassOscillator`: closed form of the linear two-mass oscillator
@@ -23,7 +23,7 @@ Implementations
     (implicit coupling, no delay; the remaining error is O(dt)). Tested against
     :class:`TwoMassOscillator` with the pure parts :class:`MassPart` and :class:`MassCouplingPart`.
 
-Not yet wired: the strip-draw scenes. ``components.stripdraw.model.StripDrawModel`` has the
+Not yet wired: the strip-draw scenes. ``tribocosim.components.stripdraw.model.StripDrawModel`` has the
 required ``step``/``get_state``/``set_state``, but the press and drawing-machine models it is
 coupled to do not exist yet (issue 8); once they do, a scene-to-:class:`CoupledModels`
 factory (mapping each ``component = ...`` FMU to its model class and parameters) completes this.
@@ -36,7 +36,7 @@ from typing import Protocol
 
 import numpy as np
 
-from components.errors import ConvergenceError
+from tribocosim.components.errors import ConvergenceError
 
 
 class Reference(Protocol):

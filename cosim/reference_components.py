@@ -5,7 +5,7 @@ FMU of a pure model (:mod:`components`). For such scenes this module
 
 - checks the parameters against the model's parameter dataclass before anything runs
   (:func:`component_problems`, :func:`check_component_scene`): the FMUs declare min/max for
-  Reals, which :mod:`cosim.validate` checks, but no choices for Strings (``friction_model =
+  Reals, which :mod:`tribocosim.cosim.validate` checks, but no choices for Strings (``friction_model =
   "tabel"``), no cross-field rules (a malformed press ``setpoint_table``) and nothing that spans
   instances: a press set-point whose nominal pressure on the connected strip's pad lies outside
   the friction table's pressure axis, a drive velocity outside its velocity axis, an initial
@@ -13,13 +13,13 @@ FMU of a pure model (:mod:`components`). For such scenes this module
   is one line ``file: fmus.INSTANCE.parameters.NAME: message``, all in one SceneError;
 - builds the monolithic reference (:func:`reference_for_scene`): each component instance becomes
   its pure model (``StripDrawModel`` with the table read through
-  :func:`components.stripdraw.table.read_table`, ``PressModel``, ``MachineModel``) with the
+  :func:`tribocosim.components.stripdraw.table.read_table`, ``PressModel``, ``MachineModel``) with the
   scene's parameters, connected as the scene connects the FMUs, unconnected inputs held at their
   scene value (a parameter of the input's name) or else the FMU's start value, stepped by
-  :class:`cosim.reference.CoupledModels` with a tiny step and the coupling solved every step.
+  :class:`tribocosim.cosim.reference.CoupledModels` with a tiny step and the coupling solved every step.
   Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
 
-This is, with :mod:`cosim.fmucache`, where :mod:`cosim` imports :mod:`components`
+This is, with :mod:`tribocosim.cosim.fmucache`, where :mod:`cosim` imports :mod:`components`
 (ARCHITECTURE.md: "nothing in cosim/ imports components/ except the reference solution and
 scene helpers"); the imports are lazy.
 """
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from components.errors import ParameterError, SceneError
+from tribocosim.components.errors import ParameterError, SceneError
 
 
 @dataclass(frozen=True)
@@ -45,19 +45,19 @@ class ComponentInfo:
 
 
 def _strip_params():
-    from components.stripdraw.parameters import StripDrawParameters
+    from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
     return StripDrawParameters
 
 
 def _press_params():
-    from components.press import PressParameters
+    from tribocosim.components.press import PressParameters
 
     return PressParameters
 
 
 def _machine_params():
-    from components.machine import MachineParameters
+    from tribocosim.components.machine import MachineParameters
 
     return MachineParameters
 
@@ -95,7 +95,7 @@ def component_of(spec) -> str | None:
 def table_path(value: str) -> Path:
     """``table_file`` as the StripDraw FMU resolves it: relative names refer to the bundled data
     (the shipped ``models/`` folder here), absolute paths are used as they are."""
-    from components.paths import MODELS_DIR
+    from tribocosim.components.paths import MODELS_DIR
 
     p = Path(value)
     return p if p.is_absolute() else MODELS_DIR / p
@@ -126,13 +126,14 @@ def _parameters(info: ComponentInfo, given: dict, add, key: str):
 def component_problems(scene) -> list[str]:
     """Problems of the component parameters of a scene (``file: key: message`` lines).
 
-    ``scene`` is a :class:`cosim.scene.Scene` (parsed, not necessarily valid) or a validated plan.
+    ``scene`` is a :class:`tribocosim.cosim.scene.Scene` (parsed, not necessarily valid) or a validated plan.
     """
-    from components.stripdraw.friction import make_friction_law
-    from components.stripdraw.table import read_table
-
     scene = getattr(scene, "scene", scene)
     problems: list[str] = []
+    if not any(component_of(spec) for spec in scene.fmus.values()):
+        return problems  # FMU files only: nothing of the components is imported
+    from tribocosim.components.stripdraw.friction import make_friction_law
+    from tribocosim.components.stripdraw.table import read_table
 
     def add(key: str, msg: str) -> None:
         problems.append(f"{scene.path}: {key}: {msg}")
@@ -223,31 +224,15 @@ def _report(path, problems: list[str]) -> str:
     return f"{n} problem{'s' if n > 1 else ''} in scene {path}:\n  " + "\n  ".join(problems)
 
 
-def _host_components_first() -> None:
-    """Import this installation's ``components.fmus`` package before any FMU of ours is instantiated.
-
-    A pythonfmu FMU imports ``components`` from its own bundle when the host has not imported it
-    yet (see :mod:`components.fmus.adapter`, "Modules in one process"); the bundle has no
-    ``components.fmus.build``, so a later scene in the same process (a sweep worker's second
-    case) could no longer build or find component FMUs. Importing the host's package first keeps
-    the builder reachable.
-    """
-    try:
-        import components.fmus.build  # noqa: F401
-    except ImportError:  # an installation without the builder: fmucache says so when it is needed
-        pass
-
-
 def load_component_scene(path, overrides: dict | None = None):
-    """:func:`cosim.validate.load_scene` plus :func:`component_problems`, all problems in one SceneError.
+    """:func:`tribocosim.cosim.validate.load_scene` plus :func:`component_problems`, all problems in one SceneError.
 
     (The component checks run on the parsed scene even when the FMU-level validation fails, and
     a key that both report is listed once.)
     """
-    from cosim.scene import parse_scene
-    from cosim.validate import load_scene
+    from tribocosim.cosim.scene import parse_scene
+    from tribocosim.cosim.validate import load_scene
 
-    _host_components_first()
     scene, _ = parse_scene(path, overrides)
     extra = component_problems(scene) if scene is not None else []
     try:
@@ -294,18 +279,18 @@ def make_model(component: str, parameters: dict[str, Any]):
     names = {f.name for f in dataclasses.fields(cls)}
     p = cls(**{k: v for k, v in parameters.items() if k in names})
     if comp == "press":
-        from components.press import PressModel
+        from tribocosim.components.press import PressModel
 
         return PressModel(p)
     if comp == "drawingmachine":
-        from components.machine import MachineModel
+        from tribocosim.components.machine import MachineModel
 
         return MachineModel(p)
     import numpy as np
 
-    from components.stripdraw.friction import make_friction_law
-    from components.stripdraw.model import StripDrawModel
-    from components.stripdraw.table import read_table
+    from tribocosim.components.stripdraw.friction import make_friction_law
+    from tribocosim.components.stripdraw.model import StripDrawModel
+    from tribocosim.components.stripdraw.table import read_table
 
     extra = {**info.extra, **{k: v for k, v in parameters.items() if k in info.extra}}
     table = read_table(table_path(str(extra["table_file"]))) if p.friction_model == "table" else None
@@ -326,7 +311,7 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
     dt : float
         The tiny step of the reference [s].
     tol, max_iterations : float, int
-        Convergence of the coupling values per step (:class:`cosim.reference.CoupledModels`).
+        Convergence of the coupling values per step (:class:`tribocosim.cosim.reference.CoupledModels`).
 
     Returns
     -------
@@ -338,10 +323,10 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
     SceneError
         If an FMU of the scene is not one of this project's components.
     """
-    from cosim.reference import CoupledModels
+    from tribocosim.cosim.reference import CoupledModels
 
     if isinstance(scene, (str, Path)):
-        from cosim.validate import load_scene
+        from tribocosim.cosim.validate import load_scene
 
         scene = load_scene(scene)
     plan = scene if hasattr(scene, "scene") else None
@@ -377,7 +362,7 @@ def _fmu_start(plan, instance: str, variable: str, component: str) -> float:
         if var is not None and var.start is not None:
             return float(var.start)
     if component == "stripdraw":
-        from components.fmus.StripDraw import INPUTS
+        from tribocosim.components.fmus.StripDraw import INPUTS
 
         return float(INPUTS[variable].start)
     return 0.0

@@ -34,13 +34,13 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    from cosim.reports import markdown
-    from cosim.reports.common import Settings, load_average
+    from tribocosim.cosim.reports import markdown
+    from tribocosim.cosim.reports.common import Settings, load_average
 
     if args.kind == "accuracy":
-        from cosim.reports.accuracy import FAMILIES
+        from tribocosim.cosim.reports.accuracy import FAMILIES
     else:
-        from cosim.reports.stability_report import CRITERION, FAMILIES
+        from tribocosim.cosim.reports.stability_report import CRITERION, FAMILIES
     names = args.only or list(FAMILIES)
     unknown = [n for n in names if n not in FAMILIES]
     if unknown:

@@ -1,9 +1,9 @@
 """``tribocosim run SCENE [--out DIR] [--plot]``: run a co-simulation scene.
 
-A thin layer over :func:`cosim.api.run`: validates the scene (all problems at once), runs it
+A thin layer over :func:`tribocosim.cosim.api.run`: validates the scene (all problems at once), runs it
 with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
 JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
-base scene, :mod:`cosim.sweep`) runs its cases in parallel processes instead.
+base scene, :mod:`tribocosim.cosim.sweep`) runs its cases in parallel processes instead.
 
 Exit codes: 0 success, 1 the run failed (FMU error, divergence), 2 the scene has problems.
 """
@@ -15,14 +15,15 @@ import logging
 import sys
 from pathlib import Path
 
-from components.errors import SceneError, TribocosimError
+from tribocosim.components.errors import SceneError, TribocosimError
 
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="tribocosim run", description="Run a co-simulation scene (TOML).")
-    p.add_argument("scene", type=Path, help="scene file (TOML)")
+    p.add_argument("scene", help="scene file (TOML), or the name of a packaged scene (e.g. demo, pressure_sweep)")
     p.add_argument("--out", type=Path, default=None,
-                   help="output folder (default: the scene's folder); [output] file is written there")
+                   help="output folder (default: the scene's folder; ./NAME for a packaged scene); "
+                        "[output] file is written there")
     p.add_argument("--plot", action="store_true", help="also write a PNG plot of the recorded variables")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -51,17 +52,19 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim run``."""
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
-    from cosim.api import run
-    from cosim.sweep import is_sweep_file
+    from tribocosim.components.paths import scene_file
+    from tribocosim.cosim.api import run
+    from tribocosim.cosim.sweep import is_sweep_file
 
     try:
+        args.scene = scene_file(args.scene)
         if is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
-            from cosim.sweep import main as sweep_main
+            from tribocosim.cosim.sweep import main as sweep_main
 
             return sweep_main(args)
-        from cosim.reference_components import load_component_scene
+        from tribocosim.cosim.reference_components import load_component_scene
 
         # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
         plan = load_component_scene(args.scene, _overrides(args.set))
@@ -74,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     meta = result.metadata
     if args.plot and result.csv_path is not None:
-        from cosim.plotting import plot_result
+        from tribocosim.cosim.plotting import plot_result
 
         png = plot_result(result, result.csv_path.with_suffix(".png"))
         if not args.quiet:

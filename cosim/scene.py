@@ -45,8 +45,8 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     variables = ["strip.pull_force", "strip.mu_mean"]
 
 :func:`parse_scene` checks the structure (keys, types, ranges) and returns every problem it
-found together with whatever could be parsed; :mod:`cosim.validate` then checks the scene
-against the FMUs' model descriptions and raises one :class:`~components.errors.SceneError`
+found together with whatever could be parsed; :mod:`tribocosim.cosim.validate` then checks the scene
+against the FMUs' model descriptions and raises one :class:`~tribocosim.components.errors.SceneError`
 listing all problems, each with the file and the key.
 """
 

@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from cosim.scene import Adaptive
+from tribocosim.cosim.scene import Adaptive
 
 
 class FixedStep:

@@ -66,7 +66,7 @@ from typing import Any
 
 import numpy as np
 
-from components.errors import SceneError
+from tribocosim.components.errors import SceneError
 
 _SWEEP_KEYS = ("scene", "title", "passes", "field_instance", "field_interval", "workers", "variables", "set",
                "summary", "plot")
@@ -305,12 +305,38 @@ def load_sweep(path: str | Path) -> Sweep:
 
 
 # ------------------------------------------------------------------ running
-def _case_key(sweep: Sweep, case: Case) -> str:
+def _case_key(sweep: Sweep, case: Case, plan, folder: Path) -> str:
+    """What a finished case depends on: the scene text, the case's settings, and the bytes of every
+    FMU the scene loads and of every file a parameter names (a friction table, say), except the
+    case's own files in ``folder``; a rebuilt FMU or a changed table makes the case run again."""
+    deps = {}
+    own = folder.resolve()
+    for name, model in plan.fmus.items():
+        deps[f"fmus.{name}"] = file_digest(model.path)
+        for pname, value in plan.scene.fmus[name].parameters.items():
+            if not (isinstance(value, str) and value and Path(value).is_absolute() and Path(value).is_file()):
+                continue
+            if Path(value).resolve().is_relative_to(own):  # field files the case itself writes
+                continue
+            deps[f"fmus.{name}.parameters.{pname}"] = file_digest(Path(value))
     blob = json.dumps({"scene": sweep.scene.read_text(encoding="utf-8"), "overrides": case.overrides,
                        "passes": sweep.passes, "field": [sweep.field_instance, sweep.field_interval],
-                       "summaries": [(x.name, x.expression.text, x.kind, x.last) for x in sweep.summaries]},
-                      sort_keys=True, default=str)
+                       "summaries": [(x.name, x.expression.text, x.kind, x.last) for x in sweep.summaries],
+                       "dependencies": deps}, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
+
+
+#: (path, size, mtime) -> SHA-256 of the file, for the life of the process
+_DIGESTS: dict[tuple[str, int, int], str] = {}
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes (cached per process by path, size and modification time)."""
+    st = Path(path).stat()
+    key = (str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return _DIGESTS[key]
 
 
 def pass_overrides(sweep: Sweep, case: Case, folder: Path, k: int) -> dict:
@@ -327,12 +353,12 @@ def pass_overrides(sweep: Sweep, case: Case, folder: Path, k: int) -> dict:
 
 def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
     """Run every pass of one case in this process; write and return its summary rows."""
-    from cosim.api import run
-    from cosim.reference_components import load_component_scene
+    from tribocosim.cosim.api import run
+    from tribocosim.cosim.reference_components import load_component_scene
 
     folder = out / "cases" / case.name
     done = folder / "summary.json"
-    key = _case_key(sweep, case)
+    key = _case_key(sweep, case, load_component_scene(sweep.scene, pass_overrides(sweep, case, folder, 1)), folder)
     if done.is_file():
         try:
             old = json.loads(done.read_text())
@@ -399,9 +425,9 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     SceneError
         For problems in the sweep file or in the scene of any case (all checked before running).
     """
-    from cosim.reference_components import component_problems
-    from cosim.scene import parse_scene
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reference_components import component_problems
+    from tribocosim.cosim.scene import parse_scene
+    from tribocosim.cosim.validate import load_scene
 
     sweep = load_sweep(path)
     out = Path(out) if out is not None else Path.cwd() / sweep.path.stem
@@ -453,7 +479,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                     indent=2, default=str), encoding="utf-8")
     result = SweepResult(sweep, rows, csv_path, json_path, wall)
     if plot:
-        from cosim.plotting import plot_beta_maps, plot_sweep
+        from tribocosim.cosim.plotting import plot_beta_maps, plot_sweep
 
         result.plots.append(plot_sweep(result, out / "sweep.png"))
         maps = sweep.plot.get("maps")
@@ -478,19 +504,16 @@ class _without_fmu_resources_on_path:
     """Hide FMU ``resources/`` folders from ``sys.path`` while workers are spawned.
 
     pythonfmu puts an instantiated FMU's ``resources/`` first on ``sys.path``, and spawned workers
-    start with the parent's ``sys.path``: a worker would then import ``components`` from an FMU's
+    start with the parent's ``sys.path``: a worker would then import ``tribocosim`` from an FMU's
     bundle (which lacks the builder) instead of this installation's.
     """
 
     def __enter__(self):
         import sys
 
-        import components
-
-        host = Path(components.__file__).resolve().parents[1]
         self.saved = list(sys.path)
-        sys.path[:] = [p for p in sys.path if not (p and Path(p, "components", "__init__.py").is_file()
-                                                   and Path(p).resolve() != host)]
+        sys.path[:] = [p for p in sys.path if not (p and Path(p).name == "resources"
+                                                   and Path(p).parent.joinpath("modelDescription.xml").is_file())]
         return self
 
     def __exit__(self, *exc):
@@ -507,7 +530,7 @@ def _same(a, b) -> bool:
 
 
 def main(args) -> int:
-    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`cosim.run_cli`)."""
+    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`tribocosim.cosim.run_cli`)."""
     import sys
 
     def progress(done, total, rows):

@@ -2,7 +2,7 @@
 
 :class:`CoupledSystem` is what the algorithms operate on. It owns
 
-- the slaves (anything implementing :class:`cosim.slave.Slave`) in scene order;
+- the slaves (anything implementing :class:`tribocosim.cosim.slave.Slave`) in scene order;
 - the links (output -> input) as index arrays, and ``y``, the current value of every link's
   source output at the current communication point;
 - the history of ``y`` at the last accepted communication points (for extrapolation);
@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from components.errors import CosimStepError
-from cosim.extrapolation import History, StepPolynomial
-from cosim.graph import algebraic_loops, evaluation_order
-from cosim.slave import Slave
+from tribocosim.components.errors import CosimStepError
+from tribocosim.cosim.extrapolation import History, StepPolynomial
+from tribocosim.cosim.graph import algebraic_loops, evaluation_order
+from tribocosim.cosim.slave import Slave
 
 
 @dataclass(frozen=True)

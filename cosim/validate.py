@@ -1,6 +1,6 @@
 """Second validation pass: the scene against the FMUs' model descriptions.
 
-:func:`load_scene` parses a scene (:func:`cosim.scene.parse_scene`), reads the model
+:func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.parse_scene`), reads the model
 description of every FMU it names (no shared library is loaded), and checks
 
 - FMU files: present, FMI 2.0, co-simulation;
@@ -12,7 +12,7 @@ description of every FMU it names (no shared library is loaded), and checks
 - master settings against FMU capabilities (schemes that roll back need
   ``canGetAndSetFMUstate``), Gauss-Seidel order, power bonds.
 
-All problems are collected and raised in one :class:`~components.errors.SceneError`, each
+All problems are collected and raised in one :class:`~tribocosim.components.errors.SceneError`, each
 line naming the file and the key. Unconnected inputs are warnings that give the start value
 used. The result, :class:`Plan`, holds everything the master needs with value references
 resolved.
@@ -26,8 +26,8 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-from components.errors import SceneError
-from cosim.scene import Scene, VariableRef, known, parse_scene
+from tribocosim.components.errors import SceneError
+from tribocosim.cosim.scene import Scene, VariableRef, known, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
 _DER = re.compile(r"^der\((?P<name>.+?)(?:,\s*(?P<order>\d+))?\)$")
@@ -113,7 +113,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     path : str or Path
         The scene file.
     overrides : dict, optional
-        Dotted keys to set before validation (see :func:`cosim.scene.apply_overrides`).
+        Dotted keys to set before validation (see :func:`tribocosim.cosim.scene.apply_overrides`).
 
     Returns
     -------
@@ -138,7 +138,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
         key = f"fmus.{name}"
         fmu_path = spec.path
         if spec.component is not None:
-            from cosim.fmucache import component_fmu
+            from tribocosim.cosim.fmucache import component_fmu
 
             try:
                 fmu_path = component_fmu(spec.component)

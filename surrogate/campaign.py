@@ -1,7 +1,7 @@
 """A mesoscale campaign: every case of a sweep run through the BEM-DEM slide, resumable.
 
-A *case* is one :class:`~surrogate.slide_config.SlideConfig` (one pressure, velocity, debris
-level, flake placement seed and surface pair) run through :func:`surrogate.coupling.run_slide`.
+A *case* is one :class:`~tribocosim.surrogate.slide_config.SlideConfig` (one pressure, velocity, debris
+level, flake placement seed and surface pair) run through :func:`tribocosim.surrogate.coupling.run_slide`.
 Its id is the first 16 hex digits of the SHA-256 of the canonical JSON of the configuration, so
 the same case has the same id in every run and on every machine.
 
@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from components.errors import TribocosimError
+from tribocosim.components.errors import TribocosimError
 
 from .slide_config import SlideConfig
 from .sweep import Sweep
@@ -327,7 +327,7 @@ def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep |
     out : path
         Campaign folder (created).
     executor
-        A :mod:`surrogate.executors` executor.
+        A :mod:`tribocosim.surrogate.executors` executor.
     sweep : Sweep, optional
         Recorded in ``OUT/campaign.json``.
     retry_failed : bool

@@ -8,7 +8,7 @@ has the profile h_tool0 (tool frame), slides by s in +x and sits at the height z
 h_top(x, y) = h_tool0(x - s, y) + z_top. After one pixel of sliding (integer shift k, on the
 grid: h_tool0 rolled by k along x) the loop
 
-1. DEM (:mod:`surrogate.dem`) with both surfaces rigid while the tool advances one pixel at v0,
+1. DEM (:mod:`tribocosim.surrogate.dem`) with both surfaces rigid while the tool advances one pixel at v0,
    n_sub steps with n_sub v0 dt = dx;
 2. classifies each flake: *blocked* if the pixels of its footprint where its upper surface
    z_hi exceeds the tool h_top form >= 3 spatially distinct 8-connected clusters (Fig. 8), else
@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from components.errors import ConvergenceError
+from tribocosim.components.errors import ConvergenceError
 
 from . import dem
 from .flakes import Footprint, footprints, random_placement
@@ -181,7 +181,7 @@ class SlideSimulation:
     solver : object, optional
         A contact solver with ``solve(gap, pressure, u_plastic=, warm_start=)`` returning an
         object with ``traction``, ``u_elastic``, ``u_plastic``, ``converged``, ``iterations``
-        (default: :class:`surrogate.bem.ContactSolver` built from the configuration).
+        (default: :class:`tribocosim.surrogate.bem.ContactSolver` built from the configuration).
     surfaces : (ndarray, ndarray), optional
         (h_def0, h_tool0) instead of generated self-affine surfaces.
     """

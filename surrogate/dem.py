@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from components.errors import ParameterError, TribocosimError, check_range
+from tribocosim.components.errors import ParameterError, TribocosimError, check_range
 
 from . import dem_kernels as _k
 

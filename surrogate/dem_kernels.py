@@ -1,10 +1,10 @@
-"""Numba kernels of the flake DEM (private; use :mod:`surrogate.dem`).
+"""Numba kernels of the flake DEM (private; use :mod:`tribocosim.surrogate.dem`).
 
 Two kernels, both ``njit(cache=True)`` with float64 arrays:
 
 - ``_forces``: surface + flake-flake penalty forces, torques, potential energy and the largest
   overlap of each flake, for one configuration (tested against a NumPy oracle);
-- ``_advance``: ``n_steps`` steps of the splitting integrator described in :mod:`surrogate.dem`
+- ``_advance``: ``n_steps`` steps of the splitting integrator described in :mod:`tribocosim.surrogate.dem`
   (tested against a NumPy oracle for one step and by conservation laws).
 
 Conventions: arrays of heights are indexed ``h[ix, iy]`` (axis 0 = x = sliding direction), the

@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import curve_fit
 
-from components.errors import ParameterError
+from tribocosim.components.errors import ParameterError
 
 
 @dataclass(frozen=True)

@@ -2,17 +2,17 @@
 
 Subcommands (each prints JSON on stdout; the key names are a stable contract):
 
-- ``surface``: generate a periodic self-affine surface (:mod:`surrogate.surfaces`) and save its
+- ``surface``: generate a periodic self-affine surface (:mod:`tribocosim.surrogate.surfaces`) and save its
   heights [m] to ``.npy``; prints one object with the parameters and the measured RMS height,
   RMS slopes (spectral and finite-difference) and the file name.
 - ``contact``: load a height map (``.npy`` or text, metres), build the gap of the rigid rough
   surface against a flat (``max(h) - h``), solve the elastic or elastic-plastic contact
-  (:mod:`surrogate.bem`) for each ``--pressure`` from the undeformed state, and print one object
+  (:mod:`tribocosim.surrogate.bem`) for each ``--pressure`` from the undeformed state, and print one object
   per pressure with the keys ``pressure, contact_area_fraction, mean_gap, n_clusters,
   mean_cluster_distance, max_traction, iterations, residual, converged, wall_time_s`` (SI
   units; ``mean_cluster_distance`` is null with fewer than two clusters). Exit status 1 if a
   solve did not converge (the object says so), 2 on bad input.
-- ``slide``: the BEM-DEM sliding run, implemented in :mod:`surrogate.slide_cli`.
+- ``slide``: the BEM-DEM sliding run, implemented in :mod:`tribocosim.surrogate.slide_cli`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import math
 import sys
 import time
 
-from components.errors import TribocosimError
+from tribocosim.components.errors import TribocosimError
 
 _SUBCOMMANDS = {"surface": "generate a periodic self-affine rough surface (.npy)",
                 "contact": "BEM contact of a rough surface against a flat at given pressures",
@@ -137,7 +137,7 @@ def _contact(argv: list[str]) -> int:
 
 def _slide(argv: list[str]) -> int:
     try:
-        module = importlib.import_module("surrogate.slide_cli")
+        module = importlib.import_module("tribocosim.surrogate.slide_cli")
     except ImportError as exc:
         print(f"tribocosim meso slide: not available yet in this version ({exc})", file=sys.stderr)
         return 2

@@ -1,7 +1,7 @@
 """Reference solutions for normal contact: closed forms and a brute-force periodic solver.
 
-The tests and reports of :mod:`surrogate.bem` compare against these. Conventions as in
-:mod:`surrogate.bem`: gap g >= 0 between a rigid profile and a flat elastic half-space of
+The tests and reports of :mod:`tribocosim.surrogate.bem` compare against these. Conventions as in
+:mod:`tribocosim.surrogate.bem`: gap g >= 0 between a rigid profile and a flat elastic half-space of
 effective modulus E* (plane-strain modulus of the pair), tractions positive in compression.
 
 Westergaard (1939): a 1D sinusoidal gap ``g(x) = g0 (1 - cos(2 pi x / lambda))`` pressed with the
@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from components.errors import ConvergenceError, ParameterError, check_range
+from tribocosim.components.errors import ConvergenceError, ParameterError, check_range
 
 
 def westergaard_full_contact_pressure(e_star: float, amplitude: float, wavelength: float) -> float:

@@ -17,7 +17,7 @@ import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-from components.errors import ParameterError, check_range
+from tribocosim.components.errors import ParameterError, check_range
 
 
 @dataclass(frozen=True)
@@ -64,7 +64,7 @@ class SlideConfig:
         Spacing of the flake-face sample points in pixels.
     pinch_overlap_fraction : float
         A flake into which both surfaces cut deeper than this fraction of h_p is blocked too
-        (see :mod:`surrogate.coupling`); 0 disables the rule (the paper's cluster rule only).
+        (see :mod:`tribocosim.surrogate.coupling`); 0 disables the rule (the paper's cluster rule only).
     n_slide_steps : int or None
         Number of one-pixel sliding steps; default 2n (the tool slides 2L).
     snapshot_every : int

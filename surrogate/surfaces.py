@@ -40,7 +40,7 @@ import os
 
 import numpy as np
 
-from components.errors import ParameterError, check_range
+from tribocosim.components.errors import ParameterError, check_range
 
 #: the two RMS-slope definitions
 SLOPE_DEFINITIONS = ("spectral", "finite_difference")

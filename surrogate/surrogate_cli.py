@@ -23,7 +23,7 @@ import sys
 import time
 from pathlib import Path
 
-from components.errors import TribocosimError
+from tribocosim.components.errors import TribocosimError
 
 PROG = "tribocosim surrogate"
 
@@ -38,7 +38,7 @@ def _usage() -> str:
 
 
 def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None = None) -> int:
-    from components.stripdraw.table import read_table, write_table
+    from tribocosim.components.stripdraw.table import read_table, write_table
 
     from .campaign import load_records, write_json
     from .table_build import build_table, describe, json_clean
@@ -124,7 +124,7 @@ def _show(argv: list[str]) -> int:
     ap.add_argument("--plot", default=None, help="PNG path (default ./<table stem>_mu_vs_P.png)")
     ap.add_argument("--no-plot", action="store_true")
     args = ap.parse_args(argv)
-    from components.stripdraw.table import read_table
+    from tribocosim.components.stripdraw.table import read_table
 
     from .table_build import describe, plot_table
 
@@ -147,7 +147,7 @@ def _compare(argv: list[str]) -> int:
     ap.add_argument("a")
     ap.add_argument("b")
     args = ap.parse_args(argv)
-    from components.stripdraw.table import read_table
+    from tribocosim.components.stripdraw.table import read_table
 
     from .table_build import compare_tables
 

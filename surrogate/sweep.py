@@ -31,7 +31,7 @@ by every slide. Example (SI units everywhere)::
 
 The keys that the grid sweeps (``pressure``, ``v0``, ``n_flakes``, ``flake_diameter``,
 ``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
-as a :class:`~components.errors.ParameterError` naming the file, the line, the key, its value and
+as a :class:`~tribocosim.components.errors.ParameterError` naming the file, the line, the key, its value and
 what is allowed.
 
 Presets live in ``surrogate/presets/<name>.toml`` (:func:`preset_path`).
@@ -45,7 +45,7 @@ import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-from components.errors import ParameterError
+from tribocosim.components.errors import ParameterError
 
 from .slide_config import SlideConfig
 
@@ -65,7 +65,7 @@ MIN_SEEDS = 3
 
 @dataclass(frozen=True)
 class TableSettings:
-    """How the table is made from the campaign (see :mod:`surrogate.table_build`).
+    """How the table is made from the campaign (see :mod:`tribocosim.surrogate.table_build`).
 
     Attributes
     ----------

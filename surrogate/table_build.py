@@ -6,7 +6,7 @@ mu_m = tau0 (A_c,m - A_p,m) / (P A0); the table holds their mean (clipped at 0) 
 their standard deviation (``ensemble.mu_std``) and count.
 
 Calibration (Eq. 6). tau0 = mu0 / s_c: ONE shear strength for all pressures, with s_c the
-through-origin slope of <A_c>/A0 against P (:func:`surrogate.fit.fit_contact`; particle-free
+through-origin slope of <A_c>/A0 against P (:func:`tribocosim.surrogate.fit.fit_contact`; particle-free
 cases when the sweep has them). mu at beta = 0 is then mu0 (A_c/A0) / (s_c P), i.e. mu0 up to the
 departure of the measured A_c from a line.
 
@@ -39,8 +39,8 @@ import time
 
 import numpy as np
 
-from components.errors import TableError
-from components.stripdraw.table import UNITS, FrictionTable
+from tribocosim.components.errors import TableError
+from tribocosim.components.stripdraw.table import UNITS, FrictionTable
 
 from .fit import FitReport, _key, ensemble, fit_all
 from .slide_config import SlideConfig
@@ -111,7 +111,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     Parameters
     ----------
     records : list of dict
-        Finished case records (:func:`surrogate.campaign.load_records`).
+        Finished case records (:func:`tribocosim.surrogate.campaign.load_records`).
     manifest : dict
         ``OUT/campaign.json``: the sweep (``manifest["sweep"]``) and its cases.
     failed : list of dict, optional
@@ -190,7 +190,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                "(Eq. 22) of BEM-DEM slides (Sec. 5-6); see surrogate.table_build",
         "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under "
                           "every blocked flake (the cluster rule of Fig. 8 and the pinch rule of "
-                          "surrogate.coupling); A_c from 'mean_contact_fraction'",
+                          "tribocosim.surrogate.coupling); A_c from 'mean_contact_fraction'",
         "beta_threshold": beta_thres,
         "beta_threshold_note": "Eq. 24: beta_thres = kappa / (alpha h'_rms) = s_c E* / alpha with the "
                                f"largest alpha ({alpha_max:.6g}), limited to 1",

@@ -1,11 +1,11 @@
 """FMI 2.0 co-simulation adapter of the drawing machine (pythonfmu): ``pull_force`` in, ``step``, outputs out.
 
-No physics here: every number comes from :class:`components.machine.MachineModel`; the FMI
+No physics here: every number comes from :class:`tribocosim.components.machine.MachineModel`; the FMI
 plumbing (declaration from the parameter dataclass, no-raise error handling, FMU state and its
-serialization, exit guard, logging) is :class:`components.fmus.adapter.ModelAdapter`'s.
+serialization, exit guard, logging) is :class:`tribocosim.components.fmus.adapter.ModelAdapter`'s.
 
 Variables
-    One parameter per field of :class:`~components.machine.MachineParameters`; input
+    One parameter per field of :class:`~tribocosim.components.machine.MachineParameters`; input
     ``pull_force`` [N], the load of the strip on the grip, held over a step (connect the
     strip-draw FMU's ``pull_force``); outputs ``grip_velocity`` [m/s] and ``grip_position`` [m]
     (connect ``grip_velocity`` to the strip-draw FMU), ``velocity_reference`` [m/s], the
@@ -25,7 +25,7 @@ import dataclasses
 
 from pythonfmu.default_experiment import DefaultExperiment
 
-from components.fmus.adapter import ModelAdapter, Var
+from tribocosim.components.fmus.adapter import ModelAdapter, Var
 
 
 class DrawingMachine(ModelAdapter):
@@ -50,11 +50,11 @@ class DrawingMachine(ModelAdapter):
     }
 
     def parameter_fields(self):
-        from components.machine import MachineParameters
+        from tribocosim.components.machine import MachineParameters
 
         return dataclasses.fields(MachineParameters)
 
     def make_model(self, parameters: dict):
-        from components.machine import MachineModel, MachineParameters
+        from tribocosim.components.machine import MachineModel, MachineParameters
 
         return MachineModel(MachineParameters(**parameters))

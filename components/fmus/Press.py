@@ -1,11 +1,11 @@
 """FMI 2.0 co-simulation adapter of the press (pythonfmu): parameters in, ``step``, outputs out.
 
-No physics here: every number comes from :class:`components.press.PressModel`; the FMI
+No physics here: every number comes from :class:`tribocosim.components.press.PressModel`; the FMI
 plumbing (declaration from the parameter dataclass, no-raise error handling, FMU state and its
-serialization, exit guard, logging) is :class:`components.fmus.adapter.ModelAdapter`'s.
+serialization, exit guard, logging) is :class:`tribocosim.components.fmus.adapter.ModelAdapter`'s.
 
 Variables
-    One parameter per field of :class:`~components.press.PressParameters` (``setpoint_table``
+    One parameter per field of :class:`~tribocosim.components.press.PressParameters` (``setpoint_table``
     is a String, ``"t0 F0; t1 F1; ..."`` in s and N, empty for the ramp); no inputs; outputs
     ``normal_force`` [N], the force of the press on one pad (connect it to the strip-draw
     FMU's ``normal_force``), and ``force_reference`` [N], the set-point F_set(t) at the current
@@ -23,7 +23,7 @@ import dataclasses
 
 from pythonfmu.default_experiment import DefaultExperiment
 
-from components.fmus.adapter import ModelAdapter, Var
+from tribocosim.components.fmus.adapter import ModelAdapter, Var
 
 
 class Press(ModelAdapter):
@@ -43,11 +43,11 @@ class Press(ModelAdapter):
     }
 
     def parameter_fields(self):
-        from components.press import PressParameters
+        from tribocosim.components.press import PressParameters
 
         return dataclasses.fields(PressParameters)
 
     def make_model(self, parameters: dict):
-        from components.press import PressModel, PressParameters
+        from tribocosim.components.press import PressModel, PressParameters
 
         return PressModel(PressParameters(**parameters))

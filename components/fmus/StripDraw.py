@@ -1,14 +1,14 @@
 """FMI 2.0 co-simulation adapter of the strip-draw model (pythonfmu): variables in, ``step``, outputs out.
 
-No physics here: every number comes from :class:`components.stripdraw.model.StripDrawModel`,
+No physics here: every number comes from :class:`tribocosim.components.stripdraw.model.StripDrawModel`,
 and no FMI plumbing either: variable declaration from the parameter dataclass, error handling
 (nothing escapes into pythonfmu 0.7.0; a rejected step is fmi2Discard with the state unchanged;
 a bad parameter makes every step refused with a message naming it), FMU state and its
-serialization, the exit guard and logging are :class:`components.fmus.adapter.ModelAdapter`'s
-(see :mod:`components.fmus.adapter` for the measured pythonfmu bugs behind them).
+serialization, the exit guard and logging are :class:`tribocosim.components.fmus.adapter.ModelAdapter`'s
+(see :mod:`tribocosim.components.fmus.adapter` for the measured pythonfmu bugs behind them).
 
 Variables
-    One parameter per field of :class:`~components.stripdraw.parameters.StripDrawParameters`
+    One parameter per field of :class:`~tribocosim.components.stripdraw.parameters.StripDrawParameters`
     (name, unit, description, default, range), then ``table_file``, the inputs
     ``normal_force`` [N] and ``grip_velocity`` [m/s], and the outputs (:data:`OUTPUTS`;
     ``table_clamp_count`` is an Integer).
@@ -54,10 +54,10 @@ from pythonfmu import Fmi2Causality, Fmi2Variability, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from components.errors import ParameterError
-from components.fmus.adapter import ModelAdapter, RealWithUnit, Var
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.fmus.adapter import ModelAdapter, RealWithUnit, Var
 
-#: Default table, bundled at ``resources/friction_table.npz`` by :mod:`components.fmus.build`.
+#: Default table, bundled at ``resources/friction_table.npz`` by :mod:`tribocosim.components.fmus.build`.
 DEFAULT_TABLE_FILE = "friction_table.npz"
 #: Start values of the inputs: the paper's test at P_N = 10 MPa on the default 35 x 35 mm pad.
 DEFAULT_NORMAL_FORCE = 12250.0  # N = 10 MPa x 0.035 m x 0.035 m
@@ -101,7 +101,7 @@ class StripDraw(ModelAdapter):
         super().__init__(**kwargs)
 
     def parameter_fields(self):
-        from components.stripdraw.parameters import parameter_fields
+        from tribocosim.components.stripdraw.parameters import parameter_fields
 
         return parameter_fields()
 
@@ -154,10 +154,10 @@ class StripDraw(ModelAdapter):
 
     def make_model(self, parameters: dict):
         """Validate the parameters, load the table (if used) and build the model."""
-        from components.stripdraw.friction import make_friction_law
-        from components.stripdraw.model import StripDrawModel
-        from components.stripdraw.parameters import StripDrawParameters
-        from components.stripdraw.table import read_table
+        from tribocosim.components.stripdraw.friction import make_friction_law
+        from tribocosim.components.stripdraw.model import StripDrawModel
+        from tribocosim.components.stripdraw.parameters import StripDrawParameters
+        from tribocosim.components.stripdraw.table import read_table
 
         params = StripDrawParameters(**{f.name: parameters[f.name] for f in self._fields})
         self._table_hash = None
@@ -175,7 +175,7 @@ class StripDraw(ModelAdapter):
         if parameters.get("field_input"):
             import numpy as np
 
-            from components.stripdraw.mesh import BarMesh
+            from tribocosim.components.stripdraw.mesh import BarMesh
 
             X, beta_field = read_field_input(parameters["field_input"])
             mine = BarMesh.build(params).X

@@ -5,7 +5,7 @@ that states only what is particular to its model: the parameter dataclass, the i
 outputs (:class:`Var`), and how to build the model. Everything else is here, once:
 
 Variables
-    One FMU parameter per dataclass field (:func:`components.params.param` metadata): a
+    One FMU parameter per dataclass field (:func:`tribocosim.components.params.param` metadata): a
     ``Real`` with ``unit``/``min``/``max``, an ``Integer`` (``integer=True``), or a ``String``
     (``choices=...`` or ``text=True``); all ``fixed``. Then the adapter's extra parameters
     (:meth:`ModelAdapter.register_extra_parameters`), the inputs (``Real``, ``continuous``) and
@@ -45,7 +45,7 @@ FMU state
     ``fmi2GetFMUstate`` captures the parameters, inputs, outputs, the adapter's
     :meth:`~ModelAdapter.fingerprint` (e.g. the friction table's hash) and the model's full
     state (its numpy arrays included); ``fmi2SerializeFMUstate`` writes it with
-    :mod:`components.fmus.statecodec` instead of pythonfmu's JSON. Restoring a state continues
+    :mod:`tribocosim.components.fmus.statecodec` instead of pythonfmu's JSON. Restoring a state continues
     the run bit-identically, in the same instance or in another instance of the same FMU (a
     state of other parameters rebuilds the model for them).
 
@@ -60,7 +60,7 @@ Modules in one process
     versions of the project therefore share the first copy of their common modules.
 
 Process exit
-    :mod:`components.fmus.exitguard` works around a use-after-free in pythonfmu 0.7.0's library
+    :mod:`tribocosim.components.fmus.exitguard` works around a use-after-free in pythonfmu 0.7.0's library
     destructor that made Python hosts abort at exit after freeing an FMU.
 """
 
@@ -75,9 +75,9 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
-from components.errors import TribocosimError
-from components.fmus import statecodec
-from components.fmus.exitguard import guard_pythonfmu_exit
+from tribocosim.components.errors import TribocosimError
+from tribocosim.components.fmus import statecodec
+from tribocosim.components.fmus.exitguard import guard_pythonfmu_exit
 
 #: SI base-unit exponents of every unit the variables may use (FMI 2.0 UnitDefinitions)
 BASE_UNITS = {
@@ -152,7 +152,7 @@ def add_unit_definitions(root: Element, variables, owner: str = "FMU") -> Elemen
     return root
 
 
-def use_bundled_packages(resources: str | None, package: str = "components") -> list[str]:
+def use_bundled_packages(resources: str | None, package: str = "tribocosim") -> list[str]:
     """Let the already imported ``package`` (and its imported subpackages) find this FMU's modules.
 
     For every imported package ``package[.sub...]`` not loaded from ``resources``: if the FMU's
@@ -257,7 +257,7 @@ class ModelAdapter(Fmi2Slave):
     def make_model(self, parameters: dict):
         """Build the model from the parameter values (``{name: value}``, extras included).
 
-        Raise :class:`~components.errors.TribocosimError` (e.g. ``ParameterError``) with a
+        Raise :class:`~tribocosim.components.errors.TribocosimError` (e.g. ``ParameterError``) with a
         message naming the culprit if the parameters are not usable.
         """
         raise NotImplementedError

@@ -2,11 +2,12 @@
 
 For each FMU the build
 
-1. finds the modules under ``components`` that its adapter imports, transitively
-   (:class:`modulefinder.ModuleFinder`, a static scan that runs nothing), and refuses to build if
-   one of them is missing;
-2. stages the adapter, those modules and the FMU's data files (the default friction table) in a
-   temporary folder;
+1. finds the ``tribocosim`` modules that its adapter imports, transitively (:func:`runtime_modules`:
+   a static scan of the import statements, resolved with :func:`importlib.util.find_spec`, so it
+   works the same from a wheel and from an editable install), and refuses to build if one of
+   them is missing;
+2. stages the adapter, those modules (at their package paths, ``tribocosim/components/...``) and
+   the FMU's data files (the default friction table) in a temporary folder;
 3. runs ``python -m pythonfmu build --handle-state --serialize-state`` on the staged adapter in a
    subprocess (pythonfmu imports the adapter by module name and caches it in the process, so
    every FMU needs its own process);
@@ -16,21 +17,23 @@ For each FMU the build
 Before building anything, every selected FMU's files and import closure are checked, so that a
 missing file fails the whole build without leaving some of the FMUs built.
 
-An FMU's ``resources/`` then holds its adapter, ``components/__init__.py``, ``errors.py``, the
-shared plumbing ``components/fmus/{adapter,statecodec,exitguard}.py``, the model modules the
-adapter imports (StripDraw: ``components/stripdraw/*`` and ``friction_table.npz``; Press:
-``press.py``, ``linear.py``, ``params.py``; DrawingMachine: ``machine.py``, ``linear.py``,
-``params.py``), plus the copy of pythonfmu's Python files that pythonfmu always adds; nothing
-from ``surrogate/`` or ``cosim/``, and no numba, scipy, pyfftw or matplotlib.
+An FMU's ``resources/`` then holds its adapter, ``tribocosim/__init__.py``,
+``tribocosim/components/__init__.py``, ``errors.py``, the shared plumbing
+``tribocosim/components/fmus/{adapter,statecodec,exitguard}.py``, the model modules the adapter
+imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press: ``press.py``, ``linear.py``,
+``params.py``; DrawingMachine: ``machine.py``, ``linear.py``, ``params.py``), plus the copy of
+pythonfmu's Python files that pythonfmu always adds; nothing from ``surrogate`` or ``cosim``, and no
+numba, scipy, pyfftw or matplotlib.
 
 Python API: :func:`build_fmus`; command line: ``tribocosim fmu build [--out DIR]``.
 """
 
 from __future__ import annotations
 
+import ast
 import hashlib
+import importlib.util
 import json
-import modulefinder
 import os
 import shutil
 import subprocess
@@ -39,10 +42,11 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from components.errors import TribocosimError
+from tribocosim.components.errors import TribocosimError
+from tribocosim.components.paths import DEFAULT_TABLE
 
-#: Root of the source tree (holds ``components/`` and ``models/``).
-PROJECT_ROOT = Path(__file__).resolve().parents[2]
+#: the package whose modules an FMU bundles (nothing outside it is staged)
+PACKAGE = "tribocosim"
 
 
 class FmuBuildError(TribocosimError):
@@ -51,55 +55,135 @@ class FmuBuildError(TribocosimError):
 
 @dataclass(frozen=True)
 class FmuSpec:
-    """What one FMU is made of, relative to :data:`PROJECT_ROOT`."""
+    """What one FMU is made of: its adapter module and the data files for the root of ``resources/``."""
 
-    adapter: str  # the pythonfmu script; its stem is the FMU's model identifier
-    data: tuple[str, ...] = ()  # files copied to the root of resources/
+    adapter: str  # module of the pythonfmu script; its last part is the FMU's model identifier
+    data: tuple[Path, ...] = ()
 
 
 #: Every FMU of the project, by model identifier.
 FMUS: dict[str, FmuSpec] = {
-    "StripDraw": FmuSpec(adapter="components/fmus/StripDraw.py", data=("models/friction_table.npz",)),
-    "Press": FmuSpec(adapter="components/fmus/Press.py"),
-    "DrawingMachine": FmuSpec(adapter="components/fmus/DrawingMachine.py"),
+    "StripDraw": FmuSpec(adapter="tribocosim.components.fmus.StripDraw", data=(DEFAULT_TABLE,)),
+    "Press": FmuSpec(adapter="tribocosim.components.fmus.Press"),
+    "DrawingMachine": FmuSpec(adapter="tribocosim.components.fmus.DrawingMachine"),
 }
 
 
-def runtime_files(name: str, root: Path = PROJECT_ROOT) -> list[Path]:
-    """The files under ``components/`` that FMU ``name`` needs at run time (paths under ``root``).
+def module_file(name: str) -> Path | None:
+    """The source file of module ``name`` (``__init__.py`` for a package), or None if there is none."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.origin or not spec.origin.endswith(".py"):
+        return None
+    return Path(spec.origin).resolve()
+
+
+def _imported_names(path: Path) -> set[str]:
+    """Every absolute module name an ``import`` statement in ``path`` may load (``from a import b``
+    gives ``a`` and ``a.b``: ``b`` may be a submodule)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return names
+
+
+def runtime_modules(name: str) -> dict[str, Path]:
+    """The ``tribocosim`` modules FMU ``name`` needs at run time: ``{module name: source file}``.
+
+    The import closure of the adapter, found statically (nothing is run), plus the ``__init__``
+    of every package on the way. The adapter itself is not included.
 
     Raises
     ------
     FmuBuildError
-        If the adapter imports a ``components`` module that does not exist.
+        If the adapter, or a module it imports, imports a ``tribocosim`` module that does not exist.
     """
     spec = _spec(name)
-    finder = modulefinder.ModuleFinder(path=[str(root)])
-    finder.run_script(str(root / spec.adapter))
-    missing, _maybe = finder.any_missing_maybe()
-    missing = sorted(m for m in missing if m.split(".")[0] == "components")
+    adapter = module_file(spec.adapter)
+    if adapter is None:
+        raise FmuBuildError(f"FMU {name}: the adapter module {spec.adapter} is missing")
+    found: dict[str, Path] = {}
+    missing: set[str] = set()
+    todo = [(adapter, spec.adapter)]
+    while todo:
+        path, importer = todo.pop()
+        for mod in sorted(_imported_names(path)):
+            if mod.split(".")[0] != PACKAGE or mod in found or mod == spec.adapter:
+                continue
+            parts = mod.split(".")
+            for k in range(1, len(parts) + 1):
+                prefix = ".".join(parts[:k])
+                if prefix in found:
+                    continue
+                src = module_file(prefix)
+                if src is None:
+                    if not _is_attribute(prefix):
+                        missing.add(prefix)
+                    break
+                found[prefix] = src
+                todo.append((src, prefix))
     if missing:
-        raise FmuBuildError(f"FMU {name}: the adapter imports missing modules: {', '.join(missing)}")
-    files = {
-        Path(mod.__file__).resolve()
-        for mod_name, mod in finder.modules.items()
-        if mod_name.split(".")[0] == "components" and mod.__file__
-    }
-    return sorted(files)
+        raise FmuBuildError(f"FMU {name}: the adapter imports missing modules: {', '.join(sorted(missing))}")
+    return dict(sorted(found.items()))
 
 
-def source_digest(name: str, root: Path = PROJECT_ROOT) -> str:
+def _is_attribute(name: str) -> bool:
+    """Whether ``a.b.c`` is a name defined in module ``a.b`` (``from a.b import c``) rather than a module."""
+    parent, _, attr = name.rpartition(".")
+    path = module_file(parent)
+    if path is None:
+        return False
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef)) and node.name == attr:
+            return True
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == attr for t in node.targets):
+            return True
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.target.id == attr:
+            return True
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and any((a.asname or a.name.split(".")[0]) == attr
+                                                                  for a in node.names):
+            return True
+    return False
+
+
+def runtime_files(name: str) -> list[Path]:
+    """The source files of :func:`runtime_modules` (sorted)."""
+    return sorted(runtime_modules(name).values())
+
+
+def resource_paths(name: str) -> list[str]:
+    """The paths, relative to ``resources/``, of the modules FMU ``name`` bundles (``tribocosim/...``)."""
+    return sorted(_staged_path(m, p).as_posix() for m, p in runtime_modules(name).items())
+
+
+def _staged_path(module: str, source: Path) -> Path:
+    """Where module ``module`` goes in an FMU's ``resources/``: its package path."""
+    parts = module.split(".")
+    if source.name == "__init__.py":
+        return Path(*parts, "__init__.py")
+    return Path(*parts[:-1], f"{parts[-1]}.py")
+
+
+def source_digest(name: str) -> str:
     """SHA-256 over the adapter, its runtime modules and data files of FMU ``name``."""
     spec = _spec(name)
     h = hashlib.sha256()
-    paths = [root / spec.adapter, *runtime_files(name, root), *(root / d for d in spec.data)]
-    for path in paths:
-        h.update(str(path.relative_to(root)).encode())
-        h.update(path.read_bytes())
+    entries = [(spec.adapter, module_file(spec.adapter)), *runtime_modules(name).items(),
+               *((d.name, Path(d)) for d in spec.data)]
+    for label, path in entries:
+        h.update(str(label).encode())
+        h.update(Path(path).read_bytes())
     return h.hexdigest()
 
 
-def build_fmus(out_dir: str | os.PathLike, names=None, *, root: str | os.PathLike = PROJECT_ROOT) -> dict[str, Path]:
+def build_fmus(out_dir: str | os.PathLike, names=None) -> dict[str, Path]:
     """Build FMUs into ``out_dir`` (created if needed) and return ``{name: path to .fmu}``.
 
     Parameters
@@ -108,8 +192,6 @@ def build_fmus(out_dir: str | os.PathLike, names=None, *, root: str | os.PathLik
         Destination folder; an existing ``<name>.fmu`` is replaced atomically.
     names : iterable of str, optional
         Model identifiers to build (keys of :data:`FMUS`); default all.
-    root : path, optional
-        Source tree to build from (default: the tree this module belongs to).
 
     Raises
     ------
@@ -118,14 +200,13 @@ def build_fmus(out_dir: str | os.PathLike, names=None, *, root: str | os.PathLik
     """
     out = Path(out_dir).resolve()  # the build subprocess runs in another folder
     out.mkdir(parents=True, exist_ok=True)
-    root = Path(root).resolve()
     selected = list(FMUS) if names is None else list(names)
     for name in selected:
         _spec(name)
     for name in selected:  # every FMU's files and imports, before building any of them
-        _check_files(name, root)
-        runtime_files(name, root)
-    return {name: _build_one(name, out, root) for name in selected}
+        _check_files(name)
+        runtime_modules(name)
+    return {name: _build_one(name, out) for name in selected}
 
 
 def _spec(name: str) -> FmuSpec:
@@ -135,36 +216,37 @@ def _spec(name: str) -> FmuSpec:
         raise FmuBuildError(f"unknown FMU {name!r}; this project builds: {', '.join(FMUS)}") from None
 
 
-def _check_files(name: str, root: Path) -> None:
+def _check_files(name: str) -> None:
     spec = _spec(name)
-    for rel in (spec.adapter, *spec.data):
-        if not (root / rel).is_file():
-            raise FmuBuildError(f"FMU {name}: required file {root / rel} is missing")
+    for path in spec.data:
+        if not Path(path).is_file():
+            raise FmuBuildError(f"FMU {name}: required file {path} is missing")
 
 
-def _build_one(name: str, out: Path, root: Path) -> Path:
+def _build_one(name: str, out: Path) -> Path:
     spec = _spec(name)
-    _check_files(name, root)
-    digest = source_digest(name, root)
+    _check_files(name)
+    digest = source_digest(name)
+    identifier = spec.adapter.rsplit(".", 1)[-1]
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-fmu-{name}-") as tmp:
         stage = Path(tmp) / "stage"
-        script = stage / Path(spec.adapter).name
+        script = stage / f"{identifier}.py"
         stage.mkdir()
-        shutil.copy2(root / spec.adapter, script)
-        for path in runtime_files(name, root):
-            dest = stage / path.relative_to(root)
+        shutil.copy2(module_file(spec.adapter), script)
+        for module, path in runtime_modules(name).items():
+            dest = stage / _staged_path(module, path)
             dest.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(path, dest)
         data = []
-        for rel in spec.data:
-            shutil.copy2(root / rel, stage / Path(rel).name)
-            data.append(str(stage / Path(rel).name))
+        for path in spec.data:
+            shutil.copy2(path, stage / Path(path).name)
+            data.append(str(stage / Path(path).name))
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         cmd = [
             sys.executable, "-m", "pythonfmu", "build",
             "-f", str(script), "--dest", str(partial),
             "--handle-state", "--serialize-state",
-            str(stage / "components"), *data,
+            str(stage / PACKAGE), *data,
         ]  # fmt: skip
         env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
         env.pop("PYTHONPATH", None)  # the staged copy, not another tree, must be imported

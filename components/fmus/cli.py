@@ -25,7 +25,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim fmu``; returns the exit code."""
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
-    from components.fmus.build import FMUS, FmuBuildError, build_fmus
+    from tribocosim.components.fmus.build import FMUS, FmuBuildError, build_fmus
 
     if args.command == "list":
         for name, spec in FMUS.items():

@@ -2,21 +2,33 @@
 
 Pure physics (numpy; numba optional): no FMI, no printing. The table module is the one place
 that reads and writes friction-table files.
+
+The names below are imported on first use, so that importing a light module of this package
+(``parameters``, ``table``) does not import the model and its compiled kernels.
 """
 
-from components.stripdraw.friction import closed_form_table, make_friction_law
-from components.stripdraw.model import INPUT_NAMES, OUTPUT_NAMES, StripDrawModel
-from components.stripdraw.parameters import StripDrawParameters
-from components.stripdraw.table import FrictionTable, read_table, write_table
+from __future__ import annotations
 
-__all__ = [
-    "INPUT_NAMES",
-    "OUTPUT_NAMES",
-    "FrictionTable",
-    "StripDrawModel",
-    "StripDrawParameters",
-    "closed_form_table",
-    "make_friction_law",
-    "read_table",
-    "write_table",
-]
+import importlib
+
+_API = {
+    "INPUT_NAMES": "model",
+    "OUTPUT_NAMES": "model",
+    "StripDrawModel": "model",
+    "StripDrawParameters": "parameters",
+    "FrictionTable": "table",
+    "read_table": "table",
+    "write_table": "table",
+    "closed_form_table": "friction",
+    "make_friction_law": "friction",
+}
+
+__all__ = sorted(_API)
+
+
+def __getattr__(name: str):
+    if name not in _API:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_API[name]}"), name)
+    globals()[name] = value
+    return value

@@ -12,7 +12,7 @@ removes tau0 and E*:
 
 b and v_ref are PROVISIONAL defaults (the paper does not print them; Fig. 15): the surrogate
 issue fits them to mesoscale runs. Which velocity v is (the pulling speed or each node's slip
-rate) is the model's ``friction_velocity`` parameter (see :mod:`components.stripdraw.model`).
+rate) is the model's ``friction_velocity`` parameter (see :mod:`tribocosim.components.stripdraw.model`).
 
 The cap of beta (Eq. 24, A_p <= A_c) is beta_thres = kappa / (alpha h'_rms). We evaluate it with
 the largest alpha, its saturation value b, so that A_p <= A_c holds at every velocity and mu never
@@ -30,9 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from components.errors import ParameterError
-from components.stripdraw.parameters import StripDrawParameters
-from components.stripdraw.table import FrictionTable
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.table import FrictionTable
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Write the closed-form law (Eq. 9 + 23) as a friction table, for comparison with the shipped one.
 
-Usage: ``python -m components.stripdraw.make_table OUT.npz``. The table says
+Usage: ``python -m tribocosim.components.stripdraw.make_table OUT.npz``. The table says
 ``"provenance": "closed_form"`` in its metadata. The shipped ``models/friction_table.npz`` is the
 mesoscale table of the quick preset (``tribocosim surrogate build --preset quick``); this command
 refuses to overwrite it.
@@ -11,16 +11,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from components.paths import DEFAULT_TABLE
-from components.stripdraw.friction import closed_form_table
-from components.stripdraw.table import write_table
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw.friction import closed_form_table
+from tribocosim.components.stripdraw.table import write_table
 
 
 def main(argv: list[str] | None = None) -> int:
     """Write the closed-form table to OUT and print its path and hash (exit 2 on bad usage)."""
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 1:
-        print("usage: python -m components.stripdraw.make_table OUT.npz", file=sys.stderr)
+        print("usage: python -m tribocosim.components.stripdraw.make_table OUT.npz", file=sys.stderr)
         return 2
     out = Path(args[0])
     if out.resolve() == Path(DEFAULT_TABLE).resolve():

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
 LEAD_LENGTH = 0.005  # m of strip behind the material that is under the pad at the end of the draw
 

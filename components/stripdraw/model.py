@@ -55,11 +55,11 @@ import math
 
 import numpy as np
 
-from components.errors import ConvergenceError, ParameterError, check_finite
-from components.stripdraw import kernels
-from components.stripdraw.mesh import BarMesh
-from components.stripdraw.parameters import StripDrawParameters
-from components.stripdraw.transport import transport_step
+from tribocosim.components.errors import ConvergenceError, ParameterError, check_finite
+from tribocosim.components.stripdraw import kernels
+from tribocosim.components.stripdraw.mesh import BarMesh
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.transport import transport_step
 
 OUTPUT_NAMES = (
     "pull_force",
@@ -89,7 +89,7 @@ class StripDrawModel:
     params : StripDrawParameters
         All parameters (validated).
     friction_law : object
-        A law from :func:`components.stripdraw.friction.make_friction_law`.
+        A law from :func:`tribocosim.components.stripdraw.friction.make_friction_law`.
     beta_field : array_like, optional
         Initial nodal debris field (multi-pass runs); default ``params.beta_initial`` everywhere.
     """

@@ -17,7 +17,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from components.params import param, validate_fields
+from tribocosim.components.params import param, validate_fields
 
 FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
@@ -34,7 +34,7 @@ class StripDrawParameters:
 
     Each field's metadata holds ``unit``, ``description`` and the allowed range (``low``,
     ``high``); ``__post_init__`` checks every field against it and raises
-    :class:`~components.errors.ParameterError` naming the field, its value and the range.
+    :class:`~tribocosim.components.errors.ParameterError` naming the field, its value and the range.
     """
 
     # --- geometry -------------------------------------------------------------------------

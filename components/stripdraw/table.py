@@ -23,7 +23,7 @@ whose hash or format version does not match is refused.
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
-caller can report them) or ``"error"`` (raise :class:`~components.errors.TableDomainError`).
+caller can report them) or ``"error"`` (raise :class:`~tribocosim.components.errors.TableDomainError`).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from components.errors import ParameterError, TableDomainError, TableError
+from tribocosim.components.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
 FORMAT_VERSION = 1

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from components.stripdraw.kernels import USE_NUMBA, jit, thomas
+from tribocosim.components.stripdraw.kernels import USE_NUMBA, jit, thomas
 
 
 def archard_source(dU, weight, pressure, archard_k, hardness, particle_thickness):

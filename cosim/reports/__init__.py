@@ -1,12 +1,12 @@
 """Reports: error against run time (work-precision) and numerical stability (``tribocosim report``).
 
 Modules
-    :mod:`~cosim.reports.metrics` the error metric and the cheapest-setting selection;
-    :mod:`~cosim.reports.stability` the stability criterion, growth detection, bisection for the largest stable step;
-    :mod:`~cosim.reports.monodromy` the exact one-step map of Jacobi/0 on the two-mass oscillator;
-    :mod:`~cosim.reports.runner` master runs with a wall-time budget and early stops, judged by the criterion;
-    :mod:`~cosim.reports.accuracy` / :mod:`~cosim.reports.stability_report` the families (one function each);
-    :mod:`~cosim.reports.markdown` CSV, PNG and Markdown output; :mod:`~cosim.reports.oscfmus` the test FMUs.
+    :mod:`~tribocosim.cosim.reports.metrics` the error metric and the cheapest-setting selection;
+    :mod:`~tribocosim.cosim.reports.stability` the stability criterion, growth detection, bisection for the largest stable step;
+    :mod:`~tribocosim.cosim.reports.monodromy` the exact one-step map of Jacobi/0 on the two-mass oscillator;
+    :mod:`~tribocosim.cosim.reports.runner` master runs with a wall-time budget and early stops, judged by the criterion;
+    :mod:`~tribocosim.cosim.reports.accuracy` / :mod:`~tribocosim.cosim.reports.stability_report` the families (one function each);
+    :mod:`~tribocosim.cosim.reports.markdown` CSV, PNG and Markdown output; :mod:`~tribocosim.cosim.reports.oscfmus` the test FMUs.
 
-The command line is :mod:`cosim.report_cli`. Nothing here is imported by ``tribocosim run``.
+The command line is :mod:`tribocosim.cosim.report_cli`. Nothing here is imported by ``tribocosim run``.
 """

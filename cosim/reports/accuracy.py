@@ -1,7 +1,7 @@
 """Work-precision families of ``tribocosim report accuracy``: error against cost, one function per family.
 
 Each family can run alone (``family(settings) -> Family``); :data:`FAMILIES` lists them in
-report order. Errors are relative (:mod:`cosim.reports.metrics`); costs are wall times on the
+report order. Errors are relative (:mod:`tribocosim.cosim.reports.metrics`); costs are wall times on the
 machine the report runs on (the load average is recorded with them) and, for the master, the
 number of ``doStep`` calls summed over the FMUs (rejected attempts and step-doubling probes
 included).
@@ -10,11 +10,11 @@ included).
     The linear two-mass oscillator of the tests (k2 = 10, 10 s) split into two FMUs; every
     algorithm x extrapolation order x fixed step, and the two adaptive estimators x tolerance
     (Jacobi, extrapolation 1). Error: max |x1 - x1_exact| / max |x1_exact| against the closed
-    form (:class:`cosim.reference.TwoMassOscillator`).
+    form (:class:`tribocosim.cosim.reference.TwoMassOscillator`).
 ``demo``
     ``models/scenes/demo.toml`` (press + strip + drawing machine) shortened in quick mode; the
     same settings. Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the
-    monolithic reference (:func:`cosim.reference_components.reference_for_scene`, the pure
+    monolithic reference (:func:`tribocosim.cosim.reference_components.reference_for_scene`, the pure
     models coupled implicitly with a tiny step ``dt_ref``), interpolated linearly onto the
     communication points.
 ``stripdraw``
@@ -45,9 +45,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.reports.common import Family, Settings, scratch, timed
-from cosim.reports.metrics import max_relative_error, relative_difference
-from cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
+from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.metrics import max_relative_error, relative_difference
+from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
 
 TARGETS = (1e-2, 1e-3, 1e-4)
 #: demo: the errors after the ramps are measured from this time on [s]
@@ -56,7 +56,7 @@ SCHEMES = [(a, q) for a in ("jacobi", "gauss-seidel", "iterative") for q in (0, 
 
 
 def _master_row(curve, setting, res, err, **extra) -> dict:
-    """A row from :func:`cosim.reports.runner.run_plan`'s dict."""
+    """A row from :func:`tribocosim.cosim.reports.runner.run_plan`'s dict."""
     status = "ok" if not res["stopped"] else res["stopped"]
     return {"curve": curve, "setting": setting, "error": err if not res["stopped"] else math.inf,
             "wall_time": res["wall_time"], "do_steps": res["do_steps"], "steps": res["steps"],
@@ -83,9 +83,9 @@ def _master_settings(quick: bool, steps_quick, steps_full, tols_quick, tols_full
 @timed
 def oscillator(settings: Settings) -> Family:
     """The two-mass oscillator (k2 = 10): master settings vs the closed form."""
-    from cosim.reference import TwoMassOscillator
-    from cosim.reports.runner import run_plan
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.reports.runner import run_plan
+    from tribocosim.cosim.validate import load_scene
 
     title = "Two-mass oscillator (k2 = 10 N/m, 10 s): error of x1 against wall time"
     try:
@@ -99,7 +99,7 @@ def oscillator(settings: Settings) -> Family:
     run_plan(load_scene(oscillator_scene(work, fmus, step=0.1, stop=0.2)))  # warm-up: extraction, imports
     fam = Family("oscillator", title, curve="curve", error="error", cost="wall_time", label="setting")
     fam.note = ("Error: max |x1 - x1_exact| / max |x1_exact| over the communication points (closed form: "
-                "cosim.reference.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
+                "tribocosim.cosim.reference.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
                 "doStep calls of both FMUs. Adaptive runs: Jacobi with extrapolation 1, initial step 0.01 s, "
                 f"min_step 1e-6 s, max_step 1 s. A run is stopped after {budget:g} s of wall time.")
     for curve, setting, s in _master_settings(settings.quick, (0.1, 0.05, 0.02, 0.01),
@@ -124,7 +124,7 @@ def oscillator(settings: Settings) -> Family:
 
 
 def demo_scene_path() -> Path | None:
-    from components.paths import MODELS_DIR
+    from tribocosim.components.paths import MODELS_DIR
 
     p = MODELS_DIR / "scenes" / "demo.toml"
     return p if p.is_file() else None
@@ -133,7 +133,7 @@ def demo_scene_path() -> Path | None:
 def reference_factory():
     """``reference_for_scene`` of issue 8, or raise Unavailable saying what is missing."""
     try:
-        from cosim.reference_components import reference_for_scene
+        from tribocosim.cosim.reference_components import reference_for_scene
     except ImportError as exc:
         raise Unavailable(f"the monolithic reference of our components (cosim.reference_components, issue 8) "
                           f"cannot be imported: {exc}") from None
@@ -143,8 +143,8 @@ def reference_factory():
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml: master settings vs the monolithic reference."""
-    from cosim.reports.runner import run_plan
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reports.runner import run_plan
+    from tribocosim.cosim.validate import load_scene
 
     quick = settings.quick
     budget = 20.0 if quick else 60.0
@@ -212,7 +212,7 @@ def demo(settings: Settings) -> Family:
 
 
 def _strip_run(integrator: str, n: int, draw: float, step: float = 1e-3):
-    from cosim.demo import run_strip_draw, steady_mean
+    from tribocosim.cosim.demo import run_strip_draw, steady_mean
 
     t0 = time.perf_counter()
     _, outs, model = run_strip_draw(integrator=integrator, draw_length=draw, n_elements=n, step=step)
@@ -296,10 +296,10 @@ def bem(settings: Settings) -> Family:
     """Fourier-BEM: grid size vs error in A_c/A0 against the finest grid vs solve time."""
     title = "Fourier-BEM contact: grid size x error in A_c/A0 (against the finest grid) x solve time"
     try:
-        from surrogate.bem import ContactSolver, gap_against_flat
-        from surrogate.surfaces import self_affine_surface
+        from tribocosim.surrogate.bem import ContactSolver, gap_against_flat
+        from tribocosim.surrogate.surfaces import self_affine_surface
     except ImportError as exc:
-        return Family.unavailable("bem", title, f"surrogate.bem cannot be imported: {exc}")
+        return Family.unavailable("bem", title, f"tribocosim.surrogate.bem cannot be imported: {exc}")
     quick = settings.quick
     grids = (64, 128, 256, 512) if quick else (64, 128, 256, 512, 1024, 2048)
     size, q0 = 500e-6, 2 * math.pi / 500e-6

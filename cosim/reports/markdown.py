@@ -12,8 +12,8 @@ import csv
 import math
 from pathlib import Path
 
-from cosim.reports.common import Family
-from cosim.reports.metrics import cheapest_reaching
+from tribocosim.cosim.reports.common import Family
+from tribocosim.cosim.reports.metrics import cheapest_reaching
 
 TARGETS = (1e-2, 1e-3, 1e-4)
 

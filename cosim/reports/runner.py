@@ -1,12 +1,12 @@
 """Judged runs: a scene run through the master under the stability criterion, with early stops.
 
-:func:`judged_run` builds the master from a validated plan (:func:`cosim.api.build`) and advances
-it step by step like :meth:`cosim.master.Master.run`, but every ``check_every`` accepted steps it
+:func:`judged_run` builds the master from a validated plan (:func:`tribocosim.cosim.api.build`) and advances
+it step by step like :meth:`tribocosim.cosim.master.Master.run`, but every ``check_every`` accepted steps it
 reads the recorded outputs and stops early when one is non-finite or beyond the bound (an unstable
 run would otherwise grow until the FMUs slow down or fail), or when the wall-time budget is
 spent (the verdict is then taken on the part run, and says so). The verdict is
-:func:`cosim.reports.stability.classify` on the recorded outputs; a master error
-(:class:`~components.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
+:func:`tribocosim.cosim.reports.stability.classify` on the recorded outputs; a master error
+(:class:`~tribocosim.components.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
 A fixed-step run in which the master had to halve a step (a discarded step or a non-finite output,
 retried by rollback) is unstable at the requested step, whatever the outputs.
 """
@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify
+from tribocosim.cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify
 
 
 def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int = 10) -> dict:
-    """Run a validated plan like :func:`cosim.run` (no files), with a wall-time budget.
+    """Run a validated plan like :func:`tribocosim.cosim.run` (no files), with a wall-time budget.
 
     ``monitor(row) -> str`` (optional) is called with the recorded outputs every ``check_every``
     accepted steps; a non-empty string stops the run early with that message.
@@ -32,7 +32,7 @@ def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int =
     ``halvings``, ``t_end``, ``stopped`` ('' if the run reached the end), ``last_failure``,
     ``controller``. Raises what the master raises (CosimStepError, FMU errors).
     """
-    from cosim.api import build
+    from tribocosim.cosim.api import build
 
     t0 = time.perf_counter()
     b = build(plan)

@@ -1,15 +1,15 @@
 """Stability families of ``tribocosim report stability``: a matrix of cases x schemes, one function per family.
 
 Every cell runs the case with the scheme at its nominal step and judges the run with the
-criterion of :mod:`cosim.reports.stability` (stable / unstable with the reason / error with the
-message), and finds the largest stable step by bisection (:func:`~cosim.reports.stability.largest_stable_step`).
+criterion of :mod:`tribocosim.cosim.reports.stability` (stable / unstable with the reason / error with the
+message), and finds the largest stable step by bisection (:func:`~tribocosim.cosim.reports.stability.largest_stable_step`).
 
 ``oscillator``
     The linear two-mass oscillator (FMUs of the tests), coupling stiffness k2 from 10 to 1e7 N/m;
     each run lasts 8 periods of the stiff mode (at least 200 steps; at most ``max_steps``, and
     never fewer than 3 periods). Bound: 10 x the closed form's max |.| of x1, x2 and the force.
     The Jacobi/0 column also shows the limit predicted from the exact one-step map
-    (:mod:`cosim.reports.monodromy`).
+    (:mod:`tribocosim.cosim.reports.monodromy`).
 ``stiff_drive``
     ``models/scenes/stiff_drive.toml`` (issue 8) with the drawing machine's drive stiffness
     from 1e4 to 1e9 N/m. Bound: |pull_force| <= 10 x (2 mu0 F_N + 2 rho c A V0) (friction capacity plus the
@@ -33,9 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.reports.common import Family, Settings, scratch, timed
-from cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
-from cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
+from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
+from tribocosim.cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
 
 CRITERION = Criterion()
 #: a bisection through the master never tries steps longer than the run / MIN_STEPS (fewer points cannot show growth)
@@ -75,7 +75,7 @@ def _cell_row(case: str, scheme: str, verdict: Verdict, limit, **extra) -> dict:
 
 # --------------------------------------------------------------------------- oscillator
 def _fast_period(k2: float) -> float:
-    from cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.reference import TwoMassOscillator
 
     lam = np.linalg.eigvals(TwoMassOscillator(k2=k2).matrix())
     return 2 * math.pi / float(np.max(np.abs(lam.imag)))
@@ -84,10 +84,10 @@ def _fast_period(k2: float) -> float:
 @timed
 def oscillator(settings: Settings) -> Family:
     """Two-mass oscillator, k2 = 10 ... 1e7: schemes x stiffness."""
-    from cosim.reference import TwoMassOscillator
-    from cosim.reports.monodromy import jacobi0_limit
-    from cosim.reports.runner import judged_run
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.reports.monodromy import jacobi0_limit
+    from tribocosim.cosim.reports.runner import judged_run
+    from tribocosim.cosim.validate import load_scene
 
     title = "Two-mass oscillator: coupling stiffness k2 x scheme"
     try:
@@ -138,7 +138,7 @@ def oscillator(settings: Settings) -> Family:
 # --------------------------------------------------------------------------- scenes with our components
 def _component_scales(plan) -> dict[str, float]:
     """Reference magnitudes: pull_force 2 mu0 F_N, grip_velocity |set-point| (from the scene or the defaults)."""
-    from cosim.reference_components import component_of
+    from tribocosim.cosim.reference_components import component_of
 
     sc = plan.scene
     fn, sp, v = None, None, 0.08
@@ -146,16 +146,16 @@ def _component_scales(plan) -> dict[str, float]:
     for name, spec in sc.fmus.items():
         comp = component_of(spec)
         if comp == "press":
-            from components.press import PressParameters
+            from tribocosim.components.press import PressParameters
 
             fn = float(spec.parameters.get("force_setpoint", PressParameters().force_setpoint))
         elif comp == "stripdraw":
-            from components.stripdraw.parameters import StripDrawParameters
+            from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
             names = {f.name for f in __import__("dataclasses").fields(StripDrawParameters)}
             sp = StripDrawParameters(**{k: v for k, v in spec.parameters.items() if k in names})
         elif comp == "drawingmachine":
-            from components.machine import MachineParameters
+            from tribocosim.components.machine import MachineParameters
 
             v = abs(float(spec.parameters.get("velocity_setpoint", MachineParameters().velocity_setpoint)))
     for name, spec in sc.fmus.items():
@@ -168,15 +168,15 @@ def _component_scales(plan) -> dict[str, float]:
 
 
 def _instance(plan, component: str) -> str | None:
-    from cosim.reference_components import component_of
+    from tribocosim.cosim.reference_components import component_of
 
     return next((n for n, s in plan.scene.fmus.items() if component_of(s) == component), None)
 
 
 def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget):
     """Run each (case overrides) x scheme at the scene step, bisect the step; append rows."""
-    from cosim.reports.runner import judged_run
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reports.runner import judged_run
+    from tribocosim.cosim.validate import load_scene
 
     for case, over, step in cases:
         for alg, q in schemes:
@@ -202,7 +202,7 @@ def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget)
 
 
 def stiff_drive_path() -> Path | None:
-    from components.paths import MODELS_DIR
+    from tribocosim.components.paths import MODELS_DIR
 
     p = MODELS_DIR / "scenes" / "stiff_drive.toml"
     return p if p.is_file() else None
@@ -211,7 +211,7 @@ def stiff_drive_path() -> Path | None:
 @timed
 def stiff_drive(settings: Settings) -> Family:
     """stiff_drive.toml: drive stiffness 1e4 ... 1e9 N/m x scheme."""
-    from cosim.validate import load_scene
+    from tribocosim.cosim.validate import load_scene
 
     title = "Stiff drive: drivetrain stiffness x scheme (stiff_drive.toml)"
     path = stiff_drive_path()
@@ -243,8 +243,8 @@ def stiff_drive(settings: Settings) -> Family:
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml through the master: nominal, P_N near p_crit, grip velocity 0, one step for the whole draw."""
-    from cosim.reports.accuracy import demo_scene_path
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reports.accuracy import demo_scene_path
+    from tribocosim.cosim.validate import load_scene
 
     title = "Demo scene through the master: extreme inputs x scheme"
     path = demo_scene_path()
@@ -318,9 +318,9 @@ def pull_force_scale(p, normal_force: float, velocity: float = 0.08) -> float:
 def strip_run(params: dict, pressure: float, profile: str, draw: float, integrator: str, step: float,
               budget: float = 120.0):
     """Run the pure model; return (verdict, info). ``step`` is the model step (the whole draw allowed)."""
-    from components.errors import TribocosimError
-    from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
-    from cosim.demo import DEFAULT_TABLE
+    from tribocosim.components.errors import TribocosimError
+    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+    from tribocosim.cosim.demo import DEFAULT_TABLE
 
     v0, ramp_time = 0.08, 0.01
     p = StripDrawParameters(draw_length=draw, integrator=integrator, **params)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.stripdraw.model import OUTPUT_NAMES
+from tribocosim.components.stripdraw.model import OUTPUT_NAMES
 
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
 #: the FMUs ``tribocosim fmu build`` builds, in its order
@@ -35,7 +35,7 @@ def built_fmus(tmp_path_factory) -> dict[str, Path]:
     """``tribocosim fmu build --out TMP`` (the command line, in a subprocess); ``{name: FMU file}``."""
     out = tmp_path_factory.mktemp("fmus")
     proc = subprocess.run(
-        [sys.executable, "-m", "cosim.cli", "fmu", "build", "--out", str(out)],
+        [sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--out", str(out)],
         cwd=PROJECT_ROOT,
         capture_output=True,
         text=True,

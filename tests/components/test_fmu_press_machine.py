@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from components.machine import MachineModel, MachineParameters
-from components.press import PressModel, PressParameters
+from tribocosim.components.machine import MachineModel, MachineParameters
+from tribocosim.components.press import PressModel, PressParameters
 
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
 FMI_DISCARD, FMI_ERROR = 2, 3
@@ -175,14 +175,14 @@ def test_every_unit_is_defined_with_its_si_base_units(fmu_description, fmu):
 
 @pytest.mark.parametrize("fmu", SPECS)
 def test_fmu_bundles_only_its_import_closure(built_fmus, fmu):
-    from components.fmus.build import runtime_files
+    from tribocosim.components.fmus.build import resource_paths
 
     with zipfile.ZipFile(built_fmus[fmu]) as z:
         names = set(z.namelist())
     ours = {n for n in names if n.startswith("resources/") and not n.startswith("resources/pythonfmu/")}
-    closure = {"resources/" + p.relative_to(PROJECT_ROOT).as_posix() for p in runtime_files(fmu)}
+    closure = {"resources/" + p for p in resource_paths(fmu)}
     assert ours == closure | {f"resources/{fmu}.py", "resources/slavemodule.txt"}
-    assert "resources/components/fmus/adapter.py" in ours
+    assert "resources/tribocosim/components/fmus/adapter.py" in ours
     assert not [n for n in ours if "stripdraw" in n or n.endswith(".npz")], "strip-draw model or table bundled"
 
 
@@ -406,7 +406,7 @@ _TOGETHER_SCRIPT = textwrap.dedent(
 
     fmus, order, n, h = json.loads(sys.argv[1]), json.loads(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
     s, vr, unzipped = {}, {}, {}
-    for name in order:  # the first one instantiated provides the `components` package
+    for name in order:  # the first one instantiated provides the `tribocosim` package
         md = read_model_description(fmus[name])
         unzipped[name] = str(extract(fmus[name]))
         s[name] = FMU2Slave(guid=md.guid, unzipDirectory=unzipped[name], modelIdentifier=name, instanceName=name)
@@ -432,7 +432,7 @@ _TOGETHER_SCRIPT = textwrap.dedent(
     print(json.dumps({
         "rows": rows,
         "unzipped": unzipped,
-        "files": {m: getattr(sys.modules[m], "__file__", None) for m in sys.modules if m.startswith("components")},
+        "files": {m: getattr(sys.modules[m], "__file__", None) for m in sys.modules if m.startswith("tribocosim")},
         "modules": sorted(sys.modules),
     }))
     """
@@ -440,7 +440,7 @@ _TOGETHER_SCRIPT = textwrap.dedent(
 
 
 def _coupled_models(n: int, h: float) -> np.ndarray:
-    from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 
     strip_p = StripDrawParameters()
     table = read_table(PROJECT_ROOT / "models" / "friction_table.npz")
@@ -460,7 +460,7 @@ def _coupled_models(n: int, h: float) -> np.ndarray:
 
 @pytest.mark.parametrize("order", [("StripDraw", "Press", "DrawingMachine"), ("DrawingMachine", "Press", "StripDraw")])
 def test_the_three_fmus_run_together_in_a_venv_with_only_numpy_and_fmpy(built_fmus, numpy_fmpy_venv, tmp_path, order):
-    """Each FMU bundles only what it imports, yet they share one ``components`` package in one
+    """Each FMU bundles only what it imports, yet they share one ``tribocosim`` package in one
     process (the first FMU's copy): each finds its own model modules in its own bundle."""
     python, env = numpy_fmpy_venv
     n, h = 150, 1e-3
@@ -474,12 +474,12 @@ def test_the_three_fmus_run_together_in_a_venv_with_only_numpy_and_fmpy(built_fm
     assert proc.returncode == 0, f"exit {proc.returncode}:\n{proc.stdout}\n{proc.stderr}"
     report = json.loads(proc.stdout.strip().splitlines()[-1])
     files, unzipped = report["files"], report["unzipped"]
-    assert files["components"].startswith(unzipped[order[0]]), "the first FMU provides the package"
-    for module, fmu in (("components.press", "Press"), ("components.machine", "DrawingMachine"),
-                        ("components.stripdraw.model", "StripDraw")):  # fmt: skip
+    assert files["tribocosim.components"].startswith(unzipped[order[0]]), "the first FMU provides the package"
+    for module, fmu in (("tribocosim.components.press", "Press"), ("tribocosim.components.machine", "DrawingMachine"),
+                        ("tribocosim.components.stripdraw.model", "StripDraw")):  # fmt: skip
         assert files[module].startswith(unzipped[fmu]), (module, files[module])
-    forbidden = ("numba", "scipy", "pyfftw", "matplotlib", "surrogate", "cosim")
-    heavy = [m for m in report["modules"] if m.split(".")[0] in forbidden]
+    forbidden = ("numba", "scipy", "pyfftw", "matplotlib", "tribocosim.surrogate", "tribocosim.cosim")
+    heavy = [m for m in report["modules"] if m.split(".")[0] in forbidden or m.startswith(forbidden[-2:])]
     assert heavy == [], heavy
     got, want = np.array(report["rows"]), _coupled_models(n, h)
     assert want[-1, 3] > 1000.0 and want[-1, 1] > 0.07, "the coupled run must draw"

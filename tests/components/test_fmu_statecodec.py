@@ -1,4 +1,4 @@
-"""components.fmus.statecodec: FMU-state bytes that restore nested numpy states bit-identically."""
+"""tribocosim.components.fmus.statecodec: FMU-state bytes that restore nested numpy states bit-identically."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from components.fmus import statecodec
+from tribocosim.components.fmus import statecodec
 
 
 def _same(a, b, path="state"):

@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from components.stripdraw.friction import make_friction_law
-from components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
-from components.stripdraw.parameters import StripDrawParameters, parameter_fields
-from components.stripdraw.table import read_table
+from tribocosim.components.stripdraw.friction import make_friction_law
+from tribocosim.components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
+from tribocosim.components.stripdraw.parameters import StripDrawParameters, parameter_fields
+from tribocosim.components.stripdraw.table import read_table
 
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
 TABLE = PROJECT_ROOT / "models" / "friction_table.npz"
@@ -128,16 +128,16 @@ def test_variables_follow_the_parameter_dataclass(stripdraw_fmu_description):
 def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     import zipfile
 
-    from components.fmus.build import runtime_files
+    from tribocosim.components.fmus.build import resource_paths
 
     with zipfile.ZipFile(stripdraw_fmu_file) as z:
         names = set(z.namelist())
         bundled_table = z.read("resources/friction_table.npz")
     ours = {n for n in names if n.startswith("resources/") and not n.startswith("resources/pythonfmu/")}
-    closure = {"resources/" + p.relative_to(PROJECT_ROOT).as_posix() for p in runtime_files("StripDraw")}
+    closure = {"resources/" + p for p in resource_paths("StripDraw")}
     assert ours == closure | {"resources/StripDraw.py", "resources/friction_table.npz", "resources/slavemodule.txt"}
     for module in ("errors", "fmus/statecodec", "stripdraw/model", "stripdraw/friction", "stripdraw/table"):
-        assert f"resources/components/{module}.py" in ours, module
+        assert f"resources/tribocosim/components/{module}.py" in ours, module
     assert bundled_table == TABLE.read_bytes()
     assert read_table(TABLE).provenance == "mesoscale"
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from components.linear import AffineInputPropagator, expm
+from tribocosim.components.linear import AffineInputPropagator, expm
 
 
 def test_expm_closed_forms():
@@ -35,7 +35,7 @@ def test_expm_is_accurate_entry_by_entry_on_a_badly_scaled_controller_matrix():
     """The drive's matrix mixes entries of 1e-3 and 4e13 (PI integral state in physical units);
     balancing keeps every entry of exp(A h) accurate (scipy's expm as the independent oracle)."""
     scipy_linalg = __import__("pytest").importorskip("scipy.linalg")
-    from components.machine import MachineModel, MachineParameters
+    from tribocosim.components.machine import MachineModel, MachineParameters
 
     prop = MachineModel(MachineParameters())._prop
     n = prop.A.shape[0]

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from components.machine import MachineModel, MachineParameters
-from components.press import PressModel, PressParameters
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.machine import MachineModel, MachineParameters
+from tribocosim.components.press import PressModel, PressParameters
 
 
 def test_press_holds_its_setpoint_in_steady_state():

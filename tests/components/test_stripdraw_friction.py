@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from components.stripdraw.friction import closed_form_law, closed_form_table, make_friction_law
-from components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.stripdraw.friction import closed_form_law, closed_form_table, make_friction_law
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
 
 def test_closed_form_limits():

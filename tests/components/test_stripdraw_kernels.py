@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.stripdraw import StripDrawModel, StripDrawParameters, kernels, make_friction_law
+from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, kernels, make_friction_law
 
 pytest.importorskip("numba")
 

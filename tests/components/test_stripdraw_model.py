@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
 
 PAD = 0.035
 P_N = 10e6

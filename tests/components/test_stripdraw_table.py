@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import TableDomainError, TableError
-from components.stripdraw.friction import closed_form_table
-from components.stripdraw.parameters import StripDrawParameters
-from components.stripdraw.table import FrictionTable, read_table, write_table
+from tribocosim.components.errors import TableDomainError, TableError
+from tribocosim.components.stripdraw.friction import closed_form_table
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
 
 
 def _trilinear_table():
@@ -97,8 +97,8 @@ def test_closed_form_table_says_where_it_comes_from():
 
 
 def test_make_table_writes_the_closed_form_but_never_over_the_shipped_table(tmp_path, capsys):
-    from components.paths import DEFAULT_TABLE
-    from components.stripdraw import make_table
+    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.components.stripdraw import make_table
 
     shipped = DEFAULT_TABLE.read_bytes()
     assert make_table.main([str(DEFAULT_TABLE)]) == 2

@@ -3,7 +3,7 @@
 import numpy as np
 from numpy.testing import assert_allclose
 
-from components.stripdraw.transport import advect_implicit, advect_implicit_numpy, advect_loop, archard_source
+from tribocosim.components.stripdraw.transport import advect_implicit, advect_implicit_numpy, advect_loop, archard_source
 
 
 def test_advection_moves_debris_backwards_at_zeta_times_slip_and_conserves_it():

@@ -7,7 +7,7 @@ strip, starting from the debris the first pass left, gives a lower mu_bar.
 
 import numpy as np
 
-from components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
+from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
 
 BASE = dict(friction_model="closed_form", draw_length=0.06, n_elements=120, window_courant=2.0)
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from cosim.reports.oscfmus import CONNECTIONS
+from tribocosim.cosim.reports.oscfmus import CONNECTIONS
 
 HERE = Path(__file__).resolve().parent
 SCRIPTS = HERE / "fmus"

@@ -13,8 +13,8 @@ rho >= 1.
 import numpy as np
 import pytest
 
-from components.errors import ConvergenceError
-from cosim import run
+from tribocosim.components.errors import ConvergenceError
+from tribocosim.cosim import run
 
 
 def loop_scene(make_scene, folder, fmu_dir, gain, algorithm="iterative", method="fixed-point", stop=0.01, step=0.01,

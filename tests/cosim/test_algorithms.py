@@ -11,15 +11,15 @@
 import numpy as np
 import pytest
 
-from cosim import run
-from cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
-from cosim.master import Master
-from cosim.recorder import Recorder
-from cosim.scene import Iterative, VariableRef
-from cosim.slave import OK
-from cosim.stepcontrol import FixedStep
-from cosim.system import CoupledSystem, LinkSpec
-from cosim.timegrid import TimeGrid
+from tribocosim.cosim import run
+from tribocosim.cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
+from tribocosim.cosim.master import Master
+from tribocosim.cosim.recorder import Recorder
+from tribocosim.cosim.scene import Iterative, VariableRef
+from tribocosim.cosim.slave import OK
+from tribocosim.cosim.stepcontrol import FixedStep
+from tribocosim.cosim.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.timegrid import TimeGrid
 
 SWEEPS = {0: [0.01, 0.005, 0.0025], 1: [0.02, 0.01, 0.005], 2: [0.04, 0.02, 0.01]}
 

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from fmpy.util import read_csv
 
-from cosim import demo, fmucache
+from tribocosim.cosim import demo, fmucache
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
     env = dict(os.environ, TRIBOCOSIM_CACHE=str(tmp_path / "cache"), MPLBACKEND="Agg")
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "cosim.cli", "demo", "--out", str(tmp_path / "demo")],
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "demo", "--out", str(tmp_path / "demo")],
                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     wall = time.perf_counter() - t0
     assert proc.returncode == 0, proc.stdout + proc.stderr

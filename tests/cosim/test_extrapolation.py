@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cosim.extrapolation import History, StepPolynomial, taylor_coefficients
+from tribocosim.cosim.extrapolation import History, StepPolynomial, taylor_coefficients
 
 
 @pytest.mark.parametrize("taus", [[0.0], [0.0, -0.1], [0.0, -0.1, -0.25], [0.3, 0.0, -0.05]])

@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 from fmpy.util import read_csv
 
-from components.errors import SceneError
-from cosim import fmucache
+from tribocosim.components.errors import SceneError
+from tribocosim.cosim import fmucache
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -51,12 +51,12 @@ def test_unknown_component_and_missing_builder_are_scene_errors(tmp_path, fmu_di
     with pytest.raises(SceneError, match="unknown component 'press'; this installation builds: Demo"):
         fmucache.component_fmu("press", cache=tmp_path)
     monkeypatch.undo()
-    import components.fmus
+    import tribocosim.components.fmus
 
     # the import fails: no module, and no attribute left by an earlier import in this session
-    monkeypatch.delattr(components.fmus, "build", raising=False)
-    monkeypatch.setitem(sys.modules, "components.fmus.build", None)
-    with pytest.raises(SceneError, match="FMU builder components.fmus.build is not available"):
+    monkeypatch.delattr(tribocosim.components.fmus, "build", raising=False)
+    monkeypatch.setitem(sys.modules, "tribocosim.components.fmus.build", None)
+    with pytest.raises(SceneError, match="FMU builder tribocosim.components.fmus.build is not available"):
         fmucache.component_fmu("stripdraw", cache=tmp_path)
 
 
@@ -69,7 +69,7 @@ def strip_run(tmp_path_factory):
         pytest.skip("the StripDraw builder (components/fmus/build.py) is not in this tree")
     folder = tmp_path_factory.mktemp("strip")
     env = dict(os.environ, TRIBOCOSIM_CACHE=str(folder / "cache"))
-    cmd = [sys.executable, "-m", "cosim.cli", "run", str(SCENE), "--out", str(folder / "out"),
+    cmd = [sys.executable, "-m", "tribocosim.cli", "run", str(SCENE), "--out", str(folder / "out"),
            "--set", "experiment.stop=0.02", "--set", 'fmus.strip.parameters.friction_model="constant"',
            "--set", "fmus.strip.parameters.mu_const=0.15"]
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600, cwd=str(ROOT))

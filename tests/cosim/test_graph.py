@@ -4,7 +4,7 @@ import itertools
 
 import numpy as np
 
-from cosim.graph import algebraic_loops, evaluation_order, gauss_seidel_order, strongly_connected
+from tribocosim.cosim.graph import algebraic_loops, evaluation_order, gauss_seidel_order, strongly_connected
 
 
 def _reach(n, edges):

@@ -9,7 +9,7 @@ nanoseconds; the step 0.01 s is exactly 10_000_000 ns.
 import numpy as np
 import pytest
 
-from cosim import run
+from tribocosim.cosim import run
 
 libcosimpy = pytest.importorskip("libcosimpy")
 from libcosimpy.CosimExecution import CosimExecution  # noqa: E402

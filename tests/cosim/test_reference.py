@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from cosim.reference import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
+from tribocosim.cosim.reference import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
 
 
 def test_closed_form_matches_scipy_and_the_issue_values(exact_t10):

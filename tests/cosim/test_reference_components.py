@@ -1,4 +1,4 @@
-"""cosim.reference_components: the monolithic reference of component scenes, and the parameter checks.
+"""tribocosim.cosim.reference_components: the monolithic reference of component scenes, and the parameter checks.
 
 The reference couples the pure models (StripDrawModel with the shipped table, PressModel,
 MachineModel) with a tiny step and the coupling solved every step; the co-simulation of the same
@@ -14,18 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.errors import SceneError
-from components.paths import DEFAULT_TABLE
-from components.stripdraw.table import read_table
-from cosim.api import run
-from cosim.reference_components import (
+from tribocosim.components.errors import SceneError
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw.table import read_table
+from tribocosim.cosim.api import run
+from tribocosim.cosim.reference_components import (
     ComponentModel,
     component_problems,
     load_component_scene,
     make_model,
     reference_for_scene,
 )
-from cosim.scene import parse_scene
+from tribocosim.cosim.scene import parse_scene
 
 DEMO = Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml"
 

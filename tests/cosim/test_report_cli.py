@@ -5,9 +5,9 @@ import json
 
 import pytest
 
-from cosim import report_cli
-from cosim.reports import accuracy, stability_report
-from cosim.reports.common import Family, timed
+from tribocosim.cosim import report_cli
+from tribocosim.cosim.reports import accuracy, stability_report
+from tribocosim.cosim.reports.common import Family, timed
 
 
 def test_accuracy_report_writes_markdown_csv_png_and_names_missing_pieces(tmp_path):
@@ -29,7 +29,7 @@ def test_accuracy_report_writes_markdown_csv_png_and_names_missing_pieces(tmp_pa
 
 def test_stability_report_matrix_with_reasons(tmp_path, monkeypatch):
     """The matrix, the verdict notes and the bisection lines, on a family with known content."""
-    from cosim.reports.stability import StepLimit, Verdict
+    from tribocosim.cosim.reports.stability import StepLimit, Verdict
 
     @timed
     def fake(settings):
@@ -70,7 +70,7 @@ def test_surrogate_family_reads_the_hold_out_result_of_bench_table(tmp_path):
     """The JSON format written by benchmarks/bench_table.py (issue 6): one row per grid."""
     from pathlib import Path
 
-    from cosim.reports.common import Settings
+    from tribocosim.cosim.reports.common import Settings
 
     data = {"holdout_points": 18, "load_before": "loadavg 1.0",
             "grids": [{"grid": g, "pressures_mpa": list(range(n_p)), "velocities": list(range(n_v)), "cases": c,

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from cosim.reports.metrics import cheapest_reaching, max_relative_error, relative_difference
+from tribocosim.cosim.reports.metrics import cheapest_reaching, max_relative_error, relative_difference
 
 
 def test_max_relative_error_is_the_largest_deviation_over_the_reference_range():

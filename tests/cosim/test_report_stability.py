@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from cosim.reports.stability import (ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, growth_bounds,
+from tribocosim.cosim.reports.stability import (ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, growth_bounds,
                                      growth_factor, largest_stable_step, swings)
 
 
@@ -144,17 +144,17 @@ def exact_limit():
 
 
 def test_monodromy_of_the_report_agrees_with_this_derivation():
-    from cosim.reports.monodromy import jacobi0_map
+    from tribocosim.cosim.reports.monodromy import jacobi0_map
 
     for h in (1e-5, 1.6e-4, 1e-3):
         np.testing.assert_allclose(jacobi0_map(h, K2), jacobi0_monodromy(h), rtol=1e-9, atol=1e-9)
 
 
 def test_jacobi_stability_limit_through_the_master_matches_the_exact_one_step_map(tmp_path, fmu_dir):
-    from cosim.reference import TwoMassOscillator
-    from cosim.reports.oscfmus import oscillator_scene
-    from cosim.reports.runner import judged_run
-    from cosim.validate import load_scene
+    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.reports.oscfmus import oscillator_scene
+    from tribocosim.cosim.reports.runner import judged_run
+    from tribocosim.cosim.validate import load_scene
 
     h_exact = exact_limit()
     assert 1.5e-4 < h_exact < 1.8e-4, h_exact  # ~1.667 / k2

@@ -6,9 +6,9 @@ import json
 import numpy as np
 from fmpy.util import read_csv
 
-from cosim import run
-from cosim.cli import main as tribocosim
-from cosim.recorder import Progress
+from tribocosim.cosim import run
+from tribocosim.cli import main as tribocosim
+from tribocosim.cosim.recorder import Progress
 
 
 def test_run_writes_csv_readable_by_fmpy_and_metadata(tmp_path, osc_scene, capsys):
@@ -67,3 +67,42 @@ def test_gauss_seidel_reports_the_cycle_it_breaks(tmp_path, osc_scene):
     assert gs["order"] == ["a", "b"] and gs["cycles"] == [["a", "b"]]
     assert gs["extrapolated_links"] == ["b.force -> a.force"]
     assert any("a -> b form a cycle" in n and "b.force -> a.force is extrapolated" in n for n in res.metadata["notes"])
+
+
+def test_run_of_fmu_files_imports_neither_numba_nor_the_mesoscale_code(tmp_path, osc_scene):
+    """``tribocosim run`` on a scene of FMU files, in a fresh interpreter: nothing heavy is imported."""
+    import subprocess
+    import sys
+
+    scene = osc_scene(tmp_path, stop=0.01, step=0.01)
+    script = (
+        "import sys\n"
+        "from tribocosim.cli import main\n"
+        f"assert main(['run', {str(scene)!r}, '--quiet']) == 0\n"
+        "heavy = ('numba', 'pyfftw', 'scipy', 'matplotlib', 'tribocosim.surrogate', 'tribocosim.components.stripdraw')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(heavy)))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "[]", proc.stdout
+
+
+def test_packaged_scenes_resolve_by_name_and_write_to_the_working_directory(tmp_path, monkeypatch):
+    from tribocosim.components.errors import SceneError
+    from tribocosim.components.paths import SCENES_DIR, packaged_scenes, scene_file
+    from tribocosim.cosim.api import default_out_dir
+
+    assert {"demo", "pressure_sweep", "multipass"} <= set(packaged_scenes())
+    assert scene_file("demo") == SCENES_DIR / "demo.toml" == scene_file("demo.toml")
+    monkeypatch.chdir(tmp_path)
+    assert default_out_dir(scene_file("demo")) == tmp_path / "demo", "never into the installed package"
+    mine = tmp_path / "demo.toml"
+    mine.write_text("")
+    assert scene_file("demo.toml").resolve() == mine, "a file in the working directory wins"
+    assert default_out_dir(mine) == tmp_path
+    try:
+        scene_file("nope")
+    except SceneError as exc:
+        assert "scene file not found: nope" in str(exc) and "demo" in str(exc)
+    else:
+        raise AssertionError("an unknown scene name must be refused")

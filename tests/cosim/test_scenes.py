@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.errors import SceneError
-from components.paths import DEFAULT_TABLE
-from components.stripdraw.table import read_table
-from cosim.api import run
-from cosim.cli import main as tribocosim
-from cosim.reference_components import load_component_scene, steady_ratio
-from cosim.sweep import load_sweep, run_sweep
+from tribocosim.components.errors import SceneError
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw.table import read_table
+from tribocosim.cosim.api import run
+from tribocosim.cli import main as tribocosim
+from tribocosim.cosim.reference_components import load_component_scene, steady_ratio
+from tribocosim.cosim.sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
 DEMO = SCENES / "demo.toml"
@@ -203,7 +203,7 @@ def test_impossible_parameters_stop_before_running_naming_scene_instance_and_par
 
 
 def test_initial_debris_above_the_tables_cap_is_refused(tmp_path):
-    from components.stripdraw import StripDrawParameters, closed_form_table, write_table
+    from tribocosim.components.stripdraw import StripDrawParameters, closed_form_table, write_table
 
     closed = tmp_path / "closed.npz"
     table = closed_form_table(StripDrawParameters())
@@ -217,7 +217,7 @@ def test_initial_debris_above_the_tables_cap_is_refused(tmp_path):
 
 
 def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
-    from components.stripdraw import StripDrawParameters, closed_form_table, write_table
+    from tribocosim.components.stripdraw import StripDrawParameters, closed_form_table, write_table
 
     small = tmp_path / "small.npz"
     write_table(small, closed_form_table(StripDrawParameters(), velocity=np.linspace(0.0, 1.0, 5)))
@@ -266,3 +266,32 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
     np.testing.assert_allclose(it["strip.pull_force"][-1], pull[-1], rtol=0.1, err_msg="iterative at 1 ms")
     ref = np.interp(it.time, small.time, pull)
     assert np.max(np.abs(it["strip.pull_force"] - ref)) < 0.1 * pull[-1]
+
+
+def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(tmp_path):
+    """The case key covers the bytes of the files the scene's parameters name (here a friction
+    table) and of the FMUs: a changed table runs the case again."""
+    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.components.stripdraw.table import read_table, write_table
+
+    table = tmp_path / "my_table.npz"
+    write_table(table, read_table(DEFAULT_TABLE))
+    path = cheap_sweep(tmp_path, "t.toml", f"""
+        workers = 1
+        [sweep.variables]
+        pressure_mpa = [10]
+        [sweep.set]
+        "fmus.strip.parameters.table_file" = "{table}"
+        [sweep.summary]
+        mu_bar = {{ mean = "strip.pull_force / (2 * press.normal_force)", last = 0.2 }}
+        """)
+    first = run_sweep(path, tmp_path / "out")
+    summary = tmp_path / "out" / "cases" / "case-000" / "summary.json"
+    stamp = summary.stat().st_mtime_ns
+    run_sweep(path, tmp_path / "out")
+    assert summary.stat().st_mtime_ns == stamp, "unchanged: reused"
+    t = read_table(table)
+    write_table(table, type(t)(t.pressure, t.velocity, t.beta, 0.5 * t.mu, t.metadata))
+    second = run_sweep(path, tmp_path / "out")
+    assert summary.stat().st_mtime_ns != stamp, "a changed table must run the case again"
+    assert second.rows[0]["mu_bar"] == pytest.approx(0.5 * first.rows[0]["mu_bar"], rel=0.05)

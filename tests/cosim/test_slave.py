@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from components.errors import CosimStepError
-from cosim.api import extracted_fmu
-from cosim.slave import DISCARD, OK, FmpySlave, Slave
+from tribocosim.components.errors import CosimStepError
+from tribocosim.cosim.api import extracted_fmu
+from tribocosim.cosim.slave import DISCARD, OK, FmpySlave, Slave
 
 
 @pytest.fixture

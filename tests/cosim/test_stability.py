@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from cosim import run
-from cosim.api import build
-from cosim.extrapolation import History
-from cosim.reports.oscfmus import CONNECTIONS
-from cosim.validate import load_scene
+from tribocosim.cosim import run
+from tribocosim.cosim.api import build
+from tribocosim.cosim.extrapolation import History
+from tribocosim.cosim.reports.oscfmus import CONNECTIONS
+from tribocosim.cosim.validate import load_scene
 
 K2 = 1e5
 STATE = ("a.x1", "a.v1", "b.x2", "b.v2")

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from components.errors import CosimStepError
-from cosim import run
-from cosim.reference import TwoMassOscillator, coupling_error
+from tribocosim.components.errors import CosimStepError
+from tribocosim.cosim import run
+from tribocosim.cosim.reference import TwoMassOscillator, coupling_error
 
 BOND = """
 [[power_bonds]]

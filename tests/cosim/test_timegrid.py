@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from components.errors import ParameterError
-from cosim.timegrid import FIXED_SUBDIVISION, TimeGrid
+from tribocosim.components.errors import ParameterError
+from tribocosim.cosim.timegrid import FIXED_SUBDIVISION, TimeGrid
 
 
 def test_fixed_grid_hits_multiples_of_the_step_exactly():

@@ -2,8 +2,8 @@
 
 import pytest
 
-from components.errors import SceneError
-from cosim import load_scene
+from tribocosim.components.errors import SceneError
+from tribocosim.cosim import load_scene
 
 
 def _problems(path):

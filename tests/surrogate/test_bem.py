@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ConvergenceError, ParameterError
-from surrogate.bem import ContactResult, ContactSolver, gap_against_flat
-from surrogate.fft import RFFT2Pair, export_wisdom, import_wisdom
-from surrogate.reference_solutions import (hertz_contact_radius, hertz_peak_pressure,
+from tribocosim.components.errors import ConvergenceError, ParameterError
+from tribocosim.surrogate.bem import ContactResult, ContactSolver, gap_against_flat
+from tribocosim.surrogate.fft import RFFT2Pair, export_wisdom, import_wisdom
+from tribocosim.surrogate.reference_solutions import (hertz_contact_radius, hertz_peak_pressure,
                                            projected_gradient_contact, rigid_plastic_paraboloid,
                                            westergaard_full_contact_pressure,
                                            westergaard_half_width, westergaard_traction)
-from surrogate.surfaces import rms_slope, self_affine_surface
+from tribocosim.surrogate.surfaces import rms_slope, self_affine_surface
 
 # --------------------------------------------------------------------------- fixtures
 WL, WE, WG0, WN = 1e-3, 1e9, 1e-6, 256  # Westergaard: period, E*, amplitude, grid

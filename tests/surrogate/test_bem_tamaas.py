@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from surrogate.bem import ContactSolver, gap_against_flat
-from surrogate.surfaces import self_affine_surface
+from tribocosim.surrogate.bem import ContactSolver, gap_against_flat
+from tribocosim.surrogate.surfaces import self_affine_surface
 
 tm = pytest.importorskip("tamaas")
 

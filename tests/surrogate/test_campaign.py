@@ -17,11 +17,11 @@ from pathlib import Path
 
 import pytest
 
-from components.errors import ParameterError
-from surrogate.campaign import (Case, CampaignStore, Progress, case_id, expand_cases, load_records,
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.campaign import (Case, CampaignStore, Progress, case_id, expand_cases, load_records,
                                 run_campaign)
-from surrogate.executors import ProcessPoolCaseExecutor
-from surrogate.sweep import load_preset, parse_sweep
+from tribocosim.surrogate.executors import ProcessPoolCaseExecutor
+from tribocosim.surrogate.sweep import load_preset, parse_sweep
 
 #: a 16^2 sweep of 2 P x 2 v x (particle-free + 3 seeds) that runs in seconds (shared with the
 #: executor and CLI tests; the line numbers of its keys are asserted below)
@@ -137,7 +137,7 @@ def test_campaign_killed_with_sigkill_resumes_and_computes_every_case_once(tmp_p
     sweep_file = tmp_path / "sweep.toml"
     sweep_file.write_text(RESUME)
     out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "surrogate.surrogate_cli", "build", "--sweep", str(sweep_file),
+    cmd = [sys.executable, "-m", "tribocosim.surrogate.surrogate_cli", "build", "--sweep", str(sweep_file),
            "--out", str(out), "--workers", "1", "--no-table", "--quiet"]
     total = len(expand_cases(parse_sweep(RESUME)))
     log1, log2 = tmp_path / "computed1.log", tmp_path / "computed2.log"

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from surrogate.clusters import cluster_statistics, contact_clusters, count_summits
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.clusters import cluster_statistics, contact_clusters, count_summits
 
 
 def _mask(n, *blocks):

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
+from tribocosim.surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
                                 modified_tool, particle_area_fraction, run_slide)
-from components.errors import ParameterError
-from surrogate import dem
-from surrogate.dem import DemState, FlakeShape
-from surrogate.flakes import Footprint, footprints
-from surrogate.slide_config import SlideConfig
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate import dem
+from tribocosim.surrogate.dem import DemState, FlakeShape
+from tribocosim.surrogate.flakes import Footprint, footprints
+from tribocosim.surrogate.slide_config import SlideConfig
 
 SHAPE = FlakeShape(12e-6, 0.5e-6)
 N, L = 32, 32e-6  # dx = 1 um: the flake spans 12 pixels
@@ -209,7 +209,7 @@ def test_real_contact_step_puts_the_tool_on_the_deformed_sheet():
 
 
 def test_pinched_flake_is_detected_only_when_both_surfaces_cut_in():
-    from surrogate.coupling import pinched
+    from tribocosim.surrogate.coupling import pinched
 
     fps = footprints(CENTRE, FLAT, SHAPE, N, L)
     limit = 0.1 * SHAPE.thickness
@@ -256,7 +256,7 @@ def test_real_solve_with_a_blocked_flake_gives_particle_area():
 
 
 def test_blow_up_in_the_loop_names_sliding_step_and_flake():
-    from surrogate.dem import DemBlowUpError
+    from tribocosim.surrogate.dem import DemBlowUpError
 
     cfg = small_config(n_slide_steps=1)
     sim = SlideSimulation(cfg, solver=FlatPunchSolver(cfg.p_crit),
@@ -269,7 +269,7 @@ def test_blow_up_in_the_loop_names_sliding_step_and_flake():
 def test_attached_flake_is_pixel_consistent_with_the_bilinear_dem_surfaces():
     """A sheet dented to the attached flake's rasterised lower face (what the solve does) and the
     tool above its rasterised upper face do not cut the flake between pixels in the DEM."""
-    from surrogate import dem
+    from tribocosim.surrogate import dem
 
     pos = np.array([[16.3e-6, 15.8e-6, 0.0]])
     quat = [list(np.r_[np.cos(0.02), np.sin(0.02) * np.array([0.6, 0.8, 0.0])])]

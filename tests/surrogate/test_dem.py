@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from surrogate import dem
-from surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape
-from surrogate.flakes import axis_angle_quaternion, rotation_matrices
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate import dem
+from tribocosim.surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape
+from tribocosim.surrogate.flakes import axis_angle_quaternion, rotation_matrices
 
 L = 100e-6
 N = 32

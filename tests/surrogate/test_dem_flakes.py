@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from surrogate.dem import FlakeShape
-from surrogate.flakes import (axis_angle_quaternion, footprints, random_placement,
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.dem import FlakeShape
+from tribocosim.surrogate.flakes import (axis_angle_quaternion, footprints, random_placement,
                               rotation_matrices)
 
 SHAPE = FlakeShape(12e-6, 0.5e-6)

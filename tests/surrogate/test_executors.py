@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.errors import ParameterError
-from surrogate.campaign import expand_cases, load_records, run_campaign
-from surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, make_executor
-from surrogate.sweep import parse_sweep
-from surrogate.table_build import build_table
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.campaign import expand_cases, load_records, run_campaign
+from tribocosim.surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, make_executor
+from tribocosim.surrogate.sweep import parse_sweep
+from tribocosim.surrogate.table_build import build_table
 
 distributed = pytest.importorskip("distributed")
 

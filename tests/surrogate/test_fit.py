@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from surrogate.fit import (alpha_law, ensemble, fit_all, fit_alpha, fit_alpha_law, fit_contact,
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.fit import (alpha_law, ensemble, fit_all, fit_alpha, fit_alpha_law, fit_contact,
                            fit_through_origin)
 
 E_STAR, P_CRIT = 55e9, 340e6

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from surrogate import meso_cli
-from surrogate.surfaces import rms_slope
+from tribocosim.surrogate import meso_cli
+from tribocosim.surrogate.surfaces import rms_slope
 
 CONTACT_KEYS = {"pressure", "contact_area_fraction", "mean_gap", "n_clusters",
                 "mean_cluster_distance", "max_traction", "iterations", "residual", "converged",
@@ -75,7 +75,7 @@ def test_slide_is_dispatched_lazily(monkeypatch, capsys):
     real = importlib.import_module
 
     def fake(name, *a, **k):
-        if name == "surrogate.slide_cli":
+        if name == "tribocosim.surrogate.slide_cli":
             raise ImportError("no module")
         return real(name, *a, **k)
 

@@ -13,10 +13,10 @@ import json
 import numpy as np
 import pytest
 
-from components.paths import DEFAULT_TABLE
-from components.stripdraw.table import read_table
-from surrogate.campaign import expand_cases, run_case
-from surrogate.sweep import load_preset
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw.table import read_table
+from tribocosim.surrogate.campaign import expand_cases, run_case
+from tribocosim.surrogate.sweep import load_preset
 
 
 @pytest.fixture(scope="module")

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from components.errors import ParameterError
-from surrogate import slide_cli
-from surrogate.slide_config import SlideConfig
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate import slide_cli
+from tribocosim.surrogate.slide_config import SlideConfig
 
 
 def test_config_defaults_match_model_and_beta():

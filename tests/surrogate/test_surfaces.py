@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import ParameterError
-from surrogate.surfaces import (load_height_map, radial_psd, rms_height, rms_slope,
+from tribocosim.components.errors import ParameterError
+from tribocosim.surrogate.surfaces import (load_height_map, radial_psd, rms_height, rms_slope,
                                 self_affine_surface)
 
 L = 500e-6

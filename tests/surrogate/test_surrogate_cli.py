@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.stripdraw.table import read_table
-from cosim.cli import main as tribocosim
-from surrogate import surrogate_cli
+from tribocosim.components.stripdraw.table import read_table
+from tribocosim.cli import main as tribocosim
+from tribocosim.surrogate import surrogate_cli
 
 TINY = ((Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-cli"')
         + "beta_extension = 2\n")

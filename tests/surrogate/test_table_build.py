@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from components.errors import TableError
-from components.stripdraw.table import FrictionTable, read_table, write_table
-from surrogate.campaign import expand_cases
-from surrogate.fit import alpha_law
-from surrogate.sweep import parse_sweep
-from surrogate.table_build import build_table, compare_tables, describe, plot_table, surface_statistics
+from tribocosim.components.errors import TableError
+from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
+from tribocosim.surrogate.campaign import expand_cases
+from tribocosim.surrogate.fit import alpha_law
+from tribocosim.surrogate.sweep import parse_sweep
+from tribocosim.surrogate.table_build import build_table, compare_tables, describe, plot_table, surface_statistics
 
 E_STAR, P_CRIT = 55e9, 340e6
 B, VREF = 300.0, 4.0  # beta_thres = E*/(p_crit b) = 0.54 < 1
@@ -242,7 +242,7 @@ def test_compare_tables_against_recorded_std(built):
 
 
 def test_out_of_range_queries_follow_the_recorded_policy(built):
-    from components.errors import TableDomainError
+    from tribocosim.components.errors import TableDomainError
 
     _, _, t, _ = built
     assert t.metadata["out_of_range_policy"].startswith("clamp")

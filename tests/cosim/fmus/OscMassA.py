@@ -13,8 +13,8 @@ import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
-from components.fmus.adapter import RealWithUnit, add_unit_definitions
-from components.linear import expm
+from tribocosim.components.fmus.adapter import RealWithUnit, add_unit_definitions
+from tribocosim.components.linear import expm
 
 
 class OscMassA(Fmi2Slave):

@@ -11,12 +11,12 @@ import sys
 
 #: subcommand -> (module providing ``main(argv)``, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("cosim.demo", "run the default strip-draw case and print mu_bar"),
-    "run": ("cosim.run_cli", "run a co-simulation scene (TOML)"),
-    "report": ("cosim.report_cli", "error-vs-run-time and stability reports"),
-    "fmu": ("components.fmus.cli", "build the project's FMUs"),
-    "meso": ("surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
-    "surrogate": ("surrogate.surrogate_cli", "campaigns and the friction table"),
+    "demo": ("tribocosim.cosim.demo", "run the default strip-draw case and print mu_bar"),
+    "run": ("tribocosim.cosim.run_cli", "run a co-simulation scene (TOML)"),
+    "report": ("tribocosim.cosim.report_cli", "error-vs-run-time and stability reports"),
+    "fmu": ("tribocosim.components.fmus.cli", "build the project's FMUs"),
+    "meso": ("tribocosim.surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
+    "surrogate": ("tribocosim.surrogate.surrogate_cli", "campaigns and the friction table"),
 }
 
 

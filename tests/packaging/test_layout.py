@@ -1,0 +1,46 @@
+"""The distribution's layout: one import name, every subpackage listed, package data, a lazy top level."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import tribocosim
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_every_source_folder_with_an_init_is_a_listed_package():
+    cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    mapping = cfg["package-dir"]
+    listed = set(cfg["packages"])
+    expected = set()
+    for name, folder in mapping.items():
+        for init in (ROOT / folder).rglob("__init__.py"):
+            rel = init.parent.relative_to(ROOT / folder)
+            expected.add(".".join([name, *rel.parts]))
+    assert expected == listed, f"pyproject packages: missing {sorted(expected - listed)}, extra {sorted(listed - expected)}"
+    assert all(p == "tribocosim" or p.startswith("tribocosim.") for p in listed), "one import name"
+
+
+def test_package_data_is_found_through_the_package():
+    from tribocosim.components.paths import DEFAULT_TABLE, SCENES_DIR
+
+    assert DEFAULT_TABLE.is_file() and (SCENES_DIR / "demo.toml").is_file()
+    table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)
+    assert table.provenance == "mesoscale"
+
+
+def test_import_tribocosim_is_lazy_and_offers_the_public_api():
+    script = ("import sys, tribocosim\n"
+              "assert not [m for m in sys.modules if m.startswith('tribocosim.')], sorted(sys.modules)\n"
+              "print(tribocosim.run.__module__, tribocosim.StripDrawModel.__module__)\n"
+              "print('numba' in sys.modules)\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    mods, numba = proc.stdout.split("\n")[:2]
+    assert mods == "tribocosim.cosim.api tribocosim.components.stripdraw.model"
+    assert numba == "True", "the model's kernels use numba when it is installed"
+    assert set(tribocosim.__all__) >= {"run", "StripDrawModel", "StripDrawParameters", "read_table", "FrictionTable"}
