@@ -1,0 +1,45 @@
+/* Shared definitions of the native runtime models (C11, standard library only).
+ *
+ * Status codes: every function that can fail returns one of them and writes a message that names the
+ * quantity, its value and what is allowed into the caller's buffer (tc_msg). A function that returns
+ * TC_DISCARD has left its object's state unchanged. No global mutable state: everything an instance
+ * needs lives in its own struct.
+ */
+#ifndef TC_COMMON_H
+#define TC_COMMON_H
+
+#include <stddef.h>
+
+/* TC_API marks the core functions; they are exported from the library only in test builds
+ * (-DTC_EXPORT_CORE), where Python calls them through ctypes. An FMU exports the fmi2 functions only. */
+#if defined(TC_EXPORT_CORE)
+#  if defined(_WIN32)
+#    define TC_API __declspec(dllexport)
+#  else
+#    define TC_API __attribute__((visibility("default")))
+#  endif
+#else
+#  define TC_API
+#endif
+
+enum tc_status {
+    TC_OK = 0,
+    TC_DISCARD = 1, /* a bad input or a step that cannot be taken; the state is unchanged */
+    TC_ERROR = 2,   /* a bad parameter, table or state: the object cannot be used as asked */
+    TC_NOMEM = 3    /* an allocation failed */
+};
+
+/* A message buffer: the text and its capacity (including the terminating NUL). */
+typedef struct tc_msg {
+    char *text;
+    size_t size;
+} tc_msg;
+
+/* printf-style message into msg (truncated to fit); returns status, so that `return tc_fail(...)` reads well. */
+int tc_fail(tc_msg msg, int status, const char *fmt, ...)
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+#endif

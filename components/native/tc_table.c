@@ -1,0 +1,65 @@
+/* The friction table in memory: construction from arrays (with the checks of table.py) and release. */
+#include "tc_table.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int check_axis(const char *name, const double *a, size_t n, int nonnegative, tc_msg msg) {
+    if (n < 1) return tc_fail(msg, TC_ERROR, "table axis %s must be a non-empty 1-D array", name);
+    for (size_t i = 0; i < n; ++i) {
+        if (!isfinite(a[i])) return tc_fail(msg, TC_ERROR, "table axis %s has non-finite values", name);
+        if (i > 0 && !(a[i] > a[i - 1]))
+            return tc_fail(msg, TC_ERROR, "table axis %s must be strictly increasing", name);
+    }
+    if (nonnegative && a[0] < 0)
+        return tc_fail(msg, TC_ERROR, "table axis %s starts at %.17g; it must be >= 0", name, a[0]);
+    return TC_OK;
+}
+
+static double *copy_array(const double *src, size_t n) {
+    double *dst = malloc(n * sizeof *dst);
+    if (dst != NULL) memcpy(dst, src, n * sizeof *dst);
+    return dst;
+}
+
+void tc_table_free(tc_table *table) {
+    if (table == NULL) return;
+    free(table->pressure);
+    free(table->velocity);
+    free(table->beta);
+    free(table->mu);
+    free(table);
+}
+
+int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_beta, const double *pressure,
+                         const double *velocity, const double *beta, const double *mu, double beta_threshold,
+                         tc_table **out, tc_msg msg) {
+    int rc;
+    *out = NULL;
+    if ((rc = check_axis("pressure", pressure, n_pressure, 0, msg)) != TC_OK) return rc;
+    if ((rc = check_axis("velocity", velocity, n_velocity, 1, msg)) != TC_OK) return rc;
+    if ((rc = check_axis("beta", beta, n_beta, 1, msg)) != TC_OK) return rc;
+    size_t n = n_pressure * n_velocity * n_beta;
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(mu[i]) || mu[i] < 0) return tc_fail(msg, TC_ERROR, "table mu must be finite and >= 0 everywhere");
+    if (!(beta_threshold > 0 && beta_threshold <= 1))
+        return tc_fail(msg, TC_ERROR, "table metadata beta_threshold = %.17g; a value in (0, 1] is required",
+                       beta_threshold);
+    tc_table *t = calloc(1, sizeof *t);
+    if (t == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
+    t->n_pressure = n_pressure;
+    t->n_velocity = n_velocity;
+    t->n_beta = n_beta;
+    t->pressure = copy_array(pressure, n_pressure);
+    t->velocity = copy_array(velocity, n_velocity);
+    t->beta = copy_array(beta, n_beta);
+    t->mu = copy_array(mu, n);
+    t->beta_threshold = beta_threshold;
+    if (!t->pressure || !t->velocity || !t->beta || !t->mu) {
+        tc_table_free(t);
+        return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
+    }
+    *out = t;
+    return TC_OK;
+}
