@@ -9,13 +9,15 @@ One small hierarchy so that callers can catch what they can handle:
 - ``TableDomainError`` (also a ``ValueError``): a friction-table lookup outside the table's axes
   under the ``error`` policy.
 - ``ConvergenceError``: an iterative solver did not reach its tolerance.
-- ``SceneError``: a co-simulation scene file with problems (all of them in one message).
+- ``SceneError``: a co-simulation scene or sweep file with problems: all of them, each a
+  :class:`Problem` (file, key, message), in ``.problems`` and in one message.
 - ``CosimStepError``: a co-simulation step that failed (names FMU, variable and time).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 
 class TribocosimError(Exception):
@@ -38,8 +40,34 @@ class ConvergenceError(TribocosimError):
     """An iterative solver did not converge to its tolerance."""
 
 
+@dataclass(frozen=True)
+class Problem:
+    """One problem of a scene or sweep file: the file, the dotted key, what is wrong."""
+
+    file: str
+    key: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.file}: {self.key}: {self.message}"
+
+
 class SceneError(TribocosimError):
-    """A scene file has one or more problems."""
+    """A scene or sweep file has one or more problems.
+
+    ``SceneError(problems, what)`` with a list of :class:`Problem` and what was read (``"scene
+    PATH"``); the message is ``"N problem(s) in WHAT:"`` and one line per problem. A plain
+    message string is also accepted (``problems`` is then empty).
+    """
+
+    def __init__(self, problems, what: str = "") -> None:
+        if isinstance(problems, str):
+            self.problems: list[Problem] = []
+            super().__init__(problems)
+            return
+        self.problems = list(problems)
+        n = len(self.problems)
+        super().__init__(f"{n} problem{'s' if n != 1 else ''} in {what}:\n  " + "\n  ".join(map(str, self.problems)))
 
 
 class CosimStepError(TribocosimError):

@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.paths import DEFAULT_TABLE
 
 
 def run_strip_draw(
@@ -32,7 +31,6 @@ def run_strip_draw(
     draw_length: float = 0.14,
     step: float = 1e-3,
     ramp_time: float = 0.01,
-    table_file=DEFAULT_TABLE,
     **parameters,
 ):
     """Run one strip draw with the pure model; return (time, outputs per step, model).
@@ -51,17 +49,15 @@ def run_strip_draw(
         Output step [s].
     ramp_time : float
         Time over which the grip velocity ramps up [s].
-    table_file : path
-        Friction table (used when ``friction_model`` is ``table``, the default).
     **parameters
-        Further :class:`StripDrawParameters` fields.
+        Further parameters of the StripDraw component: :class:`StripDrawParameters` fields and its
+        files (``table_file``: default the shipped table).
     """
-    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
+    from tribocosim.components.stripdraw.component import COMPONENT
 
-    p = StripDrawParameters(tool_length=tool_length, draw_length=draw_length, **parameters)
-    table = read_table(table_file) if p.friction_model == "table" else None
-    model = StripDrawModel(p, make_friction_law(p, table))
-    normal_force = pressure * p.tool_length * p.tool_width
+    model = COMPONENT.make({"tool_length": tool_length, "draw_length": draw_length, **parameters}).model
+    p = model.params
+    normal_force = p.normal_force(pressure)
     t_end = draw_length / velocity + 0.5 * ramp_time
     n = int(round(t_end / step))
     times = step * np.arange(1, n + 1)
@@ -85,8 +81,9 @@ def demo_scene() -> Path:
     return SCENES_DIR / "demo.toml"
 
 
-def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print) -> dict[str, Path]:
-    """Find the components' FMUs in the cache, building the missing ones; ``{component: path}``.
+def ensure_fmus(components=None, echo=print) -> dict[str, Path]:
+    """Find the components' FMUs in the cache, building the missing ones; ``{component: path}``
+    (default: the components of the demo scene).
 
     Raises
     ------
@@ -94,7 +91,10 @@ def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print)
         Saying which FMU could not be built and why (the builder's message).
     """
     from tribocosim.cosim.fmucache import cache_dir, component_fmu
+    from tribocosim.cosim.scene import parse_scene
 
+    if components is None:
+        components = [s.component for s in parse_scene(demo_scene())[0].fmus.values() if s.component]
     found = {}
     for comp in components:
         before = set(cache_dir().glob("*/*.fmu")) if cache_dir().is_dir() else set()
@@ -103,6 +103,13 @@ def ensure_fmus(components=("press", "stripdraw", "drawingmachine"), echo=print)
         if found[comp] not in before:
             echo(f"built {found[comp].name} into the FMU cache {cache_dir()} ({time.perf_counter() - t0:.1f} s)")
     return found
+
+
+def strip_parameters(scene, instance: str = "strip"):
+    """The StripDrawParameters of a scene's strip instance."""
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    return COMPONENT.split(scene.fmus[instance].parameters)[0]
 
 
 def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | None = None, overrides=None,
@@ -128,12 +135,10 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     if pressure is not None or tool_length is not None:
         from tribocosim.cosim.scene import parse_scene
 
-        scene, _ = parse_scene(demo_scene())
-        strip = scene.fmus["strip"].parameters
-        length = tool_length if tool_length is not None else strip.get("tool_length", 0.035)
-        p = pressure if pressure is not None else scene.fmus["press"].parameters["force_setpoint"] / (
-            strip.get("tool_length", 0.035) * strip.get("tool_width", 0.035))
-        over["fmus.press.parameters.force_setpoint"] = p * length * strip.get("tool_width", 0.035)
+        base, _ = parse_scene(demo_scene())
+        p = pressure if pressure is not None else strip_parameters(base).pressure(
+            base.fmus["press"].parameters["force_setpoint"])
+        over["fmus.press.parameters.force_setpoint"] = strip_parameters(parse_scene(demo_scene(), over)[0]).normal_force(p)
     over.update(overrides or {})
     plan = load_component_scene(demo_scene(), over)
     result = run(plan, out)
@@ -146,8 +151,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
         "mu_mean_strip": float(np.mean(result["strip.mu_mean"][steady])),
         "press_error": float(np.max(np.abs(fn[steady] - fset[steady]) / fset[steady])),
         "velocity_error": float(np.max(np.abs(vg[steady] - vset[steady]) / np.abs(vset[steady]))),
-        "pressure": float(fset[-1] / (plan.scene.fmus["strip"].parameters.get("tool_length", 0.035)
-                                      * plan.scene.fmus["strip"].parameters.get("tool_width", 0.035))),
+        "pressure": float(strip_parameters(plan.scene).pressure(fset[-1])),
         "sliding_distance": float(result["strip.sliding_distance"][-1]),
         "beta_mean_end": float(result["strip.beta_mean"][-1]),
         "field_file": str(field_file),

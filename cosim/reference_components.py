@@ -1,227 +1,104 @@
 """Scenes built from this project's components: parameter checks and the monolithic reference.
 
-A scene FMU given as ``component = "stripdraw" | "press" | "drawingmachine"`` is this project's
-FMU of a pure model (:mod:`components`). For such scenes this module
+A scene FMU given as ``component = "<name>"`` is the FMU of a component of
+:mod:`tribocosim.components.registry`, whose description
+(:class:`~tribocosim.components.description.Component`) this module reads to
 
-- checks the parameters against the model's parameter dataclass before anything runs
-  (:func:`component_problems`, :func:`check_component_scene`): the FMUs declare min/max for
-  Reals, which :mod:`tribocosim.cosim.validate` checks, but no choices for Strings (``friction_model =
-  "tabel"``), no cross-field rules (a malformed press ``setpoint_table``) and nothing that spans
-  instances: a press set-point whose nominal pressure on the connected strip's pad lies outside
-  the friction table's pressure axis, a drive velocity outside its velocity axis, an initial
-  debris field above the table's cap, a ``field_input`` file that does not exist. Every problem
-  is one line ``file: fmus.INSTANCE.parameters.NAME: message``, all in one SceneError;
-- builds the monolithic reference (:func:`reference_for_scene`): each component instance becomes
-  its pure model (``StripDrawModel`` with the table read through
-  :func:`tribocosim.components.stripdraw.table.read_table`, ``PressModel``, ``MachineModel``) with the
-  scene's parameters, connected as the scene connects the FMUs, unconnected inputs held at their
-  scene value (a parameter of the input's name) or else the FMU's start value, stepped by
-  :class:`tribocosim.cosim.reference.CoupledModels` with a tiny step and the coupling solved every step.
-  Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
+- check the parameters before anything runs (:func:`component_problems`): the FMUs declare
+  min/max for Reals, which :mod:`tribocosim.cosim.validate` checks, but no choices for Strings
+  (``friction_model = "tabel"``), no cross-field rules (a malformed press ``setpoint_table``) and
+  nothing that spans instances. Each parameter is checked against its dataclass, then the
+  component's own ``check`` runs (e.g. the strip's table and field file, the cap of beta), and
+  every connection from an output with known set-points (``setpoints``: the press's force, the
+  drive's speed) to an input with limits (from ``check``: the strip's table axes) is matched;
+- build the monolithic reference (:func:`reference_for_scene`): each component instance becomes
+  its pure model (``Component.make``, the same function the FMU calls) with the scene's
+  parameters, connected as the scene connects the FMUs, unconnected inputs held at their scene
+  value (a parameter of the input's name) or else the FMU's start value, stepped by
+  :class:`tribocosim.cosim.reference.CoupledModels` with a tiny step and the coupling solved every
+  step. Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
 
-This is, with :mod:`tribocosim.cosim.fmucache`, where :mod:`cosim` imports :mod:`components`
-(ARCHITECTURE.md: "nothing in cosim/ imports components/ except the reference solution and
-scene helpers"); the imports are lazy.
+This is, with :mod:`tribocosim.cosim.fmucache`, where :mod:`tribocosim.cosim` imports
+:mod:`tribocosim.components`; the imports are lazy, and a scene of FMU files imports none of it.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
-from tribocosim.components.errors import ParameterError, SceneError
-
-
-@dataclass(frozen=True)
-class ComponentInfo:
-    """What the checks and the reference need to know about one component."""
-
-    parameters: Callable[[], type]  # the parameter dataclass (imported lazily)
-    inputs: tuple[str, ...]
-    outputs: dict[str, str]  # FMU output name -> the model's output key
-    extra: dict[str, Any]  # FMU parameters that are not dataclass fields -> default
+from tribocosim.components.errors import ParameterError, Problem, SceneError
 
 
-def _strip_params():
-    from tribocosim.components.stripdraw.parameters import StripDrawParameters
-
-    return StripDrawParameters
-
-
-def _press_params():
-    from tribocosim.components.press import PressParameters
-
-    return PressParameters
-
-
-def _machine_params():
-    from tribocosim.components.machine import MachineParameters
-
-    return MachineParameters
-
-
-#: component name (normalised: lower case, no '_' or '-') -> its description
-COMPONENTS: dict[str, ComponentInfo] = {
-    "stripdraw": ComponentInfo(
-        _strip_params, ("normal_force", "grip_velocity"),
-        {n: n for n in ("pull_force", "friction_force", "mu_mean", "sliding_distance", "beta_mean", "beta_max",
-                        "contact_pressure", "grip_position", "table_clamp_count")},
-        {"table_file": "friction_table.npz", "field_output": "", "field_output_interval": 0.0, "field_input": ""},
-    ),
-    "press": ComponentInfo(_press_params, (), {"normal_force": "normal_force", "force_reference": "force_setpoint"}, {}),
-    "drawingmachine": ComponentInfo(
-        _machine_params, ("pull_force",),
-        {"grip_velocity": "grip_velocity", "grip_position": "grip_position", "velocity_reference": "velocity_setpoint",
-         "motor_force": "motor_force"},
-        {},
-    ),
-}
-
-
-def _normal(name: str) -> str:
-    return name.lower().replace("_", "").replace("-", "")
-
-
-def component_of(spec) -> str | None:
-    """The normalised component name of a scene FMU spec, or None (a ``path = ...`` FMU or unknown)."""
+def component_of(spec):
+    """The component description of a scene FMU spec, or None (a ``path = ...`` FMU or an unknown name)."""
     if spec.component is None:
         return None
-    c = _normal(spec.component)
-    return c if c in COMPONENTS else None
+    from tribocosim.components import registry
+
+    return registry.find(spec.component)
 
 
-def table_path(value: str) -> Path:
-    """``table_file`` as the StripDraw FMU resolves it: relative names refer to the bundled data
-    (the shipped ``models/`` folder here), absolute paths are used as they are."""
-    from tribocosim.components.paths import MODELS_DIR
-
-    p = Path(value)
-    return p if p.is_absolute() else MODELS_DIR / p
-
-
-def _parameters(info: ComponentInfo, given: dict, add, key: str):
-    """The dataclass instance of ``given`` (dataclass fields only), reporting each bad field by name."""
-    cls = info.parameters()
-    names = {f.name for f in dataclasses.fields(cls)}
-    fields = {k: v for k, v in given.items() if k in names}
-    default = cls()
-    ok = {}
-    for name, value in fields.items():  # one field at a time: the message names the culprit
+def _split(comp, given: dict, add, key: str):
+    """(parameters, files) of ``given`` (the FMU's parameters), each bad field reported by name."""
+    instances = []
+    for cls in (comp.parameters, comp.files):
+        if cls is None:
+            instances.append(None)
+            continue
+        names = {f.name for f in dataclasses.fields(cls)}
+        default = cls()
+        ok = {}
+        for name, value in given.items():  # one field at a time: the message names the culprit
+            if name not in names:
+                continue
+            try:
+                dataclasses.replace(default, **{name: value})
+                ok[name] = value
+            except ParameterError as exc:
+                add(f"{key}.{name}", str(exc))
+            except TypeError as exc:
+                add(f"{key}.{name}", f"{name} = {value!r}: {exc}")
         try:
-            dataclasses.replace(default, **{name: value})
-            ok[name] = value
-        except ParameterError as exc:
-            add(f"{key}.{name}", str(exc))
-        except TypeError as exc:
-            add(f"{key}.{name}", f"{name} = {value!r}: {exc}")
-    try:
-        return cls(**ok)
-    except ParameterError as exc:  # a rule across fields
-        add(key, str(exc))
-        return None
+            instances.append(cls(**ok))
+        except ParameterError as exc:  # a rule across fields
+            add(key, str(exc))
+            instances.append(None)
+    return instances
 
 
-def component_problems(scene) -> list[str]:
-    """Problems of the component parameters of a scene (``file: key: message`` lines).
+def component_problems(scene) -> list[Problem]:
+    """Problems of the component parameters of a scene.
 
     ``scene`` is a :class:`tribocosim.cosim.scene.Scene` (parsed, not necessarily valid) or a validated plan.
     """
+    from tribocosim.cosim.problems import Problems
+
     scene = getattr(scene, "scene", scene)
-    problems: list[str] = []
-    if not any(component_of(spec) for spec in scene.fmus.values()):
-        return problems  # FMU files only: nothing of the components is imported
-    from tribocosim.components.stripdraw.friction import make_friction_law
-    from tribocosim.components.stripdraw.table import read_table
-
-    def add(key: str, msg: str) -> None:
-        problems.append(f"{scene.path}: {key}: {msg}")
-
-    params: dict[str, Any] = {}
-    tables: dict[str, Any] = {}
-    for name, spec in scene.fmus.items():
-        comp = component_of(spec)
-        if comp is None:
-            continue
-        info = COMPONENTS[comp]
+    problems = Problems(scene.path)
+    found = {name: comp for name, spec in scene.fmus.items() if (comp := component_of(spec)) is not None}
+    limits: dict[str, dict] = {}
+    setpoints: dict[str, dict] = {}
+    for name, comp in found.items():
         key = f"fmus.{name}.parameters"
-        p = _parameters(info, spec.parameters, add, key)
-        params[name] = p
-        if comp != "stripdraw" or p is None:
+        params, files = _split(comp, scene.fmus[name].parameters, problems.add, key)
+        if params is None or (comp.files is not None and files is None):
             continue
-        extra = {**info.extra, **{k: v for k, v in spec.parameters.items() if k in info.extra}}
-        table = None
-        if p.friction_model == "table":
-            path = table_path(str(extra["table_file"]))
-            try:
-                table = read_table(path)
-            except Exception as exc:  # noqa: BLE001 - any unreadable table is a scene problem
-                add(f"{key}.table_file", f"friction table {path} cannot be used: {exc}")
-        tables[name] = table
-        fin = str(extra["field_input"])
-        if fin and not Path(fin).is_file():
-            add(f"{key}.field_input", f"field file {fin} does not exist (the field_output of an earlier pass)")
-        try:
-            cap = make_friction_law(p, table).beta_threshold if (table is not None or p.friction_model != "table") else None
-        except ParameterError as exc:
-            add(key, str(exc))
-            cap = None
-        if p.beta_threshold > 0:
-            cap = p.beta_threshold
-        if cap is not None and p.beta_initial > cap:
-            add(f"{key}.beta_initial", f"beta_initial = {p.beta_initial!r} exceeds the cap of beta, {cap:.6g} "
-                "(Eq. 24; from the friction law or beta_threshold)")
-
-    # set-points of the connected press and drive against the strip's friction table
-    for link in scene.connections:
+        if comp.check is not None:
+            own, limits[name] = comp.check(params, files, comp.resource_dir)
+            for pname, message in own:
+                problems.add(f"{key}.{pname}" if pname else key, message)
+        if comp.setpoints is not None:
+            setpoints[name] = comp.setpoints(params)
+    for link in scene.connections:  # set-points of one instance against the input limits of another
         src, dst = link.source, link.target
-        s_spec, d_spec = scene.fmus.get(src.instance), scene.fmus.get(dst.instance)
-        if s_spec is None or d_spec is None or component_of(d_spec) != "stripdraw":
-            continue
-        strip, table = params.get(dst.instance), tables.get(dst.instance)
-        source = params.get(src.instance)
-        if strip is None or table is None or source is None:
-            continue
-        comp = component_of(s_spec)
-        if comp == "press" and src.variable == "normal_force" and dst.variable == "normal_force":
-            _, forces = source.setpoints()
-            area = strip.tool_length * strip.tool_width
-            positive = [float(f) for f in forces if f > 0]
-            checks = [(max(positive or [0]), "the largest set-point"), (min(positive or [0]), "the smallest non-zero set-point")]
-            if not positive:
-                checks = []
-            elif len(set(positive)) == 1:
-                checks = [(positive[0], "the set-point")]
-            for f, label in checks:
-                pressure = f / area
-                lo, hi = float(table.pressure[0]), float(table.pressure[-1])
-                if not lo <= pressure <= hi:
-                    which = "force_setpoint" if not source.setpoint_table else "setpoint_table"
-                    add(f"fmus.{src.instance}.parameters.{which}",
-                        f"{label}, {f:g} N on the {strip.tool_length * 1e3:g} x {strip.tool_width * 1e3:g} mm pad of "
-                        f"'{dst.instance}', is a nominal pressure of {pressure / 1e6:.4g} MPa, outside the friction "
-                        f"table's pressure axis [{lo / 1e6:g}, {hi / 1e6:g}] MPa")
-        if comp == "drawingmachine" and src.variable == "grip_velocity" and dst.variable == "grip_velocity":
-            v = abs(source.velocity_setpoint)
-            vmax = float(table.velocity[-1])
-            if v > vmax:
-                add(f"fmus.{src.instance}.parameters.velocity_setpoint",
-                    f"|velocity_setpoint| = {v:g} m/s is above the friction table's velocity axis (up to {vmax:g} m/s) "
-                    f"of '{dst.instance}'")
-    return problems
-
-
-def check_component_scene(plan) -> None:
-    """Raise one SceneError listing every :func:`component_problems` of ``plan`` (if any)."""
-    problems = component_problems(plan)
-    if problems:
-        raise SceneError(_report(plan.scene.path, problems))
-
-
-def _report(path, problems: list[str]) -> str:
-    n = len(problems)
-    return f"{n} problem{'s' if n > 1 else ''} in scene {path}:\n  " + "\n  ".join(problems)
+        limit = limits.get(dst.instance, {}).get(dst.variable)
+        for sp in setpoints.get(src.instance, {}).get(src.variable, []) if limit else []:
+            message = limit(sp.value, sp.label, dst.instance)
+            if message:
+                problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
+    return problems.items
 
 
 def load_component_scene(path, overrides: dict | None = None):
@@ -230,6 +107,7 @@ def load_component_scene(path, overrides: dict | None = None):
     (The component checks run on the parsed scene even when the FMU-level validation fails, and
     a key that both report is listed once.)
     """
+    from tribocosim.cosim.problems import Problems
     from tribocosim.cosim.scene import parse_scene
     from tribocosim.cosim.validate import load_scene
 
@@ -238,12 +116,14 @@ def load_component_scene(path, overrides: dict | None = None):
     try:
         plan = load_scene(path, overrides)
     except SceneError as exc:
-        lines = [ln.strip() for ln in str(exc).splitlines()[1:] if ln.strip()]
-        keys = {ln.rsplit(": ", 1)[0].split(": ")[1] for ln in lines if ln.count(": ") >= 2}
-        lines += [ln for ln in extra if ln.split(": ")[1] not in keys]
-        raise SceneError(_report(scene.path if scene is not None else path, lines)) from None
+        problems = Problems(scene.path if scene is not None else path)
+        problems.extend(exc.problems)
+        problems.extend(extra, skip_known_keys=True)
+        raise problems.error() from None
     if extra:
-        raise SceneError(_report(plan.scene.path, extra))
+        problems = Problems(plan.scene.path)
+        problems.extend(extra)
+        problems.raise_if_any()
     return plan
 
 
@@ -272,33 +152,10 @@ class ComponentModel:
 
 
 def make_model(component: str, parameters: dict[str, Any]):
-    """The pure model of ``component`` for the scene parameters (FMU-only extras handled here)."""
-    comp = _normal(component)
-    info = COMPONENTS[comp]
-    cls = info.parameters()
-    names = {f.name for f in dataclasses.fields(cls)}
-    p = cls(**{k: v for k, v in parameters.items() if k in names})
-    if comp == "press":
-        from tribocosim.components.press import PressModel
+    """The pure model of ``component`` for scene parameters (the FMU's files included), as its FMU makes it."""
+    from tribocosim.components import registry
 
-        return PressModel(p)
-    if comp == "drawingmachine":
-        from tribocosim.components.machine import MachineModel
-
-        return MachineModel(p)
-    import numpy as np
-
-    from tribocosim.components.stripdraw.friction import make_friction_law
-    from tribocosim.components.stripdraw.model import StripDrawModel
-    from tribocosim.components.stripdraw.table import read_table
-
-    extra = {**info.extra, **{k: v for k, v in parameters.items() if k in info.extra}}
-    table = read_table(table_path(str(extra["table_file"]))) if p.friction_model == "table" else None
-    beta = None
-    if extra["field_input"]:
-        with np.load(extra["field_input"], allow_pickle=False) as data:
-            beta = np.array(data["beta"][-1], dtype=float)
-    return StripDrawModel(p, make_friction_law(p, table), beta_field=beta)
+    return registry.get(component).make(parameters).model
 
 
 def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations: int = 100):
@@ -323,6 +180,7 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
     SceneError
         If an FMU of the scene is not one of this project's components.
     """
+    from tribocosim.components import registry
     from tribocosim.cosim.reference import CoupledModels
 
     if isinstance(scene, (str, Path)):
@@ -334,38 +192,31 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
     others = [n for n, s in sc.fmus.items() if component_of(s) is None]
     if others:
         raise SceneError(f"scene {sc.path}: no monolithic reference for {', '.join(others)}: only component = "
-                         f"\"{'|'.join(COMPONENTS)}\" FMUs map to pure models")
+                         f"\"{'|'.join(registry.components())}\" FMUs map to pure models")
     connected = {(c.target.instance, c.target.variable) for c in sc.connections}
     models, initial = {}, {}
     for name, spec in sc.fmus.items():
         comp = component_of(spec)
-        info = COMPONENTS[comp]
         fixed = {}
-        for inp in info.inputs:
-            if (name, inp) in connected:
+        for port in comp.inputs:
+            if (name, port.name) in connected:
                 continue
-            if inp in spec.parameters:
-                fixed[inp] = float(spec.parameters[inp])
-            else:
-                fixed[inp] = _fmu_start(plan, name, inp, comp)
-        model = ComponentModel(make_model(comp, spec.parameters), fixed, info.outputs)
+            fixed[port.model_key] = float(spec.parameters.get(port.name, _fmu_start(plan, name, port)))
+        outputs = {p.name: p.model_key for p in comp.outputs}
+        model = ComponentModel(comp.make(spec.parameters).model, fixed, outputs)
         models[name] = model
         initial.update({f"{name}.{k}": v for k, v in model.outputs().items()})
     pairs = [(str(c.source), str(c.target)) for c in sc.connections]
     return CoupledModels(models, pairs, initial, dt, tol=tol, max_iterations=max_iterations)
 
 
-def _fmu_start(plan, instance: str, variable: str, component: str) -> float:
-    """Start value of an FMU input: from the model description if the plan has it, else the adapter's."""
+def _fmu_start(plan, instance: str, port) -> float:
+    """Start value of an FMU input: from the model description if the plan has it, else the description's."""
     if plan is not None and instance in plan.fmus:
-        var = plan.fmus[instance].variables.get(variable)
+        var = plan.fmus[instance].variables.get(port.name)
         if var is not None and var.start is not None:
             return float(var.start)
-    if component == "stripdraw":
-        from tribocosim.components.fmus.StripDraw import INPUTS
-
-        return float(INPUTS[variable].start)
-    return 0.0
+    return float(port.start)
 
 
 def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
@@ -377,6 +228,5 @@ def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
     return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
 
 
-__all__ = ["COMPONENTS", "ComponentModel", "check_component_scene", "component_problems", "load_component_scene",
-           "make_model",
-           "reference_for_scene", "steady_ratio", "table_path"]
+__all__ = ["ComponentModel", "component_of", "component_problems", "load_component_scene", "make_model",
+           "reference_for_scene", "steady_ratio"]

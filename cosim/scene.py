@@ -47,17 +47,18 @@ settings and the outputs to record; nothing else is loaded, computed or written.
 :func:`parse_scene` checks the structure (keys, types, ranges) and returns every problem it
 found together with whatever could be parsed; :mod:`tribocosim.cosim.validate` then checks the scene
 against the FMUs' model descriptions and raises one :class:`~tribocosim.components.errors.SceneError`
-listing all problems, each with the file and the key.
+listing all problems, each with the file and the key (:mod:`tribocosim.cosim.problems`).
 """
 
 from __future__ import annotations
 
-import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from tribocosim.cosim.problems import Problems, known  # noqa: F401 (known: re-exported)
 
 ALGORITHMS = ("jacobi", "gauss-seidel", "iterative")
 ESTIMATORS = ("step-doubling", "energy")
@@ -195,35 +196,7 @@ class Scene:
         return self.path.parent
 
 
-def known(names, given: str | None = None, limit: int = 40) -> str:
-    """'did you mean ...; known: a, b, c' for an unknown name."""
-    names = sorted(names)
-    hint = ""
-    if given is not None:
-        close = difflib.get_close_matches(given, names, n=3, cutoff=0.6)
-        if close:
-            hint = "did you mean " + " or ".join(repr(c) for c in close) + "? "
-    shown = ", ".join(names[:limit]) + (f", ... ({len(names)} in all)" if len(names) > limit else "")
-    return f"{hint}known: {shown or '(none)'}"
-
-
-class _Problems:
-    """Collects scene problems as 'file: key: message'."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.items: list[str] = []
-
-    def add(self, key: str, message: str) -> None:
-        self.items.append(f"{self.path}: {key}: {message}")
-
-    def unknown_keys(self, table: dict, allowed, key: str) -> None:
-        for k in table:
-            if k not in allowed:
-                self.add(f"{key}.{k}" if key else k, f"unknown key; {known(allowed, k)}")
-
-
-def _number(p: _Problems, table: dict, name: str, key: str, default, *, positive=False, integer=False):
+def _number(p: Problems, table: dict, name: str, key: str, default, *, positive=False, integer=False):
     if name not in table:
         return default
     v = table[name]
@@ -236,7 +209,7 @@ def _number(p: _Problems, table: dict, name: str, key: str, default, *, positive
     return v
 
 
-def _choice(p: _Problems, table: dict, name: str, key: str, choices, default):
+def _choice(p: Problems, table: dict, name: str, key: str, choices, default):
     if name not in table:
         return default
     v = table[name]
@@ -246,7 +219,7 @@ def _choice(p: _Problems, table: dict, name: str, key: str, choices, default):
     return v
 
 
-def _table(p: _Problems, doc: dict, name: str, key: str) -> dict:
+def _table(p: Problems, doc: dict, name: str, key: str) -> dict:
     v = doc.get(name, {})
     if not isinstance(v, dict):
         p.add(key, f"must be a table, got {type(v).__name__}")
@@ -254,7 +227,7 @@ def _table(p: _Problems, doc: dict, name: str, key: str) -> dict:
     return v
 
 
-def parse_ref(p: _Problems, text: Any, key: str) -> VariableRef | None:
+def parse_ref(p: Problems, text: Any, key: str) -> VariableRef | None:
     """Parse 'instance.variable' (reports a problem and returns None if malformed)."""
     if not isinstance(text, str) or "." not in text or text.startswith(".") or text.endswith("."):
         p.add(key, f"must be 'instance.variable', got {text!r}")
@@ -288,11 +261,11 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
     -------
     scene : Scene or None
         What could be parsed (None if the file is unreadable or not TOML).
-    problems : list of str
-        Every structural problem, as 'file: key: message'.
+    problems : list of Problem
+        Every structural problem (file, key, message).
     """
     path = Path(path).resolve()
-    p = _Problems(path)
+    p = Problems(path)
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
@@ -419,7 +392,7 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
     return scene, p.items
 
 
-def _parse_master(p: _Problems, m: dict, experiment: Experiment) -> MasterSettings:
+def _parse_master(p: Problems, m: dict, experiment: Experiment) -> MasterSettings:
     p.unknown_keys(m, _MASTER_KEYS, "master")
     algorithm = _choice(p, m, "algorithm", "master", ALGORITHMS, "jacobi")
     extrapolation = _choice(p, m, "extrapolation", "master", (0, 1, 2), 0)

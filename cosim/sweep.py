@@ -198,11 +198,11 @@ def is_sweep_file(path: str | Path) -> bool:
 
 def load_sweep(path: str | Path) -> Sweep:
     """Parse and check a sweep file; raise one SceneError listing every problem (file: key: message)."""
-    path = Path(path).resolve()
-    problems: list[str] = []
+    from tribocosim.cosim.problems import Problems
 
-    def add(key: str, msg: str) -> None:
-        problems.append(f"{path}: {key}: {msg}")
+    path = Path(path).resolve()
+    problems = Problems(path, "sweep")
+    add = problems.add
 
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -212,9 +212,7 @@ def load_sweep(path: str | Path) -> Sweep:
         if k != "sweep":
             add(k, "unknown top-level key in a sweep file (only [sweep] and its sub-tables)")
     s = doc.get("sweep", {})
-    for k in s:
-        if k not in _SWEEP_KEYS:
-            add(f"sweep.{k}", f"unknown key; known: {', '.join(_SWEEP_KEYS)}")
+    problems.unknown_keys(s, _SWEEP_KEYS, "sweep")
     scene = s.get("scene")
     if not isinstance(scene, str):
         add("sweep.scene", f"must name the base scene file, got {scene!r}")
@@ -285,9 +283,7 @@ def load_sweep(path: str | Path) -> Sweep:
     if not summaries:
         add("sweep.summary", "give at least one summary, e.g. mu_bar = { mean = \"strip.mu_mean\", last = 0.2 }")
     plot = s.get("plot") or {}
-    for k in plot:
-        if k not in _PLOT_KEYS:
-            add(f"sweep.plot.{k}", f"unknown key; known: {', '.join(_PLOT_KEYS)}")
+    problems.unknown_keys(plot, _PLOT_KEYS, "sweep.plot")
     axes = set(variables) | {"pass"}
     for k in ("x", "series"):
         if k in plot and plot[k] not in axes:
@@ -297,9 +293,7 @@ def load_sweep(path: str | Path) -> Sweep:
             add(f"sweep.plot.{k}", f"{plot[k]!r} is not a summary; known: {', '.join(x.name for x in summaries)}")
     if "maps" in plot and (not isinstance(plot["maps"], dict) or set(plot["maps"]) - set(variables) or finst is None):
         add("sweep.plot.maps", "must be { variable = value, ... } of sweep variables, and needs field_instance")
-    if problems:
-        raise SceneError(f"{len(problems)} problem{'s' if len(problems) > 1 else ''} in sweep {path}:\n  "
-                         + "\n  ".join(problems))
+    problems.raise_if_any()
     title = s.get("title") or path.stem
     return Sweep(path, scene_path, str(title), passes, finst, float(fint), workers, variables, settings, summaries, plot)
 
@@ -425,27 +419,22 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     SceneError
         For problems in the sweep file or in the scene of any case (all checked before running).
     """
-    from tribocosim.cosim.reference_components import component_problems
-    from tribocosim.cosim.scene import parse_scene
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.problems import Problems
+    from tribocosim.cosim.reference_components import load_component_scene
 
     sweep = load_sweep(path)
     out = Path(out) if out is not None else Path.cwd() / sweep.path.stem
     out.mkdir(parents=True, exist_ok=True)
     cases = sweep.cases()
-    problems = []
-    load_scene(sweep.scene, pass_overrides(sweep, cases[0], out / "cases" / cases[0].name, 1))  # builds the FMUs
-    for case in cases:  # every case checked before any runs (field_input files do not exist yet)
-        try:
-            load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
-            scene, _ = parse_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
-            lines = component_problems(scene)
-            if lines:
-                raise SceneError("\n  ".join(lines))
+    problems = Problems(sweep.path, "sweep")
+    for case in cases:  # every case checked before any runs (the first builds the FMUs; field_input files
+        try:            # do not exist yet)
+            load_component_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
         except SceneError as exc:
-            problems.append(f"{case.name} {case.variables}: {exc}")
-    if problems:
-        raise SceneError(f"sweep {sweep.path}: {len(problems)} case(s) have problems:\n" + "\n".join(problems))
+            for p in exc.problems or [None]:
+                problems.add(f"{case.name}" + (f": {p.key}" if p else ""),
+                             f"{p.message if p else exc} (case {case.variables}, scene {sweep.scene})")
+    problems.raise_if_any()
     n = workers if workers is not None else sweep.workers
     n = max(1, min(n or os.cpu_count() or 1, len(cases)))
     t0 = time.perf_counter()
@@ -458,8 +447,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     else:
         import multiprocessing
 
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool, \
-                _without_fmu_resources_on_path():
+        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
             futures = [pool.submit(_worker, str(sweep.path), c.index, str(out)) for c in cases]
             for fut in as_completed(futures):
                 i, rows = fut.result()
@@ -498,29 +486,6 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                                title=f"{sweep.title}: beta(X, t) at "
                                                + ", ".join(f"{k} = {v}" for k, v in maps.items())))
     return result
-
-
-class _without_fmu_resources_on_path:
-    """Hide FMU ``resources/`` folders from ``sys.path`` while workers are spawned.
-
-    pythonfmu puts an instantiated FMU's ``resources/`` first on ``sys.path``, and spawned workers
-    start with the parent's ``sys.path``: a worker would then import ``tribocosim`` from an FMU's
-    bundle (which lacks the builder) instead of this installation's.
-    """
-
-    def __enter__(self):
-        import sys
-
-        self.saved = list(sys.path)
-        sys.path[:] = [p for p in sys.path if not (p and Path(p).name == "resources"
-                                                   and Path(p).parent.joinpath("modelDescription.xml").is_file())]
-        return self
-
-    def __exit__(self, *exc):
-        import sys
-
-        sys.path[:] = self.saved
-        return False
 
 
 def _same(a, b) -> bool:

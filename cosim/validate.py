@@ -27,7 +27,8 @@ from pathlib import Path
 from fmpy import read_model_description
 
 from tribocosim.components.errors import SceneError
-from tribocosim.cosim.scene import Scene, VariableRef, known, parse_scene
+from tribocosim.cosim.problems import Problems, known
+from tribocosim.cosim.scene import Scene, VariableRef, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
 _DER = re.compile(r"^der\((?P<name>.+?)(?:,\s*(?P<order>\d+))?\)$")
@@ -123,16 +124,15 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     Raises
     ------
     SceneError
-        With one line per problem: 'file: key: message'.
+        With every problem (``.problems``: file, key, message), one line each in the message.
     """
-    scene, problems = parse_scene(path, overrides)
+    scene, parsed = parse_scene(path, overrides)
+    problems = Problems(scene.path if scene is not None else Path(path).resolve())
+    problems.extend(parsed)
     if scene is None:
-        raise SceneError(_report(path, problems))
+        problems.raise_if_any()
     plan = Plan(scene, {}, [], [])
-    file = scene.path
-
-    def add(key: str, msg: str) -> None:
-        problems.append(f"{file}: {key}: {msg}")
+    add = problems.add
 
     for name, spec in scene.fmus.items():
         key = f"fmus.{name}"
@@ -218,14 +218,8 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     _check_master(add, plan)
     _check_bonds(add, plan)
     _warn_unconnected(plan, connected)
-    if problems:
-        raise SceneError(_report(file, problems))
+    problems.raise_if_any()
     return plan
-
-
-def _report(path, problems: list[str]) -> str:
-    n = len(problems)
-    return f"{n} problem{'s' if n > 1 else ''} in scene {path}:\n  " + "\n  ".join(problems)
 
 
 def _fmu_model(name: str, path: Path, md, feedthrough: bool | None) -> FmuModel:

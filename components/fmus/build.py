@@ -1,31 +1,33 @@
-"""Build the project's FMUs with pythonfmu: one subprocess per FMU, resources limited to what runs.
+"""Build the Python (pythonfmu) FMUs of the components: one subprocess per FMU, resources limited to what runs.
 
-For each FMU the build
+Every component of :mod:`tribocosim.components.registry` is an FMU; its model identifier is the
+FMU's name. For each FMU the build
 
-1. finds the ``tribocosim`` modules that its adapter imports, transitively (:func:`runtime_modules`:
-   a static scan of the import statements, resolved with :func:`importlib.util.find_spec`, so it
-   works the same from a wheel and from an editable install), and refuses to build if one of
-   them is missing;
-2. stages the adapter, those modules (at their package paths, ``tribocosim/components/...``) and
-   the FMU's data files (the default friction table) in a temporary folder;
-3. runs ``python -m pythonfmu build --handle-state --serialize-state`` on the staged adapter in a
-   subprocess (pythonfmu imports the adapter by module name and caches it in the process, so
-   every FMU needs its own process);
-4. checks the result with ``fmpy.validate_fmu`` and moves it into place atomically (a reader
-   never sees a half-written FMU), next to a small JSON record of its source digest.
+1. writes its pythonfmu script from the component's description (:func:`adapter_script`: a
+   subclass of :class:`~tribocosim.components.fmus.adapter.ComponentAdapter` with the component's
+   ``COMPONENT``);
+2. finds the modules the script imports, transitively (:func:`runtime_modules`: a static scan of
+   the import statements, resolved with :func:`importlib.util.find_spec`, so it works the same from
+   a wheel and from an editable install), within ``tribocosim`` and the component's own top-level
+   package, and refuses to build if one of them is missing;
+3. stages the script, those modules (at their package paths, ``tribocosim/components/...``) and
+   the component's resource files in a temporary folder;
+4. runs ``python -m pythonfmu build --handle-state --serialize-state`` on the staged script in a
+   subprocess (pythonfmu imports the script by module name and caches it in the process, so every
+   FMU needs its own process);
+5. checks the result with ``fmpy.validate_fmu`` and moves it into place atomically (a reader never
+   sees a half-written FMU), next to a small JSON record of its source digest.
 
 Before building anything, every selected FMU's files and import closure are checked, so that a
 missing file fails the whole build without leaving some of the FMUs built.
 
-An FMU's ``resources/`` then holds its adapter, ``tribocosim/__init__.py``,
-``tribocosim/components/__init__.py``, ``errors.py``, the shared plumbing
-``tribocosim/components/fmus/{adapter,statecodec,exitguard}.py``, the model modules the adapter
-imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press: ``press.py``, ``linear.py``,
-``params.py``; DrawingMachine: ``machine.py``, ``linear.py``, ``params.py``), plus the copy of
+An FMU's ``resources/`` then holds its script, ``tribocosim/__init__.py``,
+``tribocosim/components/__init__.py``, ``errors.py``, ``description.py``, ``params.py``, the shared
+plumbing ``tribocosim/components/fmus/{adapter,statecodec,exitguard}.py``, the component's folder
+modules that the model imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press:
+``press/*`` and ``linear.py``; DrawingMachine: ``machine/*`` and ``linear.py``), plus the copy of
 pythonfmu's Python files that pythonfmu always adds; nothing from ``surrogate`` or ``cosim``, and no
 numba, scipy, pyfftw or matplotlib.
-
-Python API: :func:`build_fmus`; command line: ``tribocosim fmu build [--out DIR]``.
 """
 
 from __future__ import annotations
@@ -39,13 +41,13 @@ import shutil
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
+from tribocosim.components import registry
+from tribocosim.components.description import Component
 from tribocosim.components.errors import TribocosimError
-from tribocosim.components.paths import DEFAULT_TABLE
 
-#: the package whose modules an FMU bundles (nothing outside it is staged)
+#: the project's package: every FMU bundles what it needs of it
 PACKAGE = "tribocosim"
 
 
@@ -53,20 +55,32 @@ class FmuBuildError(TribocosimError):
     """An FMU could not be built (missing file, pythonfmu failure, validation problems)."""
 
 
-@dataclass(frozen=True)
-class FmuSpec:
-    """What one FMU is made of: its adapter module and the data files for the root of ``resources/``."""
-
-    adapter: str  # module of the pythonfmu script; its last part is the FMU's model identifier
-    data: tuple[Path, ...] = ()
+def fmus() -> dict[str, Component]:
+    """Every FMU this installation builds: ``{model identifier: component}``."""
+    return {c.model_identifier: c for c in registry.components().values()}
 
 
-#: Every FMU of the project, by model identifier.
-FMUS: dict[str, FmuSpec] = {
-    "StripDraw": FmuSpec(adapter="tribocosim.components.fmus.StripDraw", data=(DEFAULT_TABLE,)),
-    "Press": FmuSpec(adapter="tribocosim.components.fmus.Press"),
-    "DrawingMachine": FmuSpec(adapter="tribocosim.components.fmus.DrawingMachine"),
-}
+def component(name: str) -> Component:
+    """The component of FMU ``name`` (its model identifier); FmuBuildError listing the known ones."""
+    known = fmus()
+    if name not in known:
+        raise FmuBuildError(f"unknown FMU {name!r}; this project builds: {', '.join(known)}")
+    return known[name]
+
+
+def adapter_script(comp: Component) -> str:
+    """The pythonfmu script of a component's FMU (its file name is the model identifier)."""
+    module = registry.module_of(comp)
+    return (
+        f'"""pythonfmu script of the {comp.model_identifier} FMU, generated by tribocosim from {module}.COMPONENT."""\n'
+        "from pathlib import Path\n\n"
+        "from tribocosim.components.fmus.adapter import ComponentAdapter, hold_script_globals, use_bundled_packages\n\n"
+        "hold_script_globals(globals())  # pythonfmu 0.7.0 releases a reference it never took (see the adapter)\n"
+        "use_bundled_packages(str(Path(__file__).resolve().parent))  # this FMU's modules (see the adapter)\n"
+        f"from {module} import COMPONENT  # noqa: E402\n\n\n"
+        f"class {comp.model_identifier}(ComponentAdapter):\n"
+        "    COMPONENT = COMPONENT\n"
+    )
 
 
 def module_file(name: str) -> Path | None:
@@ -80,11 +94,11 @@ def module_file(name: str) -> Path | None:
     return Path(spec.origin).resolve()
 
 
-def _imported_names(path: Path) -> set[str]:
-    """Every absolute module name an ``import`` statement in ``path`` may load (``from a import b``
+def _imported_names(source: str, label: str) -> set[str]:
+    """Every absolute module name an ``import`` statement in ``source`` may load (``from a import b``
     gives ``a`` and ``a.b``: ``b`` may be a submodule)."""
     names = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+    for node in ast.walk(ast.parse(source, label)):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -93,28 +107,46 @@ def _imported_names(path: Path) -> set[str]:
     return names
 
 
-def runtime_modules(name: str) -> dict[str, Path]:
-    """The ``tribocosim`` modules FMU ``name`` needs at run time: ``{module name: source file}``.
+def _is_attribute(name: str) -> bool:
+    """Whether ``a.b.c`` is a name defined in module ``a.b`` (``from a.b import c``) rather than a module."""
+    parent, _, attr = name.rpartition(".")
+    path = module_file(parent)
+    if path is None:
+        return False
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef)) and node.name == attr:
+            return True
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == attr for t in node.targets):
+            return True
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.target.id == attr:
+            return True
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and any((a.asname or a.name.split(".")[0]) == attr
+                                                                  for a in node.names):
+            return True
+    return False
 
-    The import closure of the adapter, found statically (nothing is run), plus the ``__init__``
-    of every package on the way. The adapter itself is not included.
+
+def runtime_modules(name: str) -> dict[str, Path]:
+    """The modules FMU ``name`` needs at run time: ``{module name: source file}``.
+
+    The import closure of its script, found statically (nothing is run), within ``tribocosim``
+    and the component's own top-level package, plus the ``__init__`` of every package on the way.
 
     Raises
     ------
     FmuBuildError
-        If the adapter, or a module it imports, imports a ``tribocosim`` module that does not exist.
+        If the script, or a module it imports, imports a module of those packages that does not exist.
     """
-    spec = _spec(name)
-    adapter = module_file(spec.adapter)
-    if adapter is None:
-        raise FmuBuildError(f"FMU {name}: the adapter module {spec.adapter} is missing")
+    comp = component(name)
+    importlib.invalidate_caches()  # files may have changed since the import system listed their folders
+    packages = {PACKAGE, registry.module_of(comp).split(".")[0]}
     found: dict[str, Path] = {}
     missing: set[str] = set()
-    todo = [(adapter, spec.adapter)]
+    todo = [(adapter_script(comp), f"{name}.py")]
     while todo:
-        path, importer = todo.pop()
-        for mod in sorted(_imported_names(path)):
-            if mod.split(".")[0] != PACKAGE or mod in found or mod == spec.adapter:
+        source, label = todo.pop()
+        for mod in sorted(_imported_names(source, label)):
+            if mod.split(".")[0] not in packages or mod in found:
                 continue
             parts = mod.split(".")
             for k in range(1, len(parts) + 1):
@@ -127,30 +159,10 @@ def runtime_modules(name: str) -> dict[str, Path]:
                         missing.add(prefix)
                     break
                 found[prefix] = src
-                todo.append((src, prefix))
+                todo.append((src.read_text(encoding="utf-8"), str(src)))
     if missing:
         raise FmuBuildError(f"FMU {name}: the adapter imports missing modules: {', '.join(sorted(missing))}")
     return dict(sorted(found.items()))
-
-
-def _is_attribute(name: str) -> bool:
-    """Whether ``a.b.c`` is a name defined in module ``a.b`` (``from a.b import c``) rather than a module."""
-    parent, _, attr = name.rpartition(".")
-    path = module_file(parent)
-    if path is None:
-        return False
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef)) and node.name == attr:
-            return True
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == attr for t in node.targets):
-            return True
-        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.target.id == attr:
-            return True
-        if isinstance(node, (ast.Import, ast.ImportFrom)) and any((a.asname or a.name.split(".")[0]) == attr
-                                                                  for a in node.names):
-            return True
-    return False
 
 
 def runtime_files(name: str) -> list[Path]:
@@ -172,26 +184,24 @@ def _staged_path(module: str, source: Path) -> Path:
 
 
 def source_digest(name: str) -> str:
-    """SHA-256 over the adapter, its runtime modules and data files of FMU ``name``."""
-    spec = _spec(name)
-    h = hashlib.sha256()
-    entries = [(spec.adapter, module_file(spec.adapter)), *runtime_modules(name).items(),
-               *((d.name, Path(d)) for d in spec.data)]
-    for label, path in entries:
+    """SHA-256 over the script, its runtime modules and the resource files of FMU ``name``."""
+    comp = component(name)
+    h = hashlib.sha256(adapter_script(comp).encode())
+    for label, path in [*runtime_modules(name).items(), *((r.name, r) for r in comp.resource_files)]:
         h.update(str(label).encode())
         h.update(Path(path).read_bytes())
     return h.hexdigest()
 
 
 def build_fmus(out_dir: str | os.PathLike, names=None) -> dict[str, Path]:
-    """Build FMUs into ``out_dir`` (created if needed) and return ``{name: path to .fmu}``.
+    """Build Python FMUs into ``out_dir`` (created if needed) and return ``{name: path to .fmu}``.
 
     Parameters
     ----------
     out_dir : path
         Destination folder; an existing ``<name>.fmu`` is replaced atomically.
     names : iterable of str, optional
-        Model identifiers to build (keys of :data:`FMUS`); default all.
+        Model identifiers to build (keys of :func:`fmus`); default all.
 
     Raises
     ------
@@ -200,53 +210,46 @@ def build_fmus(out_dir: str | os.PathLike, names=None) -> dict[str, Path]:
     """
     out = Path(out_dir).resolve()  # the build subprocess runs in another folder
     out.mkdir(parents=True, exist_ok=True)
-    selected = list(FMUS) if names is None else list(names)
+    selected = list(fmus()) if names is None else list(names)
     for name in selected:
-        _spec(name)
+        component(name)
     for name in selected:  # every FMU's files and imports, before building any of them
         _check_files(name)
         runtime_modules(name)
     return {name: _build_one(name, out) for name in selected}
 
 
-def _spec(name: str) -> FmuSpec:
-    try:
-        return FMUS[name]
-    except KeyError:
-        raise FmuBuildError(f"unknown FMU {name!r}; this project builds: {', '.join(FMUS)}") from None
-
-
 def _check_files(name: str) -> None:
-    spec = _spec(name)
-    for path in spec.data:
-        if not Path(path).is_file():
+    for path in component(name).resource_files:
+        if not path.is_file():
             raise FmuBuildError(f"FMU {name}: required file {path} is missing")
 
 
 def _build_one(name: str, out: Path) -> Path:
-    spec = _spec(name)
+    comp = component(name)
     _check_files(name)
     digest = source_digest(name)
-    identifier = spec.adapter.rsplit(".", 1)[-1]
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-fmu-{name}-") as tmp:
         stage = Path(tmp) / "stage"
-        script = stage / f"{identifier}.py"
+        script = stage / f"{name}.py"
         stage.mkdir()
-        shutil.copy2(module_file(spec.adapter), script)
+        script.write_text(adapter_script(comp), encoding="utf-8")
+        tops = set()
         for module, path in runtime_modules(name).items():
             dest = stage / _staged_path(module, path)
             dest.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(path, dest)
+            tops.add(module.split(".")[0])
         data = []
-        for path in spec.data:
-            shutil.copy2(path, stage / Path(path).name)
+        for path in comp.resource_files:
+            shutil.copy2(path, stage / path.name)
             data.append(str(stage / Path(path).name))
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         cmd = [
             sys.executable, "-m", "pythonfmu", "build",
             "-f", str(script), "--dest", str(partial),
             "--handle-state", "--serialize-state",
-            str(stage / PACKAGE), *data,
+            *(str(stage / t) for t in sorted(tops)), *data,
         ]  # fmt: skip
         env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
         env.pop("PYTHONPATH", None)  # the staged copy, not another tree, must be imported
@@ -257,6 +260,12 @@ def _build_one(name: str, out: Path) -> Path:
             raise FmuBuildError(
                 f"FMU {name}: pythonfmu build (exit {proc.returncode}) produced no {partial}:\n{tail}"
             )
+    return _validate_and_place(name, partial, out, {"name": name, "variant": "python", "source_digest": digest,
+                                                    "python": sys.version.split()[0]})
+
+
+def _validate_and_place(name: str, partial: Path, out: Path, record: dict) -> Path:
+    """``fmpy validate`` the built FMU, then move it and its JSON record into place atomically."""
     try:
         from fmpy.validation import validate_fmu
 
@@ -267,7 +276,6 @@ def _build_one(name: str, out: Path) -> Path:
         os.replace(partial, target)
     finally:
         partial.unlink(missing_ok=True)
-    record = {"name": name, "source_digest": digest, "python": sys.version.split()[0]}
     tmp_json = out / f".{name}.{os.getpid()}.partial.json"
     tmp_json.write_text(json.dumps(record, indent=2) + "\n")
     os.replace(tmp_json, out / f"{name}.fmu.json")

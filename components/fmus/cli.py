@@ -25,11 +25,12 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim fmu``; returns the exit code."""
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
-    from tribocosim.components.fmus.build import FMUS, FmuBuildError, build_fmus
+    from tribocosim.components import registry
+    from tribocosim.components.fmus.build import FmuBuildError, build_fmus, fmus
 
     if args.command == "list":
-        for name, spec in FMUS.items():
-            print(f"{name}\t{spec.adapter}")
+        for name, comp in fmus().items():
+            print(f"{name}\t{registry.module_of(comp)}")
         return 0
     try:
         built = build_fmus(args.out, args.only)

@@ -197,7 +197,7 @@ class StripDrawModel:
     def _advance(self, dt: float, fn: float, vg: float) -> None:
         p, m = self.params, self.mesh
         self.normal_force = fn
-        pressure = fn / (p.tool_length * p.tool_width)
+        pressure = p.pressure(fn)
         h_max = p.window_courant * m.element_length / abs(vg) if vg != 0 else math.inf
         n_int = max(1, math.ceil(dt / h_max - 1e-9))
         h = dt / n_int
@@ -274,7 +274,7 @@ class StripDrawModel:
             "sliding_distance": float(w @ self.U) / wsum if wsum > 0 else 0.0,
             "beta_mean": float(w @ self.beta) / wsum if wsum > 0 else 0.0,
             "beta_max": float(self.beta.max()),
-            "contact_pressure": fn / (p.tool_length * p.tool_width),
+            "contact_pressure": p.pressure(fn),
             "grip_position": float(self.U[-1]),
             "table_clamp_count": float(self.clamp_count),
         }

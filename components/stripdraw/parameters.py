@@ -108,6 +108,20 @@ class StripDrawParameters:
         return self.shear_stiffness_factor * self.youngs_modulus / self.bar_thickness
 
     @property
+    def pad_area(self) -> float:
+        """Nominal contact area of one pad, L_T w_T [m^2]."""
+        return self.tool_length * self.tool_width
+
+    def pressure(self, normal_force: float) -> float:
+        """Nominal contact pressure P = F_N / (L_T w_T) [Pa] of a normal force [N] on one pad (uniform
+        over the pad: the paper's choice)."""
+        return normal_force / self.pad_area
+
+    def normal_force(self, pressure: float) -> float:
+        """The normal force [N] on one pad that gives the nominal pressure ``pressure`` [Pa]."""
+        return pressure * self.pad_area
+
+    @property
     def wave_speed(self) -> float:
         """Bar wave speed sqrt(E/rho) [m/s]."""
         return math.sqrt(self.youngs_modulus / self.density)

@@ -237,7 +237,7 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
         )
     try:
         table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta)
-    except ParameterError as exc:
+    except (ParameterError, ValueError, TypeError) as exc:  # also members that are not float arrays
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
     if table.content_hash() != meta.get("content_hash"):
         raise TableError(f"friction table {path} fails its content hash check (modified or corrupt)")

@@ -140,29 +140,16 @@ def _component_scales(plan) -> dict[str, float]:
     """Reference magnitudes: pull_force 2 mu0 F_N, grip_velocity |set-point| (from the scene or the defaults)."""
     from tribocosim.cosim.reference_components import component_of
 
-    sc = plan.scene
-    fn, sp, v = None, None, 0.08
+    found = {name: comp for name, spec in plan.scene.fmus.items() if (comp := component_of(spec)) is not None}
+    params = {name: comp.split(plan.scene.fmus[name].parameters)[0] for name, comp in found.items()}
+    by_kind = {comp.name: params[name] for name, comp in found.items()}
+    fn = by_kind["press"].force_setpoint if "press" in by_kind else None
+    v = abs(by_kind["drawingmachine"].velocity_setpoint) if "drawingmachine" in by_kind else 0.08
     scales = {}
-    for name, spec in sc.fmus.items():
-        comp = component_of(spec)
-        if comp == "press":
-            from tribocosim.components.press import PressParameters
-
-            fn = float(spec.parameters.get("force_setpoint", PressParameters().force_setpoint))
-        elif comp == "stripdraw":
-            from tribocosim.components.stripdraw.parameters import StripDrawParameters
-
-            names = {f.name for f in __import__("dataclasses").fields(StripDrawParameters)}
-            sp = StripDrawParameters(**{k: v for k, v in spec.parameters.items() if k in names})
-        elif comp == "drawingmachine":
-            from tribocosim.components.machine import MachineParameters
-
-            v = abs(float(spec.parameters.get("velocity_setpoint", MachineParameters().velocity_setpoint)))
-    for name, spec in sc.fmus.items():
-        comp = component_of(spec)
-        if comp == "stripdraw" and fn:
-            scales[f"{name}.pull_force"] = pull_force_scale(sp, fn, v)
-        elif comp == "drawingmachine" and v > 0:
+    for name, comp in found.items():
+        if comp.name == "stripdraw" and fn:
+            scales[f"{name}.pull_force"] = pull_force_scale(params[name], fn, v)
+        elif comp.name == "drawingmachine" and v > 0:
             scales[f"{name}.grip_velocity"] = v
     return scales
 
@@ -170,7 +157,7 @@ def _component_scales(plan) -> dict[str, float]:
 def _instance(plan, component: str) -> str | None:
     from tribocosim.cosim.reference_components import component_of
 
-    return next((n for n, s in plan.scene.fmus.items() if component_of(s) == component), None)
+    return next((n for n, s in plan.scene.fmus.items() if getattr(component_of(s), "name", None) == component), None)
 
 
 def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget):
@@ -319,13 +306,12 @@ def strip_run(params: dict, pressure: float, profile: str, draw: float, integrat
               budget: float = 120.0):
     """Run the pure model; return (verdict, info). ``step`` is the model step (the whole draw allowed)."""
     from tribocosim.components.errors import TribocosimError
-    from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
-    from tribocosim.cosim.demo import DEFAULT_TABLE
+    from tribocosim.components.stripdraw.component import COMPONENT
 
     v0, ramp_time = 0.08, 0.01
-    p = StripDrawParameters(draw_length=draw, integrator=integrator, **params)
-    model = StripDrawModel(p, make_friction_law(p, read_table(DEFAULT_TABLE) if p.friction_model == "table" else None))
-    fn = pressure * p.tool_length * p.tool_width
+    model = COMPONENT.make({**params, "draw_length": draw, "integrator": integrator}).model
+    p = model.params
+    fn = p.normal_force(pressure)
     t_end = draw / v0 + 0.5 * ramp_time
     n = max(1, int(round(t_end / step)))
     h = t_end / n

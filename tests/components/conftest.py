@@ -23,8 +23,8 @@ import pytest
 from tribocosim.components.stripdraw.model import OUTPUT_NAMES
 
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
-#: the FMUs ``tribocosim fmu build`` builds, in its order
-FMU_NAMES = ("StripDraw", "Press", "DrawingMachine")
+#: the FMUs ``tribocosim fmu build`` builds, in its order (the components' folders, alphabetically)
+FMU_NAMES = ("DrawingMachine", "Press", "StripDraw")
 
 #: Real outputs of the StripDraw FMU, in the model's order (``table_clamp_count`` is an Integer output)
 REAL_OUTPUTS = tuple(name for name in OUTPUT_NAMES if name != "table_clamp_count")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import shutil
 from pathlib import Path
@@ -34,7 +35,7 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
     assert must <= mods, sorted(must - mods)
     assert all(m.startswith("tribocosim") for m in mods), sorted(mods)
     assert not mods & {"tribocosim.components.fmus.build", "tribocosim.components.fmus.cli",
-                       "tribocosim.components.fmus.StripDraw", "tribocosim.cosim", "tribocosim.surrogate"}
+                       "tribocosim.components.paths", "tribocosim.cosim", "tribocosim.surrogate"}
     files = build.runtime_files("StripDraw")
     assert all(f.suffix == ".py" and f.is_file() for f in files)
 
@@ -47,49 +48,73 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.errors",
         "tribocosim.components.params",
         "tribocosim.components.linear",
+        "tribocosim.components.description",
         f"tribocosim.components.{model}",
+        f"tribocosim.components.{model}.component",
+        f"tribocosim.components.{model}.model",
+        f"tribocosim.components.{model}.parameters",
         "tribocosim.components.fmus",
         "tribocosim.components.fmus.adapter",
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.fmus.exitguard",
     }
-    assert build.FMUS[name].data == (), "no friction table"
+    assert build.component(name).resources == (), "no friction table"
     assert "tribocosim.components.fmus.adapter" in _modules("StripDraw"), "StripDraw uses the same adapter plumbing"
 
 
-def _fake_adapter(tmp_path, monkeypatch, body: str, name: str = "Fake") -> str:
-    """An adapter module ``fakepkg_<test>.<name>`` in a temporary folder (a package name of its own per
-    test: find_spec imports the package)."""
-    pkg = tmp_path / f"fakepkg_{tmp_path.name}"
-    pkg.mkdir(exist_ok=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / f"{name}.py").write_text(body.replace("fakepkg_adapters", pkg.name))
+EXTRA = Path(__file__).resolve().parent / "extra"
+
+
+def test_a_registered_component_is_an_fmu_with_its_own_modules_bundled(lag_component):
+    assert build.fmus()["Lag"] is lag_component
+    mods = _modules("Lag")
+    assert {"lagcomponent", "lagcomponent.component", "lagcomponent.model",
+            "tribocosim.components.fmus.adapter", "tribocosim.components.description"} <= mods
+    assert not [m for m in mods if m.startswith(("tribocosim.components.stripdraw", "tribocosim.components.press"))]
+
+
+def _lag_copy(tmp_path, monkeypatch, name: str, resources: str = "", solver: bool = False):
+    """A registered copy of the test component, as package ``name`` in ``tmp_path`` (to break or edit)."""
+    import shutil
+
+    from tribocosim.components import registry
+
+    pkg = tmp_path / name
+    shutil.copytree(EXTRA / "lagcomponent", pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    for f in pkg.glob("*.py"):
+        f.write_text(f.read_text().replace("lagcomponent", name))
+    comp = pkg / "component.py"
+    if resources:
+        comp.write_text(comp.read_text().replace("    build=build,", f"    build=build,\n    resources={resources},"))
+    if solver:  # build() imports a module that does not exist
+        comp.write_text(comp.read_text().replace(f"from {name}.model import LagModel", f"from {name}.solver import LagModel"))
     monkeypatch.syspath_prepend(str(tmp_path))
-    return f"{pkg.name}.{name}"
+    comp = importlib.import_module(f"{name}.component").COMPONENT
+    monkeypatch.setattr(registry, "_REGISTERED", dict(registry._REGISTERED))  # undone after the test
+    registry.register(comp)
+    return pkg, comp
 
 
 def test_missing_module_or_data_file_fails_the_build_naming_it(tmp_path, monkeypatch):
-    adapter = _fake_adapter(tmp_path, monkeypatch, "from tribocosim.components.stripdraw.nope import x\n")
-    monkeypatch.setitem(build.FMUS, "Fake", build.FmuSpec(adapter, data=(tmp_path / "absent.npz",)))
-    with pytest.raises(build.FmuBuildError, match=r"FMU Fake: required file .*absent\.npz is missing"):
-        build.build_fmus(tmp_path / "out", names=["Fake"])
-    monkeypatch.setitem(build.FMUS, "Fake", build.FmuSpec(adapter))
-    with pytest.raises(build.FmuBuildError, match=r"missing modules: tribocosim\.components\.stripdraw\.nope"):
-        build.build_fmus(tmp_path / "out", names=["Fake"])
+    _lag_copy(tmp_path, monkeypatch, "lagnodata", resources='(("lagnodata", "absent.npz"),)')
+    with pytest.raises(build.FmuBuildError, match=r"FMU Lag: required file .*absent\.npz is missing"):
+        build.build_fmus(tmp_path / "out", names=["Lag"])
+    _lag_copy(tmp_path, monkeypatch, "lagnomodel", solver=True)
+    with pytest.raises(build.FmuBuildError, match=r"missing modules: lagnomodel\.solver"):
+        build.build_fmus(tmp_path / "out", names=["Lag"])
     assert not list((tmp_path / "out").glob("*.fmu")), "a failed build left an FMU behind"
 
 
 def test_every_fmu_is_checked_before_any_is_built(tmp_path, monkeypatch):
-    adapter = _fake_adapter(tmp_path, monkeypatch, "import tribocosim.components.gone\n")
-    monkeypatch.setitem(build.FMUS, "Fake", build.FmuSpec(adapter))
-    missing = r"FMU Fake: the adapter imports missing modules: tribocosim\.components\.gone"
+    _lag_copy(tmp_path, monkeypatch, "lagcheck", solver=True)
+    missing = r"FMU Lag: the adapter imports missing modules: lagcheck\.solver"
     with pytest.raises(build.FmuBuildError, match=missing):
-        build.build_fmus(tmp_path / "out", names=["Press", "Fake"])
+        build.build_fmus(tmp_path / "out", names=["Press", "Lag"])
     assert not list((tmp_path / "out").glob("*.fmu")), "Press was built although the build failed"
 
 
 def test_unknown_fmu_name_is_refused_before_building(tmp_path):
-    known = "StripDraw, Press, DrawingMachine"
+    known = "DrawingMachine, Press, StripDraw"
     with pytest.raises(build.FmuBuildError, match=f"unknown FMU 'Nope'; this project builds: {known}"):
         build.build_fmus(tmp_path, names=["StripDraw", "Nope"])
     assert list(tmp_path.iterdir()) == []
@@ -104,29 +129,23 @@ def test_build_record_holds_the_source_digest(built_fmus):
 
 
 def test_source_digest_changes_with_any_bundled_file(tmp_path, monkeypatch):
-    table = tmp_path / "table.npz"
-    table.write_bytes(b"first")
-    adapter = _fake_adapter(tmp_path, monkeypatch, "from fakepkg_adapters import helper\nimport tribocosim.components.press\n")
-    helper = tmp_path / adapter.split(".")[0] / "helper.py"
-    helper.write_text("x = 1\n")
-    monkeypatch.setitem(build.FMUS, "Fake", build.FmuSpec(adapter, data=(table,)))
-    before = build.source_digest("Fake")
-    table.write_bytes(b"second")
-    assert build.source_digest("Fake") != before, "the data file is covered"
-    before = build.source_digest("Fake")
-    (tmp_path / adapter.split(".")[0] / "Fake.py").write_text("import tribocosim.components.press\n# edited\n")
-    assert build.source_digest("Fake") != before, "the adapter is covered"
-    # only tribocosim modules are bundled and digested: the press's closure, not the strip's
-    assert "tribocosim.components.press" in build.runtime_modules("Fake")
-    assert "tribocosim.components.stripdraw.model" not in build.runtime_modules("Fake")
-    assert build.source_digest("Press") != build.source_digest("StripDraw")
+    pkg, _ = _lag_copy(tmp_path, monkeypatch, "lagdigest", resources='(("lagdigest", "data.bin"),)')
+    (pkg / "data.bin").write_bytes(b"first")
+    before = build.source_digest("Lag")
+    (pkg / "data.bin").write_bytes(b"second")
+    assert build.source_digest("Lag") != before, "the resource file is covered"
+    before = build.source_digest("Lag")
+    (pkg / "model.py").write_text((pkg / "model.py").read_text() + "\n# edited\n")
+    assert build.source_digest("Lag") != before, "the model module is covered"
+    press = build.source_digest("Press")
+    assert build.source_digest("Press") == press and press != build.source_digest("StripDraw")
 
 
 def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["build", "--out", "rel/fmus"]) == 0
     printed = capsys.readouterr().out.split()
-    names = ("StripDraw", "Press", "DrawingMachine")
+    names = ("DrawingMachine", "Press", "StripDraw")
     assert printed == [str(tmp_path / "rel" / "fmus" / f"{name}.fmu") for name in names]
     assert all(Path(p).is_file() for p in printed)
 
@@ -134,9 +153,9 @@ def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
 def test_cli_lists_and_reports_errors(capsys, tmp_path):
     assert cli.main(["list"]) == 0
     assert capsys.readouterr().out.split() == [
-        "StripDraw", "tribocosim.components.fmus.StripDraw",
-        "Press", "tribocosim.components.fmus.Press",
-        "DrawingMachine", "tribocosim.components.fmus.DrawingMachine",
+        "DrawingMachine", "tribocosim.components.machine.component",
+        "Press", "tribocosim.components.press.component",
+        "StripDraw", "tribocosim.components.stripdraw.component",
     ]  # fmt: skip
     assert cli.main(["build", "--out", str(tmp_path), "--only", "Nope"]) == 1
     assert "unknown FMU 'Nope'" in capsys.readouterr().err

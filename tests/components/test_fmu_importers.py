@@ -17,6 +17,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from tribocosim.components.stripdraw.friction import make_friction_law
@@ -210,3 +211,40 @@ def test_exit_guard_registers_only_for_a_real_fmu_binary(tmp_path, stripdraw_fmu
         assert exitguard.guard_pythonfmu_exit(resources, "StripDraw")
         n = len(exitguard._guarded)
         assert exitguard.guard_pythonfmu_exit(resources, "StripDraw") and len(exitguard._guarded) == n
+
+
+_MANY_INSTANCES = textwrap.dedent(
+    """
+    import gc, sys
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu, n = sys.argv[1], int(sys.argv[2])
+    md = read_model_description(fmu)
+    unzipped = extract(fmu)
+    for k in range(n):
+        s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=f"i{k}")
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(0.0, 1e-3)
+        s.terminate()
+        s.freeInstance()
+        gc.collect()
+    print("done", n)
+    """
+)
+
+
+@pytest.mark.parametrize("name", ["Press", "StripDraw"])
+def test_many_instances_in_one_process_and_a_clean_exit(built_fmus, tmp_path, name):
+    """Regression: pythonfmu 0.7.0 releases a reference to the script's globals at every
+    instantiation (adapter.hold_script_globals); a generated script without it crashed the host."""
+    script = tmp_path / "many.py"
+    script.write_text(_MANY_INSTANCES)
+    proc = subprocess.run([sys.executable, str(script), str(built_fmus[name]), "40"], capture_output=True, text=True,
+                          timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}\n{proc.stderr[-2000:]}"
+    assert proc.stdout.split()[-2:] == ["done", "40"]

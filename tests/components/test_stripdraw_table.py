@@ -58,6 +58,24 @@ def test_wrong_format_version_and_missing_file_are_refused(tmp_path):
         read_table(path)
     with pytest.raises(TableError, match="not found"):
         read_table(tmp_path / "missing.npz")
+
+
+@pytest.mark.parametrize("member, value", [("beta_threshold", "abc"), ("beta_threshold", [1]), ("mu", b"raw bytes")])
+def test_a_malformed_member_is_a_table_error_not_a_crash(tmp_path, member, value):
+    """Values numpy loads but that are no numbers (found by fuzzing the native reader)."""
+    path = tmp_path / "t.npz"
+    write_table(path, _trilinear_table())
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    if member == "beta_threshold":
+        meta = json.loads(str(arrays["metadata"]))
+        meta[member] = value
+        arrays["metadata"] = np.array(json.dumps(meta))
+    else:
+        arrays[member] = np.frombuffer(value, dtype=np.uint8).view("V1")
+    np.savez(path, **arrays)
+    with pytest.raises(TableError, match="malformed"):
+        read_table(path)
     (tmp_path / "garbage.npz").write_bytes(b"not a zip file")
     with pytest.raises(TableError, match="malformed"):
         read_table(tmp_path / "garbage.npz")

@@ -13,14 +13,13 @@ import re
 import subprocess
 import sys
 import time
-import types
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy.util import read_csv
 
-from tribocosim.cosim import demo, fmucache
+from tribocosim.cosim import demo
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -60,12 +59,12 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
 def test_demo_says_why_when_the_fmus_cannot_be_built(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "empty"))
 
-    def build_fmus(out_dir, names=None):
-        raise RuntimeError("pythonfmu build (exit 1): no C++ compiler found")
+    from tribocosim.components.fmus import build
 
-    fake = types.SimpleNamespace(FMUS={"StripDraw": None, "Press": None, "DrawingMachine": None},
-                                 build_fmus=build_fmus, source_digest=lambda name: "0" * 64)
-    monkeypatch.setattr(fmucache, "_builder", lambda: fake)
+    def build_fmus(out_dir, names=None):
+        raise build.FmuBuildError("pythonfmu build (exit 1): no C++ compiler found")
+
+    monkeypatch.setattr(build, "build_fmus", build_fmus)
     assert demo.main(["--out", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
     assert "the FMUs could not be built" in err and "no C++ compiler found" in err and "Press.fmu" in err, err

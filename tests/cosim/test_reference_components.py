@@ -115,7 +115,7 @@ def test_component_problems_name_instance_and_parameter(tmp_path):
         "fmus.press.parameters.force_setpoint": 50.0,  # 0.04 MPa: below the shipped table's axis
         "fmus.drive.parameters.screw_lead": 0.0,
     })
-    lines = component_problems(scene)
+    lines = [str(p) for p in component_problems(scene)]
     text = "\n".join(lines)
     assert len(lines) == 4, text
     assert f"{DEMO}: fmus.strip.parameters.friction_model: friction_model = 'tabel' is not allowed" in text
@@ -124,7 +124,7 @@ def test_component_problems_name_instance_and_parameter(tmp_path):
     # the set-point is checked against the table of the strip's valid parameters (default law: table)
     assert f"{DEMO}: fmus.press.parameters.force_setpoint: the set-point, 50 N on the 35 x 35 mm pad" in text
     ok, _ = parse_scene(DEMO, {"fmus.press.parameters.force_setpoint": 50.0})
-    low = component_problems(ok)
+    low = [str(p) for p in component_problems(ok)]
     assert len(low) == 1 and "fmus.press.parameters.force_setpoint: the set-point, 50 N" in low[0]
     axis = read_table(DEFAULT_TABLE).pressure / 1e6
     assert f"0.04082 MPa, outside the friction table's pressure axis [{axis[0]:g}, {axis[-1]:g}] MPa" in low[0]

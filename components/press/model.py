@@ -17,51 +17,11 @@ set-point's breakpoints; :mod:`tribocosim.components.linear`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from tribocosim.components.errors import ParameterError, check_finite
 from tribocosim.components.linear import AffineInputPropagator
-from tribocosim.components.params import param, validate_fields
-
-
-@dataclass(frozen=True)
-class PressParameters:
-    """Parameters of the press (SI units)."""
-
-    force_setpoint: float = param(12250.0, "N", "normal force to hold on one pad (10 MPa on 35 x 35 mm)", 0.0, 1e8)
-    ramp_time: float = param(0.05, "s", "time to ramp the set-point from 0 to force_setpoint", 0.0, 1e4)
-    setpoint_table: str = param("", "", "optional set-point table 't0 F0; t1 F1; ...' [s N], overrides the ramp", text=True)
-    kp: float = param(0.5, "1", "proportional gain of the force controller", 0.0, 1e3)
-    ki: float = param(200.0, "1/s", "integral gain of the force controller", 0.0, 1e6)
-    actuator_time_constant: float = param(5e-3, "s", "first-order lag of the hydraulic actuator", 1e-6, 10.0, False)
-    frame_stiffness: float = param(5e8, "N/m", "stiffness of frame, tools and pad stack", 1.0, 1e13, False)
-    frame_damping: float = param(2e5, "N s/m", "damping of the frame/pad stack", 0.0, 1e10)
-    piston_mass: float = param(20.0, "kg", "moving mass of piston and tool", 1e-3, 1e5, False)
-
-    def __post_init__(self) -> None:
-        validate_fields(self)
-        self.setpoints()  # parse now: a malformed table is a parameter error
-
-    def setpoints(self) -> tuple[np.ndarray, np.ndarray]:
-        """Breakpoints (times [s], forces [N]) of the piecewise-linear set-point."""
-        if not self.setpoint_table:
-            if self.ramp_time == 0:
-                return np.array([0.0]), np.array([self.force_setpoint])
-            return np.array([0.0, self.ramp_time]), np.array([0.0, self.force_setpoint])
-        try:
-            pairs = [tuple(float(x) for x in item.split()) for item in self.setpoint_table.split(";") if item.strip()]
-            if not pairs or any(len(p) != 2 for p in pairs):
-                raise ValueError("each entry needs a time and a force")
-        except ValueError as exc:
-            raise ParameterError(f"setpoint_table = {self.setpoint_table!r} is malformed: {exc}") from exc
-        t, f = np.array(pairs).T
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))) or np.any(np.diff(t) <= 0) or np.any(f < 0):
-            raise ParameterError(
-                f"setpoint_table = {self.setpoint_table!r}: times must increase and forces be finite and >= 0"
-            )
-        return t, f
+from tribocosim.components.press.parameters import PressParameters
 
 
 class PressModel:

@@ -1,0 +1,172 @@
+"""One description per runtime component: everything else (FMUs, scene checks, reference) derives from it.
+
+A component is a pure model (``step(dt, inputs) -> outputs``, ``outputs()``, ``get_state()``,
+``set_state()``, the state unchanged when ``step`` raises) plus one :class:`Component` next to
+it (``tribocosim/components/<name>/component.py``, module attribute ``COMPONENT``) that says
+
+- its names: the scene name (``component = "stripdraw"``) and the FMU's model identifier;
+- its parameters: the model's frozen parameter dataclass, and a second dataclass of the FMU-only
+  parameters (files: a friction table, field files), both declared with
+  :func:`tribocosim.components.params.param` (unit, description, default, range or choices);
+- its inputs and outputs (:class:`Port`: unit, description, start value, the model's key);
+- the resource files an FMU carries (copied to the root of ``resources/``), as
+  ``(package, file name)`` pairs of package data (resolved only when building, so that a bundled
+  FMU, which has them in its ``resources/``, never looks for the package);
+- how to make the model: ``build(parameters, files, resources) -> Built`` (loads the table, reads a
+  field file, ...); ``resources`` is the folder those files are in (an FMU's ``resources/``, or the
+  installed package data in process);
+- optionally: its own scene checks (``check(parameters, files, resources) -> (problems, limits)``:
+  problems of a parameter set that only the model can see, e.g. an unreadable table, as
+  ``(parameter name or "", message)``, and the ranges its inputs accept as ``{input: Limit}``) and
+  the set-points its outputs will follow (``setpoints``), which the scene checks match across
+  connections;
+  an ``observer`` for side outputs (the strip's field file); and its native implementation
+  (``native``: C sources and the prefix of its C functions).
+
+:mod:`tribocosim.components.registry` finds the descriptions: the FMU build, the pythonfmu adapter,
+the native FMU's model description, the scene checks, the monolithic reference, the demo and the
+reports all read them. Adding a component is writing its model and its description.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from tribocosim.components.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class Port:
+    """An input or output: FMU variable name, unit, description (without the unit), start value.
+
+    ``key`` is the model's name of the quantity when the FMU variable is named differently (e.g.
+    because a parameter has the model's name); ``integer`` declares an output as an FMI Integer.
+    """
+
+    name: str
+    unit: str
+    description: str
+    start: float = 0.0
+    key: str | None = None
+    integer: bool = False
+
+    @property
+    def model_key(self) -> str:
+        """The key of the quantity in the model's inputs or outputs dict."""
+        return self.key or self.name
+
+
+@dataclass(frozen=True)
+class SetPoint:
+    """A value an output will follow (e.g. the press's force set-point), for the scene checks.
+
+    ``label`` names it in a message ("the set-point, 12250 N"); ``parameter`` is the parameter
+    that sets it (the key the problem is reported under).
+    """
+
+    value: float
+    label: str
+    parameter: str
+
+
+#: ``limit(value, label, instance) -> message or None``: whether an input accepts a set-point
+Limit = Callable[[float, str, str], "str | None"]
+
+
+@dataclass
+class Built:
+    """What :attr:`Component.build` returns: the model and the facts a restored FMU state must match.
+
+    ``fingerprint`` maps a description (e.g. ``"friction table hash"``) to a value; an FMU state
+    is restored only into an instance with the same fingerprint.
+    """
+
+    model: Any
+    fingerprint: dict[str, Any] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Native:
+    """The C implementation of a component (sources in :mod:`tribocosim.components.native`).
+
+    ``prefix`` names its C functions (``<prefix>_create``, ``_step``, ...); ``sources`` are the C
+    files beside the shared ones; ``params_header`` is the header the build generates with the
+    parameter struct (``<prefix>_params``).
+    """
+
+    prefix: str
+    sources: tuple[str, ...]
+    params_header: str
+
+
+@dataclass(frozen=True)
+class Component:
+    """The description of one runtime component (see the module docstring)."""
+
+    name: str
+    model_identifier: str
+    summary: str
+    parameters: type
+    inputs: tuple[Port, ...]
+    outputs: tuple[Port, ...]
+    build: Callable[[Any, Any, Path], Built]
+    files: type | None = None
+    resources: tuple[tuple[str, str], ...] = ()
+    check: Callable[[Any, Any, Path], tuple[list[tuple[str, str]], dict[str, Limit]]] | None = None
+    setpoints: Callable[[Any], dict[str, list[SetPoint]]] | None = None
+    observer: Callable[[Any, Any, dict], Any] | None = None
+    native: Native | None = None
+    default_experiment: tuple[float, float, float] = (0.0, 1.75, 1e-3)
+    author: str = "tribocosim"
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def parameter_fields(self) -> tuple[dataclasses.Field, ...]:
+        """Every FMU parameter: the model's fields, then the FMU-only ones (one variable each)."""
+        extra = dataclasses.fields(self.files) if self.files is not None else ()
+        return (*dataclasses.fields(self.parameters), *extra)
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        """Default value of every FMU parameter, by name."""
+        return {f.name: f.default for f in self.parameter_fields}
+
+    @property
+    def resource_files(self) -> tuple[Path, ...]:
+        """The resource files in this installation (an FMU has them at the root of ``resources/``)."""
+        from importlib.resources import files
+
+        return tuple(Path(str(files(package))) / name for package, name in self.resources)
+
+    @property
+    def resource_dir(self) -> Path:
+        """The folder the resource files are in, in this installation."""
+        folders = {p.parent for p in self.resource_files}
+        if len(folders) > 1:
+            raise ParameterError(f"component {self.name}: resources must share one folder, got {sorted(folders)}")
+        return folders.pop() if folders else Path(".")
+
+    def split(self, values: dict[str, Any]) -> tuple[Any, Any]:
+        """(parameters, files) dataclass instances from ``{name: value}`` (missing names take their
+        defaults; unknown names are ignored). Raises ParameterError naming the first bad field."""
+        own = {f.name for f in dataclasses.fields(self.parameters)}
+        params = self.parameters(**{k: v for k, v in values.items() if k in own})
+        files = None
+        if self.files is not None:
+            names = {f.name for f in dataclasses.fields(self.files)}
+            files = self.files(**{k: v for k, v in values.items() if k in names})
+        return params, files
+
+    def make(self, values: dict[str, Any], resources: Path | None = None) -> Built:
+        """The model for parameter ``values`` (``{name: value}``), resources from ``resources``
+        (default: :attr:`resource_dir`)."""
+        params, files = self.split(values)
+        return self.build(params, files, Path(resources) if resources is not None else self.resource_dir)
+
+    def output(self, name: str) -> Port:
+        """The output port ``name``."""
+        return next(p for p in self.outputs if p.name == name)

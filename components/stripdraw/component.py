@@ -1,0 +1,194 @@
+"""The strip-draw component: its FMU variables, files, resources and how the model is made.
+
+The one description of the StripDraw FMU (Python and native variants), the scene checks and the
+monolithic reference (:mod:`tribocosim.components.description`).
+
+Variables
+    One parameter per field of :class:`~tribocosim.components.stripdraw.parameters.StripDrawParameters`,
+    then the FMU's files (:class:`StripDrawFiles`), the inputs ``normal_force`` [N] and
+    ``grip_velocity`` [m/s], and the outputs (:data:`OUTPUTS`, the model's ``OUTPUT_NAMES`` in order;
+    ``table_clamp_count`` is an Integer).
+
+``table_file``
+    Used when ``friction_model = "table"``. A relative path is taken relative to the FMU's
+    ``resources/`` folder, where the default table ``friction_table.npz`` is bundled; an absolute
+    path is used as is. A missing or malformed table file is an initialization error naming the
+    path. The table's content hash is part of the FMU state: a state is restored only into an
+    instance that uses the same table.
+
+``field_output``, ``field_output_interval``, ``field_input`` (the debris field, for maps and passes)
+    When ``field_output`` names a file (relative: to the importer's working directory), the FMU
+    records the nodal fields at initialization and then after every step that ends at least
+    ``field_output_interval`` seconds after the last recorded row (0: every step), and writes them
+    at ``fmi2Terminate`` (:mod:`.fields`: the format, atomically, the final state always
+    included); a rolled-back step drops the rows after the restored time. ``field_input`` names such
+    a file: the strip starts from its last ``beta`` row (a later pass over the same strip without
+    cleaning, paper Fig. 2b); it must have been written for this mesh.
+
+Errors particular to this model
+    NaN/inf/negative ``normal_force``, NaN/inf ``grip_velocity``, a table lookup outside the table
+    under ``table_policy = "error"``, an implicit solve that does not converge: the step is
+    discarded. Lookups outside the table's axes under ``table_policy = "clamp"`` (the default)
+    are evaluated at the nearest edge and counted in ``table_clamp_count``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from tribocosim.components.description import Built, Component, Native, Port
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.params import param, validate_fields
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+
+#: The shipped friction table (package data), bundled at the root of the FMU's ``resources/``.
+TABLE_RESOURCE = ("tribocosim.models", "friction_table.npz")
+#: Start values of the inputs: the paper's test at P_N = 10 MPa on the default 35 x 35 mm pad.
+DEFAULT_NORMAL_FORCE = 12250.0  # N = 10 MPa x 0.035 m x 0.035 m
+DEFAULT_GRIP_VELOCITY = 0.08
+
+
+@dataclass(frozen=True)
+class StripDrawFiles:
+    """The StripDraw FMU's files (parameters that are not the model's)."""
+
+    table_file: str = param(
+        TABLE_RESOURCE[1], "", "friction table (.npz) used when friction_model = table: a path relative to the "
+        "FMU's resources folder, or absolute", text=True)
+    field_output: str = param(
+        "", "", "file (.npz) to write the nodal fields time, X, beta, U, contact to at terminate; empty: none "
+        "(relative paths: to the working directory)", text=True)
+    field_output_interval: float = param(0.0, "s", "least time between two recorded rows of field_output; "
+                                         "0: every step", 0.0, None)
+    field_input: str = param(
+        "", "", "field file (.npz, from field_output) whose last beta row is the initial debris field (a later "
+        "pass); empty: beta_initial everywhere", text=True)
+
+    def __post_init__(self) -> None:
+        validate_fields(self)
+
+    def table_path(self, resources: Path) -> Path:
+        """``table_file`` resolved against the resources folder (absolute paths as they are)."""
+        path = Path(self.table_file)
+        return path if path.is_absolute() else Path(resources) / path
+
+
+INPUTS = (
+    Port("normal_force", "N", "normal force F_N on one pad (>= 0)", DEFAULT_NORMAL_FORCE),
+    Port("grip_velocity", "m/s", "velocity of the grip pulling the strip", DEFAULT_GRIP_VELOCITY),
+)
+#: the model's OUTPUT_NAMES, in its order
+OUTPUTS = (
+    Port("pull_force", "N", "pull force on the whole strip (both faces); mu = pull_force / (2 normal_force)"),
+    Port("friction_force", "N", "friction force F_S on the modelled face (sum of nodal friction forces)"),
+    Port("mu_mean", "1", "mean friction coefficient F_S / F_N (Eq. 28)"),
+    Port("sliding_distance", "m", "contact-weighted mean displacement of the strip under the pad"),
+    Port("beta_mean", "1", "contact-weighted mean debris area fraction under the pad"),
+    Port("beta_max", "1", "largest debris area fraction on the strip"),
+    Port("contact_pressure", "Pa", "nominal contact pressure P = F_N / (tool_length tool_width)"),
+    Port("grip_position", "m", "displacement of the grip"),
+    Port("table_clamp_count", "1", "cumulative number of nodal table lookups outside the table (clamped)",
+         integer=True),
+)
+
+
+def _table(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
+    """The friction table the parameters ask for (None unless friction_model = table)."""
+    from tribocosim.components.stripdraw.table import read_table
+
+    return read_table(files.table_path(resources)) if params.friction_model == "table" else None
+
+
+def build(params: StripDrawParameters, files: StripDrawFiles, resources: Path) -> Built:
+    """The model: the table loaded (if used), the initial debris field read (if given)."""
+    from tribocosim.components.stripdraw.fields import read_initial_beta
+    from tribocosim.components.stripdraw.friction import make_friction_law
+    from tribocosim.components.stripdraw.mesh import BarMesh
+    from tribocosim.components.stripdraw.model import StripDrawModel
+
+    table = _table(params, files, resources)
+    beta = read_initial_beta(files.field_input, BarMesh.build(params).X) if files.field_input else None
+    model = StripDrawModel(params, make_friction_law(params, table), beta_field=beta)
+    if table is None:
+        return Built(model, {"friction table hash": None})
+    digest = table.metadata.get("content_hash")
+    note = f"friction table {files.table_path(resources)}: provenance {table.provenance}, content hash {digest}"
+    return Built(model, {"friction table hash": digest}, [note])
+
+
+def check(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
+    """Scene problems only the model sees (the table, the field file, the cap), and the input limits
+    the table sets: the normal force's nominal pressure and the grip speed must lie on its axes."""
+    from tribocosim.components.stripdraw.friction import make_friction_law
+
+    problems, limits = [], {}
+    table = None
+    if params.friction_model == "table":
+        path = files.table_path(resources)
+        try:
+            table = _table(params, files, resources)
+        except Exception as exc:  # noqa: BLE001 - any unreadable table is a scene problem
+            problems.append(("table_file", f"friction table {path} cannot be used: {exc}"))
+    if files.field_input and not Path(files.field_input).is_file():
+        problems.append(("field_input", f"field file {files.field_input} does not exist (the field_output of an "
+                                        "earlier pass)"))
+    cap = None
+    if table is not None or params.friction_model != "table":
+        try:
+            cap = make_friction_law(params, table).beta_threshold
+        except ParameterError as exc:
+            problems.append(("", str(exc)))
+    if params.beta_threshold > 0:
+        cap = params.beta_threshold
+    if cap is not None and params.beta_initial > cap:
+        problems.append(("beta_initial", f"beta_initial = {params.beta_initial!r} exceeds the cap of beta, {cap:.6g} "
+                                         "(Eq. 24; from the friction law or beta_threshold)"))
+    if table is not None:
+        lo, hi = float(table.pressure[0]), float(table.pressure[-1])
+        vmax = float(table.velocity[-1])
+        pad = f"{params.tool_length * 1e3:g} x {params.tool_width * 1e3:g} mm pad"
+
+        def force_limit(force: float, label: str, instance: str) -> str | None:
+            pressure = params.pressure(force)
+            if lo <= pressure <= hi:
+                return None
+            return (f"{label} on the {pad} of '{instance}', is a nominal pressure of {pressure / 1e6:.4g} MPa, "
+                    f"outside the friction table's pressure axis [{lo / 1e6:g}, {hi / 1e6:g}] MPa")
+
+        def velocity_limit(v: float, label: str, instance: str) -> str | None:
+            if abs(v) <= vmax:
+                return None
+            return f"{label} is above the friction table's velocity axis (up to {vmax:g} m/s) of '{instance}'"
+
+        limits = {"normal_force": force_limit, "grip_velocity": velocity_limit}
+    return problems, limits
+
+
+def observer(model, files: StripDrawFiles, values: dict):
+    """The field recorder when ``field_output`` names a file, else None."""
+    if not files.field_output:
+        return None
+    from tribocosim.components.stripdraw.fields import FieldRecorder
+
+    return FieldRecorder.start(files.field_output, files.field_output_interval, model, values)
+
+
+COMPONENT = Component(
+    name="stripdraw",
+    model_identifier="StripDraw",
+    summary=("Flat strip-draw test with wear debris: 1D bar under a rigid pad, Coulomb interface law, "
+             "debris transport and a friction table mu(P, v, beta) (FMI 2.0 co-simulation)"),
+    parameters=StripDrawParameters,
+    files=StripDrawFiles,
+    inputs=INPUTS,
+    outputs=OUTPUTS,
+    resources=(TABLE_RESOURCE,),
+    build=build,
+    check=check,
+    observer=observer,
+    native=Native(prefix="tc_stripdraw", sources=("tc_stripdraw.c", "tc_table_lookup.c", "tc_table_file.c",
+                                                   "tc_npz.c", "tc_sha256.c", "tc_json.c"),
+                  params_header="tc_stripdraw_params.h"),
+    default_experiment=(0.0, 1.75, 1e-3),
+)
