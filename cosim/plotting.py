@@ -47,11 +47,11 @@ def _pyplot():
 
 
 def read_field(path) -> dict:
-    """The arrays of a StripDraw ``field_output`` file (time, X, beta, U, contact, window)."""
-    import numpy as np
+    """The arrays of a StripDraw ``field_output`` file (time, X, beta, U, contact, window; its format's owner
+    is :mod:`tribocosim.components.stripdraw.fields`)."""
+    from tribocosim.components.stripdraw.fields import read_fields
 
-    with np.load(path, allow_pickle=False) as data:
-        return {k: np.array(data[k]) for k in data.files}
+    return read_fields(path)
 
 
 def pad_edges_in_material(field: dict):

@@ -9,9 +9,10 @@ Notation (one pad, one face; node N is the grip, nodes 0..N-1 are free):
 - lumped mass m_i = rho A l_e (half at both ends), element stiffness k_e = E A / l_e;
 - contact weight: the overlap ``ov_i`` of node i's tributary segment, placed at its current
   position x_i = X_i + U_i, with the tool window [a_lo, a_hi] (length l_e inside, l_e/2 at the ends);
-- interface law (Eq. 4-5): trial T = k_s (U_i - Up_i); if |T| > mu_i P then T = sign(T) mu_i P and
-  Up_i = U_i - T / k_s (return mapping); nodal force on the bar -T w_T ov_i. A node that enters the
-  window starts stress-free (Up_i := U_i).
+- interface law (Eq. 4-5), :func:`interface_law`, the one function every kernel calls: trial
+  T = k_s (U_i - Up_i); if |T| > mu_i P then T = sign(T) mu_i P and Up_i = U_i - T / k_s (return
+  mapping); nodal force on the bar -T w_T ov_i. A node that enters the window starts stress-free
+  (Up_i := U_i).
 
 Explicit central difference (App. B, Eq. 31-32, Newmark beta=0, gamma=1/2), lumped mass:
 predictor U += dt V + dt^2/2 A, V += dt/2 A; forces at the predicted U; A = f/m; V += dt/2 A.
@@ -59,14 +60,29 @@ def overlap_numpy(X, U, half_le, a_lo, a_hi):
     return np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo))
 
 
+def interface_law(x, ks, tmax):
+    """The interface law (Eq. 4-5), the one place it is written: elastic-perfectly-plastic Coulomb.
+
+    For the elastic slip ``x = U - U_p`` of a node (scalars, or arrays element-wise): trial traction
+    k_s x; if |k_s x| > T_max = mu P the node slips and T = sign(k_s x) T_max (the return mapping then
+    sets U_p = U - T / k_s). Returns ``(T, slipping, phi)`` with ``phi`` the potential of the
+    return-mapped spring: k_s x^2 / 2 while sticking, T_max |x| - T_max^2 / (2 k_s) while slipping
+    (its derivative is T; the generalized-alpha step minimises it). Called by every integrator kernel
+    (compiled inside the numba loops, vectorised in the NumPy references).
+    """
+    trial = ks * x
+    T = np.minimum(np.maximum(trial, -tmax), tmax)
+    slipping = np.abs(trial) > tmax
+    phi = slipping * (tmax * np.abs(x) - 0.5 * tmax * tmax / ks) + (1 - slipping) * (0.5 * ks * x * x)
+    return T, slipping, phi
+
+
 def return_mapping_numpy(U, Up, contact, ov, ks, tmax):
     """Eq. 4-5 on every node (NumPy). Updates ``Up`` and ``contact`` in place; returns T, stick."""
     entering = (ov > 0) & (contact == 0)
     Up[entering] = U[entering]
     contact[:] = ov > 0
-    trial = ks * (U - Up)
-    slip = np.abs(trial) > tmax
-    T = np.where(slip, np.sign(trial) * tmax, trial)
+    T, slip, _ = interface_law(U - Up, ks, tmax)
     T[contact == 0] = 0.0
     Up[slip & (contact == 1)] = U[slip & (contact == 1)] - T[slip & (contact == 1)] / ks
     return T, (~slip) & (contact == 1)
@@ -103,12 +119,8 @@ def _explicit_loop(n_sub, dt, U, V, A, Up, contact, X, minv, ke, ks, wT, half_le
                 if contact[i] == 0:
                     Up[i] = U[i]
                     contact[i] = 1
-                T = ks * (U[i] - Up[i])
-                if T > tmax[i]:
-                    T = tmax[i]
-                    Up[i] = U[i] - T / ks
-                elif T < -tmax[i]:
-                    T = -tmax[i]
+                T, slipping, _ = _interface_law_k(U[i] - Up[i], ks, tmax[i])
+                if slipping:
                     Up[i] = U[i] - T / ks
                 F = T * wT * ov
                 f[i] -= F
@@ -192,19 +204,9 @@ def _galpha_eval(u, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, c
         state[i] = 0
         if ov[i] > 0.0:
             x = u[i] - Upn[i]
-            t = ks * x
-            if t > tmax[i]:
-                T[i] = tmax[i]
-                state[i] = 2
-                phi = tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks
-            elif t < -tmax[i]:
-                T[i] = -tmax[i]
-                state[i] = 3
-                phi = -tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks
-            else:
-                T[i] = t
-                state[i] = 1
-                phi = 0.5 * ks * x * x
+            t, slipping, phi = _interface_law_k(x, ks, tmax[i])
+            T[i] = t
+            state[i] = 1 if not slipping else (2 if x > 0 else 3)
             if i < N:
                 pot += (1.0 - af) * wT * ov[i] * phi
         f[i] = T[i] * wT * ov[i]
@@ -337,11 +339,10 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
 
     def evaluate(u):
         x = u - Upn
-        trial = ks * x
-        slipping = np.abs(trial) > tmax
-        T = np.where(slipping, np.sign(trial) * tmax, trial) * inside
-        state = np.where(inside, np.where(slipping, np.where(trial > 0, 2, 3), 1), 0).astype(np.int8)
-        phi = np.where(slipping, tmax * np.abs(x) - 0.5 * tmax**2 / ks, 0.5 * ks * x**2) * inside
+        T, slipping, phi = interface_law(x, ks, tmax)
+        T = T * inside
+        phi = phi * inside
+        state = np.where(inside, np.where(slipping, np.where(x > 0, 2, 3), 1), 0).astype(np.int8)
         d = np.diff(u)
         f = T * wT * ov
         f[:-1] -= ke * d
@@ -388,6 +389,7 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
 
 
 _thomas_k = jit(_thomas_loop)
+_interface_law_k = jit(interface_law)
 _galpha_eval_k = jit(_galpha_eval)
 if USE_NUMBA:
     explicit_kernel = jit(_explicit_loop)

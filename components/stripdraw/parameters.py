@@ -119,7 +119,7 @@ class StripDrawParameters:
 
     def normal_force(self, pressure: float) -> float:
         """The normal force [N] on one pad that gives the nominal pressure ``pressure`` [Pa]."""
-        return pressure * self.pad_area
+        return pressure * self.tool_length * self.tool_width
 
     @property
     def wave_speed(self) -> float:
