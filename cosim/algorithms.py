@@ -43,9 +43,39 @@ import numpy as np
 
 from tribocosim.components.errors import ConvergenceError
 from tribocosim.cosim.extrapolation import StepPolynomial
-from tribocosim.cosim.scene import Iterative
 from tribocosim.cosim.slave import DISCARD
 from tribocosim.cosim.system import CoupledSystem
+
+ITERATION_METHODS = ("fixed-point", "quasi-newton")
+
+
+@dataclass(frozen=True)
+class Iterative:
+    """[master.iterative]: the fixed-point / quasi-Newton iteration of a macro step."""
+
+    method: str = "quasi-newton"
+    relaxation: float | str = 1.0
+    tolerance: float = 1e-8
+    max_iterations: int = 50
+    reuse: int = 2
+
+    @classmethod
+    def parse(cls, p, table: dict, key: str) -> "Iterative":
+        """The settings of a ``[master.iterative]`` table; problems go to the collector ``p``."""
+        p.unknown_keys(table, [f.name for f in __import__("dataclasses").fields(cls)], key)
+        d = cls()
+        method = p.choice(table, "method", key, ITERATION_METHODS, d.method)
+        relax = table.get("relaxation", d.relaxation)
+        if relax != "aitken" and (isinstance(relax, bool) or not isinstance(relax, (int, float)) or not 0 < relax <= 2):
+            p.add(f"{key}.relaxation", f"must be a number in (0, 2] or \"aitken\", got {relax!r}")
+            relax = d.relaxation
+        return cls(
+            method,
+            relax if relax == "aitken" else float(relax),
+            float(p.number(table, "tolerance", key, d.tolerance, positive=True)),
+            int(p.number(table, "max_iterations", key, d.max_iterations, positive=True, integer=True)),
+            int(p.number(table, "reuse", key, d.reuse, integer=True)),
+        )
 
 
 @dataclass
@@ -74,19 +104,18 @@ def _mix(a: StepPolynomial, b: StepPolynomial, use_b: np.ndarray) -> StepPolynom
 
 
 class Algorithm:
-    """Base: the settings every scheme shares."""
+    """Base: the settings every scheme shares.
+
+    Every scheme is made with ``(order, propagate, sequence, settings)``: the extrapolation order,
+    whether outputs are propagated through direct feedthrough after a step, the Gauss-Seidel
+    sequence of slaves, and the scheme's own settings (its ``[master.<name>]`` table).
+    """
 
     name = "base"
-    needs_rollback = False
 
-    def __init__(self, order: int, propagate: bool = True) -> None:
+    def __init__(self, order: int, propagate: bool = True, sequence: tuple[int, ...] = (), settings=None) -> None:
         self.order = order
         self.propagate = propagate
-
-    @property
-    def accuracy_order(self) -> int:
-        """Global order of the coupling error with exact subsystems (q + 1, capped at 2 for mean hold)."""
-        return self.order + 1
 
     def step(self, sys: CoupledSystem, t: float, h: float, tick: float) -> StepResult:
         """One macro step; the first step of a degree-2 scheme gets one corrector pass (if it can roll back)."""
@@ -130,7 +159,7 @@ class GaussSeidel(Algorithm):
 
     name = "gauss-seidel"
 
-    def __init__(self, order: int, sequence: tuple[int, ...], propagate: bool = True) -> None:
+    def __init__(self, order: int, propagate: bool = True, sequence: tuple[int, ...] = (), settings=None) -> None:
         super().__init__(order, propagate)
         self.sequence = sequence
 
@@ -167,13 +196,12 @@ class IterativeCoupling(Algorithm):
     """Repeat the macro step from the saved state until the coupling values converge."""
 
     name = "iterative"
-    needs_rollback = True
 
-    def __init__(self, order: int, settings: Iterative) -> None:
+    def __init__(self, order: int, propagate: bool = True, sequence: tuple[int, ...] = (),
+                 settings: Iterative | None = None) -> None:
         super().__init__(min(order, 2), propagate=True)
-        self.settings = settings
+        self.settings = settings if settings is not None else Iterative()
         self.reused: list[_Secants] = []
-        self.total_iterations = 0
 
     def step(self, sys: CoupledSystem, t: float, h: float, tick: float) -> StepResult:
         st = self.settings
@@ -204,7 +232,6 @@ class IterativeCoupling(Algorithm):
                 err = float(np.max(np.abs(r) / scale)) if sys.m else 0.0
                 errs.append(err)
                 norms.append(float(np.max(np.abs(r))) if sys.m else 0.0)
-                self.total_iterations += 1
                 if err <= 1.0:
                     self._remember(own)
                     return StepResult(True, iterations=k + 1, residual=err, contraction=_rate(norms))
@@ -277,3 +304,26 @@ def _worst(sys: CoupledSystem, r: np.ndarray, scale: np.ndarray) -> str:
         return "(no links)"
     k = int(np.argmax(np.abs(r) / scale))
     return f"{sys.links[k].label} (residual {r[k]:.3g})"
+
+
+@dataclass(frozen=True)
+class AlgorithmSpec:
+    """A coupling scheme: its class, the dataclass of its ``[master.<name>]`` table (or None), and
+    what the master and the scene checks need to know of it."""
+
+    cls: type
+    settings: type | None = None
+    rolls_back: bool = False  # repeats every macro step from saved FMU states
+    solves_loops: bool = False  # converges algebraic loops within a macro step
+
+    def create(self, order: int, propagate: bool, sequence: tuple[int, ...], settings) -> Algorithm:
+        """The scheme for a run."""
+        return self.cls(order, propagate, sequence, settings)
+
+
+#: every coupling scheme by its scene name (``[master] algorithm``): the one list of them
+ALGORITHMS: dict[str, AlgorithmSpec] = {
+    Jacobi.name: AlgorithmSpec(Jacobi),
+    GaussSeidel.name: AlgorithmSpec(GaussSeidel),
+    IterativeCoupling.name: AlgorithmSpec(IterativeCoupling, Iterative, rolls_back=True, solves_loops=True),
+}

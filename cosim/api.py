@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from tribocosim.cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
+from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.graph import gauss_seidel_order
 from tribocosim.cosim.master import Master
 from tribocosim.cosim.recorder import Progress, Recorder
 from tribocosim.cosim.slave import FmpySlave
-from tribocosim.cosim.stepcontrol import EnergyControl, FixedStep, StepDoubling
+from tribocosim.cosim.stepcontrol import ESTIMATORS, FixedStep
 from tribocosim.cosim.system import CoupledSystem, LinkSpec
 from tribocosim.cosim.timegrid import TimeGrid
 from tribocosim.cosim.validate import Plan
@@ -111,15 +111,13 @@ def extracted_fmu(path: Path) -> Path:
     return d
 
 
-def build(plan: Plan, slave_factory=None) -> Build:
+def build(plan: Plan) -> Build:
     """Assemble a master for a validated scene (FMUs extracted, not yet instantiated).
 
     Parameters
     ----------
     plan : Plan
         From :func:`tribocosim.cosim.validate.load_scene`.
-    slave_factory : callable, optional
-        ``(name, FmuModel, unzip_dir) -> Slave``; default :class:`FmpySlave`.
     """
     scene = plan.scene
     names = list(plan.fmus)
@@ -127,8 +125,7 @@ def build(plan: Plan, slave_factory=None) -> Build:
     slaves = []
     for n in names:
         model = plan.fmus[n]
-        factory = slave_factory or (lambda name, mdl, unzip: FmpySlave(name, unzip, mdl.md))
-        slaves.append(factory(n, model, extracted_fmu(model.path)))
+        slaves.append(FmpySlave(n, extracted_fmu(model.path), model.md))
 
     links = []
     for l in plan.links:
@@ -160,17 +157,13 @@ def build(plan: Plan, slave_factory=None) -> Build:
     propagate = ms.output_update == "propagate"
     pairs = [(sp.source, sp.target) for sp in links]
     gs = gauss_seidel_order(len(names), pairs, [index[o] for o in ms.order] if ms.order else None)
-    if ms.algorithm == "jacobi":
-        algorithm = Jacobi(order, propagate)
-    elif ms.algorithm == "gauss-seidel":
-        algorithm = GaussSeidel(order, gs.order, propagate)
+    algorithm = ALGORITHMS[ms.algorithm].create(order, propagate, gs.order, ms.algorithm_settings)
+    if isinstance(algorithm, GaussSeidel):
         for cycle in gs.cycles:
             back = [links[k].label for k in sorted(gs.backward) if links[k].target in cycle]
             notes.append(f"Gauss-Seidel: instances {' -> '.join(names[i] for i in cycle)} form a cycle; stepping order "
                          f"{', '.join(names[i] for i in gs.order)}, so {', '.join(back)} {'is' if len(back) == 1 else 'are'} "
                          "extrapolated")
-    else:
-        algorithm = IterativeCoupling(order, ms.iterative)
 
     ex = scene.experiment
     if ms.adaptive is None:
@@ -178,14 +171,11 @@ def build(plan: Plan, slave_factory=None) -> Build:
         controller = FixedStep(grid.macro_ticks)
     else:
         grid = TimeGrid.variable(ex.start, ex.stop, ms.adaptive.min_step)
-        if ms.adaptive.estimator == "step-doubling":
-            controller = StepDoubling(ms.adaptive, grid.even_ticks(ex.step), p)
-        else:
-            controller = EnergyControl(ms.adaptive, grid.ticks(ex.step), plan.bonds)
+        controller = ESTIMATORS[ms.adaptive.estimator].create(ms.adaptive, grid, ex.step, p, plan.bonds)
     recorder = Recorder(slaves, index, plan.recorded, system)
     master = Master(system, algorithm, controller, grid, recorder, names)
     master.gauss_seidel = gs
-    master.accuracy_order = p
+    master.accuracy_order = p  # of the coupling error with exact subsystems (reported in the metadata)
     params = []
     for n in names:
         model = plan.fmus[n]
@@ -198,7 +188,7 @@ def build(plan: Plan, slave_factory=None) -> Build:
 
 
 def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, overrides: dict | None = None,
-        progress: bool = False, write: bool = True, slave_factory=None) -> Result:
+        progress: bool = False, write: bool = True) -> Result:
     """Load, validate and run a scene.
 
     Parameters
@@ -216,8 +206,6 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         Show a progress bar on stderr for runs longer than two seconds.
     write : bool
         Write the CSV and JSON files (False: only return the result).
-    slave_factory : callable, optional
-        Replace the fmpy slaves (tests).
 
     Returns
     -------
@@ -230,21 +218,23 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
         scene = load_component_scene(scene_file(scene), overrides)
     plan = scene
-    b = build(plan, slave_factory)
+    b = build(plan)
     m = b.master
     ex = plan.scene.experiment
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     bar = Progress(ex.start, ex.stop) if progress else None
+    if bar is not None:
+        m.observers.append(bar)
     t0 = time.perf_counter()
     try:
         m.initialize(ex.start, ex.stop, b.parameters)
-        m.run(bar)
+        m.run()
     finally:
         if bar is not None:
             bar.close()
         total = time.perf_counter() - t0
         fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
-        calls = {n: dict(getattr(s, "calls", {})) for n, s in zip(b.names, m.system.slaves)}
+        calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
         b.close()
     meta = _metadata(b, started, total, fmu_times, calls)
     result = Result(m.recorder.time, m.recorder.columns(), meta)
@@ -304,7 +294,7 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
             "output_update": ms.output_update,
             "step_control": m.controller.name,
             "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
-            "iterative": asdict(ms.iterative) if ms.algorithm == "iterative" else None,
+            **({ms.algorithm: asdict(ms.algorithm_settings)} if ms.algorithm_settings is not None else {}),
             "order_of_accuracy": m.accuracy_order,
             "time_tick": m.grid.tick,
         },

@@ -7,9 +7,10 @@ grid and the recorder. Its primitives are what the controllers use:
 - ``attempt(n, k)``: one macro step from tick n over k ticks; False if an FMU discarded the
   step or returned a non-finite linked output (the reason is kept for the error message);
 - ``snapshot()`` / ``restore()`` / ``release()``: FMU states, coupling values, history and
-  recorded rows, for rollback;
+  the observers' positions (recorded rows), for rollback;
 - ``accept(n)``: the step ending at tick n is final: push the coupling values into the
-  history and record the outputs.
+  history and notify the observers (:class:`~tribocosim.cosim.recorder.Observer`: the recorder,
+  a progress bar).
 
 Initialization follows FMI 2.0: instantiate, set parameters, set up the experiment, enter
 initialization mode, propagate initial values through the links (as many passes as there are
@@ -25,8 +26,8 @@ import time
 from dataclasses import dataclass, field
 
 from tribocosim.components.errors import CosimStepError
-from tribocosim.cosim.algorithms import Algorithm
-from tribocosim.cosim.recorder import Recorder
+from tribocosim.cosim.algorithms import ALGORITHMS, Algorithm
+from tribocosim.cosim.recorder import Observer, Recorder
 from tribocosim.cosim.system import CoupledSystem, NonFiniteOutput
 from tribocosim.cosim.timegrid import TimeGrid
 
@@ -64,17 +65,21 @@ class Master:
     controller : FixedStep, StepDoubling or EnergyControl
     grid : TimeGrid
     recorder : Recorder
+        The first observer (the results of the run).
     names : list of str
         Instance names (for messages).
+    observers : list of Observer, optional
+        Notified after the recorder (e.g. a progress bar).
     """
 
     def __init__(self, system: CoupledSystem, algorithm: Algorithm, controller, grid: TimeGrid, recorder: Recorder,
-                 names: list[str]) -> None:
+                 names: list[str], observers: list[Observer] = ()) -> None:
         self.system = system
         self.algorithm = algorithm
         self.controller = controller
         self.grid = grid
         self.recorder = recorder
+        self.observers: list[Observer] = [recorder, *observers]
         self.names = names
         self.stats = RunStats()
         self.n = 0
@@ -83,7 +88,6 @@ class Master:
         self.last_failure = ""
         self.last_inputs_at_end = system.u_end
         self.warnings: list[str] = []
-        self._pending = None  # recorded values read after the last successful attempt
 
     # --- initialization ----------------------------------------------------------------------
     def initialize(self, start: float, stop: float, parameters: list[dict[int, tuple[str, object]]]) -> None:
@@ -111,9 +115,10 @@ class Master:
         for loop in sysm.loops:
             labels = ", ".join(sysm.links[k].label for k in loop.links)
             msg = f"algebraic loop through {labels}: contraction factor rho = {loop.contraction:.4g}"
-            if self.algorithm.name != "iterative" and loop.contraction >= 1.0:
-                msg += (" >= 1: a non-iterative scheme cannot be stable here (the loop is broken with a one-step "
-                        "delay, y_n+1 = D y_n + s); use algorithm = \"iterative\"")
+            if not ALGORITHMS[self.algorithm.name].solves_loops and loop.contraction >= 1.0:
+                solvers = " or ".join(f'"{n}"' for n, a in ALGORITHMS.items() if a.solves_loops)
+                msg += (f" >= 1: {self.algorithm.name} cannot be stable here (the loop is broken with a one-step "
+                        f"delay, y_n+1 = D y_n + s); use algorithm = {solvers}")
                 self.warnings.append(msg)
                 LOG.warning(msg)
             else:
@@ -133,10 +138,8 @@ class Master:
             return False
         self.stats.iterations += res.iterations
         if res.ok:
-            self._pending = self.recorder.read()
-            bad = self.recorder.non_finite(self._pending)
+            bad = [name for obs in self.observers for name in obs.step_attempted(t + h)]
             if bad:
-                self._pending = None
                 insts = ", ".join(sorted({f"'{b.split('.', 1)[0]}'" for b in bad}))
                 self.last_failure = (f"FMU instance {insts}: non-finite output {', '.join(bad)} at t = {t + h:.9g} s "
                                      f"(step from t = {t:.9g} s)")
@@ -146,22 +149,22 @@ class Master:
             self.stats.observed_contraction = res.contraction if c != c else max(c, res.contraction)
         if not res.ok:
             i = res.discarded_by
-            msgs = list(getattr(self.system.slaves[i], "messages", []))[-3:]
+            msgs = list(self.system.slaves[i].messages)[-3:]
             self.last_failure = (f"FMU instance '{self.names[i]}' discarded the step from t = {t:.9g} s over h = {h:.6g} s"
                                  + (f" (FMU log: {' | '.join(msgs)})" if msgs else ""))
             return False
         return True
 
     def snapshot(self):
-        """Save FMU states, coupling values, history, recorder position and step count."""
-        return self.system.snapshot(), self.recorder.mark(), self.n, self.stats.steps
+        """Save FMU states, coupling values, history, the observers' positions and the step count."""
+        return self.system.snapshot(), [obs.mark() for obs in self.observers], self.n, self.stats.steps
 
     def restore(self, snap) -> None:
         """Return to a snapshot (it stays valid until released)."""
-        sys_snap, mark, self.n, self.stats.steps = snap
+        sys_snap, marks, self.n, self.stats.steps = snap
         self.system.restore(sys_snap)
-        self.recorder.truncate(mark)
-        self._pending = None
+        for obs, mark in zip(self.observers, marks):
+            obs.truncate(mark)
 
     def release(self, snap) -> None:
         """Free a snapshot's FMU states."""
@@ -175,11 +178,8 @@ class Master:
             self.stats.max_step = max(self.stats.max_step, h)
         self.n = n
         self.system.history.push(n, self.system.y)
-        if self._pending is not None:
-            self.recorder.append(self.grid.time(n), self._pending)
-            self._pending = None
-        else:
-            self.recorder.sample(self.grid.time(n))
+        for obs in self.observers:
+            obs.step_accepted(self.grid.time(n))
         self.stats.steps += 1
 
     def fail_without_rollback(self):
@@ -194,12 +194,10 @@ class Master:
                              f"({k * self.grid.tick:.3g} s at t = {self.grid.time(n):.9g} s)")
 
     # --- the loop ----------------------------------------------------------------------------
-    def run(self, progress=None) -> RunStats:
+    def run(self) -> RunStats:
         """Advance to the end of the grid; return the statistics."""
         t0 = time.perf_counter()
         while self.n < self.grid.end_ticks:
             self.controller.advance(self, self.n)
-            if progress is not None:
-                progress(self.grid.time(self.n))
         self.stats.wall_time = time.perf_counter() - t0
         return self.stats

@@ -9,6 +9,7 @@ collect into it, so a user sees everything wrong with a file at once.
 from __future__ import annotations
 
 import difflib
+import math
 from pathlib import Path
 
 from tribocosim.components.errors import Problem, SceneError
@@ -48,6 +49,38 @@ class Problems:
         for k in table:
             if k not in allowed:
                 self.add(f"{key}.{k}" if key else k, f"unknown key; {known(allowed, k)}")
+
+    # --- typed values of a TOML table: the value, or the default after recording a problem
+    def number(self, table: dict, name: str, key: str, default, *, positive=False, integer=False):
+        """``table[name]`` as a finite number (``> 0`` if ``positive``, an int if ``integer``)."""
+        if name not in table:
+            return default
+        v = table[name]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
+            self.add(f"{key}.{name}", f"must be {'an integer' if integer else 'a number'}, got {v!r}")
+            return default
+        if not math.isfinite(v) or (positive and v <= 0):
+            self.add(f"{key}.{name}", f"must be finite{' and > 0' if positive else ''}, got {v!r}")
+            return default
+        return v
+
+    def choice(self, table: dict, name: str, key: str, choices, default):
+        """``table[name]`` if it is one of ``choices``."""
+        if name not in table:
+            return default
+        v = table[name]
+        if v not in choices:
+            self.add(f"{key}.{name}", f"{v!r} is not allowed; allowed: {', '.join(map(str, choices))}")
+            return default
+        return v
+
+    def table(self, doc: dict, name: str, key: str) -> dict:
+        """``doc[name]`` if it is a table (default empty)."""
+        v = doc.get(name, {})
+        if not isinstance(v, dict):
+            self.add(key, f"must be a table, got {type(v).__name__}")
+            return {}
+        return v
 
     def error(self) -> SceneError:
         """The SceneError listing every problem."""

@@ -1,4 +1,8 @@
-"""Observers: the recorder of the scene's output variables, and a progress reporter.
+"""Observers of a run: the recorder of the scene's output variables, and a progress reporter.
+
+The master notifies a list of observers (:class:`Observer`): after every successful attempt of a
+macro step (an observer may refuse the values it read, e.g. non-finite outputs, and the attempt
+then counts as failed), when a step is accepted, and around rollbacks (``mark``/``truncate``).
 
 The recorder reads the variables named in ``[output] variables`` from the slaves at every
 accepted communication point (one ``fmi2Get*`` call per slave) and keeps them in memory; rows
@@ -20,7 +24,25 @@ from tribocosim.cosim.scene import VariableRef
 from tribocosim.cosim.slave import Slave
 
 
-class Recorder:
+class Observer:
+    """What the master calls on its observers (a base that does nothing)."""
+
+    def step_attempted(self, t: float) -> list[str]:
+        """A macro step to ``t`` succeeded in the FMUs; return the names of values that make it unusable."""
+        return []
+
+    def step_accepted(self, t: float) -> None:
+        """The step to ``t`` is final."""
+
+    def mark(self):
+        """A position to roll back to."""
+        return None
+
+    def truncate(self, mark) -> None:
+        """Forget what was observed after ``mark``."""
+
+
+class Recorder(Observer):
     """Samples named variables of the slaves at accepted communication points.
 
     Parameters
@@ -59,6 +81,7 @@ class Recorder:
         self._groups = [(i, getters[kind], [c for c, _ in cv], [v for _, v in cv]) for (i, kind), cv in groups.items()]
         self._times: list[float] = []
         self._rows: list[np.ndarray] = []
+        self._pending: np.ndarray | None = None  # read after the last successful attempt
 
     def read(self) -> np.ndarray:
         """Read every recorded variable (one call per slave and type)."""
@@ -84,6 +107,21 @@ class Recorder:
         """Read every recorded variable and append a row at time t."""
         self.append(t, self.read())
 
+    def step_attempted(self, t: float) -> list[str]:
+        """Read the values after a successful attempt; the non-finite ones make it unusable."""
+        row = self.read()
+        bad = self.non_finite(row)
+        self._pending = None if bad else row
+        return bad
+
+    def step_accepted(self, t: float) -> None:
+        """Record the values read after the accepted attempt (or read them now)."""
+        if self._pending is not None:
+            self.append(t, self._pending)
+            self._pending = None
+        else:
+            self.sample(t)
+
     def mark(self) -> int:
         """Current number of rows (to roll back to)."""
         return len(self._times)
@@ -92,6 +130,7 @@ class Recorder:
         """Drop rows recorded after ``mark``."""
         del self._times[mark:]
         del self._rows[mark:]
+        self._pending = None
 
     @property
     def time(self) -> np.ndarray:
@@ -115,7 +154,7 @@ class Recorder:
         return path
 
 
-class Progress:
+class Progress(Observer):
     """A one-line progress bar on stderr, shown once a run has taken longer than ``delay`` seconds."""
 
     def __init__(self, start: float, stop: float, delay: float = 2.0, stream=None) -> None:
@@ -136,6 +175,9 @@ class Progress:
         self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  t = {t:.6g} s  eta {eta:6.1f} s")
         self.stream.flush()
         self.shown = True
+
+    def step_accepted(self, t: float) -> None:
+        self(t)
 
     def close(self) -> None:
         if self.shown:

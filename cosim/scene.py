@@ -14,13 +14,13 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     # output_update = "propagate"   # or "none": outputs read right after doStep (as libcosim)
     # order = ["press", "strip"]    # Gauss-Seidel order (default: from the connection graph)
 
-    # [master.adaptive]
+    # [master.adaptive]            # tribocosim.cosim.stepcontrol.Adaptive
     # tolerance = 1e-4
     # min_step = 1e-7
     # max_step = 1e-2
     # estimator = "step-doubling"   # or "energy" (needs [[power_bonds]])
 
-    # [master.iterative]
+    # [master.iterative]           # settings of the algorithm of that name (tribocosim.cosim.algorithms)
     # method = "quasi-newton"       # or "fixed-point"
     # relaxation = 1.0              # fixed-point relaxation factor, or "aitken"
     # tolerance = 1e-8
@@ -58,18 +58,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tribocosim.cosim.problems import Problems, known  # noqa: F401 (known: re-exported)
+from tribocosim.cosim.algorithms import ALGORITHMS
+from tribocosim.cosim.problems import Problems
+from tribocosim.cosim.stepcontrol import ESTIMATORS, Adaptive
 
-ALGORITHMS = ("jacobi", "gauss-seidel", "iterative")
-ESTIMATORS = ("step-doubling", "energy")
-ITERATION_METHODS = ("fixed-point", "quasi-newton")
 OUTPUT_UPDATES = ("propagate", "none")
 
 _TOP_KEYS = ("experiment", "master", "fmus", "connections", "power_bonds", "output")
 _EXPERIMENT_KEYS = ("start", "stop", "step")
-_MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive", "iterative")
-_ADAPTIVE_KEYS = ("tolerance", "absolute_tolerance", "min_step", "max_step", "estimator", "safety")
-_ITERATIVE_KEYS = ("method", "relaxation", "tolerance", "max_iterations", "reuse")
+_MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive",
+                *(name for name, spec in ALGORITHMS.items() if spec.settings is not None))
 _FMU_KEYS = ("path", "component", "parameters", "feedthrough")
 _CONNECTION_KEYS = ("from", "to")
 _BOND_KEYS = ("effort", "flow")
@@ -86,49 +84,16 @@ class Experiment:
 
 
 @dataclass(frozen=True)
-class Adaptive:
-    """[master.adaptive]: error-controlled variable step.
-
-    ``tolerance`` is relative, ``absolute_tolerance`` (default: ``tolerance``) absolute.
-    Step doubling accepts a step H whose local error estimates e_i of the coupling signals y_i
-    satisfy max_i |e_i| / (H (absolute_tolerance + tolerance |y_i|)) <= 1 (error per unit
-    step: the tolerance is per second of simulated time); the energy estimator normalises the
-    energy residual of each power bond by absolute_tolerance + tolerance * energy level.
-    """
-
-    tolerance: float = 1e-4
-    absolute_tolerance: float | None = None
-    min_step: float = 1e-7
-    max_step: float = 1e-2
-    estimator: str = "step-doubling"
-    safety: float = 0.9
-
-    @property
-    def atol(self) -> float:
-        return self.tolerance if self.absolute_tolerance is None else self.absolute_tolerance
-
-
-@dataclass(frozen=True)
-class Iterative:
-    """[master.iterative]: the fixed-point / quasi-Newton iteration of a macro step."""
-
-    method: str = "quasi-newton"
-    relaxation: float | str = 1.0
-    tolerance: float = 1e-8
-    max_iterations: int = 50
-    reuse: int = 2
-
-
-@dataclass(frozen=True)
 class MasterSettings:
-    """[master]."""
+    """[master]: the algorithm (a name of :data:`tribocosim.cosim.algorithms.ALGORITHMS`) and its
+    settings (its ``[master.<name>]`` table), the input extrapolation, and the step control."""
 
     algorithm: str = "jacobi"
     extrapolation: int = 0
     output_update: str = "propagate"
     order: tuple[str, ...] | None = None
     adaptive: Adaptive | None = None
-    iterative: Iterative = field(default_factory=Iterative)
+    algorithm_settings: Any = None
 
 
 @dataclass(frozen=True)
@@ -196,37 +161,6 @@ class Scene:
         return self.path.parent
 
 
-def _number(p: Problems, table: dict, name: str, key: str, default, *, positive=False, integer=False):
-    if name not in table:
-        return default
-    v = table[name]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
-        p.add(f"{key}.{name}", f"must be {'an integer' if integer else 'a number'}, got {v!r}")
-        return default
-    if not math.isfinite(v) or (positive and v <= 0):
-        p.add(f"{key}.{name}", f"must be finite{' and > 0' if positive else ''}, got {v!r}")
-        return default
-    return v
-
-
-def _choice(p: Problems, table: dict, name: str, key: str, choices, default):
-    if name not in table:
-        return default
-    v = table[name]
-    if v not in choices:
-        p.add(f"{key}.{name}", f"{v!r} is not allowed; allowed: {', '.join(map(str, choices))}")
-        return default
-    return v
-
-
-def _table(p: Problems, doc: dict, name: str, key: str) -> dict:
-    v = doc.get(name, {})
-    if not isinstance(v, dict):
-        p.add(key, f"must be a table, got {type(v).__name__}")
-        return {}
-    return v
-
-
 def parse_ref(p: Problems, text: Any, key: str) -> VariableRef | None:
     """Parse 'instance.variable' (reports a problem and returns None if malformed)."""
     if not isinstance(text, str) or "." not in text or text.startswith(".") or text.endswith("."):
@@ -281,14 +215,14 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         apply_overrides(doc, overrides)
 
     p.unknown_keys(doc, _TOP_KEYS, "")
-    exp = _table(p, doc, "experiment", "experiment")
+    exp = p.table(doc, "experiment", "experiment")
     p.unknown_keys(exp, _EXPERIMENT_KEYS, "experiment")
     for k in ("stop", "step"):
         if k not in exp:
             p.add(f"experiment.{k}", "missing (required)")
-    start = _number(p, exp, "start", "experiment", 0.0)
-    stop = _number(p, exp, "stop", "experiment", start + 1.0)
-    step = _number(p, exp, "step", "experiment", 1e-3, positive=True)
+    start = p.number(exp, "start", "experiment", 0.0)
+    stop = p.number(exp, "stop", "experiment", start + 1.0)
+    step = p.number(exp, "step", "experiment", 1e-3, positive=True)
     if stop <= start:
         p.add("experiment.stop", f"must be greater than start = {start!r}, got {stop!r}")
         stop = start + 1.0
@@ -296,10 +230,10 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         p.add("experiment.step", f"{step!r} is longer than the experiment ({stop - start!r} s)")
     experiment = Experiment(float(start), float(stop), float(step))
 
-    master = _parse_master(p, _table(p, doc, "master", "master"), experiment)
+    master = _parse_master(p, p.table(doc, "master", "master"), experiment)
 
     fmus: dict[str, FmuSpec] = {}
-    fmu_doc = _table(p, doc, "fmus", "fmus")
+    fmu_doc = p.table(doc, "fmus", "fmus")
     if not fmu_doc:
         p.add("fmus", "no FMUs given; add at least one [fmus.NAME] table")
     for name, spec in fmu_doc.items():
@@ -370,7 +304,7 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         if len(pair) == 2:
             bonds.append(PowerBond(pair["effort"], pair["flow"], key))
 
-    out = _table(p, doc, "output", "output")
+    out = p.table(doc, "output", "output")
     p.unknown_keys(out, _OUTPUT_KEYS, "output")
     ofile = out.get("file")
     if ofile is not None and not isinstance(ofile, str):
@@ -387,56 +321,23 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
             refs.append(r)
 
     scene = Scene(path, experiment, master, fmus, tuple(connections), tuple(bonds), OutputSpec(ofile, tuple(refs)))
-    if master.adaptive is not None and master.adaptive.estimator == "energy" and not bonds:
-        p.add("master.adaptive.estimator", "'energy' needs at least one [[power_bonds]] entry")
+    if master.adaptive is not None and ESTIMATORS[master.adaptive.estimator].needs_bonds and not bonds:
+        p.add("master.adaptive.estimator", f"'{master.adaptive.estimator}' needs at least one [[power_bonds]] entry")
     return scene, p.items
 
 
 def _parse_master(p: Problems, m: dict, experiment: Experiment) -> MasterSettings:
     p.unknown_keys(m, _MASTER_KEYS, "master")
-    algorithm = _choice(p, m, "algorithm", "master", ALGORITHMS, "jacobi")
-    extrapolation = _choice(p, m, "extrapolation", "master", (0, 1, 2), 0)
-    output_update = _choice(p, m, "output_update", "master", OUTPUT_UPDATES, "propagate")
+    algorithm = p.choice(m, "algorithm", "master", tuple(ALGORITHMS), "jacobi")
+    extrapolation = p.choice(m, "extrapolation", "master", (0, 1, 2), 0)
+    output_update = p.choice(m, "output_update", "master", OUTPUT_UPDATES, "propagate")
     order = m.get("order")
     if order is not None and not (isinstance(order, list) and all(isinstance(o, str) for o in order)):
         p.add("master.order", f"must be a list of instance names, got {order!r}")
         order = None
-    adaptive = None
-    if "adaptive" in m:
-        a = m["adaptive"] if isinstance(m["adaptive"], dict) else {}
-        if not isinstance(m["adaptive"], dict):
-            p.add("master.adaptive", "must be a table")
-        key = "master.adaptive"
-        p.unknown_keys(a, _ADAPTIVE_KEYS, key)
-        d = Adaptive()
-        tol = _number(p, a, "tolerance", key, d.tolerance, positive=True)
-        atol = _number(p, a, "absolute_tolerance", key, None, positive=True)
-        hmin = _number(p, a, "min_step", key, min(d.min_step, experiment.step), positive=True)
-        hmax = _number(p, a, "max_step", key, max(d.max_step, experiment.step), positive=True)
-        est = _choice(p, a, "estimator", key, ESTIMATORS, d.estimator)
-        safety = _number(p, a, "safety", key, d.safety, positive=True)
-        if not hmin <= experiment.step <= hmax:
-            p.add(key, f"need min_step <= experiment.step <= max_step, got {hmin!r} <= {experiment.step!r} <= {hmax!r}")
-        if safety >= 1.0:
-            p.add(f"{key}.safety", f"must be in (0, 1), got {safety!r}")
-        adaptive = Adaptive(float(tol), atol if atol is None else float(atol), float(hmin), float(hmax), est, float(safety))
-    it = m.get("iterative", {})
-    if not isinstance(it, dict):
-        p.add("master.iterative", "must be a table")
-        it = {}
-    key = "master.iterative"
-    p.unknown_keys(it, _ITERATIVE_KEYS, key)
-    d = Iterative()
-    method = _choice(p, it, "method", key, ITERATION_METHODS, d.method)
-    relax = it.get("relaxation", d.relaxation)
-    if relax != "aitken" and (isinstance(relax, bool) or not isinstance(relax, (int, float)) or not 0 < relax <= 2):
-        p.add(f"{key}.relaxation", f"must be a number in (0, 2] or \"aitken\", got {relax!r}")
-        relax = d.relaxation
-    iterative = Iterative(
-        method,
-        relax if relax == "aitken" else float(relax),
-        float(_number(p, it, "tolerance", key, d.tolerance, positive=True)),
-        int(_number(p, it, "max_iterations", key, d.max_iterations, positive=True, integer=True)),
-        int(_number(p, it, "reuse", key, d.reuse, integer=True)),
-    )
-    return MasterSettings(algorithm, int(extrapolation), output_update, tuple(order) if order else None, adaptive, iterative)
+    adaptive = Adaptive.parse(p, p.table(m, "adaptive", "master.adaptive"), "master.adaptive", experiment.step) \
+        if "adaptive" in m else None
+    settings = {name: spec.settings.parse(p, p.table(m, name, f"master.{name}"), f"master.{name}")
+                for name, spec in ALGORITHMS.items() if spec.settings is not None}
+    return MasterSettings(algorithm, int(extrapolation), output_update, tuple(order) if order else None, adaptive,
+                          settings.get(algorithm))

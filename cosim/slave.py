@@ -81,6 +81,8 @@ class Slave(Protocol):
     can_roll_back: bool
     can_interpolate_inputs: bool
     wall_time: float
+    calls: dict[str, int]  # FMI calls made, by function (doStep, getFMUstate, ...)
+    messages: Sequence[str]  # the last log messages of the FMU (for error messages)
 
     def instantiate(self) -> None: ...
 

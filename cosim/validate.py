@@ -27,7 +27,9 @@ from pathlib import Path
 from fmpy import read_model_description
 
 from tribocosim.components.errors import SceneError
+from tribocosim.cosim.algorithms import ALGORITHMS
 from tribocosim.cosim.problems import Problems, known
+from tribocosim.cosim.stepcontrol import ESTIMATORS
 from tribocosim.cosim.scene import Scene, VariableRef, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
@@ -284,12 +286,13 @@ def _check_master(add, plan: Plan) -> None:
     if not cannot:
         return
     names = ", ".join(cannot)
-    if m.algorithm == "iterative":
-        add("master.algorithm", f"'iterative' repeats each macro step from a saved state, but {names} cannot roll back "
-            "(canGetAndSetFMUstate = false); use jacobi or gauss-seidel")
-    if m.adaptive is not None and m.adaptive.estimator == "step-doubling":
-        add("master.adaptive.estimator", f"'step-doubling' rejects steps by rolling back, but {names} cannot roll back "
-            "(canGetAndSetFMUstate = false); use estimator = \"energy\" (rollback-free) or a fixed step")
+    if ALGORITHMS[m.algorithm].rolls_back:
+        add("master.algorithm", f"'{m.algorithm}' repeats each macro step from a saved state, but {names} cannot roll "
+            "back (canGetAndSetFMUstate = false); use " + " or ".join(n for n, a in ALGORITHMS.items() if not a.rolls_back))
+    if m.adaptive is not None and ESTIMATORS[m.adaptive.estimator].rolls_back:
+        others = " or ".join(f'estimator = "{n}"' for n, e in ESTIMATORS.items() if not e.rolls_back)
+        add("master.adaptive.estimator", f"'{m.adaptive.estimator}' rejects steps by rolling back, but {names} cannot "
+            f"roll back (canGetAndSetFMUstate = false); use {others} (rollback-free) or a fixed step")
     plan.notes.append(f"FMU(s) {names} cannot roll back (canGetAndSetFMUstate = false): the scheme runs without "
                       "rollback; a discarded step or a non-finite output stops the run with an error")
 

@@ -15,7 +15,8 @@ from tribocosim.cosim import run
 from tribocosim.cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
 from tribocosim.cosim.master import Master
 from tribocosim.cosim.recorder import Recorder
-from tribocosim.cosim.scene import Iterative, VariableRef
+from tribocosim.cosim.algorithms import Iterative
+from tribocosim.cosim.scene import VariableRef
 from tribocosim.cosim.slave import OK
 from tribocosim.cosim.stepcontrol import FixedStep
 from tribocosim.cosim.system import CoupledSystem, LinkSpec
@@ -53,6 +54,8 @@ class MockIntegrator:
     def __init__(self, name, discard_longer_than=None):
         self.name = name
         self.wall_time = 0.0
+        self.messages = []
+        self.calls = {"doStep": 0}
         self.u = [0.0, 0.0, 0.0]
         self.x = 0.0
         self.t = 0.0
@@ -119,7 +122,7 @@ def test_jacobi_hands_over_start_values_and_gauss_seidel_end_values():
     h, n = 0.1, 10
     mj, _, bj = _chain_master(Jacobi(0), h)
     mj.run()
-    mg, _, bg = _chain_master(GaussSeidel(0, (0, 1)), h)
+    mg, _, bg = _chain_master(GaussSeidel(0, sequence=(0, 1)), h)
     mg.run()
     # x_a = t; Jacobi holds x_a(t_k) over step k, Gauss-Seidel x_a(t_k+1)
     np.testing.assert_allclose(bj.x, h * h * n * (n - 1) / 2, rtol=1e-12, err_msg="Jacobi: sum of h * x_a(t_k)")
@@ -161,7 +164,7 @@ def test_quasi_newton_solves_a_linear_loop_in_few_iterations(gain):
     p, q = LinearLoop("p", gain, 1.0), LinearLoop("q", 1.0, 0.5)
     links = [LinkSpec(0, 1, "Real", 1, 0, "Real", True, "p.y -> q.u"), LinkSpec(1, 1, "Real", 0, 0, "Real", True, "q.y -> p.u")]
     system = CoupledSystem([p, q], links, 0, [True, True])
-    alg = IterativeCoupling(0, Iterative(method="quasi-newton", tolerance=1e-12, reuse=0))
+    alg = IterativeCoupling(0, settings=Iterative(method="quasi-newton", tolerance=1e-12, reuse=0))
     grid = TimeGrid.fixed(0.0, 0.3, 0.1)
     m = Master(system, alg, FixedStep(grid.macro_ticks), grid, Recorder([p, q], {"p": 0, "q": 1}, []), ["p", "q"])
     m.initialize(0.0, 0.3, [{}, {}])
