@@ -94,8 +94,9 @@ class Native:
     """The C implementation of a component (sources in :mod:`tribocosim.components.native`).
 
     ``prefix`` names its C functions (``<prefix>_create``, ``_step``, ...); ``sources`` are the C
-    files beside the shared ones; ``params_header`` is the header the build generates with the
-    parameter struct (``<prefix>_params``).
+    files of the model and of its FMU glue (``tc_<name>_fmu.c``: the component functions of
+    ``tc_fmu.h``), beside the shared ones (``tc_common.c``, the FMI wrapper); ``params_header`` is
+    the header the build generates with the parameter struct (``<prefix>_params``).
     """
 
     prefix: str

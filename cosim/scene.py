@@ -28,6 +28,8 @@ settings and the outputs to record; nothing else is loaded, computed or written.
 
     [fmus.strip]
     path = "StripDraw.fmu"      # relative to the scene file, or: component = "stripdraw"
+    # variant = "native"        # of a component's FMU: native (C, the default where the component has one)
+                                # or python (pythonfmu)
     parameters = { tool_length = 0.035 }
     # feedthrough = false       # outputs never depend directly on inputs (default: from the
                                 # model description, else probed numerically at the start)
@@ -68,7 +70,8 @@ _TOP_KEYS = ("experiment", "master", "fmus", "connections", "power_bonds", "outp
 _EXPERIMENT_KEYS = ("start", "stop", "step")
 _MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive",
                 *(name for name, spec in ALGORITHMS.items() if spec.settings is not None))
-_FMU_KEYS = ("path", "component", "parameters", "feedthrough")
+_FMU_KEYS = ("path", "component", "variant", "parameters", "feedthrough")
+VARIANTS = ("native", "python")
 _CONNECTION_KEYS = ("from", "to")
 _BOND_KEYS = ("effort", "flow")
 _OUTPUT_KEYS = ("file", "variables")
@@ -105,6 +108,7 @@ class FmuSpec:
     component: str | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
     feedthrough: bool | None = None
+    variant: str | None = None  # of a component's FMU: native (C; the default when there is one) or python
 
 
 @dataclass(frozen=True)
@@ -262,8 +266,11 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         if ft is not None and not isinstance(ft, bool):
             p.add(f"{key}.feedthrough", f"must be true or false, got {ft!r}")
             ft = None
+        variant = p.choice(spec, "variant", key, VARIANTS, None)
+        if "variant" in spec and comp is None:
+            p.add(f"{key}.variant", "applies to component = \"...\" FMUs only")
         resolved = (path.parent / fpath).resolve() if fpath else None
-        fmus[name] = FmuSpec(name, resolved, comp, dict(params), ft)
+        fmus[name] = FmuSpec(name, resolved, comp, dict(params), ft, variant)
 
     connections = []
     conn_doc = doc.get("connections", [])

@@ -143,7 +143,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
             from tribocosim.cosim.fmucache import component_fmu
 
             try:
-                fmu_path = component_fmu(spec.component)
+                fmu_path = component_fmu(spec.component, variant=spec.variant)
             except SceneError as exc:
                 add(f"{key}.component", str(exc))
                 continue

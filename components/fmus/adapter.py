@@ -20,7 +20,7 @@ Variables
     ``fixed``. Then the inputs (``Real``, ``continuous``) and the outputs (``initial = exact``,
     start value from the :class:`~tribocosim.components.description.Port`; Integer where the port
     says so). Every description ends with its unit in brackets (``[text]`` for strings), and the
-    model description gets the ``UnitDefinitions`` of the units used (:data:`BASE_UNITS`).
+    model description gets the ``UnitDefinitions`` of the units used (:mod:`tribocosim.components.fmus.modeldescription`).
 
 Life cycle
     ``__init__`` only registers variables (pythonfmu instantiates the class at build time).
@@ -90,40 +90,20 @@ from __future__ import annotations
 import dataclasses
 import sys
 from pathlib import Path
-from xml.etree.ElementTree import Element, SubElement
+from xml.etree.ElementTree import Element
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from tribocosim.components.description import Component
+from tribocosim.components.fmus.modeldescription import describe, unit_definitions
 
 from tribocosim.components.errors import TribocosimError
 from tribocosim.components.fmus import statecodec
 from tribocosim.components.fmus.exitguard import guard_pythonfmu_exit
 
 #: SI base-unit exponents of every unit the variables may use (FMI 2.0 UnitDefinitions)
-BASE_UNITS = {
-    "1": {},
-    "m": {"m": 1},
-    "m/s": {"m": 1, "s": -1},
-    "s": {"s": 1},
-    "1/s": {"s": -1},
-    "kg": {"kg": 1},
-    "kg m2": {"kg": 1, "m": 2},
-    "kg/m3": {"kg": 1, "m": -3},
-    "N": {"kg": 1, "m": 1, "s": -2},
-    "N/m": {"kg": 1, "s": -2},
-    "N s/m": {"kg": 1, "s": -1},
-    "Pa": {"kg": 1, "m": -1, "s": -2},
-}
-
-
-def describe(description: str, unit: str) -> str:
-    """The variable description with its unit, e.g. ``"pad length [m]"``."""
-    return f"{description} [{unit or '1'}]"
-
-
 class RealWithUnit(Real):
     """A pythonfmu ``Real`` that also writes ``unit``, ``min`` and ``max`` into the XML, and its
     start value with ``repr`` (pythonfmu's 16 digits do not always round-trip a float64)."""
@@ -147,16 +127,8 @@ class RealWithUnit(Real):
 
 def add_unit_definitions(root: Element, variables, owner: str = "FMU") -> Element:
     """Insert ``<UnitDefinitions>`` (after ``<CoSimulation>``) for the units of the
-    :class:`RealWithUnit` variables, with their SI base-unit exponents from :data:`BASE_UNITS`."""
-    used = sorted({v.unit for v in variables if isinstance(v, RealWithUnit)})
-    unknown = [u for u in used if u not in BASE_UNITS]
-    if unknown:  # a packaging error, found at build time
-        raise TribocosimError(f"{owner}: units {unknown} are missing from adapter.BASE_UNITS")
-    units = Element("UnitDefinitions")
-    for unit in used:
-        node = SubElement(units, "Unit", {"name": unit})
-        if BASE_UNITS[unit]:
-            SubElement(node, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[unit].items()})
+    :class:`RealWithUnit` variables (:func:`~tribocosim.components.fmus.modeldescription.unit_definitions`)."""
+    units = unit_definitions({v.unit for v in variables if isinstance(v, RealWithUnit)}, owner)
     root.insert(list(root).index(root.find("CoSimulation")) + 1, units)
     return root
 

@@ -51,5 +51,6 @@ COMPONENT = Component(
     ),
     build=build,
     setpoints=setpoints,
-    native=Native(prefix="tc_machine", sources=("tc_machine.c", "tc_linear.c"), params_header="tc_machine_params.h"),
+    native=Native(prefix="tc_machine", sources=("tc_machine.c", "tc_linear.c", "tc_machine_fmu.c"),
+                  params_header="tc_machine_params.h"),
 )

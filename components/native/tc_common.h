@@ -20,6 +20,14 @@
 #  endif
 #else
 #  define TC_API
+/* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
+#define TC_REPR_SIZE 32
+TC_API const char *tc_repr_double(double x, char buf[TC_REPR_SIZE]);
+
+/* Python's repr() of a str (quotes chosen and escapes as Python does for ASCII; other UTF-8 bytes are
+ * copied), truncated to size; returns buf. */
+TC_API const char *tc_repr_string(const char *s, char *buf, size_t size);
+
 #endif
 
 enum tc_status {
@@ -41,5 +49,13 @@ int tc_fail(tc_msg msg, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
+#define TC_REPR_SIZE 32
+TC_API const char *tc_repr_double(double x, char buf[TC_REPR_SIZE]);
+
+/* Python's repr() of a str (quotes chosen and escapes as Python does for ASCII; other UTF-8 bytes are
+ * copied), truncated to size; returns buf. */
+TC_API const char *tc_repr_string(const char *s, char *buf, size_t size);
 
 #endif

@@ -241,6 +241,18 @@ int tc_zip_find(const tc_zip *zip, const char *name, tc_zip_member *member, tc_m
     return TC_OK;
 }
 
+int tc_zip_has(const tc_zip *zip, const char *name) {
+    size_t want = strlen(name), pos = 0, next;
+    cd_entry entry;
+    tc_msg quiet = {NULL, 0};
+    while (pos < zip->cd_size) {
+        if (read_entry(zip, pos, &entry, &next, quiet) != TC_OK) return 0; /* tc_zip_open checked every entry */
+        if (entry.name_len == want && memcmp(entry.name, name, want) == 0) return 1;
+        pos = next;
+    }
+    return 0;
+}
+
 /* ---- npy ---------------------------------------------------------------------------------------------- */
 
 /* numpy.lib.format refuses headers longer than this (max_header_size) */

@@ -43,6 +43,11 @@ TC_API int tc_zip_open(tc_zip *zip, const unsigned char *data, size_t size, tc_m
  * and the member must be stored uncompressed, unencrypted, lie inside the file and match its CRC-32. */
 TC_API int tc_zip_find(const tc_zip *zip, const char *name, tc_zip_member *member, tc_msg msg);
 
+/* 1 if the central directory of an archive that tc_zip_open accepted has an entry called name (zipfile's
+ * namelist, which numpy's NpzFile consults first: a missing member is its KeyError), else 0. Nothing about
+ * the entry is checked: tc_zip_find does that. */
+TC_API int tc_zip_has(const tc_zip *zip, const char *name);
+
 #define TC_NPY_MAX_DIMS 32
 
 /* The header of a .npy array (NEP 1 / numpy.lib.format, versions 1.0, 2.0 and 3.0). */

@@ -55,5 +55,6 @@ COMPONENT = Component(
     ),
     build=build,
     setpoints=setpoints,
-    native=Native(prefix="tc_press", sources=("tc_press.c", "tc_linear.c"), params_header="tc_press_params.h"),
+    native=Native(prefix="tc_press", sources=("tc_press.c", "tc_linear.c", "tc_press_fmu.c"),
+                  params_header="tc_press_params.h"),
 )

@@ -187,8 +187,9 @@ COMPONENT = Component(
     build=build,
     check=check,
     observer=observer,
-    native=Native(prefix="tc_stripdraw", sources=("tc_stripdraw.c", "tc_table_lookup.c", "tc_table_file.c",
-                                                   "tc_npz.c", "tc_sha256.c", "tc_json.c"),
+    native=Native(prefix="tc_stripdraw",
+                  sources=("tc_stripdraw.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
+                           "tc_sha256.c", "tc_json.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h"),
     default_experiment=(0.0, 1.75, 1e-3),
 )

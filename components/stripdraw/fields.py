@@ -54,7 +54,7 @@ def read_fields(path) -> dict:
     try:
         with np.load(path, allow_pickle=False) as data:
             out = {k: np.array(data[k]) for k in data.files}
-    except (OSError, KeyError, ValueError) as exc:
+    except Exception as exc:  # noqa: BLE001 - any file numpy cannot read as ours
         raise ParameterError(f"field file {str(path)!r} cannot be read: {exc}") from exc
     missing = [k for k in ("time", "X", "beta") if k not in out]
     if missing:
@@ -75,7 +75,7 @@ def read_initial_beta(path, X: np.ndarray) -> np.ndarray:
     try:
         with np.load(path, allow_pickle=False) as data:
             Xf, beta = np.array(data["X"], dtype=float), np.array(data["beta"], dtype=float)
-    except (OSError, KeyError, ValueError) as exc:
+    except Exception as exc:  # noqa: BLE001 - any file numpy cannot read as ours (fuzzed: BadZipFile, EOFError...)
         raise ParameterError(f"field_input = {str(path)!r} cannot be read as a field_output file: {exc}") from exc
     if beta.ndim != 2 or beta.shape[0] < 1 or beta.shape[1] != Xf.size:
         raise ParameterError(f"field_input = {str(path)!r}: beta has shape {beta.shape}, X has {Xf.size} nodes")

@@ -32,10 +32,11 @@ REAL_OUTPUTS = tuple(name for name in OUTPUT_NAMES if name != "table_clamp_count
 
 @pytest.fixture(scope="session")
 def built_fmus(tmp_path_factory) -> dict[str, Path]:
-    """``tribocosim fmu build --out TMP`` (the command line, in a subprocess); ``{name: FMU file}``."""
+    """``tribocosim fmu build --python --out TMP`` (the command line, in a subprocess): the pythonfmu
+    variants; ``{name: FMU file}``."""
     out = tmp_path_factory.mktemp("fmus")
     proc = subprocess.run(
-        [sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--out", str(out)],
+        [sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--python", "--out", str(out)],
         cwd=PROJECT_ROOT,
         capture_output=True,
         text=True,

@@ -57,6 +57,7 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.fmus.adapter",
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.fmus.exitguard",
+        "tribocosim.components.fmus.modeldescription",
     }
     assert build.component(name).resources == (), "no friction table"
     assert "tribocosim.components.fmus.adapter" in _modules("StripDraw"), "StripDraw uses the same adapter plumbing"
@@ -143,7 +144,7 @@ def test_source_digest_changes_with_any_bundled_file(tmp_path, monkeypatch):
 
 def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert cli.main(["build", "--out", "rel/fmus"]) == 0
+    assert cli.main(["build", "--python", "--out", "rel/fmus"]) == 0
     printed = capsys.readouterr().out.split()
     names = ("DrawingMachine", "Press", "StripDraw")
     assert printed == [str(tmp_path / "rel" / "fmus" / f"{name}.fmu") for name in names]
@@ -157,5 +158,5 @@ def test_cli_lists_and_reports_errors(capsys, tmp_path):
         "Press", "tribocosim.components.press.component",
         "StripDraw", "tribocosim.components.stripdraw.component",
     ]  # fmt: skip
-    assert cli.main(["build", "--out", str(tmp_path), "--only", "Nope"]) == 1
+    assert cli.main(["build", "--python", "--out", str(tmp_path), "--only", "Nope"]) == 1
     assert "unknown FMU 'Nope'" in capsys.readouterr().err

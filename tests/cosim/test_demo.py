@@ -59,13 +59,13 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
 def test_demo_says_why_when_the_fmus_cannot_be_built(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "empty"))
 
-    from tribocosim.components.fmus import build
+    from tribocosim.components.fmus import build, native
 
-    def build_fmus(out_dir, names=None):
-        raise build.FmuBuildError("pythonfmu build (exit 1): no C++ compiler found")
+    def build_native_fmus(out_dir, names=None, platforms=None):
+        raise build.FmuBuildError("compiling Press.so for linux64 failed (exit 1): no C compiler found")
 
-    monkeypatch.setattr(build, "build_fmus", build_fmus)
+    monkeypatch.setattr(native, "build_native_fmus", build_native_fmus)
     assert demo.main(["--out", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
-    assert "the FMUs could not be built" in err and "no C++ compiler found" in err and "Press.fmu" in err, err
+    assert "the FMUs could not be built" in err and "no C compiler found" in err and "Press.fmu" in err, err
     assert not (tmp_path / "out").exists()

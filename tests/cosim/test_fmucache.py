@@ -28,7 +28,7 @@ def test_component_is_built_once_and_cached(tmp_path, lag_component):
     second = fmucache.component_fmu("LAG", cache=cache)
     assert first == second and first.is_file() and first.parent.parent == cache
     assert second.stat().st_mtime_ns == stamp, "the second request uses the cache"
-    assert first.parent.name == f"Lag-{build.source_digest('Lag')[:16]}", "keyed by the source digest"
+    assert first.parent.name == f"Lag-python-{build.source_digest('Lag')[:16]}", "keyed by the source digest"
     assert not [p for p in cache.iterdir() if p.name.startswith(".")], "no temporary folders left"
 
 

@@ -1,0 +1,48 @@
+"""What the model descriptions of both FMU variants share: units, descriptions, unit definitions.
+
+The Python (pythonfmu) and native variants of a component's FMU declare the same variables with the
+same descriptions and units, both from the component's description; the native builder writes its
+whole model description from :func:`tribocosim.components.native.declarations.variables`, the
+pythonfmu adapter lets pythonfmu write it and adds the unit definitions.
+"""
+
+from __future__ import annotations
+
+from xml.etree.ElementTree import Element, SubElement
+
+from tribocosim.components.errors import TribocosimError
+
+#: SI base-unit exponents of every unit the variables may use (FMI 2.0 UnitDefinitions)
+BASE_UNITS = {
+    "1": {},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "s": {"s": 1},
+    "1/s": {"s": -1},
+    "kg": {"kg": 1},
+    "kg m2": {"kg": 1, "m": 2},
+    "kg/m3": {"kg": 1, "m": -3},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N/m": {"kg": 1, "s": -2},
+    "N s/m": {"kg": 1, "s": -1},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+}
+
+
+def describe(description: str, unit: str) -> str:
+    """The variable description with its unit, e.g. ``"pad length [m]"``."""
+    return f"{description} [{unit or '1'}]"
+
+
+def unit_definitions(units, owner: str = "FMU") -> Element:
+    """``<UnitDefinitions>`` for ``units`` (sorted), with their SI base-unit exponents from :data:`BASE_UNITS`."""
+    used = sorted(set(units))
+    unknown = [u for u in used if u not in BASE_UNITS]
+    if unknown:  # a packaging error, found at build time
+        raise TribocosimError(f"{owner}: units {unknown} are missing from modeldescription.BASE_UNITS")
+    node = Element("UnitDefinitions")
+    for unit in used:
+        u = SubElement(node, "Unit", {"name": unit})
+        if BASE_UNITS[unit]:
+            SubElement(u, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[unit].items()})
+    return node

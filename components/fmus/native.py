@@ -1,0 +1,225 @@
+"""Build the native FMUs (FMI 2.0 co-simulation, C, no Python at run time) of the components.
+
+For each component with a native implementation (``Component.native``) the build
+
+1. generates, from the component's description, the parameter header and the FMU's variable table
+   (:mod:`tribocosim.components.native.declarations`) and the model description (this module),
+   with the same names, units, descriptions, start values, ranges and value references as the
+   Python variant;
+2. compiles the model's C sources, its glue and the generic FMI wrapper (``tc_fmi2.c``, against
+   the standard's headers that fmpy ships) into ``binaries/{linux64,win64,darwin64}`` with the C
+   compiler of the ``ziglang`` package (:mod:`tribocosim.components.native.toolchain`);
+3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table)
+   into ``<ModelIdentifier>.fmu`` (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
+   it into place atomically, next to a JSON record of its source digest.
+
+The GUID is derived from the source digest (C sources, generated text, resources, compiler flags
+and zig version), so a model description and a binary of different builds do not load together.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree.ElementTree import Element, SubElement, indent, tostring
+
+from tribocosim.components import registry
+from tribocosim.components.description import Component
+from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
+from tribocosim.components.fmus.modeldescription import describe, unit_definitions
+from tribocosim.components.native import declarations, toolchain
+
+#: the sources every native FMU compiles beside its component's (the FMI wrapper and the shared helpers)
+SHARED_SOURCES = ("tc_common.c", "tc_fmi2.c")
+PLATFORMS = tuple(toolchain.PLATFORMS)
+
+
+def fmus() -> dict[str, Component]:
+    """Every native FMU this installation builds: ``{model identifier: component}``."""
+    return {c.model_identifier: c for c in registry.components().values() if c.native is not None}
+
+
+def component(name: str) -> Component:
+    known = fmus()
+    if name not in known:
+        raise FmuBuildError(f"unknown native FMU {name!r}; this project builds: {', '.join(known)}")
+    return known[name]
+
+
+def fmi2_headers() -> Path:
+    """The folder of the FMI 2.0 headers (``fmi2Functions.h``...) that fmpy ships."""
+    import fmpy
+
+    folder = Path(fmpy.__file__).resolve().parent / "c-code"
+    if not (folder / "fmi2Functions.h").is_file():
+        raise FmuBuildError(f"the FMI 2.0 headers are not in {folder} (fmpy installation)")
+    return folder
+
+
+def sources(comp: Component) -> list[Path]:
+    """The C files of a component's native FMU."""
+    return [toolchain.SOURCE_DIR / name for name in (*SHARED_SOURCES, *comp.native.sources)]
+
+
+def _zig_version() -> str:
+    try:
+        from importlib.metadata import version
+
+        return version("ziglang")
+    except Exception:  # noqa: BLE001 - the compiler's absence is reported by the build itself
+        return "?"
+
+
+def source_digest(name: str) -> str:
+    """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
+    comp = component(name)
+    h = hashlib.sha256()
+    for path in sorted({*sources(comp), *toolchain.SOURCE_DIR.glob("*.h")}):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    h.update(declarations.params_header(comp).encode())
+    h.update(declarations.model_header(comp, "").encode())
+    h.update(model_description(comp, "").encode())
+    for path in comp.resource_files:
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    h.update(" ".join((*toolchain.CFLAGS, _zig_version(), *PLATFORMS)).encode())
+    return h.hexdigest()
+
+
+def guid(digest: str) -> str:
+    """The FMU's GUID from its source digest."""
+    d = digest[:32]
+    return f"{{{d[:8]}-{d[8:12]}-{d[12:16]}-{d[16:20]}-{d[20:32]}}}"
+
+
+def _number(x) -> str:
+    return repr(float(x))
+
+
+def model_description(comp: Component, fmu_guid: str) -> str:
+    """The FMI 2.0 model description of a component's native FMU (variables in the Python variant's order)."""
+    from tribocosim import __name__ as package
+
+    start, stop, step = comp.default_experiment
+    root = Element("fmiModelDescription", {
+        "fmiVersion": "2.0", "modelName": comp.model_identifier, "guid": fmu_guid,
+        "description": comp.summary, "author": comp.author, "generationTool": f"{package} (native)",
+        "variableNamingConvention": "structured", "numberOfEventIndicators": "0",
+    })
+    SubElement(root, "CoSimulation", {
+        "modelIdentifier": comp.model_identifier, "needsExecutionTool": "false",
+        "canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "false",
+        "maxOutputDerivativeOrder": "0", "canRunAsynchronuously": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false", "canNotUseMemoryManagementFunctions": "true",
+        "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false",
+    })
+    vs = declarations.variables(comp)
+    root.append(unit_definitions({v["unit"] for v in vs if v["kind"] != "string"}, comp.model_identifier))
+    cats = SubElement(root, "LogCategories")
+    for status in ("OK", "Warning", "Discard", "Error", "Fatal"):
+        SubElement(cats, "Category", {"name": f"logStatus{status}", "description": f"messages with status fmi2{status}"})
+    SubElement(root, "DefaultExperiment", {"startTime": _number(start), "stopTime": _number(stop),
+                                           "stepSize": _number(step)})
+    mv = SubElement(root, "ModelVariables")
+    outputs = []
+    for vr, v in enumerate(vs):
+        unit = v["unit"] if v["kind"] != "string" else ""
+        attrs = {"name": v["name"], "valueReference": str(vr),
+                 "description": describe(v["description"], unit) if v["kind"] != "string" else f"{v['description']} [text]",
+                 "causality": v["causality"]}
+        if v["causality"] == "parameter":
+            attrs["variability"] = "fixed"
+        elif v["causality"] == "input":
+            attrs["variability"] = "continuous"
+        else:
+            attrs["variability"] = "discrete" if v["kind"] == "integer" else "continuous"
+            attrs["initial"] = "exact"
+            outputs.append(vr + 1)
+        sv = SubElement(mv, "ScalarVariable", attrs)
+        if v["kind"] == "string":
+            SubElement(sv, "String", {"start": str(v["start"])})
+            continue
+        typed = {"start": str(int(v["start"])) if v["kind"] == "integer" else _number(v["start"])}
+        if v["kind"] == "real":
+            typed["unit"] = unit
+        if v["low"] is not None:
+            typed["min"] = str(int(v["low"])) if v["kind"] == "integer" else _number(v["low"])
+        if v["high"] is not None:
+            typed["max"] = str(int(v["high"])) if v["kind"] == "integer" else _number(v["high"])
+        SubElement(sv, "Integer" if v["kind"] == "integer" else "Real", typed)
+    structure = SubElement(root, "ModelStructure")
+    if outputs:
+        out = SubElement(structure, "Outputs")
+        for index in outputs:
+            SubElement(out, "Unknown", {"index": str(index)})
+    indent(root, "  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
+
+
+def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, digest: str | None = None) -> dict:
+    """Generate the headers of FMU ``name`` into ``folder/include`` and compile its binaries into
+    ``folder/binaries/<platform>/``; returns ``{platform: library path}``."""
+    comp = component(name)
+    folder = Path(folder)
+    include = folder / "include"
+    include.mkdir(parents=True, exist_ok=True)
+    declarations.write_params_headers(include, [comp])
+    (include / "tc_fmu_model.h").write_text(
+        declarations.model_header(comp, guid(digest or source_digest(name))), encoding="ascii")
+    built = {}
+    for platform in platforms:
+        ext = toolchain.PLATFORMS[platform][1]
+        out = folder / "binaries" / platform / f"{name}{ext}"
+        try:
+            built[platform] = toolchain.compile_shared(sources(comp), out, platform,
+                                                       include_dirs=[include, fmi2_headers()])
+        except toolchain.CompileError as exc:
+            raise FmuBuildError(f"FMU {name}: {exc}") from exc
+    return built
+
+
+def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORMS) -> dict[str, Path]:
+    """Build native FMUs into ``out_dir`` and return ``{name: path to .fmu}`` (see the module docstring).
+
+    Raises
+    ------
+    FmuBuildError
+        Naming the FMU and the cause (missing resource, compiler output, validation problems).
+    """
+    out = Path(out_dir).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    selected = list(fmus()) if names is None else list(names)
+    for name in selected:  # every FMU's resources, before building any of them
+        for path in component(name).resource_files:
+            if not path.is_file():
+                raise FmuBuildError(f"FMU {name}: required file {path} is missing")
+    return {name: _build_one(name, out, tuple(platforms)) for name in selected}
+
+
+def _build_one(name: str, out: Path, platforms) -> Path:
+    comp = component(name)
+    digest = source_digest(name)
+    with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp:
+        stage = Path(tmp)
+        compile_binaries(name, stage, platforms, digest)
+        partial = out / f".{name}.{os.getpid()}.partial.fmu"
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", model_description(comp, guid(digest)))
+            for platform in platforms:
+                lib = stage / "binaries" / platform / f"{name}{toolchain.PLATFORMS[platform][1]}"
+                z.write(lib, f"binaries/{platform}/{lib.name}")
+            for path in comp.resource_files:
+                z.write(path, f"resources/{path.name}")
+            if not comp.resource_files:
+                z.writestr("resources/", "")
+    return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "source_digest": digest,
+                                                    "platforms": list(platforms), "python": sys.version.split()[0],
+                                                    "ziglang": _zig_version()})
+
+
+__all__ = ["build_native_fmus", "compile_binaries", "fmus", "model_description", "source_digest"]

@@ -1,0 +1,178 @@
+"""The C declarations of a component, generated from its description (so that C and Python cannot drift).
+
+Two headers, written into a build folder next to the sources:
+
+``<prefix>_params.h`` (one per component with a native implementation)
+    ``typedef struct <prefix>_params {...}``: one member per field of the component's parameter
+    dataclass, same names, same order; float fields are ``double``, integer fields ``int``, fields
+    with choices ``int`` (the index into the choices tuple, named ``<PREFIX>_<FIELD>_<CHOICE>``),
+    text fields ``const char *``. The native model is written against it.
+``tc_fmu_model.h`` (one per FMU)
+    the model identifier and GUID, the table of FMU variables (:data:`tc_variable` of ``tc_fmu.h``:
+    the parameters, then the inputs, then the outputs, in the order and with the names, units,
+    start values, ranges and choices of the model description), ``TC_P_<name>`` indices of the
+    parameters, and ``<prefix>_fill_params(values, p)`` that fills the model's struct from the
+    FMU's parameter values. The generic FMI wrapper (``tc_fmi2.c``) and the component's glue
+    (``tc_<name>_fmu.c``) include it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+from tribocosim.components.description import Component
+
+
+def _c_string(text: str) -> str:
+    """A C string literal (ASCII; quotes, backslashes and control characters escaped)."""
+    return json.dumps(text, ensure_ascii=True)
+
+
+def _c_double(x) -> str:
+    """A C double literal that reads back as the same float (Python repr; inf as HUGE_VAL)."""
+    x = float(x)
+    if math.isinf(x):
+        return "HUGE_VAL" if x > 0 else "-HUGE_VAL"
+    text = repr(x)
+    return text if any(ch in text for ch in ".en") else text + ".0"
+
+
+def _kind(f: dataclasses.Field) -> str:
+    meta = f.metadata
+    if meta.get("text") or "choices" in meta:
+        return "string"
+    return "integer" if meta.get("integer") else "real"
+
+
+def params_header(comp: Component) -> str:
+    """The ``<prefix>_params.h`` of a component (see the module docstring)."""
+    prefix = comp.native.prefix
+    guard = f"{prefix.upper()}_PARAMS_H"
+    lines = [
+        f"/* Parameters of the {comp.name} model: one member per field of {comp.parameters.__name__}, same names and",
+        " * order. GENERATED from the component's description by tribocosim/components/native/declarations.py:",
+        " * do not edit. float fields are double, integer fields int, choice fields int (the index of the value",
+        f" * among its choices, named {prefix.upper()}_<FIELD>_<CHOICE>), text fields const char *. SI units. */",
+        f"#ifndef {guard}",
+        f"#define {guard}",
+        "",
+    ]
+    for f in dataclasses.fields(comp.parameters):
+        for k, choice in enumerate(f.metadata.get("choices", ())):
+            lines.append(f"#define {prefix.upper()}_{f.name.upper()}_{choice.upper()} {k}")
+        if "choices" in f.metadata:
+            lines.append("")
+    lines.append(f"typedef struct {prefix}_params {{")
+    for f in dataclasses.fields(comp.parameters):
+        meta = f.metadata
+        ctype = {"real": "double", "integer": "int"}.get(_kind(f), "int" if "choices" in meta else "const char *")
+        unit = f" [{meta['unit']}]" if meta.get("unit") else ""
+        lines.append(f"    {ctype} {f.name}; /* {meta['description'].replace('*/', '* /')}{unit} */")
+    lines += [f"}} {prefix}_params;", "", "#endif", ""]
+    return "\n".join(lines)
+
+
+def variables(comp: Component) -> list[dict]:
+    """The FMU's variables in model-description order: name, kind, causality, index, unit, start, range,
+    choices, description (value reference = position)."""
+    out = []
+    for k, f in enumerate(comp.parameter_fields):
+        meta = f.metadata
+        kind = _kind(f)
+        out.append({
+            "name": f.name, "kind": kind, "causality": "parameter", "index": k,
+            "unit": "" if kind == "string" else (meta.get("unit") or "1"),
+            "start": f.default, "low": meta.get("low"), "high": meta.get("high"),
+            "low_inclusive": meta.get("low_inclusive", True), "choices": tuple(meta.get("choices", ())),
+            "description": meta["description"],
+        })
+    for k, port in enumerate(comp.inputs):
+        out.append({"name": port.name, "kind": "real", "causality": "input", "index": k, "unit": port.unit or "1",
+                    "start": port.start, "low": None, "high": None, "low_inclusive": True, "choices": (),
+                    "description": port.description})
+    for k, port in enumerate(comp.outputs):
+        out.append({"name": port.name, "kind": "integer" if port.integer else "real", "causality": "output",
+                    "index": k, "unit": port.unit or "1", "start": port.start, "low": None, "high": None,
+                    "low_inclusive": True, "choices": (), "description": port.description})
+    return out
+
+
+def model_header(comp: Component, guid: str) -> str:
+    """The ``tc_fmu_model.h`` of a component's FMU (see the module docstring)."""
+    prefix = comp.native.prefix
+    vs = variables(comp)
+    n_par = sum(v["causality"] == "parameter" for v in vs)
+    lines = [
+        f"/* The {comp.model_identifier} FMU's variables and parameter struct filler. GENERATED from the component's",
+        " * description by tribocosim/components/native/declarations.py: do not edit. */",
+        "#ifndef TC_FMU_MODEL_H",
+        "#define TC_FMU_MODEL_H",
+        "",
+        "#include <math.h>",
+        "",
+        '#include "tc_fmu.h"',
+        f'#include "{comp.native.params_header}"',
+        "",
+        f"#define TC_MODEL_IDENTIFIER {_c_string(comp.model_identifier)}",
+        f"#define TC_GUID {_c_string(guid)}",
+        f"#define TC_N_PARAMETERS {n_par}",
+        f"#define TC_N_INPUTS {len(comp.inputs)}",
+        f"#define TC_N_OUTPUTS {len(comp.outputs)}",
+        f"#define TC_N_VARIABLES {len(vs)}",
+        "",
+    ]
+    for v in vs:
+        if v["causality"] == "parameter":
+            lines.append(f"#define TC_P_{v['name']} {v['index']}")
+    lines.append("")
+    for v in vs:
+        if v["choices"]:
+            items = ", ".join(_c_string(c) for c in v["choices"])
+            lines.append(f"static const char *const TC_CHOICES_{v['name']}[] = {{{items}}};")
+    lines += ["", "static const tc_variable TC_VARIABLES[TC_N_VARIABLES] = {"]
+    kinds = {"real": "TC_KIND_REAL", "integer": "TC_KIND_INTEGER", "string": "TC_KIND_STRING"}
+    causes = {"parameter": "TC_CAUSALITY_PARAMETER", "input": "TC_CAUSALITY_INPUT", "output": "TC_CAUSALITY_OUTPUT"}
+    for v in vs:
+        text = v["kind"] == "string"
+        start = "0.0" if text else _c_double(v["start"])
+        start_text = _c_string(str(v["start"])) if text else "NULL"
+        low, high = v["low"], v["high"]
+        choices = (f"TC_CHOICES_{v['name']}", len(v["choices"])) if v["choices"] else ("NULL", 0)
+        lines.append(
+            f"    {{{_c_string(v['name'])}, {kinds[v['kind']]}, {causes[v['causality']]}, {v['index']}, "
+            f"{_c_string(v['unit'] if not text else '')}, {start}, {start_text}, {int(low is not None)}, "
+            f"{int(high is not None)}, {int(bool(v['low_inclusive']))}, {_c_double(low if low is not None else 0)}, "
+            f"{_c_double(high if high is not None else 0)}, {choices[0]}, {choices[1]}}},")
+    lines += ["};", ""]
+    lines += [f"/* {comp.parameters.__name__} from the FMU's parameter values (choices by index) */",
+              f"static inline void {prefix}_fill_params(const tc_param_value *v, {prefix}_params *p) {{"]
+    index = {v["name"]: v["index"] for v in vs if v["causality"] == "parameter"}
+    for f in dataclasses.fields(comp.parameters):
+        k = index[f.name]
+        meta = f.metadata
+        if "choices" in meta:
+            lines.append(f"    p->{f.name} = v[{k}].choice;")
+        elif meta.get("text"):
+            lines.append(f"    p->{f.name} = v[{k}].text;")
+        elif meta.get("integer"):
+            lines.append(f"    p->{f.name} = (int)v[{k}].number;")
+        else:
+            lines.append(f"    p->{f.name} = v[{k}].number;")
+    lines += ["}", "", "#endif", ""]
+    return "\n".join(lines)
+
+
+def write_params_headers(folder: str | Path, components) -> list[Path]:
+    """Write the ``<prefix>_params.h`` of every component with a native implementation into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for comp in components:
+        if comp.native is not None:
+            path = folder / comp.native.params_header
+            path.write_text(params_header(comp), encoding="ascii")
+            written.append(path)
+    return written

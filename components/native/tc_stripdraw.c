@@ -1,0 +1,846 @@
+/* The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law.
+ *
+ * Native twin of components/stripdraw/{model,kernels,transport,friction,mesh}.py; the Python modules are the
+ * readable reference and their docstrings give the reasoning. The arithmetic here is written in the order of
+ * the Python loop forms (the ones numba compiles) and of NumPy's element-wise expressions, and the sources are
+ * compiled without fused multiply-add, so both implementations round alike (see tests/native).
+ *
+ * Physics (paper Sec. 3-4, App. B-C):
+ *
+ * - bar, half model (one pad, one face): rho U_tt = E U_XX (Eq. 2), linear elements of length l_e, lumped
+ *   masses m_i = rho A l_e (half at both ends), element stiffness k_e = E A / l_e (Eq. 29-30); the grip node
+ *   N moves with the grip velocity V0. L_B = lead + draw_length + L_T + free_length, pad over
+ *   [a, a + L_T] with a = lead + draw_length (lead = 5 mm);
+ * - contact weight of node i: overlap ov_i of its tributary segment [x_i - l_e/2, x_i + l_e/2] (one-sided at the
+ *   ends) at x_i = X_i + U_i with the pad, divided by l_e;
+ * - interface (Eq. 4-5), elastic-perfectly-plastic Coulomb with return mapping: trial T = k_s (U_i - Up_i),
+ *   |T| <= T_max,i = mu_i P with P = F_N / (L_T w_T); nodal force -T w_T ov_i; a node that enters the pad starts
+ *   stress-free (Up_i := U_i); k_s = shear_stiffness_factor E / h_B;
+ * - explicit integrator: central difference (App. B, Eq. 31-32) at cfl_safety x 2 / omega_max, with
+ *   omega_max^2 <= (4 k_e + k_s w_T l_e) / m_1 (Gershgorin), sub-cycled inside each coupling interval;
+ * - implicit integrator: generalized-alpha (Chung & Hulbert 1993) in force-averaged form,
+ *   M [(1-am) a_{n+1} + am a_n] + (1-af) f(u_{n+1}) + af f(u_n) = 0, Newmark updates, am = (2r-1)/(r+1),
+ *   af = r/(r+1), gamma = 1/2 - am + af, beta = (1 - am + af)^2 / 4 (r = rho_inf); each step is solved by
+ *   Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by an Armijo
+ *   line search on the step's convex incremental potential Pi (kernels.py states Pi); a step that does not
+ *   converge in 60 iterations is halved, up to 12 times;
+ * - friction (Eq. 6-9, 23): constant mu_const; closed form mu = mu0 (1 - alpha(v) beta h'_rms / kappa) with
+ *   alpha(v) = b (1 - exp(-|v|/v_ref)) (evaluated with expm1, as NumPy does); or the table (tc_table_mu);
+ *   v is the grip speed |V0| or each node's slip rate of the last interval (friction_velocity);
+ * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
+ *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
+ *   tridiagonal M-matrix, Thomas algorithm), then the cap beta <= beta_thres (Eq. 24) whose removal is summed.
+ *
+ * Coupling (model.py): a step is split into n_int = max(1, ceil(dt / h_max - 1e-9)) intervals with
+ * h_max = window_courant l_e / |V0|; per interval mu is evaluated on the nodes that can reach the pad
+ * (contact nodes +- ceil(window_courant) + 1) and held, the bar advanced, then beta updated from the nodal
+ * slip increments with the contact weights averaged over the interval.
+ *
+ * Outputs: pull_force = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 F_N)), friction_force
+ * F_S = sum of nodal friction forces, mu_mean = F_S / F_N (Eq. 28), contact-weighted means under the pad.
+ *
+ * Where the Python model fails from deep inside a step (numba's ZeroDivisionError when dt^2 underflows, an
+ * OverflowError for infinitely many intervals) the native step is refused the same way (TC_DISCARD, state
+ * unchanged); a step that would need more than TC_STRIPDRAW_MAX_INTERVALS intervals or
+ * TC_STRIPDRAW_MAX_SUBSTEPS explicit steps (where Python would run for days) is refused as well.
+ */
+#include "tc_stripdraw.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define LEAD_LENGTH 0.005 /* mesh.LEAD_LENGTH [m] */
+#define MAX_HALVINGS 12   /* model._MAX_HALVINGS */
+#ifndef TC_STRIPDRAW_NEWTON_MAX_ITER
+#define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* model._NEWTON_MAX_ITER; the tests build with fewer to exercise the halving */
+#endif
+#define NEWTON_RTOL 1e-10 /* model._NEWTON_RTOL: residual relative to the friction capacity + grip pull */
+#define STATE_MAGIC 0x44534354u /* "TCSD" in little-endian bytes */
+#define STATE_VERSION 1u
+#define STATE_HEADER 16
+#define N_STATE_ARRAYS 7
+#define N_STATE_DOUBLES 5
+#define N_STATE_INTS 2
+
+struct tc_stripdraw {
+    tc_stripdraw_params p;
+    const tc_table *table; /* borrowed; NULL unless the table law is used */
+    size_t n;              /* nodes; node n - 1 is the grip */
+    /* mesh (mesh.BarMesh) and constants */
+    double le, half_le, a_lo, a_hi, ke, ks, wT, dt_explicit, pad_area;
+    double am, af, gamma, beta_nm; /* generalized-alpha */
+    double beta_cap;
+    long long reach; /* ceil(window_courant) + 1 */
+    double *X, *mass, *minv;
+    /* state (model._ARRAYS, model._SCALARS) */
+    double *U, *V, *A, *Up, *beta, *slip_rate, *fprev;
+    signed char *contact;
+    double time, friction_force, reaction, normal_force, beta_removed;
+    long long n_steps, clamp_count;
+    /* derived from U: contact weights (model._w) */
+    double *w;
+    /* work arrays */
+    double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *bsrc, *bnew, *over, *awork;
+    double *fwork;          /* explicit: nodal forces */
+    double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
+    unsigned char *clamped; /* table lookups flagged as clamped */
+    signed char *giwork;
+    unsigned char *backup; /* the state before the current step */
+    size_t state_size;
+    double *pool;          /* every double array above, in one allocation */
+    unsigned char *bytes;  /* contact, clamped, giwork and backup, in one allocation */
+};
+
+/* ---------------------------------------------------------------------------------------------------
+ * helpers
+ * ------------------------------------------------------------------------------------------------- */
+
+
+/* NumPy's pairwise summation, as np.sum reduces a contiguous float64 array (so that sums match bit for bit). */
+static double pairwise_sum(const double *a, size_t n) {
+    if (n < 8) {
+        double res = 0.0;
+        for (size_t i = 0; i < n; ++i) res += a[i];
+        return res;
+    }
+    if (n <= 128) {
+        double r[8];
+        size_t i;
+        for (i = 0; i < 8; ++i) r[i] = a[i];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (size_t j = 0; j < 8; ++j) r[j] += a[i + j];
+        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; ++i) res += a[i];
+        return res;
+    }
+    size_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
+}
+
+/* Python's max(a, b) / min(a, b) for floats (numba compiles them the same way): b replaces a only if
+ * strictly larger / smaller. */
+static double py_max(double a, double b) { return b > a ? b : a; }
+static double py_min(double a, double b) { return b < a ? b : a; }
+
+/* ---------------------------------------------------------------------------------------------------
+ * kernels (kernels.py, transport.py)
+ * ------------------------------------------------------------------------------------------------- */
+
+void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                   double *ov) {
+    for (size_t i = 0; i < n; ++i) {
+        const double x = X[i] + U[i];
+        const double lo = i == 0 ? x : x - half_le;
+        const double hi = i == n - 1 ? x : x + half_le;
+        /* np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo)); NaN propagates as in NumPy */
+        const double top = hi > a_hi ? a_hi : hi;
+        const double bottom = lo < a_lo ? a_lo : lo;
+        const double d = top - bottom;
+        ov[i] = d < 0.0 ? 0.0 : d;
+    }
+}
+
+void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
+               double *work) {
+    double *c = work, *d = work + n;
+    c[0] = sup[0] / diag[0];
+    d[0] = rhs[0] / diag[0];
+    for (size_t i = 1; i < n; ++i) {
+        const double m = diag[i] - sub[i] * c[i - 1];
+        c[i] = sup[i] / m;
+        d[i] = (rhs[i] - sub[i] * d[i - 1]) / m;
+    }
+    x[n - 1] = d[n - 1];
+    for (size_t i = n - 1; i-- > 0;) x[i] = d[i] - c[i] * x[i + 1];
+}
+
+void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
+                    signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
+                    double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
+                    double *reaction, double *f) {
+    const size_t N = n - 1;
+    double fr = 0.0;
+    for (size_t i = 0; i < n; ++i) f[i] = 0.0; /* reaction = -f[N] is defined even for n_sub = 0 */
+    for (long long s = 0; s < n_sub; ++s) {
+        /* predictor: U += dt V + dt^2/2 A, V += dt/2 A; the grip follows V0 */
+        for (size_t i = 0; i < N; ++i) {
+            U[i] += dt * V[i] + 0.5 * dt * dt * A[i];
+            V[i] += 0.5 * dt * A[i];
+        }
+        U[N] += dt * vg;
+        V[N] = vg;
+        A[N] = 0.0;
+        for (size_t i = 0; i < n; ++i) f[i] = 0.0;
+        for (size_t e = 0; e < N; ++e) {
+            const double s_e = ke * (U[e + 1] - U[e]);
+            f[e] += s_e;
+            f[e + 1] -= s_e;
+        }
+        /* interface law with return mapping on the nodes under the pad */
+        fr = 0.0;
+        for (size_t i = 0; i < n; ++i) {
+            const double x = X[i] + U[i];
+            const double lo = i == 0 ? x : x - half_le;
+            const double hi = i == N ? x : x + half_le;
+            const double ov = py_min(hi, a_hi) - py_max(lo, a_lo);
+            if (ov > 0.0) {
+                if (contact[i] == 0) {
+                    Up[i] = U[i];
+                    contact[i] = 1;
+                }
+                double T = ks * (U[i] - Up[i]);
+                if (T > tmax[i]) {
+                    T = tmax[i];
+                    Up[i] = U[i] - T / ks;
+                } else if (T < -tmax[i]) {
+                    T = -tmax[i];
+                    Up[i] = U[i] - T / ks;
+                }
+                const double F = T * wT * ov;
+                f[i] -= F;
+                fr += F;
+            } else {
+                contact[i] = 0;
+            }
+        }
+        /* corrector: A = f / m, V += dt/2 A */
+        for (size_t i = 0; i < N; ++i) {
+            A[i] = f[i] * minv[i];
+            V[i] += 0.5 * dt * A[i];
+        }
+    }
+    *fric = fr;
+    *reaction = -f[N];
+}
+
+/* kernels._galpha_eval: tractions T, stick/slip state (0 off the pad, 1 stick, 2/3 slip +/-), nodal forces f,
+ * residual r = dPi/du (free nodes) and the potential Pi; *rmax = max |r_i|. */
+static double galpha_eval(size_t n, const double *u, const double *u0, const double *upred, const double *A,
+                          const double *Upn, const double *fprev, const double *ov, const double *m, double ke,
+                          double ks, double wT, const double *tmax, double am, double af, double cm, double *T,
+                          signed char *state, double *f, double *r, double *rmax) {
+    const size_t N = n - 1;
+    double pot = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        T[i] = 0.0;
+        state[i] = 0;
+        if (ov[i] > 0.0) {
+            const double x = u[i] - Upn[i];
+            const double t = ks * x;
+            double phi;
+            if (t > tmax[i]) {
+                T[i] = tmax[i];
+                state[i] = 2;
+                phi = tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks;
+            } else if (t < -tmax[i]) {
+                T[i] = -tmax[i];
+                state[i] = 3;
+                phi = -tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks;
+            } else {
+                T[i] = t;
+                state[i] = 1;
+                phi = 0.5 * ks * x * x;
+            }
+            if (i < N) pot += (1.0 - af) * wT * ov[i] * phi;
+        }
+        f[i] = T[i] * wT * ov[i];
+    }
+    for (size_t e = 0; e < N; ++e) {
+        const double d = u[e + 1] - u[e];
+        f[e] -= ke * d;
+        f[e + 1] += ke * d;
+        pot += (1.0 - af) * 0.5 * ke * d * d;
+    }
+    double rm = 0.0;
+    for (size_t i = 0; i < N; ++i) {
+        const double lin = am * m[i] * A[i] + af * fprev[i];
+        const double du = u[i] - upred[i];
+        r[i] = cm * m[i] * du + lin + (1.0 - af) * f[i];
+        pot += 0.5 * cm * m[i] * (du * du) + lin * (u[i] - u0[i]); /* (u - upred) ** 2 is du * du */
+        rm = py_max(rm, fabs(r[i]));
+    }
+    *rmax = rm;
+    return pot;
+}
+
+int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
+                 double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
+                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
+                 double rtol, double *fric, double *reaction, double *work, signed char *iwork) {
+    const size_t N = n - 1;
+    double *Upn = work, *upred = work + n, *u = work + 2 * n, *u0 = work + 3 * n, *T = work + 4 * n;
+    double *f = work + 5 * n, *ut = work + 6 * n, *r = work + 7 * n, *du = r + N, *sub = du + N, *dia = sub + N;
+    double *sup = dia + N, *rhs = sup + N, *tw = rhs + N; /* tw: 2 N for the Thomas solve */
+    signed char *state = iwork, *used = iwork + n;
+
+    /* the compiled loop form raises ZeroDivisionError (numba's Python error model) when dt^2 underflows */
+    if (beta * dt * dt == 0.0) return -2;
+    for (size_t i = 0; i < n; ++i) {
+        Upn[i] = Up[i];
+        if (ov[i] > 0.0 && contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
+    }
+    const double cm = (1.0 - am) / (beta * dt * dt);
+    const double cA = dt * dt * (0.5 - beta);
+    for (size_t i = 0; i < n; ++i) upred[i] = U[i] + dt * V[i] + cA * A[i]; /* Newmark predictor */
+    const double shift = dt * vg;
+    for (size_t i = 0; i < n; ++i) {
+        u[i] = U[i] + shift; /* initial guess: the strip follows the grip rigidly */
+        u0[i] = u[i];
+    }
+    double fscale = ke * fabs(dt * vg) + 1e-300;
+    for (size_t i = 0; i < n; ++i) fscale += tmax[i] * wT * ov[i];
+
+    double rmax, rmax_t;
+    double pot = galpha_eval(n, u, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r,
+                             &rmax);
+    int it = 0;
+    while (rmax > rtol * fscale) {
+        if (it >= max_iter) return -1;
+        double slope = 0.0;
+        for (size_t i = 0; i < N; ++i) {
+            const double kt = state[i] == 1 ? ks * wT * ov[i] : 0.0;
+            dia[i] = cm * m[i] + (1.0 - af) * ((i > 0 ? 2.0 * ke : ke) + kt);
+            sub[i] = -(1.0 - af) * ke;
+            sup[i] = -(1.0 - af) * ke;
+            rhs[i] = -r[i];
+        }
+        for (size_t i = 0; i < n; ++i) used[i] = state[i];
+        tc_thomas(N, sub, dia, sup, rhs, du, tw);
+        for (size_t i = 0; i < N; ++i) slope += r[i] * du[i];
+        double alpha = 1.0, pot_t;
+        for (;;) { /* backtracking (Armijo) line search on Pi */
+            for (size_t i = 0; i < N; ++i) ut[i] = u[i] + alpha * du[i];
+            ut[N] = u[N];
+            pot_t = galpha_eval(n, ut, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r,
+                                &rmax_t);
+            if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
+            alpha *= 0.5;
+        }
+        for (size_t i = 0; i < n; ++i) u[i] = ut[i];
+        pot = pot_t;
+        rmax = rmax_t;
+        it += 1;
+        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
+            int same = 1;
+            for (size_t i = 0; i < n; ++i)
+                if (state[i] != used[i]) {
+                    same = 0;
+                    break;
+                }
+            if (same) break;
+        }
+    }
+    /* accept: Newmark updates, plastic slip, contact flags */
+    for (size_t i = 0; i < N; ++i) {
+        const double anew = (u[i] - upred[i]) / (beta * dt * dt);
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+        A[i] = anew;
+    }
+    V[N] = vg;
+    A[N] = 0.0;
+    double fr = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        U[i] = u[i];
+        fprev[i] = f[i];
+        if (ov[i] > 0.0) {
+            contact[i] = 1;
+            Up[i] = Upn[i];
+            if (state[i] != 1) Up[i] = u[i] - T[i] / ks;
+            fr += T[i] * wT * ov[i];
+        } else {
+            contact[i] = 0;
+        }
+    }
+    *fric = fr;
+    *reaction = f[N];
+    return it;
+}
+
+void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
+                  double element_length, double *out, double *work) {
+    memcpy(out, beta, n_all * sizeof *out);
+    long long lo = -1, hi = -1; /* the pad covers one contiguous run of nodes */
+    for (size_t i = 0; i < n_all; ++i)
+        if (weight[i] > 0.0) {
+            if (lo < 0) lo = (long long)i;
+            hi = (long long)i + 1;
+        }
+    if (zeta == 0.0 || lo < 0 || hi - lo < 2) return;
+    const size_t n = (size_t)(hi - lo);
+    double *diag = work, *sub = work + n, *sup = work + 2 * n, *tw = work + 3 * n;
+    for (size_t k = 0; k < n; ++k) {
+        diag[k] = 1.0;
+        sub[k] = 0.0;
+        sup[k] = 0.0;
+    }
+    for (size_t k = 0; k + 1 < n; ++k) {
+        const size_t a = (size_t)lo + k, b = a + 1;
+        if (weight[a] > 0.0 && weight[b] > 0.0) {
+            /* face Courant number; upwind: from node k+1 into k when c > 0, from k into k+1 otherwise */
+            const double c = zeta * 0.5 * (dU[a] + dU[b]) / element_length;
+            if (c > 0.0) {
+                diag[k + 1] += c;
+                sup[k] -= c;
+            } else {
+                diag[k] -= c;
+                sub[k + 1] += c;
+            }
+        }
+    }
+    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * friction laws (friction.py)
+ * ------------------------------------------------------------------------------------------------- */
+
+/* beta_threshold of the law (Eq. 24): constant 1; closed form kappa / (b h'_rms) limited to 1; the table's. */
+static double law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table) {
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE) return table->beta_threshold;
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM) {
+        if (p->alpha_b <= 0) return 1.0;
+        return py_min(1.0, p->kappa / (p->alpha_b * p->rms_slope));
+    }
+    return 1.0;
+}
+
+/* mu of the nodes lo..lo+cnt-1 at pressure P (law.mu with the velocity model.py passes), flags of clamped
+ * table lookups into m->clamped. */
+static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t cnt, tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    const int grip = p->friction_velocity == TC_STRIPDRAW_FRICTION_VELOCITY_GRIP;
+    const double *b = m->beta + lo;
+    switch (p->friction_model) {
+    case TC_STRIPDRAW_FRICTION_MODEL_CONSTANT:
+        for (size_t k = 0; k < cnt; ++k) {
+            m->mu[k] = p->mu_const;
+            m->clamped[k] = 0;
+        }
+        return TC_OK;
+    case TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM:
+        for (size_t k = 0; k < cnt; ++k) {
+            const double v = grip ? fabs(vg) : m->slip_rate[lo + k];
+            const double alpha = p->alpha_b * -expm1(-fabs(v) / p->alpha_v_ref); /* Eq. 23 */
+            m->mu[k] = p->mu0 * (1.0 - alpha * b[k] * p->rms_slope / p->kappa); /* Eq. 9 */
+            m->clamped[k] = 0;
+        }
+        return TC_OK;
+    default: {
+        const double *v = m->slip_rate + lo;
+        if (grip) {
+            for (size_t k = 0; k < cnt; ++k) m->vel[k] = fabs(vg);
+            v = m->vel;
+        }
+        return tc_table_mu(m->table, pressure, cnt, v, b, p->table_policy, m->mu, m->clamped, msg);
+    }
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * the model (model.py)
+ * ------------------------------------------------------------------------------------------------- */
+
+static void weights(const tc_stripdraw *m, const double *U, double *w) {
+    tc_sd_overlap(m->n, m->X, U, m->half_le, m->a_lo, m->a_hi, w);
+    for (size_t i = 0; i < m->n; ++i) w[i] = w[i] / m->le;
+}
+
+/* StripDrawModel._implicit: one generalized-alpha step of length h with the overlaps ov; when Newton fails,
+ * two half steps, the second with the overlaps at the midpoint; at most MAX_HALVINGS levels. */
+static int implicit_step(tc_stripdraw *m, double h, const double *ov, double vg, int depth, double *fric,
+                         double *reaction, tc_msg msg) {
+    const size_t n = m->n;
+    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, m->mass, m->ke, m->ks, m->wT,
+                          m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
+                          NEWTON_RTOL, fric, reaction, m->gwork, m->giwork);
+    if (it >= 0) return TC_OK;
+    if (it == -2) { /* Python: ZeroDivisionError */
+        char r[TC_REPR_SIZE];
+        return tc_fail(msg, TC_DISCARD,
+                       "division by zero: the implicit bar step of %s s is too short (its square underflows) at "
+                       "t = %.9g s", tc_repr_double(h, r), m->time);
+    }
+    if (depth >= MAX_HALVINGS)
+        return tc_fail(msg, TC_DISCARD,
+                       "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
+                       "the step halved %d times to %.3g s",
+                       m->time, depth, h);
+    int rc = implicit_step(m, 0.5 * h, ov, vg, depth + 1, fric, reaction, msg);
+    if (rc != TC_OK) return rc;
+    double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
+    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
+    return implicit_step(m, 0.5 * h, ov_mid, vg, depth + 1, fric, reaction, msg);
+}
+
+/* StripDrawModel._interval: one coupling interval of length h. */
+static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    const size_t n = m->n;
+    for (size_t i = 0; i < n; ++i) m->tmax[i] = 0.0;
+    if (pressure > 0) {
+        /* only nodes that can be under the pad during this interval need mu: the pad slides at most
+         * window_courant elements per interval */
+        long long first = -1, last = -1;
+        for (size_t i = 0; i < n; ++i)
+            if (m->w[i] > 0) {
+                if (first < 0) first = (long long)i;
+                last = (long long)i;
+            }
+        long long lo = 0, hi = (long long)n;
+        if (first >= 0) {
+            lo = first - m->reach > 0 ? first - m->reach : 0;
+            hi = last + 1 + m->reach < (long long)n ? last + 1 + m->reach : (long long)n;
+        }
+        if (hi > lo) {
+            const size_t cnt = (size_t)(hi - lo);
+            int rc = law_mu(m, pressure, vg, (size_t)lo, cnt, msg);
+            if (rc != TC_OK) return rc;
+            for (size_t k = 0; k < cnt; ++k) {
+                if (m->clamped[k] && m->w[(size_t)lo + k] > 0) m->clamp_count += 1;
+                m->tmax[(size_t)lo + k] = m->mu[k] * pressure;
+            }
+        }
+    }
+    memcpy(m->U0, m->U, n * sizeof *m->U);
+    double fric, reaction;
+    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        double q = ceil(h / m->dt_explicit - 1e-9);
+        long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
+        tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
+                       m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &reaction, m->fwork);
+    } else {
+        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le; /* w0 * element_length */
+        int rc = implicit_step(m, h, m->ov, vg, 0, &fric, &reaction, msg);
+        if (rc != TC_OK) return rc;
+    }
+    m->friction_force = fric;
+    m->reaction = reaction;
+    for (size_t i = 0; i < n; ++i) {
+        m->dU[i] = m->U[i] - m->U0[i];
+        m->slip_rate[i] = fabs(m->dU[i]) / h;
+    }
+    double *w0 = m->w; /* the weights at the start of the interval */
+    m->w = m->w0;
+    m->w0 = w0;
+    weights(m, m->U, m->w);
+    for (size_t i = 0; i < n; ++i) m->weight[i] = 0.5 * (w0[i] + m->w[i]);
+    /* transport.transport_step: Archard source (Eq. 37), advection (Eq. 13-14), cap (Eq. 24) */
+    const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
+    for (size_t i = 0; i < n; ++i) m->bsrc[i] = m->beta[i] + kp * fabs(m->dU[i]) * m->weight[i] / hh;
+    tc_sd_advect(n, m->bsrc, m->dU, m->weight, p->zeta, m->le, m->bnew, m->awork);
+    const double cap = m->beta_cap;
+    for (size_t i = 0; i < n; ++i) {
+        const double d = m->bnew[i] - cap;
+        m->over[i] = d < 0.0 ? 0.0 : d;                     /* np.maximum(new - cap, 0.0) */
+        m->beta[i] = m->bnew[i] > cap ? cap : m->bnew[i]; /* np.minimum(new, cap) */
+    }
+    m->beta_removed += pairwise_sum(m->over, n);
+    return TC_OK;
+}
+
+/* StripDrawModel._advance: split the step into coupling intervals. */
+static int advance(tc_stripdraw *m, double dt, double fn, double vg, tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    char r1[TC_REPR_SIZE], r2[TC_REPR_SIZE];
+    m->normal_force = fn;
+    const double pressure = fn / (p->tool_length * p->tool_width);
+    const double h_max = vg != 0 ? p->window_courant * m->le / fabs(vg) : INFINITY;
+    const double q = ceil(dt / h_max - 1e-9);
+    if (!(q <= TC_STRIPDRAW_MAX_INTERVALS))
+        return tc_fail(msg, TC_DISCARD,
+                       "dt = %s s at grip_velocity = %s m/s needs %.3g coupling intervals; at most %.0e are allowed",
+                       tc_repr_double(dt, r1), tc_repr_double(vg, r2), q, TC_STRIPDRAW_MAX_INTERVALS);
+    const long long n_int = q > 1.0 ? (long long)q : 1;
+    const double h = dt / (double)n_int;
+    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        const double qs = ceil(h / m->dt_explicit - 1e-9);
+        const double total = (double)n_int * (qs > 1.0 ? qs : 1.0);
+        if (!(total <= TC_STRIPDRAW_MAX_SUBSTEPS))
+            return tc_fail(msg, TC_DISCARD,
+                           "dt = %s s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step",
+                           tc_repr_double(dt, r1), total, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
+    }
+    for (long long k = 0; k < n_int; ++k) {
+        int rc = interval(m, h, pressure, vg, msg);
+        if (rc != TC_OK) return rc;
+    }
+    return TC_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * state image
+ * ------------------------------------------------------------------------------------------------- */
+
+static size_t state_size(size_t n) {
+    return STATE_HEADER + sizeof(double) * (N_STATE_ARRAYS * n + N_STATE_DOUBLES) + sizeof(int64_t) * N_STATE_INTS +
+           n;
+}
+
+static void write_state(const tc_stripdraw *m, unsigned char *b) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    const uint32_t head[2] = {STATE_MAGIC, STATE_VERSION};
+    const uint64_t nn = (uint64_t)n;
+    memcpy(b, head, sizeof head);
+    memcpy(b + 8, &nn, sizeof nn);
+    b += STATE_HEADER;
+    const double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, m->slip_rate, m->fprev};
+    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) memcpy(b, arrays[k], nb);
+    const double scalars[N_STATE_DOUBLES] = {m->time, m->friction_force, m->reaction, m->normal_force,
+                                             m->beta_removed};
+    memcpy(b, scalars, sizeof scalars);
+    b += sizeof scalars;
+    const int64_t counts[N_STATE_INTS] = {(int64_t)m->n_steps, (int64_t)m->clamp_count};
+    memcpy(b, counts, sizeof counts);
+    b += sizeof counts;
+    memcpy(b, m->contact, n);
+}
+
+static void read_state(tc_stripdraw *m, const unsigned char *b) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    b += STATE_HEADER;
+    double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, m->slip_rate, m->fprev};
+    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) memcpy(arrays[k], b, nb);
+    double scalars[N_STATE_DOUBLES];
+    memcpy(scalars, b, sizeof scalars);
+    b += sizeof scalars;
+    m->time = scalars[0];
+    m->friction_force = scalars[1];
+    m->reaction = scalars[2];
+    m->normal_force = scalars[3];
+    m->beta_removed = scalars[4];
+    int64_t counts[N_STATE_INTS];
+    memcpy(counts, b, sizeof counts);
+    b += sizeof counts;
+    m->n_steps = (long long)counts[0];
+    m->clamp_count = (long long)counts[1];
+    memcpy(m->contact, b, n);
+    weights(m, m->U, m->w); /* derived, as set_state recomputes _w */
+}
+
+size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
+
+void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) { write_state(m, buf); }
+
+int tc_stripdraw_set_state(tc_stripdraw *m, const void *buf, size_t size, tc_msg msg) {
+    const unsigned char *b = buf;
+    if (b == NULL || size != m->state_size)
+        return tc_fail(msg, TC_ERROR, "strip-draw state image has %zu bytes; this model's has %zu",
+                       b == NULL ? (size_t)0 : size, m->state_size);
+    uint32_t head[2];
+    uint64_t nn;
+    memcpy(head, b, sizeof head);
+    memcpy(&nn, b + 8, sizeof nn);
+    if (head[0] != STATE_MAGIC || head[1] != STATE_VERSION)
+        return tc_fail(msg, TC_ERROR, "not a strip-draw state image (version %u of this format is read)",
+                       (unsigned)STATE_VERSION);
+    if (nn != (uint64_t)m->n)
+        return tc_fail(msg, TC_ERROR, "strip-draw state image has %llu nodes; this model has %zu",
+                       (unsigned long long)nn, m->n);
+    const unsigned char *contact = b + size - m->n;
+    for (size_t i = 0; i < m->n; ++i)
+        if (contact[i] > 1) return tc_fail(msg, TC_ERROR, "strip-draw state image has a contact flag that is not 0/1");
+    read_state(m, b);
+    return TC_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * public API
+ * ------------------------------------------------------------------------------------------------- */
+
+void tc_stripdraw_free(tc_stripdraw *m) {
+    if (m == NULL) return;
+    free(m->pool);
+    free(m->bytes);
+    free(m);
+}
+
+int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
+                        size_t n_beta, tc_stripdraw **out, tc_msg msg) {
+    char r1[TC_REPR_SIZE];
+    if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no place for the model (out is NULL)");
+    *out = NULL;
+    if (p == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no parameters (p is NULL)");
+    if (p->friction_model < 0 || p->friction_model > 2)
+        return tc_fail(msg, TC_ERROR, "friction_model = %d is not allowed; choose 0 (table), 1 (closed_form) or 2 "
+                       "(constant)", p->friction_model);
+    if (p->friction_velocity < 0 || p->friction_velocity > 1)
+        return tc_fail(msg, TC_ERROR, "friction_velocity = %d is not allowed; choose 0 (grip) or 1 (slip_rate)",
+                       p->friction_velocity);
+    if (p->table_policy < 0 || p->table_policy > 1)
+        return tc_fail(msg, TC_ERROR, "table_policy = %d is not allowed; choose 0 (clamp) or 1 (error)",
+                       p->table_policy);
+    if (p->integrator < 0 || p->integrator > 1)
+        return tc_fail(msg, TC_ERROR, "integrator = %d is not allowed; choose 0 (explicit) or 1 (implicit)",
+                       p->integrator);
+    if (p->n_elements < 1 || p->n_elements > 100000000)
+        return tc_fail(msg, TC_ERROR, "n_elements = %d is out of range; allowed: [1, 100000000]", p->n_elements);
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table == NULL)
+        return tc_fail(msg, TC_ERROR, "friction_model = 'table' needs a friction table; none was given");
+    const size_t n = (size_t)p->n_elements + 1;
+    const double cap = p->beta_threshold > 0 ? p->beta_threshold : law_beta_threshold(p, table);
+    if (beta_field != NULL) {
+        int ok = n_beta == n;
+        for (size_t i = 0; ok && i < n; ++i) ok = isfinite(beta_field[i]) && !(beta_field[i] < 0);
+        if (!ok)
+            return tc_fail(msg, TC_ERROR,
+                           "beta_field must hold %zu finite values >= 0 (one per node); got shape (%zu,)", n, n_beta);
+    }
+    double bmax = 0.0;
+    int over = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double b = beta_field != NULL ? beta_field[i] : p->beta_initial;
+        if (i == 0 || b > bmax) bmax = b;
+        if (b > cap) over = 1;
+    }
+    if (over)
+        return tc_fail(msg, TC_ERROR, "initial beta = %s exceeds the cap beta_threshold = %g", tc_repr_double(bmax, r1),
+                       cap);
+
+    tc_stripdraw *m = calloc(1, sizeof *m);
+    if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
+    const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, work 10, advection 5, then the
+     * explicit forces (1) or the generalized-alpha work (15) and the overlaps of each halving level (13) */
+    const size_t n_arrays = 3 + 7 + 1 + 10 + 5 + (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 : 1);
+    m->state_size = state_size(n);
+    m->pool = calloc(n_arrays * n, sizeof *m->pool);
+    m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
+    if (m->pool == NULL || m->bytes == NULL) {
+        tc_stripdraw_free(m);
+        return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model (%zu nodes)", n);
+    }
+    double *q = m->pool;
+    double **arrays[] = {&m->X,    &m->mass, &m->minv,      &m->U,  &m->V,      &m->A,      &m->Up,
+                         &m->beta, &m->slip_rate, &m->fprev, &m->w,  &m->tmax,   &m->U0,     &m->w0,
+                         &m->dU,   &m->weight,    &m->vel,   &m->mu, &m->bsrc,   &m->bnew,   &m->over};
+    for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
+    m->awork = q;
+    q += 5 * n;
+    if (implicit) {
+        m->gwork = q;
+        m->ov = q + TC_SD_GALPHA_WORK(n);
+    } else {
+        m->fwork = q;
+    }
+    m->contact = (signed char *)m->bytes;
+    m->clamped = m->bytes + n;
+    m->giwork = (signed char *)(m->bytes + 2 * n);
+    m->backup = m->bytes + 4 * n;
+
+    m->p = *p;
+    m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
+    m->n = n;
+    m->beta_cap = cap;
+    /* mesh.BarMesh.build */
+    const double length = LEAD_LENGTH + p->draw_length + p->tool_length + p->free_length;
+    const double le = length / (double)p->n_elements;
+    const double bar_area = p->sheet_width * (0.5 * p->sheet_thickness);
+    m->le = le;
+    m->half_le = 0.5 * le;
+    for (size_t i = 0; i < n; ++i) m->X[i] = (double)i * le;
+    m->X[n - 1] = length;
+    for (size_t i = 0; i < n; ++i) m->mass[i] = p->density * bar_area * le;
+    m->mass[0] *= 0.5;
+    m->mass[n - 1] *= 0.5;
+    m->a_lo = LEAD_LENGTH + p->draw_length;
+    m->a_hi = m->a_lo + p->tool_length;
+    m->ke = p->youngs_modulus * bar_area / le;
+    m->ks = p->shear_stiffness_factor * p->youngs_modulus / (0.5 * p->sheet_thickness);
+    m->wT = p->tool_width;
+    m->pad_area = p->tool_length * p->tool_width;
+    const double node_ks = m->ks * p->tool_width * le;
+    m->dt_explicit = p->cfl_safety * (2.0 / sqrt((4.0 * m->ke + node_ks) / m->mass[1])); /* critical_time_step */
+    for (size_t i = 0; i < n; ++i) m->minv[i] = 1.0 / m->mass[i];
+    const double r = p->rho_inf;
+    m->am = (2.0 * r - 1.0) / (r + 1.0);
+    m->af = r / (r + 1.0);
+    m->gamma = 0.5 - m->am + m->af;
+    m->beta_nm = 0.25 * pow(1.0 - m->am + m->af, 2.0); /* Python's float ** 2 is pow() */
+    /* math.ceil(window_courant) + 1, kept within [-n, n] (where it acts as +-infinity) */
+    const double reach = ceil(p->window_courant) + 1.0;
+    if (reach >= -(double)n && reach <= (double)n)
+        m->reach = (long long)reach;
+    else
+        m->reach = reach < 0 ? -(long long)n : (long long)n;
+    /* state */
+    for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? beta_field[i] : p->beta_initial;
+    weights(m, m->U, m->w);
+    *out = m;
+    return TC_OK;
+}
+
+int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double grip_velocity, tc_msg msg) {
+    char r1[TC_REPR_SIZE];
+    if (!isfinite(dt))
+        return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r1));
+    if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r1));
+    if (!isfinite(normal_force))
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
+                       tc_repr_double(normal_force, r1));
+    if (normal_force < 0)
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r1));
+    if (!isfinite(grip_velocity))
+        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
+                       tc_repr_double(grip_velocity, r1));
+    write_state(m, m->backup);
+    int rc = advance(m, dt, normal_force, grip_velocity, msg);
+    if (rc == TC_OK) {
+        int finite = isfinite(m->reaction);
+        for (size_t i = 0; finite && i < m->n; ++i) finite = isfinite(m->U[i]);
+        if (!finite) rc = tc_fail(msg, TC_DISCARD, "non-finite bar state at t = %.9g s", m->time + dt);
+    }
+    if (rc != TC_OK) {
+        read_state(m, m->backup); /* bit-identical: arrays, scalars, and the weights recomputed from U */
+        return rc;
+    }
+    m->time = m->time + dt;
+    m->n_steps += 1;
+    return TC_OK;
+}
+
+void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
+    const size_t n = m->n;
+    const double fn = m->normal_force;
+    const double wsum = pairwise_sum(m->w, n);
+    double wu = 0.0, wb = 0.0, bmax = m->beta[0];
+    for (size_t i = 0; i < n; ++i) {
+        wu += m->w[i] * m->U[i];
+        wb += m->w[i] * m->beta[i];
+        if (m->beta[i] > bmax || isnan(m->beta[i])) bmax = m->beta[i]; /* np.max propagates NaN */
+    }
+    out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
+    out[TC_STRIPDRAW_FRICTION_FORCE] = m->friction_force;
+    out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? m->friction_force / fn : 0.0;
+    out[TC_STRIPDRAW_SLIDING_DISTANCE] = wsum > 0 ? wu / wsum : 0.0;
+    out[TC_STRIPDRAW_BETA_MEAN] = wsum > 0 ? wb / wsum : 0.0;
+    out[TC_STRIPDRAW_BETA_MAX] = bmax;
+    out[TC_STRIPDRAW_CONTACT_PRESSURE] = fn / m->pad_area;
+    out[TC_STRIPDRAW_GRIP_POSITION] = m->U[n - 1];
+    out[TC_STRIPDRAW_TABLE_CLAMP_COUNT] = (double)m->clamp_count;
+}
+
+size_t tc_stripdraw_n_nodes(const tc_stripdraw *m) { return m->n; }
+
+void tc_stripdraw_fields(const tc_stripdraw *m, double *X, double *U, double *beta, double *slip, double *contact) {
+    const size_t nb = m->n * sizeof(double);
+    if (X != NULL) memcpy(X, m->X, nb);
+    if (U != NULL) memcpy(U, m->U, nb);
+    if (beta != NULL) memcpy(beta, m->beta, nb);
+    if (slip != NULL) memcpy(slip, m->Up, nb);
+    if (contact != NULL) memcpy(contact, m->w, nb);
+}
+
+void tc_stripdraw_window(const tc_stripdraw *m, double window[2]) {
+    window[0] = m->a_lo;
+    window[1] = m->a_hi;
+}
+
+double tc_stripdraw_time(const tc_stripdraw *m) { return m->time; }
+
+double tc_stripdraw_beta_cap(const tc_stripdraw *m) { return m->beta_cap; }
+
+double tc_stripdraw_explicit_time_step(const tc_stripdraw *m) { return m->dt_explicit; }

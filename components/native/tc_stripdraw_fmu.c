@@ -1,0 +1,210 @@
+/* Glue of the StripDraw FMU: the generic FMI wrapper's component functions (tc_fmu.h) on the native
+ * strip-draw model, with what the Python component (tribocosim/components/stripdraw/component.py) does
+ * around it:
+ *
+ *   - table_file: the friction table used when friction_model = table, relative to the FMU's resources
+ *     folder or absolute; read and verified (format version, content hash) by tc_table_read; its hash is
+ *     part of the state image, so a state is restored only into an instance using the same table;
+ *   - field_input: the strip starts from the last beta row of a field file written for this mesh;
+ *   - field_output / field_output_interval: the nodal fields recorded at the start, after every step at
+ *     least the interval after the last row, and written at terminate with the final state (tc_fields);
+ *     a restored state drops the rows recorded after its time.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tc_fields.h"
+#include "tc_fmu.h"
+#include "tc_fmu_model.h"
+#include "tc_stripdraw.h"
+#include "tc_table.h"
+
+#define HASH_SIZE 64
+
+struct tc_component {
+    tc_stripdraw *model;
+    tc_table *table;
+    tc_field_recorder *recorder;
+    size_t n;
+    double *X, *U, *beta, *contact; /* work rows for the recorder */
+    char table_hash[HASH_SIZE + 1];  /* "" without a table */
+    char note[1024];
+};
+
+static int is_absolute(const char *path) {
+    return path[0] == '/' || path[0] == '\\' || (path[0] && path[1] == ':');
+}
+
+/* the FMU's parameters as a JSON object with sorted keys (the field file's metadata, as the Python FMU) */
+static char *parameters_json(const tc_param_value *values) {
+    int order[TC_N_PARAMETERS];
+    size_t size = 16, used = 0;
+    char number[TC_REPR_SIZE];
+    for (int k = 0; k < TC_N_PARAMETERS; ++k) {
+        order[k] = k;
+        size += strlen(TC_VARIABLES[k].name) + 8 + TC_REPR_SIZE + (values[k].text ? 6 * strlen(values[k].text) : 0);
+    }
+    for (int a = 1; a < TC_N_PARAMETERS; ++a) { /* insertion sort by name: a few dozen entries */
+        int key = order[a], b = a - 1;
+        while (b >= 0 && strcmp(TC_VARIABLES[order[b]].name, TC_VARIABLES[key].name) > 0) {
+            order[b + 1] = order[b];
+            --b;
+        }
+        order[b + 1] = key;
+    }
+    char *out = malloc(size);
+    if (out == NULL) return NULL;
+    out[used++] = '{';
+    for (int i = 0; i < TC_N_PARAMETERS; ++i) {
+        const tc_variable *v = &TC_VARIABLES[order[i]];
+        const tc_param_value *p = &values[order[i]];
+        used += (size_t)snprintf(out + used, size - used, "%s\"%s\": ", i ? ", " : "", v->name);
+        if (v->kind == TC_KIND_STRING) {
+            out[used++] = '"';
+            for (const unsigned char *s = (const unsigned char *)p->text; *s; ++s) {
+                if (*s == '"' || *s == '\\') used += (size_t)snprintf(out + used, size - used, "\\%c", *s);
+                else if (*s < 0x20 || *s > 0x7e) used += (size_t)snprintf(out + used, size - used, "\\u%04x", *s);
+                else out[used++] = (char)*s;
+            }
+            out[used++] = '"';
+        } else if (v->kind == TC_KIND_INTEGER) {
+            used += (size_t)snprintf(out + used, size - used, "%.0f", p->number);
+        } else {
+            used += (size_t)snprintf(out + used, size - used, "%s", tc_repr_double(p->number, number));
+        }
+    }
+    out[used++] = '}';
+    out[used] = '\0';
+    return out;
+}
+
+static int record(tc_component *c, int force, tc_msg msg) {
+    tc_stripdraw_fields(c->model, NULL, c->U, c->beta, NULL, c->contact);
+    return tc_field_recorder_record(c->recorder, tc_stripdraw_time(c->model), c->beta, c->U, c->contact, force, msg);
+}
+
+void tc_component_free(tc_component *c) {
+    if (c == NULL) return;
+    tc_stripdraw_free(c->model);
+    tc_table_free(c->table);
+    tc_field_recorder_free(c->recorder);
+    free(c->X);
+    free(c->U);
+    free(c->beta);
+    free(c->contact);
+    free(c);
+}
+
+int tc_component_create(const tc_param_value *values, const char *resources, tc_component **out, tc_msg msg) {
+    tc_stripdraw_params p;
+    int rc = TC_OK;
+    *out = NULL;
+    tc_component *c = calloc(1, sizeof *c);
+    if (c == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw FMU");
+    tc_stripdraw_fill_params(values, &p);
+    if (p.friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE) {
+        const char *file = values[TC_P_table_file].text;
+        size_t n = strlen(resources) + strlen(file) + 2;
+        char *path = malloc(n);
+        if (path == NULL) {
+            tc_component_free(c);
+            return tc_fail(msg, TC_NOMEM, "out of memory for the table path");
+        }
+        if (is_absolute(file)) snprintf(path, n, "%s", file);
+        else snprintf(path, n, "%s/%s", resources, file);
+        rc = tc_table_read(path, &c->table, msg);
+        if (rc == TC_OK) {
+            snprintf(c->table_hash, sizeof c->table_hash, "%s", c->table->content_hash);
+            snprintf(c->note, sizeof c->note, "friction table %s: provenance %s, content hash %s", path,
+                     c->table->provenance, c->table->content_hash);
+        }
+        free(path);
+        if (rc != TC_OK) {
+            tc_component_free(c);
+            return rc == TC_NOMEM ? TC_NOMEM : TC_ERROR;
+        }
+    }
+    rc = tc_stripdraw_create(&p, c->table, NULL, 0, &c->model, msg);
+    if (rc == TC_OK) {
+        c->n = tc_stripdraw_n_nodes(c->model);
+        c->X = malloc(c->n * sizeof(double));
+        c->U = malloc(c->n * sizeof(double));
+        c->beta = malloc(c->n * sizeof(double));
+        c->contact = malloc(c->n * sizeof(double));
+        if (!c->X || !c->U || !c->beta || !c->contact) rc = tc_fail(msg, TC_NOMEM, "out of memory for the fields");
+        else tc_stripdraw_fields(c->model, c->X, NULL, NULL, NULL, NULL);
+    }
+    if (rc == TC_OK && values[TC_P_field_input].text[0]) { /* a later pass: start from the last beta row */
+        rc = tc_field_read_initial_beta(values[TC_P_field_input].text, c->n, c->X, c->beta, msg);
+        if (rc == TC_OK) {
+            tc_stripdraw_free(c->model);
+            c->model = NULL;
+            rc = tc_stripdraw_create(&p, c->table, c->beta, c->n, &c->model, msg);
+        }
+    }
+    if (rc == TC_OK && values[TC_P_field_output].text[0]) {
+        double window[2];
+        char *json = parameters_json(values);
+        tc_stripdraw_window(c->model, window);
+        rc = json == NULL ? tc_fail(msg, TC_NOMEM, "out of memory for the field metadata")
+                          : tc_field_recorder_create(values[TC_P_field_output].text,
+                                                     values[TC_P_field_output_interval].number, c->n, c->X, window,
+                                                     json, &c->recorder, msg);
+        free(json);
+        if (rc == TC_OK) rc = record(c, 1, msg);
+    }
+    if (rc != TC_OK) {
+        tc_component_free(c);
+        return rc == TC_NOMEM ? TC_NOMEM : TC_ERROR;
+    }
+    *out = c;
+    return TC_OK;
+}
+
+int tc_component_step(tc_component *c, double dt, const double *inputs, tc_msg msg) {
+    return tc_stripdraw_step(c->model, dt, inputs[0], inputs[1], msg); /* normal_force, grip_velocity */
+}
+
+void tc_component_outputs(const tc_component *c, double *outputs) { tc_stripdraw_outputs(c->model, outputs); }
+
+int tc_component_after_step(tc_component *c, tc_msg msg) {
+    return c->recorder == NULL ? TC_OK : record(c, 0, msg);
+}
+
+int tc_component_terminate(tc_component *c, char *log_line, size_t size, tc_msg msg) {
+    if (size > 0) log_line[0] = '\0';
+    if (c->recorder == NULL) return TC_OK;
+    tc_stripdraw_fields(c->model, NULL, c->U, c->beta, NULL, c->contact); /* the final state is always in the file */
+    int rc = tc_field_recorder_finish(c->recorder, tc_stripdraw_time(c->model), c->beta, c->U, c->contact, msg);
+    if (rc == TC_OK && size > 0)
+        snprintf(log_line, size, "field_output: %zu rows written", tc_field_recorder_rows(c->recorder));
+    return rc;
+}
+
+/* state image: the table hash (64 characters, blank without a table), then the model's image */
+size_t tc_component_state_size(const tc_component *c) { return HASH_SIZE + tc_stripdraw_state_size(c->model); }
+
+void tc_component_get_state(const tc_component *c, void *buf) {
+    memset(buf, ' ', HASH_SIZE);
+    memcpy(buf, c->table_hash, strlen(c->table_hash));
+    tc_stripdraw_get_state(c->model, (unsigned char *)buf + HASH_SIZE);
+}
+
+int tc_component_set_state(tc_component *c, const void *buf, size_t size, tc_msg msg) {
+    char mine[HASH_SIZE], theirs[HASH_SIZE + 1];
+    if (size < HASH_SIZE) return tc_fail(msg, TC_ERROR, "the state image is too short (%zu bytes)", size);
+    memset(mine, ' ', HASH_SIZE);
+    memcpy(mine, c->table_hash, strlen(c->table_hash));
+    if (memcmp(mine, buf, HASH_SIZE) != 0) {
+        memcpy(theirs, buf, HASH_SIZE);
+        theirs[HASH_SIZE] = '\0';
+        return tc_fail(msg, TC_ERROR, "the FMU state was taken with friction table hash %s; this instance uses %s",
+                       theirs, c->table_hash[0] ? c->table_hash : "none");
+    }
+    int rc = tc_stripdraw_set_state(c->model, (const unsigned char *)buf + HASH_SIZE, size - HASH_SIZE, msg);
+    if (rc == TC_OK && c->recorder != NULL) tc_field_recorder_truncate(c->recorder, tc_stripdraw_time(c->model));
+    return rc;
+}
+
+const char *tc_component_note(const tc_component *c) { return c->note; }

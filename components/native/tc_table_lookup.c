@@ -1,0 +1,106 @@
+/* Trilinear lookup mu(P, v, beta) in a friction table (FrictionTable.interpolate with a scalar pressure,
+ * the path the strip-draw model uses; stripdraw/table.py).
+ *
+ * Each axis is located as FrictionTable._locate does: the query is clamped to [axis_0, axis_last], the
+ * cell index is i = min(searchsorted(axis, q, "right") - 1, n - 2) and the local coordinate
+ * t = (q - axis_i) / (axis_{i+1} - axis_i) (i = 0, t = 0 on a one-point axis). The pressure is located
+ * once and the table interpolated linearly in P to a (v, beta) plane,
+ *
+ *     plane(iv, ib) = (1 - tp) mu[ip, iv, ib] + tp mu[ip + 1, iv, ib]      (mu[0, iv, ib] if nP = 1),
+ *
+ * then bilinearly in (|v|, beta):
+ *
+ *     mu = (1 - tv) ((1 - tb) plane(iv, ib) + tb plane(iv, ib + sb))
+ *          + tv ((1 - tb) plane(iv + sv, ib) + tb plane(iv + sv, ib + sb)),
+ *
+ * with sv, sb = 1 (0 on a one-point axis). The operations are NumPy's, in its order, so the values are
+ * bit-identical. A query outside an axis is flagged (clamp policy) or refused with the message of
+ * table.py's TableDomainError (error policy: pressure first, then the first velocity, then the first beta
+ * outside the table).
+ */
+#include "tc_table.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+
+static int outside(const double *axis, size_t n, double q) { return q < axis[0] || q > axis[n - 1]; }
+
+/* FrictionTable._locate for one query (NaN stays NaN, as np.maximum/np.minimum propagate it, and sorts
+ * after every axis value, as in np.searchsorted). */
+static void locate(const double *axis, size_t n, double q, size_t *i, double *t) {
+    double qc = q < axis[0] ? axis[0] : q;
+    qc = qc > axis[n - 1] ? axis[n - 1] : qc;
+    if (n == 1) {
+        *i = 0;
+        *t = 0.0;
+        return;
+    }
+    size_t lo = 0, hi = n; /* searchsorted(axis, qc, side="right"): the first k with qc < axis[k] */
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (qc < axis[mid])
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    size_t k = lo > 0 ? lo - 1 : 0;
+    if (k > n - 2) k = n - 2;
+    *i = k;
+    *t = (qc - axis[k]) / (axis[k + 1] - axis[k]);
+}
+
+static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
+    char r[TC_REPR_SIZE];
+    return tc_fail(msg, TC_DISCARD, "friction table lookup %s = %s %s is outside the table's range [%g, %g] %s", name,
+                   tc_repr_double(bad, r), unit, axis[0], axis[n - 1], unit);
+}
+
+int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity, const double *beta,
+                int policy, double *mu, unsigned char *clamped, tc_msg msg) {
+    if (policy != TC_TABLE_CLAMP && policy != TC_TABLE_ERROR)
+        return tc_fail(msg, TC_ERROR, "table policy = %d is not allowed; choose clamp (%d) or error (%d)", policy,
+                       TC_TABLE_CLAMP, TC_TABLE_ERROR);
+    const size_t nP = table->n_pressure, nv = table->n_velocity, nb = table->n_beta;
+    const int outp = outside(table->pressure, nP, pressure);
+    if (policy == TC_TABLE_ERROR) {
+        if (outp) return domain_error("pressure", "Pa", pressure, table->pressure, nP, msg);
+        for (size_t k = 0; k < n; ++k)
+            if (outside(table->velocity, nv, fabs(velocity[k])))
+                return domain_error("velocity", "m/s", fabs(velocity[k]), table->velocity, nv, msg);
+        for (size_t k = 0; k < n; ++k)
+            if (outside(table->beta, nb, beta[k]))
+                return domain_error("beta", "1", beta[k], table->beta, nb, msg);
+    }
+    size_t ip, iv, ib;
+    double tp, tv, tb;
+    locate(table->pressure, nP, pressure, &ip, &tp);
+    const size_t sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
+    const double *m0 = table->mu + ip * nv * nb;                  /* mu[ip] */
+    const double *m1 = nP > 1 ? table->mu + (ip + 1) * nv * nb : NULL; /* mu[ip + 1] */
+    for (size_t k = 0; k < n; ++k) {
+        const double v = fabs(velocity[k]), b = beta[k];
+        locate(table->velocity, nv, v, &iv, &tv);
+        locate(table->beta, nb, b, &ib, &tb);
+        const size_t c00 = iv * nb + ib, c01 = iv * nb + ib + sb, c10 = (iv + sv) * nb + ib,
+                     c11 = (iv + sv) * nb + ib + sb;
+        double p00, p01, p10, p11; /* the P-interpolated plane at the four corners */
+        if (m1 == NULL) {
+            p00 = m0[c00];
+            p01 = m0[c01];
+            p10 = m0[c10];
+            p11 = m0[c11];
+        } else {
+            p00 = (1.0 - tp) * m0[c00] + tp * m1[c00];
+            p01 = (1.0 - tp) * m0[c01] + tp * m1[c01];
+            p10 = (1.0 - tp) * m0[c10] + tp * m1[c10];
+            p11 = (1.0 - tp) * m0[c11] + tp * m1[c11];
+        }
+        mu[k] = (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
+        if (clamped != NULL)
+            clamped[k] = (unsigned char)(outp || outside(table->velocity, nv, v) || outside(table->beta, nb, b));
+    }
+    return TC_OK;
+}

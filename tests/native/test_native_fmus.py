@@ -1,0 +1,445 @@
+"""The native FMUs (issue 13): built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
+and libcosimpy, and held against the Python models.
+
+- the model descriptions are the Python variants' (names, value references, causality, units, descriptions,
+  start values), both generated from the component descriptions; ``fmpy validate`` is clean;
+- linux64, win64 and darwin64 binaries export every fmi2 function; the FMU holds no ``.py`` file;
+- a C host (tests/native/host/fmi2_host.c, compiled here) loads each FMU with dlopen in a process without
+  Python and runs it; its outputs agree with the Python models (StripDraw: the demo draw and a pressure ramp
+  with a reversing grip, both integrators, all three friction laws; also the beta field of field_output);
+- FMU states (get/set, serialize/deserialize) replay bit-identically; bad inputs are fmi2Discard with the
+  outputs unchanged (thousands of random calls in the C host, no crash); bad parameters and tables are
+  fmi2Error at initialization with a message naming them; nothing leaks (valgrind, when installed).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import textwrap
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+
+HERE = Path(__file__).resolve().parent
+
+
+def exported_functions(path):
+    """tests/native/exports.py (a sibling module: loaded by path under pytest's importlib mode)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("native_exports", HERE / "exports.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.exported_functions(path)
+NAMES = ("DrawingMachine", "Press", "StripDraw")
+FMI2_FUNCTIONS = {
+    "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate", "fmi2FreeInstance",
+    "fmi2SetupExperiment", "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Terminate",
+    "fmi2Reset", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean", "fmi2GetString", "fmi2SetReal",
+    "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2GetFMUstate", "fmi2SetFMUstate",
+    "fmi2FreeFMUstate", "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative", "fmi2EnterEventMode", "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode",
+    "fmi2CompletedIntegratorStep", "fmi2SetTime", "fmi2SetContinuousStates", "fmi2GetDerivatives",
+    "fmi2GetEventIndicators", "fmi2GetContinuousStates", "fmi2GetNominalsOfContinuousStates",
+    "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives", "fmi2DoStep", "fmi2CancelStep",
+    "fmi2GetStatus", "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
+}  # fmt: skip
+STRIP_OUTPUTS = ("pull_force", "mu_mean", "beta_max", "friction_force", "beta_mean", "sliding_distance",
+                 "contact_pressure", "grip_position", "table_clamp_count")
+
+
+@pytest.fixture(scope="session")
+def native_fmus(tmp_path_factory) -> dict[str, Path]:
+    """``tribocosim fmu build --out TMP`` (the command line: native, all three platforms)."""
+    out = tmp_path_factory.mktemp("native_fmus")
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--out", str(out)],
+                          capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert [Path(p) for p in proc.stdout.split()] == [out.resolve() / f"{n}.fmu" for n in NAMES]
+    return {n: out / f"{n}.fmu" for n in NAMES}
+
+
+@pytest.fixture(scope="session")
+def unzipped(native_fmus, tmp_path_factory):
+    from fmpy import extract
+
+    return {n: Path(extract(str(p), str(tmp_path_factory.mktemp(f"u_{n}")))) for n, p in native_fmus.items()}
+
+
+@pytest.fixture(scope="session")
+def descriptions(native_fmus):
+    from fmpy import read_model_description
+
+    return {n: read_model_description(str(p)) for n, p in native_fmus.items()}
+
+
+@pytest.fixture(scope="session")
+def fmi2_host(tmp_path_factory) -> Path:
+    """The C host, compiled with the project's toolchain (a linux64 executable, no Python)."""
+    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.native.toolchain import compile_executable
+
+    out = tmp_path_factory.mktemp("host") / "fmi2_host"
+    return compile_executable([HERE / "host" / "fmi2_host.c"], out, include_dirs=[fmi2_headers()], libs=["-ldl"])
+
+
+def _vr(description, name: str) -> int:
+    return next(v.valueReference for v in description.modelVariables if v.name == name)
+
+
+def run_host(host, unzipped, description, tmp_path, steps, *, inputs=(), outputs=(), parameters=None, extra=(),
+             check=True):
+    """Run the C host on a schedule ``steps`` (rows: dt, inputs...); return (outputs per step, process)."""
+    md = description
+    kinds = {v.name: v for v in md.modelVariables}
+    sets = []
+    for name, value in (parameters or {}).items():
+        v = kinds[name]
+        kind = {"Real": "r", "Integer": "i", "String": "s"}[v.type]
+        sets += ["--set", f"{kind}:{v.valueReference}={value}"]
+    spec = ",".join(f"{'i' if kinds[n].type == 'Integer' else 'r'}:{kinds[n].valueReference}" for n in outputs)
+    steps_file = tmp_path / "steps.txt"
+    steps_file.write_text("\n".join(",".join(repr(float(x)) for x in row) for row in steps) + "\n")
+    given = ["--inputs", ",".join(str(kinds[n].valueReference) for n in inputs)] if inputs else []
+    cmd = [str(host), str(unzipped), md.coSimulation.modelIdentifier, md.guid, *sets, *given,  # inputs before steps
+           "--outputs", spec or "r:0", "--steps", str(steps_file), *extra]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env={"PATH": "/usr/bin:/bin"},
+                          cwd=tmp_path)
+    if check:
+        assert proc.returncode == 0, f"exit {proc.returncode}\n{proc.stderr[-3000:]}"
+    rows = np.array([[float(x) for x in line.split(",")] for line in proc.stdout.split()]) if proc.stdout.strip() else None
+    return rows, proc
+
+
+# ----------------------------------------------------------------------------------- the FMUs as files
+def test_model_descriptions_are_the_python_variants(descriptions, tmp_path_factory):
+    from fmpy import read_model_description
+
+    from tribocosim.components.fmus.build import build_fmus
+
+    python = build_fmus(tmp_path_factory.mktemp("python_fmus"))
+    for name in NAMES:
+        mine, theirs = descriptions[name], read_model_description(str(python[name]))
+        key = lambda v: (v.name, v.valueReference, v.causality, v.variability, v.type, v.unit,  # noqa: E731
+                         v.description, None if v.start is None else str(v.start))
+        assert [key(v) for v in mine.modelVariables] == [key(v) for v in theirs.modelVariables], name
+        for a, b in zip(mine.modelVariables, theirs.modelVariables):
+            if a.type == "Real":
+                num = lambda x: None if x is None else float(x)  # noqa: E731
+                assert (num(a.min), num(a.max)) == (num(b.min), num(b.max)), a.name
+        assert mine.defaultExperiment.stopTime == theirs.defaultExperiment.stopTime
+        assert mine.coSimulation.canGetAndSetFMUstate and mine.coSimulation.canSerializeFMUstate
+        assert mine.coSimulation.canHandleVariableCommunicationStepSize and not mine.coSimulation.needsExecutionTool
+
+
+def test_fmpy_validate_is_clean_and_no_python_file_is_inside(native_fmus):
+    from fmpy.validation import validate_fmu
+
+    for name, path in native_fmus.items():
+        assert validate_fmu(str(path)) == [], name
+        with zipfile.ZipFile(path) as z:
+            files = z.namelist()
+        assert not [f for f in files if f.endswith((".py", ".pyc"))], files
+        assert ("resources/friction_table.npz" in files) == (name == "StripDraw")
+
+
+def test_every_platform_binary_exports_every_fmi2_function(unzipped, fmi2_host, descriptions):
+    for name, folder in unzipped.items():
+        for platform, ext in (("linux64", ".so"), ("win64", ".dll"), ("darwin64", ".dylib")):
+            exported = exported_functions(folder / "binaries" / platform / f"{name}{ext}")
+            assert FMI2_FUNCTIONS <= exported, (name, platform, sorted(FMI2_FUNCTIONS - exported))
+            assert not [f for f in exported if f.startswith("tc_")], "internal functions stay hidden"
+        md = descriptions[name]
+        proc = subprocess.run([str(fmi2_host), str(folder), name, md.guid, "--symbols"], capture_output=True, text=True)
+        assert proc.stdout.strip() == f"{len(FMI2_FUNCTIONS)} functions exported", proc.stderr
+
+
+# ----------------------------------------------------------------------------------- native == Python
+def _strip_schedule(kind: str, n: int, dt: float = 1e-3):
+    """(dt, normal_force, grip_velocity) rows: the demo draw (10 MPa, velocity ramp over 10 ms), or a pressure
+    ramp 1 -> 20 MPa with the grip reversing half-way."""
+    rows = []
+    for k in range(n):
+        t = (k + 0.5) * dt
+        if kind == "demo":
+            rows.append((dt, 12250.0, 0.08 * min(1.0, t / 0.01)))
+        else:
+            frac = k / max(1, n - 1)
+            v = 0.08 * min(1.0, t / 0.01) if frac < 0.5 else -0.08 * min(1.0, (frac - 0.5) * n * dt / 0.01)
+            rows.append((dt, (1e6 + 19e6 * frac) * 0.035 * 0.035, v))
+    return rows
+
+
+def _python_strip(parameters: dict, schedule):
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    model = COMPONENT.make(parameters).model
+    outs = [model.step(dt, {"normal_force": f, "grip_velocity": v}) for dt, f, v in schedule]
+    return np.array([[o[k] for k in STRIP_OUTPUTS] for o in outs]), model
+
+
+CASES = [(integrator, law, kind)
+         for integrator in ("implicit", "explicit") for law in ("table", "closed_form", "constant")
+         for kind in ("demo", "ramp")]
+
+
+@pytest.mark.parametrize("integrator, law, kind", CASES)
+def test_c_host_without_python_agrees_with_the_python_model(fmi2_host, unzipped, descriptions, tmp_path,
+                                                           integrator, law, kind):
+    """The explicit integrator resolves the waves (~1e4 substeps per ms): its cases run 25 ms."""
+    n = 1750 if integrator == "implicit" else 25
+    schedule = _strip_schedule(kind, n)
+    field = tmp_path / "field.npz"
+    params = {"integrator": integrator, "friction_model": law, "field_output": str(field),
+              "field_output_interval": 0.0 if n < 100 else 0.05}
+    got, _ = run_host(fmi2_host, unzipped["StripDraw"], descriptions["StripDraw"], tmp_path, schedule,
+                      inputs=("normal_force", "grip_velocity"), outputs=STRIP_OUTPUTS, parameters=params)
+    want, model = _python_strip({k: v for k, v in params.items() if not k.startswith("field")}, schedule)
+    worst = {}
+    for j, name in enumerate(STRIP_OUTPUTS):
+        scale = max(np.abs(want[:, j]).max(), 1e-300)
+        worst[name] = float(np.abs(got[:, j + 1] - want[:, j]).max() / scale)
+    from tribocosim.components.stripdraw.fields import read_fields
+
+    beta = read_fields(field)["beta"][-1]
+    worst["beta field"] = float(np.abs(beta - model.beta).max() / max(model.beta.max(), 1e-300))
+    print(f"\n{integrator} {law} {kind}: largest relative difference " + ", ".join(f"{k} {v:.2g}" for k, v in worst.items()))
+    assert max(worst.values()) <= 1e-9, worst
+    assert want[:, 0].max() > 0, "the strip must be pulled"
+
+
+def test_press_and_machine_in_the_c_host_agree_with_the_python_models(fmi2_host, unzipped, descriptions, tmp_path):
+    from tribocosim.components.machine import MachineModel, MachineParameters
+    from tribocosim.components.press import PressModel, PressParameters
+
+    rng = np.random.default_rng(3)
+    dts = rng.uniform(2e-4, 3e-3, 200)
+    table = "0 0; 0.05 12250; 0.2 20000"
+    got, _ = run_host(fmi2_host, unzipped["Press"], descriptions["Press"], tmp_path, [(dt,) for dt in dts],
+                      outputs=("normal_force", "force_reference"), parameters={"setpoint_table": table})
+    press = PressModel(PressParameters(setpoint_table=table))
+    want = np.array([list(press.step(dt).values()) for dt in dts])
+    np.testing.assert_allclose(got[:, 1:], want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+    pulls = rng.uniform(0, 4000, dts.size)
+    got, _ = run_host(fmi2_host, unzipped["DrawingMachine"], descriptions["DrawingMachine"], tmp_path,
+                      list(zip(dts, pulls)), inputs=("pull_force",),
+                      outputs=("grip_velocity", "grip_position", "velocity_reference", "motor_force"))
+    machine = MachineModel(MachineParameters())
+    want = np.array([list(machine.step(dt, {"pull_force": f}).values()) for dt, f in zip(dts, pulls)])
+    for j in range(want.shape[1]):
+        np.testing.assert_allclose(got[:, 1 + j], want[:, j], rtol=0, atol=1e-9 * np.abs(want[:, j]).max())
+
+
+# ----------------------------------------------------------------------------------- state, errors, leaks
+def test_serialized_state_replays_bit_identically_in_the_c_host(fmi2_host, unzipped, descriptions, tmp_path):
+    schedule = _strip_schedule("ramp", 400)
+    _, proc = run_host(fmi2_host, unzipped["StripDraw"], descriptions["StripDraw"], tmp_path, schedule,
+                       inputs=("normal_force", "grip_velocity"), outputs=STRIP_OUTPUTS, extra=["--replay", "150"])
+    assert "replay from step 150 bit-identical" in proc.stderr
+
+
+def test_fmpy_state_round_trips_across_instances(unzipped, descriptions):
+    from fmpy.fmi2 import FMU2Slave
+
+    md = descriptions["StripDraw"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outs = [vr[n] for n in STRIP_OUTPUTS if n != "table_clamp_count"]
+
+    def make(name):
+        s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",
+                      instanceName=name)
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.setString([vr["friction_model"]], ["closed_form"])
+        s.exitInitializationMode()
+        return s
+
+    a, b = make("a"), make("b")
+    schedule = _strip_schedule("ramp", 300)
+    t = 0.0
+    for dt, f, v in schedule[:120]:
+        a.setReal([vr["normal_force"], vr["grip_velocity"]], [f, v])
+        a.doStep(t, dt)
+        t += dt
+    blob = a.serializeFMUstate(a.getFMUstate())
+    rows_a, rows_b = [], []
+    state = b.deSerializeFMUstate(blob)
+    b.setFMUstate(state)
+    for dt, f, v in schedule[120:]:
+        for s, rows in ((a, rows_a), (b, rows_b)):
+            s.setReal([vr["normal_force"], vr["grip_velocity"]], [f, v])
+            s.doStep(t, dt)
+            rows.append(s.getReal(outs))
+        t += dt
+    assert_array_equal(np.array(rows_a), np.array(rows_b))
+    for s in (a, b):
+        s.terminate()
+        s.freeInstance()
+
+
+def _fmpy_instance(unzipped, md, parameters: dict, messages: list):
+    from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+    def log(env, name, status, category, message):
+        messages.append((int(status), message.decode()))
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(log)
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped), modelIdentifier=md.coSimulation.modelIdentifier,
+                  instanceName="x")
+    s.instantiate(callbacks=cb)
+    s._keep = cb
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    vr = {v.name: v for v in md.modelVariables}
+    for k, value in parameters.items():
+        v = vr[k]
+        {"Real": s.setReal, "Integer": s.setInteger, "String": s.setString}[v.type]([v.valueReference], [value])
+    return s
+
+
+BAD_PARAMETERS = [
+    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: (0.0001, 1] m"),
+    ("StripDraw", {"friction_model": "tabel"}, "friction_model = 'tabel' is not allowed; choose one of table, "
+                                               "closed_form, constant"),
+    ("StripDraw", {"table_file": "/nowhere/t.npz"}, "friction table file not found: /nowhere/t.npz"),
+    ("StripDraw", {"n_elements": 2}, "n_elements = 2 is out of range; allowed: [4, 200000]"),
+    ("StripDraw", {"field_input": "/nowhere/f.npz"}, "field_input = '/nowhere/f.npz' cannot be read"),
+    ("Press", {"setpoint_table": "0 0; 0.1"}, "setpoint_table = '0 0; 0.1' is malformed"),
+    ("DrawingMachine", {"screw_lead": 0.0}, "screw_lead = 0.0 m is out of range"),
+]
+
+
+@pytest.mark.parametrize("name, parameters, message", BAD_PARAMETERS)
+def test_a_bad_parameter_is_an_error_at_initialization_naming_it(unzipped, descriptions, name, parameters, message):
+    from fmpy.fmi1 import FMICallException
+
+    msgs = []
+    s = _fmpy_instance(unzipped[name], descriptions[name], parameters, msgs)
+    with pytest.raises(FMICallException) as exc:
+        s.exitInitializationMode()
+    assert exc.value.status == 3, "fmi2Error"
+    assert any(status == 3 and message in text for status, text in msgs), msgs
+    with pytest.raises(FMICallException):
+        s.doStep(0.0, 1e-3)
+    s.freeInstance()
+
+
+def test_bad_inputs_are_discarded_with_the_state_unchanged_and_a_message(unzipped, descriptions):
+    from fmpy.fmi1 import FMICallException
+
+    md = descriptions["StripDraw"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {}, msgs)
+    s.exitInitializationMode()
+    s.setReal([vr["normal_force"], vr["grip_velocity"]], [12250.0, 0.01])
+    s.doStep(0.0, 1e-3)
+    before = s.getReal([vr["pull_force"], vr["beta_max"]])
+    for f, v, dt in ((float("nan"), 0.01, 1e-3), (-5.0, 0.01, 1e-3), (12250.0, float("inf"), 1e-3),
+                     (12250.0, 0.01, 0.0), (12250.0, 0.01, -1e-3)):
+        s.setReal([vr["normal_force"], vr["grip_velocity"]], [f, v])
+        with pytest.raises(FMICallException) as exc:
+            s.doStep(1e-3, dt)
+        assert exc.value.status == 2, "fmi2Discard"
+        assert s.getReal([vr["pull_force"], vr["beta_max"]]) == before
+    assert any(st == 2 and "normal_force = nan" in m and "the FMU state is unchanged" in m for st, m in msgs), msgs
+    s.setReal([vr["normal_force"], vr["grip_velocity"]], [12250.0, 0.01])
+    s.doStep(1e-3, 1e-3)  # usable again
+    s.terminate()
+    s.freeInstance()
+
+
+@pytest.mark.parametrize("name, inputs", [("StripDraw", ("normal_force", "grip_velocity")), ("Press", ()),
+                                          ("DrawingMachine", ("pull_force",))])
+def test_thousands_of_random_calls_never_crash_the_c_host(fmi2_host, unzipped, descriptions, tmp_path, name, inputs):
+    md = descriptions[name]
+    outs = [v.name for v in md.modelVariables if v.causality == "output"]
+    steps = [(1e-3, *([12250.0, 0.01][:len(inputs)] if name == "StripDraw" else [100.0] * len(inputs)))] * 5
+    _, proc = run_host(fmi2_host, unzipped[name], md, tmp_path, steps, inputs=inputs, outputs=outs,
+                       extra=["--fuzz", "3000", "11"])
+    summary = [line for line in proc.stderr.splitlines() if "fuzz:" in line][-1]
+    taken, discarded = int(summary.split()[-5]), int(summary.split()[-2])
+    assert taken > 0 and discarded > 0, summary
+
+
+def test_nothing_leaks_valgrind(fmi2_host, unzipped, descriptions, tmp_path):
+    if shutil.which("valgrind") is None:
+        pytest.skip("valgrind is not installed")
+    schedule = _strip_schedule("demo", 30)
+    _, proc = run_host(fmi2_host, unzipped["StripDraw"], descriptions["StripDraw"], tmp_path, schedule,
+                       inputs=("normal_force", "grip_velocity"), outputs=STRIP_OUTPUTS,
+                       parameters={"n_elements": 60, "field_output": str(tmp_path / "f.npz")},
+                       extra=["--replay", "10", "--fuzz", "200", "5"], check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    cmd = ["valgrind", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect", "--error-exitcode=9",
+           "--quiet"]
+    host_cmd = proc.args
+    full = subprocess.run(cmd + host_cmd, capture_output=True, text=True, timeout=900, cwd=tmp_path)
+    assert full.returncode == 0, full.stderr[-4000:]
+
+
+_LIBCOSIM = textwrap.dedent(
+    """
+    import json, sys
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.WARNING)
+    fmu, inputs, outs = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3])
+    ex = CosimExecution.from_step_size(step_size=1_000_000)
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=fmu, instance_name="strip"))
+    vr = {v.name.decode(): v.reference for v in ex.slave_variables(idx)}
+    observer = CosimObserver.create_last_value()
+    ex.add_observer(observer=observer)
+    override = CosimManipulator.create_override()
+    ex.add_manipulator(manipulator=override)
+    rows = []
+    for f, v in inputs:
+        override.slave_real_values(idx, [vr["normal_force"], vr["grip_velocity"]], [f, v])
+        assert ex.step(1)
+        rows.append(observer.last_real_values(idx, [vr[n] for n in outs]))
+    print(json.dumps(rows))
+    """
+)
+
+
+def test_libcosimpy_gives_the_same_outputs_as_fmpy(native_fmus, unzipped, descriptions, tmp_path):
+    from fmpy.fmi2 import FMU2Slave
+
+    schedule = _strip_schedule("demo", 200)
+    outs = [n for n in STRIP_OUTPUTS if n != "table_clamp_count"]
+    script = tmp_path / "cosim.py"
+    script.write_text(_LIBCOSIM)
+    proc = subprocess.run([sys.executable, str(script), str(native_fmus["StripDraw"]),
+                           json.dumps([(f, v) for _, f, v in schedule]), json.dumps(outs)],
+                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = np.array(json.loads(proc.stdout.strip().splitlines()[-1]))
+    md = descriptions["StripDraw"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",
+                  instanceName="f")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    rows = []
+    for k, (_, f, v) in enumerate(schedule):  # libcosim passes doStep the difference of integer-ns times
+        dt = ((k + 1) * 1_000_000) / 1e9 - (k * 1_000_000) / 1e9
+        s.setReal([vr["normal_force"], vr["grip_velocity"]], [f, v])
+        s.doStep(k * 1_000_000 / 1e9, dt)
+        rows.append(s.getReal([vr[n] for n in outs]))
+    s.terminate()
+    s.freeInstance()
+    assert_array_equal(got, np.array(rows))

@@ -1,0 +1,496 @@
+"""Native strip-draw model (tc_stripdraw.c, tc_table_lookup.c) against the Python reference.
+
+The C code follows the loop forms of kernels.py/transport.py and the NumPy expressions of model.py
+operation by operation, and is compiled without fused multiply-add, so states agree bit for bit; the only
+outputs that may differ in the last bits are the contact-weighted means (``sliding_distance``,
+``beta_mean``), where NumPy's ``w @ U`` calls BLAS. The bounds below (1e-12) are therefore rounding noise;
+the acceptance bar of the native code is 1e-9.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+
+import numpy as np
+import pytest
+
+from tribocosim.components.errors import ParameterError, TribocosimError
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw import kernels
+from tribocosim.components.stripdraw import model as sdmodel
+from tribocosim.components.stripdraw import transport
+from tribocosim.components.stripdraw.friction import make_friction_law
+from tribocosim.components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.table import FrictionTable, read_table
+
+RTOL = 1e-12  # rounding noise; see the module docstring
+TC_OK, TC_DISCARD, TC_ERROR = 0, 1, 2  # tc_common.h
+PAD_AREA = 0.035 * 0.035
+F_N = 10e6 * PAD_AREA  # 10 MPa on the default pad
+BYTE_P = ctypes.POINTER(ctypes.c_byte)
+
+
+def ptr(a: np.ndarray, ctype=ctypes.POINTER(ctypes.c_double)):
+    """ctypes pointer to the data of a contiguous array (double by default)."""
+    return a.ctypes.data_as(ctype)
+
+
+@pytest.fixture(scope="module")
+def table() -> FrictionTable:
+    return read_table(DEFAULT_TABLE)
+
+
+def _pair(core, params, table=None, beta_field=None):
+    """(Python model, native model) with the same parameters."""
+    py = StripDrawModel(params, make_friction_law(params, table), beta_field)
+    nat = core.stripdraw(params, table if params.friction_model == "table" else None, beta_field)
+    return py, nat
+
+
+def _ramp(t, v=0.08, t_ramp=0.01):
+    return v * min(1.0, t / t_ramp)
+
+
+def _run_both(py, nat, schedule):
+    """Step both models through ``schedule`` [(dt, normal_force, grip_velocity)]; outputs as (steps, 9) arrays."""
+    a, b = [], []
+    for dt, fn, vg in schedule:
+        inputs = {"normal_force": fn, "grip_velocity": vg}
+        ref, out = py.step(dt, inputs), nat.step(dt, inputs)
+        a.append([ref[k] for k in OUTPUT_NAMES])
+        b.append([out[k] for k in OUTPUT_NAMES])
+    return np.array(a), np.array(b)
+
+
+def _assert_agree(a, b, py, nat, label):
+    """Outputs agree to RTOL: relative to each value, except the contact-weighted means, which are held
+    against the largest magnitude of the output over the run (NumPy's BLAS dot product rounds differently)."""
+    scale = np.abs(a).max(axis=0)
+    for j, name in enumerate(OUTPUT_NAMES):
+        if name in ("sliding_distance", "beta_mean"):
+            err = np.abs(a[:, j] - b[:, j]).max() / (scale[j] if scale[j] > 0 else 1.0)
+        else:
+            nz = a[:, j] != 0
+            err = np.max(np.abs(a[nz, j] - b[nz, j]) / np.abs(a[nz, j]), initial=0.0)
+            assert np.all(b[~nz, j] == 0), f"{label}: {name} is 0 in Python and not in C"
+        assert err <= RTOL, f"{label}: {name} differs by {err:.3g} (relative)"
+    fields = nat.fields()
+    for key, ref in (("beta", py.beta), ("U", py.U), ("slip", py.Up), ("contact", py._w)):
+        den = max(np.abs(ref).max(), 1e-300)
+        err = np.abs(fields[key] - ref).max() / den
+        assert err <= RTOL, f"{label}: final {key} field differs by {err:.3g} (relative to its largest value)"
+
+
+# ------------------------------------------------------------------------------------------------------
+# kernels, one by one, against their Python loop forms / NumPy references
+# ------------------------------------------------------------------------------------------------------
+def _midrun_model(table, integrator="implicit", steps=30, **kw):
+    """A Python model some way into a draw (pad partly loaded, debris on the strip)."""
+    p = StripDrawParameters(draw_length=0.03, n_elements=120, integrator=integrator, **kw)
+    m = StripDrawModel(p, make_friction_law(p, table))
+    for k in range(steps):
+        m.step(1e-3, {"normal_force": F_N, "grip_velocity": _ramp((k + 0.5) * 1e-3)})
+    return m
+
+
+def test_overlap_is_bit_identical_to_numpy(native_core):
+    rng = np.random.default_rng(1)
+    X = np.linspace(0.0, 0.1, 101)
+    for _ in range(20):
+        U = rng.normal(0.0, 0.01, X.size)
+        ov = np.zeros(X.size)
+        native_core.lib.tc_sd_overlap(X.size, ptr(X), ptr(U), 0.0005, 0.03, 0.065, ptr(ov))
+        np.testing.assert_array_equal(ov, kernels.overlap_numpy(X, U, 0.0005, 0.03, 0.065))
+
+
+def test_thomas_solves_tridiagonal_systems_like_a_dense_solve(native_core):
+    rng = np.random.default_rng(2)
+    for n in (1, 2, 5, 64, 401):
+        sub, sup = rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)
+        diag = 2.5 + rng.uniform(0, 1, n)  # diagonally dominant
+        rhs = rng.normal(size=n)
+        x, work = np.zeros(n), np.zeros(2 * n)
+        native_core.lib.tc_thomas(n, ptr(sub), ptr(diag), ptr(sup), ptr(rhs), ptr(x), ptr(work))
+        dense = np.diag(diag) + np.diag(sub[1:], -1) + np.diag(sup[:-1], 1)
+        np.testing.assert_allclose(x, np.linalg.solve(dense, rhs), rtol=1e-12, atol=1e-14, err_msg=f"n = {n}")
+        np.testing.assert_array_equal(x, kernels.thomas(sub, diag, sup, rhs), err_msg=f"n = {n}: loop form")
+
+
+def _state_copies(m):
+    arrays = {k: np.array(getattr(m, k)) for k in ("U", "V", "A", "Up", "contact", "fprev")}
+    return arrays, {k: v.copy() for k, v in arrays.items()}
+
+
+def test_explicit_kernel_is_bit_identical_to_the_loop_form(native_core, table):
+    m = _midrun_model(table, "explicit", steps=3)
+    mesh, p = m.mesh, m.params
+    rng = np.random.default_rng(3)
+    tmax = rng.uniform(0.0, 2e6, mesh.n_nodes) * (m._w > 0)
+    py, c = _state_copies(m)
+    dt = m.explicit_time_step
+    fric_py, reac_py = kernels.explicit_loop(
+        200, dt, py["U"], py["V"], py["A"], py["Up"], py["contact"], mesh.X, m._minv, mesh.element_stiffness,
+        p.shear_stiffness, p.tool_width, 0.5 * mesh.element_length, mesh.window_lo, mesh.window_hi, tmax, 0.08)
+    fric, reac, f = np.zeros(1), np.zeros(1), np.zeros(mesh.n_nodes)
+    native_core.lib.tc_sd_explicit(
+        mesh.n_nodes, 200, dt, ptr(c["U"]), ptr(c["V"]), ptr(c["A"]), ptr(c["Up"]), ptr(c["contact"], BYTE_P),
+        ptr(mesh.X), ptr(m._minv), mesh.element_stiffness, p.shear_stiffness, p.tool_width,
+        0.5 * mesh.element_length, mesh.window_lo, mesh.window_hi, ptr(tmax), 0.08, ptr(fric), ptr(reac), ptr(f))
+    assert (fric[0], reac[0]) == (fric_py, reac_py)
+    for k in py:
+        np.testing.assert_array_equal(c[k], py[k], err_msg=k)
+
+
+def _galpha_native(core, m, dt, arrays, ov, tmax, vg, max_iter):
+    n = m.mesh.n_nodes
+    fric, reac = np.zeros(1), np.zeros(1)
+    work, iwork = np.zeros(15 * n), np.zeros(2 * n, dtype=np.int8)
+    p, mesh = m.params, m.mesh
+    it = core.lib.tc_sd_galpha(
+        n, dt, ptr(arrays["U"]), ptr(arrays["V"]), ptr(arrays["A"]), ptr(arrays["Up"]),
+        ptr(arrays["contact"], BYTE_P), ptr(arrays["fprev"]), ptr(ov), ptr(mesh.mass), mesh.element_stiffness,
+        p.shear_stiffness, p.tool_width, ptr(tmax), vg, m._am, m._af, m._beta_nm, m._gamma, max_iter, 1e-10,
+        ptr(fric), ptr(reac), ptr(work), ptr(iwork, BYTE_P))
+    return it, fric[0], reac[0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_galpha_kernel_is_bit_identical_to_the_loop_form(native_core, table, seed):
+    m = _midrun_model(table)
+    mesh, p = m.mesh, m.params
+    rng = np.random.default_rng(seed)
+    ov = m._w * mesh.element_length
+    mu = rng.uniform(0.05, 0.2, mesh.n_nodes) if seed else np.full(mesh.n_nodes, 0.15)
+    tmax = mu * 10e6 * (m._w > 0)
+    py, c = _state_copies(m)
+    if seed:  # a disturbed state: other stick/slip sets, nodes entering and leaving the pad
+        for d in (py, c):
+            d["U"] += np.random.default_rng(seed).normal(0.0, 2e-6, mesh.n_nodes)
+        vg = -0.05 * seed
+    else:
+        vg = 0.08
+    dt = 1e-3 * seed if seed else 1e-3
+    res_py = kernels.galpha_loop(dt, py["U"], py["V"], py["A"], py["Up"], py["contact"], py["fprev"], ov, mesh.mass,
+                                 mesh.element_stiffness, p.shear_stiffness, p.tool_width, tmax, vg, m._am, m._af,
+                                 m._beta_nm, m._gamma, 60, 1e-10)
+    res_c = _galpha_native(native_core, m, dt, c, ov, tmax, vg, 60)
+    assert res_c == tuple(res_py) and res_c[0] >= 1
+    for k in py:
+        np.testing.assert_array_equal(c[k], py[k], err_msg=k)
+    # without iterations the step fails and changes nothing
+    before = {k: v.copy() for k, v in c.items()}
+    c["U"] += 1e-4  # far from equilibrium
+    before["U"] = c["U"].copy()
+    assert _galpha_native(native_core, m, dt, c, ov, tmax, vg, 0)[0] == -1
+    for k in c:
+        np.testing.assert_array_equal(c[k], before[k], err_msg=k)
+
+
+def test_advection_is_bit_identical_to_the_loop_form(native_core):
+    rng = np.random.default_rng(4)
+    n = 80
+    for case in range(12):
+        beta = rng.uniform(0, 0.3, n)
+        dU = rng.normal(0, 1e-4, n)
+        weight = np.zeros(n)
+        lo, hi = sorted(rng.integers(0, n, 2))
+        weight[lo:hi + 1] = rng.uniform(0.2, 1.0, hi + 1 - lo)
+        if case == 3:
+            weight[lo + (hi - lo) // 2] = 0.0  # a gap: that face carries no flux
+        zeta = 0.0 if case == 5 else 0.2
+        out, work = np.zeros(n), np.zeros(5 * n)
+        native_core.lib.tc_sd_advect(n, ptr(beta), ptr(dU), ptr(weight), zeta, 5e-4, ptr(out), ptr(work))
+        ref = transport.advect_loop(beta, dU, weight, zeta, 5e-4)
+        np.testing.assert_array_equal(out, ref, err_msg=f"case {case}")
+        assert math.isclose(out.sum(), beta.sum(), rel_tol=1e-13), "mass is conserved"
+
+
+# ------------------------------------------------------------------------------------------------------
+# the friction table lookup
+# ------------------------------------------------------------------------------------------------------
+def _tables(table):
+    """The shipped table and tables with one-point axes."""
+    yield "shipped", table
+    meta = {"beta_threshold": 0.8}
+    yield "one pressure", FrictionTable(table.pressure[2:3], table.velocity, table.beta, table.mu[2:3], meta)
+    yield "one velocity", FrictionTable(table.pressure, table.velocity[3:4], table.beta, table.mu[:, 3:4], meta)
+    yield "one beta", FrictionTable(table.pressure, table.velocity, table.beta[:1], table.mu[:, :, :1], meta)
+    yield "one point", FrictionTable([5e6], [0.1], [0.0], [[[0.12]]], meta)
+
+
+def test_table_lookup_is_bit_identical_to_interpolate(native_core, table):
+    rng = np.random.default_rng(5)
+    for label, tab in _tables(table):
+        nt = native_core.table(tab)
+        for pressure in (*tab.pressure, 0.5e6, 1.7e6, 2.9e7, 4e7, *rng.uniform(1e6, 3e7, 5)):
+            v = np.concatenate([rng.uniform(-60, 60, 40), tab.velocity, -tab.velocity, [0.0, -0.0]])
+            b = np.resize(np.concatenate([tab.beta, rng.uniform(-0.1, 1.2, 40), [1.0, 0.5]]), v.size)
+            mu_ref, clamped_ref = tab.interpolate(pressure, v, b, "clamp")
+            mu, clamped = nt.mu(pressure, v, b, 0)
+            np.testing.assert_array_equal(mu, mu_ref, err_msg=f"{label}, P = {pressure}")
+            np.testing.assert_array_equal(clamped, clamped_ref, err_msg=f"{label}, P = {pressure}")
+
+
+def test_table_lookup_error_policy_refuses_like_python(native_core, table):
+    nt = native_core.table(table)
+    cases = [
+        (4e7, [0.08], [0.0]),  # pressure above the table
+        (5e6, [0.08, 70.0, -80.0], [0.0, 0.0, 0.0]),  # the first velocity outside
+        (5e6, [0.08, 0.08], [0.1, 1.5]),  # a beta outside
+        (5e6, [0.08], [-0.01]),
+    ]
+    for pressure, v, b in cases:
+        with pytest.raises(TribocosimError) as exc:
+            table.interpolate(pressure, np.array(v), np.array(b), "error")
+        with pytest.raises(native_core.NativeError) as nexc:
+            nt.mu(pressure, v, b, 1)
+        assert nexc.value.status == TC_DISCARD
+        assert nexc.value.message == str(exc.value)
+    mu, clamped = nt.mu(5e6, [0.08, 2.0], [0.0, 0.3], 1)  # inside: as under clamp
+    np.testing.assert_array_equal(mu, table.interpolate(5e6, np.array([0.08, 2.0]), np.array([0.0, 0.3]))[0])
+    assert not clamped.any()
+
+
+# ------------------------------------------------------------------------------------------------------
+# the whole model against StripDrawModel
+# ------------------------------------------------------------------------------------------------------
+def test_demo_draw_matches_python(native_core, table):
+    """The demo: default parameters, the shipped table, 140 mm at 0.08 m/s with a 10 ms ramp, 1 ms steps."""
+    p = StripDrawParameters()
+    py, nat = _pair(native_core, p, table)
+    assert nat.beta_cap == py.beta_cap == table.beta_threshold
+    schedule = [(1e-3, F_N, _ramp((k + 0.5) * 1e-3)) for k in range(1750)]
+    a, b = _run_both(py, nat, schedule)
+    assert a[-1, OUTPUT_NAMES.index("sliding_distance")] > 0.139, "the draw covered 140 mm"
+    _assert_agree(a, b, py, nat, "demo draw")
+
+
+def test_demo_draw_explicit_matches_python(native_core, table):
+    """The demo's first milliseconds with the explicit integrator (about 1e4 sub-steps per step)."""
+    p = StripDrawParameters(integrator="explicit")
+    py, nat = _pair(native_core, p, table)
+    assert nat.explicit_time_step == py.explicit_time_step
+    a, b = _run_both(py, nat, [(1e-3, F_N, _ramp((k + 0.5) * 1e-3)) for k in range(4)])
+    _assert_agree(a, b, py, nat, "explicit demo")
+
+
+def _pressure_ramp_reversing(n_steps, dt, period):
+    """Normal force ramped to 25 MPa, grip velocity reversing with the given period."""
+    return [(dt, 2.5 * F_N * min(1.0, (k + 1) / (0.4 * n_steps)),
+             0.08 * math.cos(2 * math.pi * (k + 0.5) * dt / period)) for k in range(n_steps)]
+
+
+@pytest.mark.parametrize("law,velocity", [("constant", "grip"), ("closed_form", "grip"), ("closed_form", "slip_rate"),
+                                          ("table", "grip"), ("table", "slip_rate")])
+def test_pressure_ramp_with_reversing_grip_matches_python_implicit(native_core, table, law, velocity):
+    p = StripDrawParameters(friction_model=law, friction_velocity=velocity, draw_length=0.03, n_elements=150)
+    py, nat = _pair(native_core, p, table)
+    a, b = _run_both(py, nat, _pressure_ramp_reversing(250, 1e-3, 0.1) + [(7e-3, 3 * F_N, 0.3)] * 3)
+    _assert_agree(a, b, py, nat, f"implicit, {law}, {velocity}")
+
+
+@pytest.mark.parametrize("law", ["constant", "closed_form", "table"])
+def test_pressure_ramp_with_reversing_grip_matches_python_explicit(native_core, table, law):
+    p = StripDrawParameters(friction_model=law, friction_velocity="slip_rate" if law == "table" else "grip",
+                            integrator="explicit", draw_length=0.01, n_elements=60, beta_initial=0.05)
+    py, nat = _pair(native_core, p, table)
+    a, b = _run_both(py, nat, _pressure_ramp_reversing(12, 2e-4, 1.2e-3))
+    _assert_agree(a, b, py, nat, f"explicit, {law}")
+
+
+@pytest.mark.parametrize("max_iter", [3, 1])
+def test_step_halving_matches_python(native_core_newton, table, monkeypatch, max_iter):
+    """With the Newton limit lowered, steps are halved (up to 12 times; with 1 iteration some steps fail even
+    then): the native model halves, fails and restores its state exactly as the Python model does."""
+    core = native_core_newton(max_iter)
+    monkeypatch.setattr(sdmodel, "_NEWTON_MAX_ITER", max_iter)
+    p = StripDrawParameters(draw_length=0.03, n_elements=150)
+    py, nat = _pair(core, p, table)
+    failures = 0
+    for k in range(60):
+        inputs = {"normal_force": F_N * min(1.0, k / 20), "grip_velocity": 0.08 * math.cos(k / 10)}
+        before = nat.get_state()
+        try:
+            ref = py.step(1e-3, inputs)
+        except TribocosimError as exc:
+            failures += 1
+            assert nat.step_status(1e-3, **inputs) == TC_DISCARD
+            assert core.last_message() == str(exc)
+            assert nat.get_state() == before, "a failed step leaves the state unchanged"
+            continue
+        out = nat.step(1e-3, inputs)
+        for name in ("pull_force", "friction_force", "beta_max", "grip_position"):
+            assert out[name] == ref[name], f"step {k}: {name}"
+        np.testing.assert_array_equal(nat.fields()["U"], py.U)
+    assert (failures > 0) == (max_iter == 1)
+
+
+def test_table_policy_error_discards_like_python_and_clamp_counts(native_core, table):
+    high = 40e6 * PAD_AREA  # 40 MPa: above the table's pressure axis
+    for policy in ("error", "clamp"):
+        p = StripDrawParameters(table_policy=policy, draw_length=0.03, n_elements=150)
+        py, nat = _pair(native_core, p, table)
+        for k in range(5):
+            py.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+            nat.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+        before = nat.get_state()
+        if policy == "error":
+            with pytest.raises(TribocosimError) as exc:
+                py.step(1e-3, {"normal_force": high, "grip_velocity": 0.08})
+            assert nat.step_status(1e-3, high, 0.08) == TC_DISCARD
+            assert native_core.last_message() == str(exc.value)
+            assert nat.get_state() == before
+        else:
+            ref = py.step(1e-3, {"normal_force": high, "grip_velocity": 0.08})
+            out = nat.step(1e-3, {"normal_force": high, "grip_velocity": 0.08})
+            assert out["table_clamp_count"] == ref["table_clamp_count"] > 0
+            assert out["pull_force"] == ref["pull_force"]
+
+
+def test_creation_checks_like_python(native_core, table):
+    p = StripDrawParameters(friction_model="closed_form", n_elements=40)
+    n = p.n_elements + 1
+    bad_fields = [np.zeros(n - 1), np.full(n, np.nan), np.full(n, -0.1), np.full(n, 0.9)]
+    for field in bad_fields:
+        with pytest.raises(ParameterError) as exc:
+            StripDrawModel(p, make_friction_law(p), field)
+        with pytest.raises(native_core.NativeError) as nexc:
+            native_core.stripdraw(p, None, field)
+        assert nexc.value.status == TC_ERROR
+        assert nexc.value.message == str(exc.value)
+    q = p.replace(beta_initial=0.5, beta_threshold=0.25)
+    with pytest.raises(ParameterError) as exc:
+        StripDrawModel(q, make_friction_law(q))
+    with pytest.raises(native_core.NativeError) as nexc:
+        native_core.stripdraw(q)
+    assert nexc.value.message == str(exc.value)
+    with pytest.raises(ParameterError) as exc:
+        make_friction_law(StripDrawParameters())
+    with pytest.raises(native_core.NativeError) as nexc:
+        native_core.stripdraw(StripDrawParameters())
+    assert nexc.value.message == str(exc.value)
+    # a field that is accepted starts the run
+    field = np.linspace(0.0, 0.2, n)
+    py, nat = _pair(native_core, p, None, field)
+    a, b = _run_both(py, nat, [(1e-3, F_N, 0.08)] * 5)
+    _assert_agree(a, b, py, nat, "beta_field")
+
+
+# ------------------------------------------------------------------------------------------------------
+# state, fields, instances
+# ------------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("integrator,steps,dt", [("implicit", 40, 1e-3), ("explicit", 6, 2e-4)])
+def test_state_round_trip_replays_bit_identically(native_core, table, integrator, steps, dt):
+    p = StripDrawParameters(integrator=integrator, draw_length=0.02, n_elements=100, friction_velocity="slip_rate")
+    nat = native_core.stripdraw(p, table)
+    schedule = _pressure_ramp_reversing(2 * steps, dt, 30 * dt)
+    for dt_, fn, vg in schedule[:steps]:
+        nat.step(dt_, {"normal_force": fn, "grip_velocity": vg})
+    saved = nat.get_state()
+    first = [nat.step(dt_, {"normal_force": fn, "grip_velocity": vg}) for dt_, fn, vg in schedule[steps:]]
+    end = nat.get_state()
+    nat.set_state(saved)
+    assert nat.get_state() == saved
+    again = [nat.step(dt_, {"normal_force": fn, "grip_velocity": vg}) for dt_, fn, vg in schedule[steps:]]
+    assert again == first and nat.get_state() == end
+    other = native_core.stripdraw(p, table)  # a fresh instance takes the state as well
+    other.set_state(saved)
+    fresh = [other.step(dt_, {"normal_force": fn, "grip_velocity": vg}) for dt_, fn, vg in schedule[steps:]]
+    assert fresh == first and other.get_state() == end
+
+
+def test_set_state_refuses_foreign_images(native_core):
+    nat = native_core.stripdraw(StripDrawParameters(friction_model="constant", n_elements=30))
+    other = native_core.stripdraw(StripDrawParameters(friction_model="constant", n_elements=31))
+    good = nat.get_state()
+    nat.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+    after = nat.get_state()
+    contact_bad = bytearray(good)
+    contact_bad[-1] = 7
+    wrong_magic = bytearray(good)
+    wrong_magic[0] ^= 0xFF
+    for image in (good[:-1], good + b"\0", other.get_state(), bytes(wrong_magic), bytes(contact_bad)):
+        with pytest.raises(native_core.NativeError) as exc:
+            nat.set_state(bytes(image))
+        assert exc.value.status == TC_ERROR
+        assert nat.get_state() == after
+
+
+@pytest.mark.parametrize("integrator,policy", [("implicit", "clamp"), ("implicit", "error"), ("explicit", "clamp")])
+def test_random_bad_inputs_are_discarded_like_python_with_the_state_unchanged(native_core, table, integrator, policy):
+    """1500 random calls with NaN, inf, negative, tiny and huge inputs: never a crash; a discarded step leaves
+    the state bit-identical; the native model accepts exactly the steps the Python model takes, with the same
+    results, and refuses the others (the input checks with Python's messages). Steps that would need more than
+    TC_STRIPDRAW_MAX_INTERVALS coupling intervals (or explicit sub-steps), where Python would overflow or run
+    for days, are refused and not compared."""
+    specials = [math.nan, math.inf, -math.inf, -1.0, -0.0, 0.0, 5e-324, 1e-300, 1e300, -1e300, 1e30]
+    dts = specials + [1e-9, 1e-4, 1e-3]
+    fns = specials + [1e3, F_N, 3 * F_N]
+    vgs = specials + [0.08, -0.08, 1.0]
+    rng = np.random.default_rng(6)
+    p = StripDrawParameters(integrator=integrator, draw_length=0.01, n_elements=20, table_policy=policy)
+    py, nat = _pair(native_core, p, table)
+    counts = {"ok": 0, "refused": 0, "capped": 0}
+    for _ in range(1500):
+        dt, fn, vg = dts[rng.integers(len(dts))], fns[rng.integers(len(fns))], vgs[rng.integers(len(vgs))]
+        before = nat.get_state()
+        status = nat.step_status(dt, fn, vg)
+        message = native_core.last_message()
+        assert status in (TC_OK, TC_DISCARD)
+        if status == TC_DISCARD:
+            assert nat.get_state() == before, f"dt={dt}, normal_force={fn}, grip_velocity={vg}"
+            if "coupling intervals" in message or "explicit steps" in message:
+                counts["capped"] += 1
+                continue
+        try:
+            ref = py.step(dt, {"normal_force": fn, "grip_velocity": vg})
+        except (ArithmeticError, TribocosimError) as exc:  # the numba kernels raise ZeroDivisionError
+            assert status == TC_DISCARD, f"dt={dt}, normal_force={fn}, grip_velocity={vg}: Python raised {exc!r}"
+            if isinstance(exc, ZeroDivisionError):
+                assert message.startswith("division by zero")
+            else:
+                assert message == str(exc)
+            counts["refused"] += 1
+            continue
+        assert status == TC_OK, f"dt={dt}, normal_force={fn}, grip_velocity={vg}: {message}"
+        out = nat.outputs()
+        for name in ("pull_force", "friction_force", "beta_max", "grip_position", "table_clamp_count"):
+            assert out[name] == ref[name] or (math.isnan(out[name]) and math.isnan(ref[name])), name
+        counts["ok"] += 1
+    assert min(counts.values()) > 0, counts
+
+
+def test_two_instances_do_not_interfere(native_core, table):
+    pa = StripDrawParameters(draw_length=0.02, n_elements=80)
+    pb = StripDrawParameters(draw_length=0.02, n_elements=90, friction_model="closed_form", integrator="implicit")
+    schedule = _pressure_ramp_reversing(30, 1e-3, 0.02)
+    alone = []
+    for p in (pa, pb):
+        nat = native_core.stripdraw(p, table)
+        alone.append([nat.step(dt, {"normal_force": fn, "grip_velocity": vg}) for dt, fn, vg in schedule])
+    a, b = native_core.stripdraw(pa, table), native_core.stripdraw(pb, table)
+    together = [[], []]
+    for dt, fn, vg in schedule:
+        together[0].append(a.step(dt, {"normal_force": fn, "grip_velocity": vg}))
+        together[1].append(b.step(dt, {"normal_force": fn, "grip_velocity": vg}))
+    assert together == alone
+
+
+def test_fields_window_and_time_match_python(native_core, table):
+    p = StripDrawParameters(draw_length=0.02, n_elements=100)
+    py, nat = _pair(native_core, p, table)
+    for k in range(25):
+        py.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+        nat.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+    fields, ref = nat.fields(), py.fields()
+    for key in ("X", "U", "beta", "slip", "contact"):
+        np.testing.assert_array_equal(fields[key], ref[key], err_msg=key)
+    np.testing.assert_array_equal(nat.window(), [py.mesh.window_lo, py.mesh.window_hi])
+    assert nat.time == py.time
+    x = fields["X"] + fields["U"]
+    lo, hi = nat.window()
+    inside = fields["contact"][(x > lo + py.mesh.element_length) & (x < hi - py.mesh.element_length)]
+    np.testing.assert_allclose(inside, 1.0, rtol=1e-9)
+    assert np.all(fields["contact"][(x < lo - py.mesh.element_length) | (x > hi + py.mesh.element_length)] == 0.0)
