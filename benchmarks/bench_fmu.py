@@ -1,6 +1,11 @@
-"""Cost of the StripDraw FMU against calling the strip-draw model directly.
+"""Cost of the StripDraw FMUs (native C and pythonfmu) against calling the strip-draw model directly.
 
 Measures, for the default parameters (table friction, implicit integrator, 450 elements):
+
+0. the native FMU (issue 13): per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
+   pythonfmu FMU through the same loop (target: native at least 10x faster), and the default 140 mm draw
+   at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
+   loop, per-step cost and real-time factor (target >= 500);
 
 1. overhead per doStep: ``setReal(inputs) + doStep + getReal(outputs)`` through fmpy's
    ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
@@ -155,6 +160,41 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
     return t_model, t_fmu, t_warm_cache
 
 
+def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
+    """The native FMU's figures (see the module docstring, item 0)."""
+    from fmpy import extract, read_model_description
+
+    from tribocosim.components.fmus.native import build_native_fmus, fmi2_headers
+    from tribocosim.components.native.toolchain import compile_executable
+
+    fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
+    md = read_model_description(str(fmu))
+    unzipped = str(extract(str(fmu), str(tmp / "native_unzipped")))
+    _, t_native = per_step(unzipped, md, n_warm=200, n=steps, repeat=repeat)
+    py_md = read_model_description(str(python_fmu))
+    py_unzipped = str(extract(str(python_fmu), str(tmp / "python_unzipped")))
+    _, t_python = per_step(py_unzipped, py_md, n_warm=200, n=steps, repeat=repeat)
+    host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
+                              include_dirs=[fmi2_headers()], libs=["-ldl"])
+    schedule = tmp / "draw.txt"
+    schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(N_DRAW)))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    cmd = [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
+           "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
+           "--no-print"]
+    loops = []
+    for _ in range(repeat):
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=True, env={"PATH": "/usr/bin:/bin"})
+        line = [ln for ln in proc.stderr.splitlines() if " steps in " in ln][-1]
+        loops.append(float(line.split()[-2]))
+    t0 = time.perf_counter()
+    from fmpy import simulate_fmu
+
+    simulate_fmu(unzipped, model_description=md, stop_time=N_DRAW * DT, output_interval=DT)
+    return {"fmpy_native": t_native, "fmpy_python": t_python, "host_loop": min(loops),
+            "simulate_fmu_native": time.perf_counter() - t0}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--fmu", type=Path, help="a built StripDraw.fmu (default: build one)")
@@ -178,6 +218,15 @@ def main(argv=None) -> int:
         load = os.getloadavg()
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
               f"{os.cpu_count()} CPUs")  # fmt: skip
+        nat = native(tmp, Path(fmu), args.repeat, args.steps)
+        speedup = nat["fmpy_python"] / nat["fmpy_native"]
+        print(f"native FMU   fmpy set+doStep+get {nat['fmpy_native'] * 1e6:8.1f} us/step   pythonfmu FMU "
+              f"{nat['fmpy_python'] * 1e6:8.1f} us/step   native {speedup:.1f}x faster "
+              f"({'meets' if speedup >= 10 else 'MISSES'} the 10x target)")
+        rtf = N_DRAW * DT / nat["host_loop"]
+        print(f"native FMU   140 mm draw at 1 ms in the C host (no Python): {nat['host_loop'] * 1e3:8.2f} ms, "
+              f"{nat['host_loop'] / N_DRAW * 1e6:6.2f} us/step, real-time factor {rtf:.0f} "
+              f"({'meets' if rtf >= 500 else 'MISSES'} the 500 target); fmpy.simulate_fmu {nat['simulate_fmu_native']:.3f} s")
         tm, tf = per_step(unzipped, md, n_warm=200, n=args.steps, repeat=args.repeat)
         print(f"per step     model.step {tm * 1e6:8.1f} us   FMU set+doStep+get {tf * 1e6:8.1f} us   "
               f"overhead {(tf - tm) * 1e6:6.1f} us ({tf / tm:.2f}x)")  # fmt: skip

@@ -12,7 +12,9 @@
  *     --fuzz N SEED            N random calls with NaN, inf, negative and huge values (after the steps): no
  *                              crash, only allowed statuses, a discarded step leaves the outputs unchanged
  *     --symbols                check that every fmi2 function of the standard is exported, and stop
- * Prints "t,outputs..." per step (%.17g) to stdout, FMU log messages to stderr. Exit 0 on success.
+ *     --no-print               do not print the outputs (benchmarks: the stepping loop's time alone)
+ * Prints "t,outputs..." per step (%.17g) to stdout, FMU log messages and "N steps in S s" (the wall time of
+ * the stepping loop, set + doStep + get per step) to stderr. Exit 0 on success.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <dlfcn.h>
@@ -21,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fmi2Functions.h"
 
@@ -178,6 +181,7 @@ int main(int argc, char **argv) {
     output_ref outputs[64];
     double *steps = NULL; /* n_steps rows of 1 + n_inputs values */
     long replay = -1, fuzz = 0;
+    int print_outputs = 1;
     unsigned long long seed = 1;
     for (int a = 4; a < argc; ++a) {
         if (strcmp(argv[a], "--set") == 0 && a + 1 < argc) {
@@ -203,6 +207,7 @@ int main(int argc, char **argv) {
             char line[4096];
             if (in == NULL) die("cannot open the steps file");
             while (fgets(line, sizeof line, in)) {
+                if (strspn(line, " \t\r\n") == strlen(line)) continue; /* blank line */
                 if (n_steps + 1 > cap) {
                     cap = cap ? 2 * cap : 1024;
                     steps = realloc(steps, cap * 17 * sizeof(double));
@@ -216,6 +221,8 @@ int main(int argc, char **argv) {
                 ++n_steps;
             }
             fclose(in);
+        } else if (strcmp(argv[a], "--no-print") == 0) {
+            print_outputs = 0;
         } else if (strcmp(argv[a], "--replay") == 0 && a + 1 < argc) {
             replay = atol(argv[++a]);
         } else if (strcmp(argv[a], "--fuzz") == 0 && a + 2 < argc) {
@@ -230,6 +237,8 @@ int main(int argc, char **argv) {
     size_t saved_size = 0;
     double saved_time = 0.0;
     if (first == NULL) die("out of memory");
+    struct timespec t_start, t_end;
+    clock_gettime(CLOCK_MONOTONIC, &t_start);
     for (size_t s = 0; s < n_steps; ++s) {
         const double *row = &steps[s * 17];
         if (n_inputs && f.set_real(c, inputs, n_inputs, row + 1) != fmi2OK) die("fmi2SetReal failed");
@@ -241,9 +250,11 @@ int main(int argc, char **argv) {
         t += row[0];
         read_outputs(&f, c, outputs, n_outputs, &first[s * (n_outputs + 1) + 1]);
         first[s * (n_outputs + 1)] = t;
-        printf("%.17g", t);
-        for (size_t k = 0; k < n_outputs; ++k) printf(",%.17g", first[s * (n_outputs + 1) + 1 + k]);
-        printf("\n");
+        if (print_outputs) {
+            printf("%.17g", t);
+            for (size_t k = 0; k < n_outputs; ++k) printf(",%.17g", first[s * (n_outputs + 1) + 1 + k]);
+            printf("\n");
+        }
         if ((long)s + 1 == replay) { /* the state after this step, serialized */
             fmi2FMUstate state = NULL;
             if (f.get_state(c, &state) != fmi2OK || f.state_size(c, state, &saved_size) != fmi2OK)
@@ -254,6 +265,9 @@ int main(int argc, char **argv) {
             saved_time = t;
         }
     }
+    clock_gettime(CLOCK_MONOTONIC, &t_end);
+    fprintf(stderr, "fmi2_host: %zu steps in %.9f s\n", n_steps,
+            (double)(t_end.tv_sec - t_start.tv_sec) + 1e-9 * (double)(t_end.tv_nsec - t_start.tv_nsec));
     if (saved != NULL) { /* restore the serialized state and replay the rest: bit-identical */
         fmi2FMUstate state = NULL;
         if (f.deserialize(c, saved, saved_size, &state) != fmi2OK || f.set_state(c, state) != fmi2OK)
