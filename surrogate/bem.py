@@ -4,7 +4,7 @@ Problem. A rigid profile with gap ``g(x)`` (Eq. 17/19: ``g* = h*_tool - h_def0``
 values, metres) is pressed with the imposed mean pressure ``p`` onto a flat, periodic elastic
 half-space of effective modulus E* whose surface already carries the accumulated plastic
 displacement ``u_p``. Displacements are positive *into* the half-space (compression), so that the
-deformed sheet is ``h_def = h_def0 - u_p - u_e`` (MODEL.md Sec. 5), and the rigid body moves
+deformed sheet is ``h_def = h_def0 - u_p - u_e`` (docs/model.md section 5), and the rigid body moves
 towards the half-space by the approach ``delta`` (an unknown). The deformed gap is
 
     G = g + u_p + u_e - delta,        u_e = K t,   (K t)^(q) = 2 t^(q) / (E* |q|),  (K t)^(0) = 0

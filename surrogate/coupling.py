@@ -12,7 +12,7 @@ grid: h_tool0 rolled by k along x) the loop
    n_sub steps with n_sub v0 dt = dx;
 2. classifies each flake: *blocked* if the pixels of its footprint where its upper surface
    z_hi exceeds the tool h_top form >= 3 spatially distinct 8-connected clusters (Fig. 8), else
-   free. Our addition (MODEL.md Sec. 7 leaves the criterion open): a flake is also blocked when
+   free. Our addition (docs/model.md section 7 leaves the criterion open): a flake is also blocked when
    it is *pinched*, i.e. the tool and the sheet both cut into it by more than
    ``pinch_overlap_fraction`` h_p (on the grid: max(z_hi - h_top) and max(h_low - z_lo) over its
    footprint). A smooth tool asperity wider than the flake overlaps it in one cluster only,

@@ -13,7 +13,7 @@
   the uncertainties are not defined (reported as NaN).
 - Eq. 8: <A_c>/A0 = s_c P through the origin (s_c [1/Pa], R^2). With the composite RMS slope
   h'_rms of the gap, kappa = s_c E* h'_rms (Eq. 8 read backwards). In the plastic regime of
-  MODEL.md Sec. 4 s_c ~ 1/p_crit.
+  docs/model.md section 4 s_c ~ 1/p_crit.
 
 Everything here is plain arithmetic on the case records: no I/O.
 """

@@ -22,7 +22,7 @@ from tribocosim.components.errors import ParameterError, check_range
 
 @dataclass(frozen=True)
 class SlideConfig:
-    """Parameters of a sliding run (defaults: MODEL.md Sec. 5-6 and the paper's Fig. 10 case).
+    """Parameters of a sliding run (defaults: docs/model.md section 5-6 and the paper's Fig. 10 case).
 
     Attributes
     ----------

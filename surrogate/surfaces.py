@@ -1,4 +1,4 @@
-"""Periodic self-affine rough surfaces and their statistics (paper Sec. 5, 6.1; MODEL.md Sec. 5).
+"""Periodic self-affine rough surfaces and their statistics (paper Sec. 5, 6.1; docs/model.md section 5).
 
 Generation. On an ``n x n`` periodic grid of side ``L`` the height field is a sum of Fourier modes
 with wavevectors ``q = 2 pi k / L`` (``k`` integer pairs). The isotropic power spectral density is

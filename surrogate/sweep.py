@@ -1,6 +1,6 @@
 """The sweep of a mesoscale campaign: a TOML file over P, v, beta, placements and surfaces.
 
-A sweep names the grid of the friction table (Sec. 6; MODEL.md Sec. 4-5) and the settings shared
+A sweep names the grid of the friction table (Sec. 6; docs/model.md section 4-5) and the settings shared
 by every slide. Example (SI units everywhere)::
 
     name = "quick"
@@ -70,7 +70,7 @@ class TableSettings:
     Attributes
     ----------
     mu0 : float
-        Particle-free friction coefficient, the calibration of tau0 (Eq. 6, MODEL.md Sec. 4).
+        Particle-free friction coefficient, the calibration of tau0 (Eq. 6, docs/model.md section 4).
     low_velocities : tuple of float
         Velocity nodes [m/s] below the campaign's smallest velocity; their A_p comes from the
         fitted alpha(v) law (Fig. 15), because the meso runs are too slow at the macro velocity.

@@ -1,4 +1,4 @@
-"""The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; MODEL.md Sec. 4).
+"""The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; docs/model.md section 4).
 
 Law (Eq. 7): mu = tau0 (A_c - A_p) / (P A0), with <A_c>/A0 and <A_p>/A0 ensemble-averaged
 over the members (placement seeds x surfaces) of each grid point. Each member gives

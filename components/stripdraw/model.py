@@ -1,6 +1,6 @@
 """The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law.
 
-Physics (paper Sec. 3-4, App. B-C; ../shared/MODEL.md sections 1-4):
+Physics (paper Sec. 3-4, App. B-C; docs/model.md sections 1-4):
 
 - bar: rho U_tt = E U_XX (Eq. 2), linear elements, lumped mass (:mod:`.mesh`);
 - interface: elastic-perfectly-plastic Coulomb law with return mapping, T_max = mu P (Eq. 4-5),
@@ -25,12 +25,12 @@ Time integration. Two integrators for the bar, selected by ``integrator``:
 Velocity in mu(P, v, beta) (``friction_velocity``). ``grip`` (default): the pulling speed |V0|,
 the same for every node, as the paper does ("alpha was extrapolated from Figure 15 using the pulling
 velocity v0 = 0.08 m/s", Fig. 19). ``slip_rate``: each node's own slip rate of the last coupling
-interval (MODEL.md section 7 lists this as the open choice). With ``slip_rate`` a sticking node has
+interval (docs/model.md section 7 lists this as the open choice). With ``slip_rate`` a sticking node has
 alpha = 0 and mu = mu0 whatever its debris, so at high debris coverage the law is strongly
 velocity-weakening and the strip goes into stick-slip (measured: 70 mm pad at 30 MPa, mu swinging
 between ~0 and 0.146); the paper's steady friction curves need ``grip``.
 
-Coupling of bar, friction and debris (our choice; MODEL.md section 7): a requested step is split
+Coupling of bar, friction and debris (our choice; docs/model.md section 7): a requested step is split
 into coupling intervals in which the pad slides at most ``window_courant`` elements. In each
 interval mu is evaluated per node from (P, slip rate of the last interval, beta) and held, the bar
 is advanced (sub-cycled explicit steps or one generalized-alpha step), then beta is updated from

@@ -1,7 +1,7 @@
 """Parameters of the strip-draw model (one frozen dataclass, SI units, validated on creation).
 
 Defaults are the paper's strip-draw test (AA5182-O, 1.5 mm sheet, 35 x 35 mm pad, 140 mm draw at
-0.08 m/s; ../shared/MODEL.md section 6). The field metadata (unit, description, allowed range)
+0.08 m/s; docs/model.md section 6). The field metadata (unit, description, allowed range)
 is the single source for validation messages and for the FMU's variable declarations, so the
 two cannot drift.
 

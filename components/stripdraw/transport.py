@@ -17,7 +17,7 @@ so the update is unconditionally stable, keeps beta >= 0, and conserves sum(beta
 coupling step, also the very large steps that the stability report tries. At small steps it agrees
 with the paper's explicit Eq. 14 to first order.
 
-Boundary rule (MODEL.md section 3): transport acts only between nodes that are both under the pad;
+Boundary rule (docs/model.md section 3): transport acts only between nodes that are both under the pad;
 the faces at the pad's edges carry no flux. Debris riding on the tool therefore stays under the
 pad (it piles up at the entry edge, the "accumulation zone" of Sec. 7) and is never lost; debris
 on the strip leaves the pad with the strip. Mass is conserved exactly.

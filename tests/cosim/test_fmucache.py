@@ -65,7 +65,7 @@ def test_stripdraw_scene_builds_on_demand_and_runs(strip_run):
     meta = json.loads((out / "stripdraw.json").read_text())
     assert meta["steps"]["accepted"] == 20
     assert "input strip.normal_force is not connected; its scene value 12250.0 is used" in meta["warnings"]
-    # mu = pull_force / (2 normal_force) reads like Eq. 1 once sliding (MODEL.md section 2)
+    # mu = pull_force / (2 normal_force) reads like Eq. 1 once sliding (docs/model.md section 2)
     assert abs(traj["strip.pull_force"][-1] / (2 * 12250.0) - 0.15) < 0.01, traj["strip.pull_force"]
     assert len(list((folder / "cache").glob("StripDraw-*/StripDraw.fmu"))) == 1
 
