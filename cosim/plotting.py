@@ -76,8 +76,6 @@ def draw_beta_map(ax, field: dict, *, vmax=None, colorbar=True, label=None):
     is under the pad; the 'V' opens between the first point that met the pad (vertical line) and
     the pad's entry edge moving through the strip at the draw speed (inclined line).
     """
-    import numpy as np
-
     t, x, beta = field["time"], field["X"] * 1e3, field["beta"]
     entry, exit_ = pad_edges_in_material(field)
     lo = max(0.0, float(entry.min()) * 1e3 - 10.0)

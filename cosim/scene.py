@@ -54,7 +54,6 @@ listing all problems, each with the file and the key (:mod:`tribocosim.cosim.pro
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path

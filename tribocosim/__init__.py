@@ -20,36 +20,19 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
 
 from __future__ import annotations
 
-import importlib
+from tribocosim.components.lazy import lazy_exports
 
-#: public name -> (module, attribute)
-_API = {
-    "run": ("tribocosim.cosim.api", "run"),
-    "Result": ("tribocosim.cosim.api", "Result"),
-    "load_scene": ("tribocosim.cosim.validate", "load_scene"),
-    "StripDrawModel": ("tribocosim.components.stripdraw.model", "StripDrawModel"),
-    "StripDrawParameters": ("tribocosim.components.stripdraw.parameters", "StripDrawParameters"),
-    "make_friction_law": ("tribocosim.components.stripdraw.friction", "make_friction_law"),
-    "FrictionTable": ("tribocosim.components.stripdraw.table", "FrictionTable"),
-    "read_table": ("tribocosim.components.stripdraw.table", "read_table"),
-    "write_table": ("tribocosim.components.stripdraw.table", "write_table"),
-    "DEFAULT_TABLE": ("tribocosim.components.paths", "DEFAULT_TABLE"),
-    "scene_file": ("tribocosim.components.paths", "scene_file"),
-    "TribocosimError": ("tribocosim.components.errors", "TribocosimError"),
-}
-
-__all__ = sorted(_API)
-
-
-def __getattr__(name: str):
-    try:
-        module, attribute = _API[name]
-    except KeyError:
-        raise AttributeError(f"module 'tribocosim' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(module), attribute)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_API))
+__getattr__, __all__ = lazy_exports(__name__, {
+    "run": "tribocosim.cosim.api",
+    "Result": "tribocosim.cosim.api",
+    "load_scene": "tribocosim.cosim.validate",
+    "StripDrawModel": "tribocosim.components.stripdraw.model",
+    "StripDrawParameters": "tribocosim.components.stripdraw.parameters",
+    "make_friction_law": "tribocosim.components.stripdraw.friction",
+    "FrictionTable": "tribocosim.components.stripdraw.table",
+    "read_table": "tribocosim.components.stripdraw.table",
+    "write_table": "tribocosim.components.stripdraw.table",
+    "DEFAULT_TABLE": "tribocosim.components.paths",
+    "scene_file": "tribocosim.components.paths",
+    "TribocosimError": "tribocosim.components.errors",
+})

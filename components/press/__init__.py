@@ -3,18 +3,6 @@
 ``PressParameters`` and ``PressModel`` are imported on first use.
 """
 
-from __future__ import annotations
+from tribocosim.components.lazy import lazy_exports
 
-import importlib
-
-_API = {"PressParameters": "parameters", "PressModel": "model"}
-
-__all__ = sorted(_API)
-
-
-def __getattr__(name: str):
-    if name not in _API:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{_API[name]}"), name)
-    globals()[name] = value
-    return value
+__getattr__, __all__ = lazy_exports(__name__, {"PressParameters": ".parameters", "PressModel": ".model"})

@@ -58,6 +58,7 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.fmus.exitguard",
         "tribocosim.components.fmus.modeldescription",
+        "tribocosim.components.lazy",
     }
     assert build.component(name).resources == (), "no friction table"
     assert "tribocosim.components.fmus.adapter" in _modules("StripDraw"), "StripDraw uses the same adapter plumbing"

@@ -112,48 +112,12 @@ def test_fmu_runs_in_a_venv_with_only_numpy_and_fmpy(stripdraw_fmu_file, numpy_f
             assert_allclose(got[:, j], want[:, j], rtol=1e-12, atol=1e-15, err_msg=f"{name} {params}")
 
 
-_COSIM_SCRIPT = textwrap.dedent(
-    """
-    import json, sys
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimManipulator import CosimManipulator
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
-    log_output_level(CosimLogLevel.WARNING)
-    fmu, step_ns, inputs, real_outputs = sys.argv[1], int(sys.argv[2]), json.loads(sys.argv[3]), json.loads(sys.argv[4])
-    ex = CosimExecution.from_step_size(step_size=step_ns)  # integer nanoseconds
-    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=fmu, instance_name="stripdraw"))
-    vr = {v.name.decode(): v.reference for v in ex.slave_variables(idx)}
-    observer = CosimObserver.create_last_value()
-    ex.add_observer(observer=observer)
-    override = CosimManipulator.create_override()
-    ex.add_manipulator(manipulator=override)
-    rows = []
-    for f, v in inputs:
-        override.slave_real_values(idx, [vr["normal_force"], vr["grip_velocity"]], [f, v])
-        assert ex.step(1), "libcosim step failed"
-        reals = observer.last_real_values(idx, [vr[n] for n in real_outputs])
-        count = observer.last_integer_values(idx, [vr["table_clamp_count"]])[0]
-        rows.append(list(reals) + [float(count)])
-    print(json.dumps(rows))
-    """
-)
-
-
-def test_libcosimpy_gives_the_same_outputs_as_fmpy(stripdraw_fmu_file, stripdraw_fmu_instance, tmp_path):
+def test_libcosimpy_gives_the_same_outputs_as_fmpy(stripdraw_fmu_file, stripdraw_fmu_instance, libcosim_run):
     params, schedule = CASES[0]
     step_ns = 1_000_000
-    script = tmp_path / "run_libcosim.py"
-    script.write_text(_COSIM_SCRIPT)
     inputs = [(f, v) for _, f, v in schedule]
-    proc = subprocess.run(
-        [sys.executable, str(script), str(stripdraw_fmu_file), str(step_ns), json.dumps(inputs), json.dumps(list(REAL_OUTPUTS))],
-        cwd=tmp_path, capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
-    assert proc.returncode == 0, f"libcosimpy run failed (exit {proc.returncode}):\n{proc.stdout}\n{proc.stderr}"
-    got = np.array(json.loads(proc.stdout.strip().splitlines()[-1]))
+    got = np.array(libcosim_run(stripdraw_fmu_file, step_ns, ("normal_force", "grip_velocity"), inputs,
+                                REAL_OUTPUTS, ("table_clamp_count",)))
     # libcosim keeps time in integer nanoseconds and passes doStep the difference of the two
     # time points in seconds, t_(k+1)/1e9 - t_k/1e9, which is not always exactly 1e-3
     steps = [((k + 1) * step_ns) / 1e9 - (k * step_ns) / 1e9 for k in range(len(inputs))]

@@ -371,3 +371,57 @@ def native_core_newton(tmp_path_factory, native_headers):
         return cache[max_iter]
 
     return build
+
+
+# Test-only allocator shim of the checked builds: live allocations are counted and the n-th allocation can be
+# made to fail (tc_count_live, tc_count_fail_after), so that the tests can check that nothing leaks on any path.
+_COUNT_H = r"""
+#include <stdlib.h>
+#include "tc_common.h"
+TC_API void *tc_count_malloc(size_t n);
+TC_API void *tc_count_calloc(size_t a, size_t b);
+TC_API void *tc_count_realloc(void *p, size_t n);
+TC_API void tc_count_free(void *p);
+#define malloc(n) tc_count_malloc(n)
+#define calloc(a, b) tc_count_calloc(a, b)
+#define realloc(p, n) tc_count_realloc(p, n)
+#define free(p) tc_count_free(p)
+"""
+_COUNT_C = r"""
+#undef malloc
+#undef calloc
+#undef realloc
+#undef free
+static long live = 0, countdown = -1;
+static int granted(void) {
+    if (countdown == 0) return 0;
+    if (countdown > 0) --countdown;
+    return 1;
+}
+TC_API void *tc_count_malloc(size_t n) { void *p = granted() ? malloc(n) : NULL; if (p) ++live; return p; }
+TC_API void *tc_count_calloc(size_t a, size_t b) { void *p = granted() ? calloc(a, b) : NULL; if (p) ++live; return p; }
+TC_API void *tc_count_realloc(void *p, size_t n) {
+    void *q = granted() ? realloc(p, n) : NULL;
+    if (q && !p) ++live;
+    return q;
+}
+TC_API void tc_count_free(void *p) { if (p) { --live; free(p); } }
+TC_API long tc_count_live(void) { return live; }
+TC_API void tc_count_fail_after(long n) { countdown = n; }
+"""
+
+
+@pytest.fixture(scope="session")
+def native_checked_compile():
+    """``build(sources, folder, name, defines=()) -> Path``: C sources (names in the native folder) compiled for
+    linux64 with undefined behaviour trapping and the allocation-counting shim (test builds only)."""
+
+    def build(sources, folder: Path, name: str, defines=()) -> Path:
+        (folder / "tc_count.h").write_text(_COUNT_H)
+        (folder / "tc_count.c").write_text(_COUNT_C)
+        return compile_shared([*(SOURCE_DIR / s for s in sources), folder / "tc_count.c"], folder / name, "linux64",
+                              defines=["TC_EXPORT_CORE", *defines],
+                              extra_flags=["-include", str(folder / "tc_count.h"), "-fsanitize=undefined",
+                                           "-fsanitize-trap=undefined"])
+
+    return build

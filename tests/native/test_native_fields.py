@@ -40,42 +40,7 @@ ZIP64_TEST_LIMIT = 1000  # TC_FIELDS_ZIP64_LIMIT of the checked build
 
 _D = ctypes.POINTER(ctypes.c_double)
 
-# Test-only allocator shim of the checked build (as in test_native_table_file.py): live allocations are
-# counted and the n-th allocation can be made to fail.
-_COUNT_H = r"""
-#include <stdlib.h>
-#include "tc_common.h"
-TC_API void *tc_count_malloc(size_t n);
-TC_API void *tc_count_calloc(size_t a, size_t b);
-TC_API void *tc_count_realloc(void *p, size_t n);
-TC_API void tc_count_free(void *p);
-#define malloc(n) tc_count_malloc(n)
-#define calloc(a, b) tc_count_calloc(a, b)
-#define realloc(p, n) tc_count_realloc(p, n)
-#define free(p) tc_count_free(p)
-"""
-_COUNT_C = r"""
-#undef malloc
-#undef calloc
-#undef realloc
-#undef free
-static long live = 0, countdown = -1;
-static int granted(void) {
-    if (countdown == 0) return 0;
-    if (countdown > 0) --countdown;
-    return 1;
-}
-TC_API void *tc_count_malloc(size_t n) { void *p = granted() ? malloc(n) : NULL; if (p) ++live; return p; }
-TC_API void *tc_count_calloc(size_t a, size_t b) { void *p = granted() ? calloc(a, b) : NULL; if (p) ++live; return p; }
-TC_API void *tc_count_realloc(void *p, size_t n) {
-    void *q = granted() ? realloc(p, n) : NULL;
-    if (q && !p) ++live;
-    return q;
-}
-TC_API void tc_count_free(void *p) { if (p) { --live; free(p); } }
-TC_API long tc_count_live(void) { return live; }
-TC_API void tc_count_fail_after(long n) { countdown = n; }
-"""
+
 
 
 class _Msg(ctypes.Structure):
@@ -238,15 +203,11 @@ def native_fields(fields_dir) -> Fields:
 
 
 @pytest.fixture(scope="module")
-def checked_build(fields_dir) -> Path:
+def checked_build(fields_dir, native_checked_compile) -> Path:
     """The same sources with undefined behaviour trapping, the allocation-counting shim and a ZIP64 limit of
     ZIP64_TEST_LIMIT bytes (so that small files take every ZIP64 path)."""
-    (fields_dir / "tc_count.h").write_text(_COUNT_H)
-    (fields_dir / "tc_count.c").write_text(_COUNT_C)
-    return toolchain.compile_shared(
-        [*(toolchain.SOURCE_DIR / s for s in SOURCES), fields_dir / "tc_count.c"], fields_dir / "libtc_checked.so",
-        "linux64", defines=["TC_EXPORT_CORE", f"TC_FIELDS_ZIP64_LIMIT={ZIP64_TEST_LIMIT}"],
-        extra_flags=["-include", str(fields_dir / "tc_count.h"), "-fsanitize=undefined", "-fsanitize-trap=undefined"])
+    return native_checked_compile(SOURCES, fields_dir, "libtc_checked.so",
+                                  defines=[f"TC_FIELDS_ZIP64_LIMIT={ZIP64_TEST_LIMIT}"])
 
 
 @pytest.fixture(scope="module")
@@ -558,7 +519,7 @@ def test_refusals_of_files_that_are_not_field_files(native_fields, python_field_
         if python_raises is None:
             read_initial_beta(path, X)
         else:
-            with pytest.raises(ParameterError, match=f"field_input = .* cannot be read as a field_output file"):
+            with pytest.raises(ParameterError, match="field_input = .* cannot be read as a field_output file"):
                 read_initial_beta(path, X)
 
 

@@ -14,11 +14,9 @@ and libcosimpy, and held against the Python models.
 
 from __future__ import annotations
 
-import json
 import shutil
 import subprocess
 import sys
-import textwrap
 import zipfile
 from pathlib import Path
 
@@ -38,18 +36,18 @@ def exported_functions(path):
     spec.loader.exec_module(module)
     return module.exported_functions(path)
 NAMES = ("DrawingMachine", "Press", "StripDraw")
-FMI2_FUNCTIONS = {
-    "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate", "fmi2FreeInstance",
-    "fmi2SetupExperiment", "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Terminate",
-    "fmi2Reset", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean", "fmi2GetString", "fmi2SetReal",
-    "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2GetFMUstate", "fmi2SetFMUstate",
-    "fmi2FreeFMUstate", "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative", "fmi2EnterEventMode", "fmi2NewDiscreteStates", "fmi2EnterContinuousTimeMode",
-    "fmi2CompletedIntegratorStep", "fmi2SetTime", "fmi2SetContinuousStates", "fmi2GetDerivatives",
-    "fmi2GetEventIndicators", "fmi2GetContinuousStates", "fmi2GetNominalsOfContinuousStates",
-    "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives", "fmi2DoStep", "fmi2CancelStep",
-    "fmi2GetStatus", "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
-}  # fmt: skip
+def _fmi2_functions() -> set[str]:
+    """Every function of the FMI 2.0 standard, from its header (the names fmi2Functions.h maps through
+    fmi2FullName)."""
+    import re
+
+    from tribocosim.components.fmus.native import fmi2_headers
+
+    text = (fmi2_headers() / "fmi2Functions.h").read_text()
+    return set(re.findall(r"#define (fmi2\w+)\s+fmi2FullName\(", text))
+
+
+FMI2_FUNCTIONS = _fmi2_functions()
 STRIP_OUTPUTS = ("pull_force", "mu_mean", "beta_max", "friction_force", "beta_mean", "sliding_distance",
                  "contact_pressure", "grip_position", "table_clamp_count")
 
@@ -386,46 +384,13 @@ def test_nothing_leaks_valgrind(fmi2_host, unzipped, descriptions, tmp_path):
     assert full.returncode == 0, full.stderr[-4000:]
 
 
-_LIBCOSIM = textwrap.dedent(
-    """
-    import json, sys
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimManipulator import CosimManipulator
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
-    log_output_level(CosimLogLevel.WARNING)
-    fmu, inputs, outs = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3])
-    ex = CosimExecution.from_step_size(step_size=1_000_000)
-    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=fmu, instance_name="strip"))
-    vr = {v.name.decode(): v.reference for v in ex.slave_variables(idx)}
-    observer = CosimObserver.create_last_value()
-    ex.add_observer(observer=observer)
-    override = CosimManipulator.create_override()
-    ex.add_manipulator(manipulator=override)
-    rows = []
-    for f, v in inputs:
-        override.slave_real_values(idx, [vr["normal_force"], vr["grip_velocity"]], [f, v])
-        assert ex.step(1)
-        rows.append(observer.last_real_values(idx, [vr[n] for n in outs]))
-    print(json.dumps(rows))
-    """
-)
-
-
-def test_libcosimpy_gives_the_same_outputs_as_fmpy(native_fmus, unzipped, descriptions, tmp_path):
+def test_libcosimpy_gives_the_same_outputs_as_fmpy(native_fmus, unzipped, descriptions, libcosim_run):
     from fmpy.fmi2 import FMU2Slave
 
     schedule = _strip_schedule("demo", 200)
     outs = [n for n in STRIP_OUTPUTS if n != "table_clamp_count"]
-    script = tmp_path / "cosim.py"
-    script.write_text(_LIBCOSIM)
-    proc = subprocess.run([sys.executable, str(script), str(native_fmus["StripDraw"]),
-                           json.dumps([(f, v) for _, f, v in schedule]), json.dumps(outs)],
-                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    got = np.array(json.loads(proc.stdout.strip().splitlines()[-1]))
+    got = np.array(libcosim_run(native_fmus["StripDraw"], 1_000_000, ("normal_force", "grip_velocity"),
+                                [(f, v) for _, f, v in schedule], outs))
     md = descriptions["StripDraw"]
     vr = {v.name: v.valueReference for v in md.modelVariables}
     s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",

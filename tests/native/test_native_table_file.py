@@ -34,40 +34,7 @@ MSG_SIZE = 1024
 # Test-only allocator shim for the fuzz build: every malloc/calloc/realloc/free of the C sources goes through
 # these counters (forced include), so a leak shows as live allocations after a read, and the n-th
 # allocation can be made to fail.
-_COUNT_H = r"""
-#include <stdlib.h>
-#include "tc_common.h"
-TC_API void *tc_count_malloc(size_t n);
-TC_API void *tc_count_calloc(size_t a, size_t b);
-TC_API void *tc_count_realloc(void *p, size_t n);
-TC_API void tc_count_free(void *p);
-#define malloc(n) tc_count_malloc(n)
-#define calloc(a, b) tc_count_calloc(a, b)
-#define realloc(p, n) tc_count_realloc(p, n)
-#define free(p) tc_count_free(p)
-"""
-_COUNT_C = r"""
-#undef malloc
-#undef calloc
-#undef realloc
-#undef free
-static long live = 0, countdown = -1;
-static int granted(void) {
-    if (countdown == 0) return 0;
-    if (countdown > 0) --countdown;
-    return 1;
-}
-TC_API void *tc_count_malloc(size_t n) { void *p = granted() ? malloc(n) : NULL; if (p) ++live; return p; }
-TC_API void *tc_count_calloc(size_t a, size_t b) { void *p = granted() ? calloc(a, b) : NULL; if (p) ++live; return p; }
-TC_API void *tc_count_realloc(void *p, size_t n) {
-    void *q = granted() ? realloc(p, n) : NULL;
-    if (q && !p) ++live;
-    return q;
-}
-TC_API void tc_count_free(void *p) { if (p) { --live; free(p); } }
-TC_API long tc_count_live(void) { return live; }
-TC_API void tc_count_fail_after(long n) { countdown = n; }
-"""
+
 
 
 class _Table(ctypes.Structure):
@@ -154,15 +121,9 @@ def table_file_lib(table_file_dir):
 
 
 @pytest.fixture(scope="module")
-def table_file_fuzz_lib(table_file_dir) -> Path:
+def table_file_fuzz_lib(table_file_dir, native_checked_compile) -> Path:
     """The same sources with undefined behaviour trapping and the allocation-counting shim."""
-    (table_file_dir / "tc_count.h").write_text(_COUNT_H)
-    (table_file_dir / "tc_count.c").write_text(_COUNT_C)
-    return toolchain.compile_shared(
-        [*(toolchain.SOURCE_DIR / s for s in SOURCES), table_file_dir / "tc_count.c"], table_file_dir / "libtc_fuzz.so",
-        "linux64", defines=["TC_EXPORT_CORE"],
-        extra_flags=["-include", str(table_file_dir / "tc_count.h"),
-                     "-fsanitize=undefined", "-fsanitize-trap=undefined"])
+    return native_checked_compile(SOURCES, table_file_dir, "libtc_fuzz.so")
 
 
 @pytest.fixture(scope="module")
