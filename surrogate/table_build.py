@@ -1,14 +1,16 @@
 """The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; docs/model.md section 4).
 
-Law (Eq. 7): mu = tau0 (A_c - A_p) / (P A0), with <A_c>/A0 and <A_p>/A0 ensemble-averaged
-over the members (placement seeds x surfaces) of each grid point. Each member gives
-mu_m = tau0 (A_c,m - A_p,m) / (P A0); the table holds their mean (clipped at 0) and the metadata
-their standard deviation (``ensemble.mu_std``) and count.
+The table (format version 2) holds, at every node (P, v, beta), the ensemble means of <A_c>/A0 and
+<A_p>/A0 over the members (placement seeds x surfaces) of the grid point and their member standard
+deviations, and mu = mu0 (1 - <A_p> / <A_c>) (Eq. 7 with tau0 set by the particle-free mu0, Eq. 6),
+so that mu at beta = 0 is mu0 at every pressure whatever the grid resolves of A_c; the metadata
+hold the members' spread of mu (``ensemble.mu_std``) and their count. The strip-draw model computes
+mu from the areas, with A_c from the table (``contact_area = "mesoscale"``) or from Eq. 8
+(``"eq8"``); the table does not fix that choice.
 
-Calibration (Eq. 6). tau0 = mu0 / s_c: ONE shear strength for all pressures, with s_c the
-through-origin slope of <A_c>/A0 against P (:func:`tribocosim.surrogate.fit.fit_contact`; particle-free
-cases when the sweep has them). mu at beta = 0 is then mu0 (A_c/A0) / (s_c P), i.e. mu0 up to the
-departure of the measured A_c from a line.
+For reference the metadata also give tau0 = mu0 / s_c, with s_c the through-origin slope of
+<A_c>/A0 against P (:func:`tribocosim.surrogate.fit.fit_contact`; particle-free cases when the
+sweep has them): the shear strength a single-tau0 law would need.
 
 Axes.
 
@@ -167,27 +169,35 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         ratio = {v: 1.0 for v in v_low}
 
     shape = (len(pressures), len(vel_axis), len(beta_axis))
-    mu = np.zeros(shape)
-    mu_std = np.zeros(shape)
+    mu, mu_std = np.zeros(shape), np.zeros(shape)
+    ac_mean, ap_mean, ac_std, ap_std = (np.zeros(shape) for _ in range(4))
     n_mem = np.zeros(shape, dtype=int)
+
+    def std(x):
+        return float(np.std(x, ddof=1)) if x.size > 1 else 0.0
+
     for i, p in enumerate(pressures):
         rows = {v: _Row(ens, p, v, levels, sweep["particle_free"]) for v in v_camp}
         for j, v in enumerate(vel_axis):
             row, scale = (rows[v], 1.0) if v in rows else (rows[v_camp[0]], ratio[v])
             for k, b in enumerate(beta_axis):
                 mem = row.at(b)
-                vals = np.array([tau0 * (ac - scale * ap) / p for ap, ac in mem.values()])
-                mu[i, j, k] = max(0.0, float(vals.mean()))
-                mu_std[i, j, k] = float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0
-                n_mem[i, j, k] = vals.size
+                ap = np.array([scale * a for a, _ in mem.values()])
+                ac = np.array([c for _, c in mem.values()])
+                ap_mean[i, j, k], ac_mean[i, j, k] = float(ap.mean()), float(ac.mean())
+                ap_std[i, j, k], ac_std[i, j, k] = std(ap), std(ac)
+                mu[i, j, k] = mu0 * max(0.0, 1.0 - ap_mean[i, j, k] / ac_mean[i, j, k])
+                mu_std[i, j, k] = std(mu0 * (1.0 - ap / ac))
+                n_mem[i, j, k] = ap.size
 
     flakes = sweep["flakes"]
     seeds = sweep["seeds"]
     meta = {
         "provenance": "mesoscale",
         "title": f"friction table from the mesoscale campaign '{sweep['name']}'",
-        "law": "mu = tau0 (A_c - A_p) / (P A0) (Eq. 7) with ensemble-averaged <A_c>/A0 and <A_p>/A0 "
-               "(Eq. 22) of BEM-DEM slides (Sec. 5-6); see surrogate.table_build",
+        "law": "mu = mu0 (1 - <A_p> / <A_c>) (Eq. 7 with tau0 set by mu0, Eq. 6) with ensemble-averaged "
+               "<A_c>/A0 and <A_p>/A0 (Eq. 22) of BEM-DEM slides (Sec. 5-6), both tabulated (format version 2) "
+               "so that the model can take A_c from Eq. 8 instead; see surrogate.table_build",
         "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under "
                           "every blocked flake (the cluster rule of Fig. 8 and the pinch rule of "
                           "tribocosim.surrogate.coupling); A_c from 'mean_contact_fraction'",
@@ -195,8 +205,8 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "beta_threshold_note": "Eq. 24: beta_thres = kappa / (alpha h'_rms) = s_c E* / alpha with the "
                                f"largest alpha ({alpha_max:.6g}), limited to 1",
         "calibration": {"mu0": mu0, "tau0": tau0, "tau0_unit": "Pa",
-                        "tau0_source": "tau0 = mu0 / s_c, s_c the through-origin slope of <A_c>/A0 "
-                                       f"vs P of the {fits.contact.source} (one tau0 for all pressures)"},
+                        "tau0_source": "for reference: tau0 = mu0 / s_c, s_c the through-origin slope of "
+                                       f"<A_c>/A0 vs P of the {fits.contact.source}; mu uses mu0 and the areas"},
         "e_star": e_star, "p_crit": p_crit,
         "axes": {
             "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
@@ -250,8 +260,9 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu,
-                          json_clean(meta))
+    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu, json_clean(meta),
+                          contact_area=ac_mean, particle_area=ap_mean, contact_area_std=ac_std,
+                          particle_area_std=ap_std)
     return table, fits
 
 
@@ -298,10 +309,21 @@ def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:
     n = a.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("n", 256)
     pixel = tau0 / (a.pressure[:, None, None] * n * n) if tau0 else np.zeros_like(a.mu)
     tol = np.maximum(np.maximum(std, pixel), 1e-12)
-    return {"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
-            "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
-            "tolerance": "max(recorded ensemble std, one contact pixel tau0/(P n^2))",
-            "within_uncertainty": bool(np.all(d <= tol))}
+    out = {"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
+           "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
+           "tolerance": "max(recorded ensemble std, one contact pixel: tau0/(P n^2) for mu, 1/n^2 for the areas)"}
+    ok = bool(np.all(d <= tol))
+    if a.version == 2 and b.version == 2:
+        for name in ("contact_area", "particle_area"):
+            da = np.abs(getattr(a, name) - getattr(b, name))
+            tol_a = np.maximum(np.maximum(getattr(a, name + "_std"), 1.0 / (n * n)), 1e-15)
+            out[f"{name}_max_abs_diff"] = float(da.max())
+            out[f"{name}_nodes_beyond_tolerance"] = int(np.count_nonzero(da > tol_a))
+            ok = ok and bool(np.all(da <= tol_a))
+    elif a.version != b.version:
+        out["note"] = f"format versions {a.version} and {b.version}: only mu is compared"
+    out["within_uncertainty"] = ok
+    return out
 
 
 def table_at(table: FrictionTable, pressure: float, velocity: float, betas) -> np.ndarray:

@@ -13,7 +13,8 @@ import sys
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("tribocosim.cosim.demo", "run the default strip-draw case and print mu_bar"),
     "run": ("tribocosim.cosim.run_cli", "run a co-simulation scene (TOML)"),
-    "report": ("tribocosim.cosim.report_cli", "error-vs-run-time and stability reports"),
+    "report": ("tribocosim.cosim.report_cli", "error-vs-run-time, stability and paper-figure reports"),
+    "calibrate": ("tribocosim.cosim.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
     "fmu": ("tribocosim.components.fmus.cli", "build the project's FMUs"),
     "meso": ("tribocosim.surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
     "surrogate": ("tribocosim.surrogate.surrogate_cli", "campaigns and the friction table"),

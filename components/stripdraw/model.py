@@ -34,7 +34,9 @@ Coupling of bar, friction and debris (our choice; docs/model.md section 7): a re
 into coupling intervals in which the pad slides at most ``window_courant`` elements. In each
 interval mu is evaluated per node from (P, slip rate of the last interval, beta) and held, the bar
 is advanced (sub-cycled explicit steps or one generalized-alpha step), then beta is updated from
-the nodal slip increments (implicit upwind, exact mass balance). Both integrators share this, so
+the nodal slip increments (implicit upwind, exact mass balance) and capped where A_p reaches A_c
+(Eq. 24) at the interval's pressure and grip speed (``law.beta_cap``; ``beta_threshold`` > 0
+overrides it). Both integrators share this, so
 their comparison measures the bar integrator alone.
 
 Outputs (one pad, one face; ``pull_force`` for the whole strip):
@@ -235,7 +237,8 @@ class StripDrawModel:
         self.slip_rate = np.abs(dU) / h
         self._w = self._weights(self.U)
         weight = 0.5 * (w0 + self._w)
-        self.beta, removed = transport_step(self.beta, dU, weight, pressure, p, m.element_length, self.beta_cap)
+        cap = self.beta_cap if p.beta_threshold > 0 else min(self.beta_cap, self.law.beta_cap(pressure, abs(vg)))
+        self.beta, removed = transport_step(self.beta, dU, weight, pressure, p, m.element_length, cap)
         self.beta_removed += removed
 
     def _implicit(self, h: float, ov: np.ndarray, tmax: np.ndarray, vg: float, depth: int):

@@ -23,6 +23,7 @@ FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
 TABLE_POLICIES = ("clamp", "error")
 FRICTION_VELOCITIES = ("grip", "slip_rate")
+CONTACT_AREAS = ("mesoscale", "eq8")
 
 
 _p = param
@@ -68,10 +69,21 @@ class StripDrawParameters:
     kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0, False)
     rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0, False)
     alpha_b: float = _p(
-        20.0, "1", "PROVISIONAL amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15)", 0.0, 1e6
+        63.37, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
+        "(Fig. 15): the shipped campaign's fitted alpha at its slowest velocity, 2 m/s (standard error 4.9)", 0.0, 1e6
     )
     alpha_v_ref: float = _p(
-        0.05, "m/s", "PROVISIONAL velocity scale v_ref of alpha(v) (Fig. 15)", 1e-9, 1e6, False
+        0.0, "m/s", "velocity scale v_ref of alpha(v) in the closed_form law; 0: alpha = alpha_b at every velocity "
+        "(the shipped campaign's alpha falls with v, so no saturation law is fitted)", 0.0, 1e6
+    )
+    contact_area: str = _p(
+        "mesoscale", "", "real contact area A_c in mu = mu0 (1 - A_p / A_c): mesoscale (from the friction table) | "
+        "eq8 (the paper's Eq. 8, kappa P / (rms_slope e_star))", choices=CONTACT_AREAS
+    )
+    e_star: float = _p(55e9, "Pa", "effective modulus E* of Eq. 8 (eq8 contact area)", 1e6, 1e13, False)
+    particle_area_scale: float = _p(
+        1.0, "1", "factor on the particle-borne area A_p (1: as the mesoscale campaign measured it; "
+        "fitted by tribocosim calibrate)", 0.0, 1e6
     )
     friction_velocity: str = _p(
         "grip", "", "velocity in mu(P, v, beta): grip (the pulling speed, as the paper) | slip_rate (each node's)",

@@ -5,21 +5,27 @@ This module is the only owner of the format: the surrogate writes tables through
 
 File layout (numpy ``.npz``, read with ``allow_pickle=False``):
 
-=============  =============================  ===============================================
-key            shape / type                   meaning
-=============  =============================  ===============================================
-``pressure``   (nP,) float64, increasing      contact pressure axis P [Pa]
-``velocity``   (nv,) float64, increasing      sliding-velocity axis v [m/s] (magnitude, >= 0)
-``beta``       (nb,) float64, increasing      debris area-fraction axis beta [-]
-``mu``         (nP, nv, nb) float64, >= 0     friction coefficient mu(P, v, beta) [-]
-``metadata``   0-d str (JSON object)          see below
-=============  =============================  ===============================================
+=========================  =============================  ===========================================
+key                        shape / type                   meaning
+=========================  =============================  ===========================================
+``pressure``               (nP,) float64, increasing      contact pressure axis P [Pa]
+``velocity``               (nv,) float64, increasing      sliding-velocity axis v [m/s] (magnitude, >= 0)
+``beta``                   (nb,) float64, increasing      debris area-fraction axis beta [-]
+``mu``                     (nP, nv, nb) float64, >= 0     friction coefficient mu(P, v, beta) [-]
+``contact_area``           (nP, nv, nb) float64, >= 0     version 2: ensemble mean of A_c/A0 [-]
+``particle_area``          (nP, nv, nb) float64, >= 0     version 2: ensemble mean of A_p/A0 [-]
+``contact_area_std``       (nP, nv, nb) float64, >= 0     version 2: member std of A_c/A0 [-]
+``particle_area_std``      (nP, nv, nb) float64, >= 0     version 2: member std of A_p/A0 [-]
+``metadata``               0-d str (JSON object)          see below
+=========================  =============================  ===========================================
 
-``metadata`` always holds ``format`` (``"tribocosim-friction-table"``), ``format_version``,
-``units`` (axis -> unit), ``provenance`` (``"closed_form"`` or ``"mesoscale"``),
-``beta_threshold`` (the cap of beta, Eq. 24) and ``content_hash``: the SHA-256 of the axes and
-values (float64, little-endian, C order) and of the canonical JSON of the other metadata. A file
-whose hash or format version does not match is refused.
+Version 2 carries the contact areas behind mu, so that the strip-draw model can compute
+mu = mu0 (1 - A_p / A_c) with either contact-area convention (docs/model.md section 4); version 1
+(mu only) stays readable. ``metadata`` always holds ``format`` (``"tribocosim-friction-table"``),
+``format_version`` (1 or 2), ``units`` (array -> unit), ``provenance`` (``"closed_form"`` or
+``"mesoscale"``), ``beta_threshold`` (the cap of beta, Eq. 24) and ``content_hash``: the SHA-256
+of the axes and arrays (float64, little-endian, C order) and of the canonical JSON of the other
+metadata. A file whose hash or format version does not match is refused.
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
@@ -28,6 +34,7 @@ caller can report them) or ``"error"`` (raise :class:`~tribocosim.components.err
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -39,9 +46,11 @@ import numpy as np
 from tribocosim.components.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # written when the table carries the areas; 1 (mu only) is still read and written
+VERSIONS = (1, 2)
 AXES = ("pressure", "velocity", "beta")
-UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1"}
+AREAS = ("contact_area", "particle_area", "contact_area_std", "particle_area_std")
+UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1", **{a: "1" for a in AREAS}}
 
 
 def _as_axis(name: str, values) -> np.ndarray:
@@ -69,6 +78,9 @@ class FrictionTable:
         Friction coefficients, shape ``(len(pressure), len(velocity), len(beta))``.
     metadata : dict
         Free-form JSON-serialisable metadata; ``beta_threshold`` is required.
+    contact_area, particle_area, contact_area_std, particle_area_std : array_like, optional
+        Version 2: the ensemble means of A_c/A0 and A_p/A0 and their member standard deviations,
+        same shape as ``mu`` (all four, or none).
     """
 
     pressure: np.ndarray
@@ -76,21 +88,38 @@ class FrictionTable:
     beta: np.ndarray
     mu: np.ndarray
     metadata: dict = field(default_factory=dict)
+    contact_area: np.ndarray | None = None
+    particle_area: np.ndarray | None = None
+    contact_area_std: np.ndarray | None = None
+    particle_area_std: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for name in AXES:
             object.__setattr__(self, name, _as_axis(name, getattr(self, name)))
-        mu = np.ascontiguousarray(self.mu, dtype=np.float64)
         shape = (self.pressure.size, self.velocity.size, self.beta.size)
-        if mu.shape != shape:
-            raise ParameterError(f"table mu has shape {mu.shape}; the axes need {shape}")
-        if not np.all(np.isfinite(mu)) or np.any(mu < 0):
-            raise ParameterError("table mu must be finite and >= 0 everywhere")
-        object.__setattr__(self, "mu", mu)
+        given = [a for a in AREAS if getattr(self, a) is not None]
+        if given and len(given) != len(AREAS):
+            raise ParameterError(f"table areas: {given} given; a version 2 table needs all of {list(AREAS)}")
+        for name in ("mu", *given):
+            arr = np.ascontiguousarray(getattr(self, name), dtype=np.float64)
+            if arr.shape != shape:
+                raise ParameterError(f"table {name} has shape {arr.shape}; the axes need {shape}")
+            if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+                raise ParameterError(f"table {name} must be finite and >= 0 everywhere")
+            object.__setattr__(self, name, arr)
         bt = self.metadata.get("beta_threshold")
         if bt is None or not (0 < float(bt) <= 1):
             raise ParameterError(f"table metadata beta_threshold = {bt!r}; a value in (0, 1] is required")
         object.__setattr__(self, "metadata", dict(self.metadata))
+
+    @property
+    def version(self) -> int:
+        """The format version: 2 when the table carries the areas, else 1."""
+        return 2 if self.contact_area is not None else 1
+
+    def arrays(self) -> tuple[str, ...]:
+        """The names of the value arrays this table holds (``mu``, and the areas in version 2)."""
+        return ("mu", *AREAS) if self.version == 2 else ("mu",)
 
     @property
     def beta_threshold(self) -> float:
@@ -105,8 +134,8 @@ class FrictionTable:
     def content_hash(self) -> str:
         """SHA-256 of the axes, the values and the metadata (without its ``content_hash``)."""
         h = hashlib.sha256()
-        h.update(f"{FORMAT}:{FORMAT_VERSION}".encode())
-        for name in (*AXES, "mu"):
+        h.update(f"{FORMAT}:{self.version}".encode())
+        for name in (*AXES, *self.arrays()):
             arr = np.ascontiguousarray(getattr(self, name), dtype="<f8")
             h.update(name.encode())
             h.update(str(arr.shape).encode())
@@ -137,6 +166,10 @@ class FrictionTable:
         TableDomainError
             Under ``policy="error"``, naming the quantity, the value and the table's range.
         """
+        return self.interpolate_array(self.mu, pressure, velocity, beta, policy)
+
+    def interpolate_array(self, values: np.ndarray, pressure, velocity, beta, policy: str = "clamp"):
+        """Trilinear interpolation of one of the table's arrays (``mu`` or an area), as :meth:`interpolate`."""
         if policy not in ("clamp", "error"):
             raise ParameterError(f"table policy = {policy!r} is not allowed; choose clamp or error")
         p = np.asarray(pressure, float)
@@ -147,19 +180,19 @@ class FrictionTable:
             # bilinearly in (v, beta)
             ip, tp, outp = self._locate("pressure", p, policy)
             ip, tp = int(ip), float(tp)
-            plane = self.mu[ip] if self.pressure.size == 1 else (1.0 - tp) * self.mu[ip] + tp * self.mu[ip + 1]
+            plane = values[ip] if self.pressure.size == 1 else (1.0 - tp) * values[ip] + tp * values[ip + 1]
             v, b = np.broadcast_arrays(v, b)
             iv, tv, outv = self._locate("velocity", v, policy)
             ib, tb, outb = self._locate("beta", b, policy)
             sv = min(1, self.velocity.size - 1)
             sb = min(1, self.beta.size - 1)
-            mu = ((1.0 - tv) * ((1.0 - tb) * plane[iv, ib] + tb * plane[iv, ib + sb])
-                  + tv * ((1.0 - tb) * plane[iv + sv, ib] + tb * plane[iv + sv, ib + sb]))
-            return mu, outv | outb | bool(outp)
+            out = ((1.0 - tv) * ((1.0 - tb) * plane[iv, ib] + tb * plane[iv, ib + sb])
+                   + tv * ((1.0 - tb) * plane[iv + sv, ib] + tb * plane[iv + sv, ib + sb]))
+            return out, outv | outb | bool(outp)
         p, v, b = np.broadcast_arrays(p, v, b)
         located = [self._locate(name, q, policy) for name, q in zip(AXES, (p, v, b))]
         (ip, tp, op), (iv, tv, ov), (ib, tb, ob) = located
-        mu = np.zeros(p.shape)
+        out = np.zeros(p.shape)
         sp, sv, sb = (min(1, getattr(self, n).size - 1) for n in AXES)
         for dp in (0, sp):
             wp = tp if dp else 1.0 - tp
@@ -167,8 +200,8 @@ class FrictionTable:
                 wv = tv if dv else 1.0 - tv
                 for db in (0, sb):
                     wb = tb if db else 1.0 - tb
-                    mu += wp * wv * wb * self.mu[ip + dp, iv + dv, ib + db]
-        return mu, op | ov | ob
+                    out += wp * wv * wb * values[ip + dp, iv + dv, ib + db]
+        return out, op | ov | ob
 
     def _locate(self, name: str, q: np.ndarray, policy: str):
         """Cell index, local coordinate in [0, 1] and out-of-range mask of queries on one axis."""
@@ -191,19 +224,17 @@ class FrictionTable:
 def write_table(path: str | os.PathLike, table: FrictionTable) -> str:
     """Write ``table`` to ``path`` (``.npz``) atomically and return its content hash."""
     meta = dict(table.metadata)
-    meta.update(format=FORMAT, format_version=FORMAT_VERSION, units=UNITS)
+    meta.update(format=FORMAT, format_version=table.version,
+                units={k: u for k, u in UNITS.items() if k in (*AXES, *table.arrays())})
     meta.pop("content_hash", None)
-    stamped = FrictionTable(table.pressure, table.velocity, table.beta, table.mu, meta)
+    stamped = dataclasses.replace(table, metadata=meta)
     digest = stamped.content_hash()
     meta["content_hash"] = digest
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez(
         tmp,
-        pressure=stamped.pressure,
-        velocity=stamped.velocity,
-        beta=stamped.beta,
-        mu=stamped.mu,
+        **{name: getattr(stamped, name) for name in (*AXES, *stamped.arrays())},
         metadata=np.array(json.dumps(meta, sort_keys=True)),
     )
     os.replace(tmp, path)
@@ -224,19 +255,23 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
         raise TableError(f"friction table file not found: {path}")
     try:
         with np.load(path, allow_pickle=False) as data:
-            arrays = {k: np.array(data[k]) for k in (*AXES, "mu", "metadata")}
-        meta = json.loads(str(arrays["metadata"]))
-        if not isinstance(meta, dict):
-            raise ValueError("metadata is not a JSON object")
+            meta = json.loads(str(np.array(data["metadata"])))
+            if not isinstance(meta, dict):
+                raise ValueError("metadata is not a JSON object")
+            version = meta.get("format_version")
+            names = (*AXES, "mu", *(AREAS if version == 2 else ()))
+            arrays = {k: np.array(data[k]) for k in names if version in VERSIONS}
     except Exception as exc:  # noqa: BLE001 - any parse failure is a malformed file
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
-    if meta.get("format") != FORMAT or meta.get("format_version") != FORMAT_VERSION:
+    if meta.get("format") != FORMAT or meta.get("format_version") not in VERSIONS:
         raise TableError(
             f"friction table {path} has format {meta.get('format')!r} version "
-            f"{meta.get('format_version')!r}; this version reads {FORMAT!r} version {FORMAT_VERSION}"
+            f"{meta.get('format_version')!r}; this version reads {FORMAT!r} versions "
+            f"{' and '.join(map(str, VERSIONS))}"
         )
     try:
-        table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta)
+        table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta,
+                              **{a: arrays[a] for a in AREAS if a in arrays})
     except (ParameterError, ValueError, TypeError) as exc:  # also members that are not float arrays
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
     if table.content_hash() != meta.get("content_hash"):

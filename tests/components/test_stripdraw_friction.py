@@ -37,3 +37,86 @@ def test_table_law_matches_closed_form_on_its_nodes():
 def test_table_law_needs_a_table():
     with pytest.raises(ParameterError, match="table"):
         make_friction_law(StripDrawParameters(friction_model="table"))
+
+
+def _eq23_table(**changes):
+    """The closed form tabulated (A_c from Eq. 8, A_p from Eq. 23), alpha rising with v (Fig. 15)."""
+    p = StripDrawParameters(friction_model="table", alpha_b=40.0, alpha_v_ref=0.05, **changes)
+    return p, closed_form_table(p)
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.37])
+def test_eq8_with_an_eq23_table_reproduces_the_closed_form_eq9_exactly(scale):
+    """mu = mu0 (1 - s A_p / A_c) with A_c of Eq. 8 and A_p of Eq. 23 is Eq. 9; A_p is multilinear in
+    (P, beta), which the trilinear interpolation reproduces between the nodes (at velocity nodes)."""
+    p, table = _eq23_table(contact_area="eq8", particle_area_scale=scale)
+    law, ref = make_friction_law(p, table), closed_form_law(p)
+    rng = np.random.default_rng(1)
+    P = rng.uniform(table.pressure[0], table.pressure[-1], 300)
+    V = rng.choice(table.velocity, 300)
+    B = rng.uniform(0, table.beta[-1] * 0.9, 300)
+    assert_allclose(law.mu(P, V, B)[0], ref.mu(P, V, B)[0], rtol=1e-12, atol=1e-15)
+    # the cap (Eq. 24): where s A_p reaches A_c, kappa / (s alpha(v) h'), here at the velocity node v
+    for v in table.velocity[table.velocity > 0.2]:
+        want = min(1.0, 2.0 / (scale * float(ref.alpha(v)) * 0.34))
+        if want < table.beta[-1]:
+            assert law.beta_cap(1e7, v) == pytest.approx(want, rel=1e-12)
+
+
+def test_the_two_conventions_share_mu0_and_differ_by_the_contact_area():
+    p, table = _eq23_table()
+    meso = make_friction_law(p, table)
+    eq8 = make_friction_law(p.replace(contact_area="eq8", e_star=5.5e9), table)  # a 10x larger Eq. 8 area
+    assert_allclose(meso.mu(1e7, 1.0, 0.0)[0], 0.15)
+    assert_allclose(eq8.mu(1e7, 1.0, 0.0)[0], 0.15)
+    # A_p / A_c is 10x smaller with the 10x larger contact area: the debris effect shrinks 10x
+    d_meso = 0.15 - meso.mu(1e7, 1.0, 0.05)[0]
+    d_eq8 = 0.15 - eq8.mu(1e7, 1.0, 0.05)[0]
+    assert d_eq8 == pytest.approx(d_meso / 10, rel=1e-12)
+
+
+def test_a_version_1_table_gives_its_mu_and_refuses_what_needs_the_areas():
+    from tribocosim.components.stripdraw.table import FrictionTable
+
+    _, t2 = _eq23_table()
+    t1 = FrictionTable(t2.pressure, t2.velocity, t2.beta, 0.5 * t2.mu, t2.metadata)  # mu only
+    assert t1.version == 1 and t2.version == 2
+    law = make_friction_law(StripDrawParameters(friction_model="table"), t1)
+    assert_allclose(law.mu(1e7, 1.0, 0.01)[0], t1.interpolate(1e7, 1.0, 0.01)[0])
+    assert law.beta_cap(1e7, 1.0) == t1.beta_threshold
+    for bad in ({"contact_area": "eq8"}, {"particle_area_scale": 2.0}):
+        with pytest.raises(ParameterError, match="needs a friction table of format version 2"):
+            make_friction_law(StripDrawParameters(friction_model="table", **bad), t1)
+
+
+def test_closed_form_without_a_velocity_law_uses_alpha_b_and_its_cap():
+    p = StripDrawParameters(friction_model="closed_form")  # defaults: alpha = 63.37 at every velocity
+    law = make_friction_law(p)
+    assert p.alpha_v_ref == 0 and law.alpha(0.08) == law.alpha(50.0) == p.alpha_b
+    assert law.beta_threshold == pytest.approx(2.0 / (63.37 * 0.34))
+    assert_allclose(law.mu(1e7, 0.08, 0.01)[0], 0.15 * (1 - 63.37 * 0.01 * 0.34 / 2.0))
+
+
+def test_closed_form_default_alpha_is_the_shipped_campaigns_at_its_slowest_velocity():
+    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.components.stripdraw.table import read_table
+
+    fit = read_table(DEFAULT_TABLE).metadata["fits"]["alpha_per_velocity"][0]
+    assert fit["velocity"] == min(a["velocity"] for a in read_table(DEFAULT_TABLE).metadata["fits"]["alpha_per_velocity"])
+    assert StripDrawParameters().alpha_b == pytest.approx(fit["alpha"], abs=0.005)
+
+
+def test_the_strip_caps_beta_where_the_particle_area_reaches_the_contact_area():
+    """With Eq. 8's area and Eq. 23's A_p, debris piles up to kappa / (s alpha h') and no further."""
+    from tribocosim.components.stripdraw.model import StripDrawModel
+
+    p = StripDrawParameters(friction_model="table", contact_area="eq8", alpha_b=40.0, alpha_v_ref=0.0,
+                            archard_k=5e-3, draw_length=0.01, n_elements=60, particle_area_scale=2.0)
+    table = closed_form_table(p)
+    model = StripDrawModel(p, make_friction_law(p, table))
+    cap = 2.0 / (2.0 * 40.0 * 0.34)
+    for k in range(120):
+        out = model.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 10)})
+    assert out["beta_max"] == pytest.approx(cap, rel=1e-12), "saturated at the cap"
+    assert model.beta_removed > 0
+    assert out["mu_mean"] < 0.01, "where A_p = A_c the particles carry all the contact: mu -> 0"

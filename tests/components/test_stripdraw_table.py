@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import TableDomainError, TableError
+from tribocosim.components.errors import ParameterError, TableDomainError, TableError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
@@ -128,3 +128,40 @@ def test_make_table_writes_the_closed_form_but_never_over_the_shipped_table(tmp_
     written = read_table(out)
     assert written.provenance == "closed_form"
     assert_allclose(written.mu, closed_form_table(StripDrawParameters()).mu, rtol=0, atol=0)
+
+
+def _v2(table):
+    rng = np.random.default_rng(4)
+    areas = {name: rng.uniform(0, 1e-2, table.mu.shape) for name in
+             ("contact_area", "particle_area", "contact_area_std", "particle_area_std")}
+    return FrictionTable(table.pressure, table.velocity, table.beta, table.mu, table.metadata, **areas)
+
+
+def test_version_2_round_trip_keeps_the_areas_and_their_hash(tmp_path):
+    t = _v2(_trilinear_table())
+    path = tmp_path / "t2.npz"
+    digest = write_table(path, t)
+    back = read_table(path)
+    assert back.version == 2 and back.metadata["format_version"] == 2 and back.content_hash() == digest
+    for name in ("mu", "contact_area", "particle_area", "contact_area_std", "particle_area_std"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(t, name), err_msg=name)
+    # the areas are under the hash
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays["particle_area"] = arrays["particle_area"] * 1.001
+    np.savez(path, **arrays)
+    with pytest.raises(TableError, match="hash"):
+        read_table(path)
+
+
+def test_version_1_files_stay_readable_and_writable(tmp_path):
+    t = _trilinear_table()
+    assert t.version == 1
+    path = tmp_path / "t1.npz"
+    digest = write_table(path, t)
+    with np.load(path) as data:
+        assert set(data.files) == {"pressure", "velocity", "beta", "mu", "metadata"}
+    back = read_table(path)
+    assert back.version == 1 and back.content_hash() == digest and back.contact_area is None
+    with pytest.raises(ParameterError, match="needs all of"):
+        FrictionTable(t.pressure, t.velocity, t.beta, t.mu, t.metadata, contact_area=t.mu)

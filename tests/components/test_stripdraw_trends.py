@@ -9,7 +9,9 @@ import numpy as np
 
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
 
-BASE = dict(friction_model="closed_form", draw_length=0.06, n_elements=120, window_courant=2.0)
+#: the closed form with an alpha(v) rising with v as in the paper's Fig. 15 (b = 20, v_ref = 0.05 m/s)
+RISING = dict(alpha_b=20.0, alpha_v_ref=0.05)
+BASE = dict(friction_model="closed_form", draw_length=0.06, n_elements=120, window_courant=2.0, **RISING)
 
 
 def mu_bar(pressure=10e6, beta_field=None, **kw):
@@ -52,7 +54,7 @@ def test_friction_at_the_pulling_speed_stays_steady_where_the_slip_rate_law_stic
     1 ms steps). At the pulling speed (the paper's choice) mu(t) settles."""
     spread = {}
     for mode in ("grip", "slip_rate"):
-        p = StripDrawParameters(friction_model="closed_form", tool_length=0.07, friction_velocity=mode)
+        p = StripDrawParameters(friction_model="closed_form", tool_length=0.07, friction_velocity=mode, **RISING)
         model = StripDrawModel(p, make_friction_law(p))
         fn = 30e6 * 0.07 * 0.035
         mus = [model.step(1e-3, {"normal_force": fn, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 10)})["mu_mean"]

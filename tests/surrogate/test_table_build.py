@@ -1,4 +1,4 @@
-"""Tests of surrogate.table_build: mu = tau0 (A_c - A_p) / (P A0) on the grid from synthetic
+"""Tests of surrogate.table_build: the areas and mu = mu0 (1 - A_p / A_c) on the grid from synthetic
 campaign records, the rows below the campaign's velocities, the beta extension and threshold, the
 metadata, and the round trip through the table format (hash and version checks)."""
 
@@ -78,10 +78,13 @@ def test_axes_are_campaign_grid_plus_low_velocities_and_beta_nodes(built):
     assert t.metadata["axes"]["beta"]["extrapolated"] == pytest.approx(list(t.beta[3:]))
 
 
-def test_mu_on_campaign_nodes_is_tau0_times_ac_minus_ap_over_p(built):
+def test_campaign_nodes_hold_the_member_areas_and_mu_from_them(built):
+    """Version 2: the ensemble means and member stds of A_c/A0 and A_p/A0 of every campaign node, and
+    mu = mu0 (1 - <A_p> / <A_c>) (Eq. 7 with tau0 set by mu0): mu0 exactly where there is no debris."""
     _, records, t, fits = built
-    tau0 = 0.15 / fits.contact.slope
-    assert t.metadata["calibration"]["tau0"] == pytest.approx(tau0)
+    std = lambda x: float(np.std(x, ddof=1)) if len(x) > 1 else 0.0  # noqa: E731 - the members' spread
+    assert t.version == 2
+    assert t.metadata["calibration"]["tau0"] == pytest.approx(0.15 / fits.contact.slope)
     for i, p in enumerate(t.pressure):
         for j, v in enumerate(t.velocity):
             if v < 1.0:
@@ -89,30 +92,33 @@ def test_mu_on_campaign_nodes_is_tau0_times_ac_minus_ap_over_p(built):
             for k, b in enumerate(t.beta[:3]):
                 mem = [r["summary"] for r in records if r["labels"]["pressure"] == p
                        and r["labels"]["velocity"] == v and abs(r["labels"]["beta"] - b) <= 1e-9 * b]
-                mus = [tau0 * (m["mean_contact_fraction"] - m["mean_particle_fraction"]) / p for m in mem]
-                assert t.mu[i, j, k] == pytest.approx(np.mean(mus), rel=1e-12)
-                std = t.metadata["ensemble"]["mu_std"][i][j][k]
-                assert std == pytest.approx(np.std(mus, ddof=1) if len(mus) > 1 else 0.0, rel=1e-9, abs=1e-15)
-    # the calibration: mu at beta = 0 is mu0 up to the noise of A_c
-    assert_allclose(t.mu[:, :, 0], 0.15, rtol=0.1)
+                ap = np.array([m["mean_particle_fraction"] for m in mem])
+                ac = np.array([m["mean_contact_fraction"] for m in mem])
+                assert t.particle_area[i, j, k] == pytest.approx(ap.mean(), rel=1e-12)
+                assert t.contact_area[i, j, k] == pytest.approx(ac.mean(), rel=1e-12)
+                assert t.contact_area_std[i, j, k] == pytest.approx(std(ac), rel=1e-9, abs=1e-18)
+                assert t.mu[i, j, k] == pytest.approx(0.15 * (1 - ap.mean() / ac.mean()), rel=1e-12)
+                assert t.metadata["ensemble"]["mu_std"][i][j][k] == pytest.approx(std(0.15 * (1 - ap / ac)), rel=1e-9,
+                                                                                abs=1e-15)
+    assert_allclose(t.mu[:, :, 0], 0.15, rtol=0, atol=0)
 
 
 def test_low_velocity_rows_follow_the_fitted_alpha_law(built):
     _, records, t, fits = built
     law = fits.law
-    tau0 = t.metadata["calibration"]["tau0"]
     j_min = list(t.velocity).index(1.0)
     assert list(t.velocity[:j_min]) == [0.0, 0.08]
-    # v = 0: alpha(0) = 0, no debris effect: mu = tau0 <A_c>/(P A0) of the members at v_min
+    # v = 0: alpha(0) = 0, no debris effect: A_p = 0, A_c the members' at v_min, mu = mu0
     for i, p in enumerate(t.pressure):
         for k in (1, 2):
             ac = [r["summary"]["mean_contact_fraction"] for r in records if r["labels"]["pressure"] == p
                   and r["labels"]["velocity"] == 1.0 and abs(r["labels"]["beta"] - t.beta[k]) <= 1e-9 * t.beta[k]]
-            assert t.mu[i, 0, k] == pytest.approx(tau0 * np.mean(ac) / p, rel=1e-12)
-    # v = 0.08: A_p = A_p(v_min) alpha(v)/alpha(v_min), so mu - mu(v_min) = (1 - r) tau0 A_p(v_min)/P
+            assert t.contact_area[i, 0, k] == pytest.approx(np.mean(ac), rel=1e-12)
+            assert t.particle_area[i, 0, k] == 0.0 and t.mu[i, 0, k] == 0.15
+    # v = 0.08: A_p = A_p(v_min) alpha(v)/alpha(v_min), A_c = A_c(v_min)
     r = float(law(0.08)) / float(law(1.0))
-    x = t.mu[:, 0, :] - t.mu[:, j_min, :]  # = tau0 A_p(v_min) / P
-    assert_allclose(t.mu[:, 1, :] - t.mu[:, j_min, :], (1 - r) * x, rtol=1e-9, atol=1e-15)
+    assert_allclose(t.particle_area[:, 1, :], r * t.particle_area[:, j_min, :], rtol=1e-12, atol=0)
+    assert_allclose(t.contact_area[:, 1, :], t.contact_area[:, j_min, :], rtol=0, atol=0)
     assert 0 < r < 1
     assert t.metadata["axes"]["velocity"]["below_campaign_policy"] == "alpha_law"
 
