@@ -29,6 +29,10 @@ void tc_table_free(tc_table *table) {
     free(table->velocity);
     free(table->beta);
     free(table->mu);
+    free(table->contact_area);
+    free(table->particle_area);
+    free(table->contact_area_std);
+    free(table->particle_area_std);
     free(table);
 }
 
@@ -61,5 +65,25 @@ int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_beta, co
         return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
     }
     *out = t;
+    return TC_OK;
+}
+
+int tc_table_set_areas(tc_table *table, const double *contact_area, const double *particle_area,
+                       const double *contact_area_std, const double *particle_area_std, tc_msg msg) {
+    static const char *const names[4] = {"contact_area", "particle_area", "contact_area_std", "particle_area_std"};
+    const double *src[4] = {contact_area, particle_area, contact_area_std, particle_area_std};
+    double **dst[4] = {&table->contact_area, &table->particle_area, &table->contact_area_std, &table->particle_area_std};
+    const size_t n = table->n_pressure * table->n_velocity * table->n_beta;
+    for (int a = 0; a < 4; ++a)
+        for (size_t i = 0; i < n; ++i)
+            if (!isfinite(src[a][i]) || src[a][i] < 0)
+                return tc_fail(msg, TC_ERROR, "table %s must be finite and >= 0 everywhere", names[a]);
+    for (int a = 0; a < 4; ++a) {
+        double *copy = copy_array(src[a], n);
+        if (copy == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
+        free(*dst[a]);
+        *dst[a] = copy;
+    }
+    table->format_version = 2;
     return TC_OK;
 }

@@ -21,6 +21,9 @@ typedef struct tc_table {
     double *velocity; /* [n_velocity] */
     double *beta;     /* [n_beta] */
     double *mu;       /* [n_pressure * n_velocity * n_beta] */
+    /* format version 2 (NULL in version 1): ensemble means of A_c/A0 and A_p/A0 and their member spreads,
+     * same layout as mu */
+    double *contact_area, *particle_area, *contact_area_std, *particle_area_std;
     double beta_threshold;  /* metadata "beta_threshold": the cap of beta (Eq. 24), in (0, 1] */
     int format_version;     /* metadata "format_version" */
     char content_hash[65];  /* metadata "content_hash": SHA-256, lowercase hex */
@@ -33,8 +36,14 @@ TC_API int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_b
                                 const double *velocity, const double *beta, const double *mu,
                                 double beta_threshold, tc_table **out, tc_msg msg);
 
-/* Read and verify a table file written by table.write_table (the .npz): format name and version,
- * array shapes and values, and the content hash recomputed exactly as table.py computes it. */
+/* Attach the version 2 arrays (copied; checked finite and >= 0 as FrictionTable.__post_init__ does) and make
+ * the table version 2. */
+TC_API int tc_table_set_areas(tc_table *table, const double *contact_area, const double *particle_area,
+                              const double *contact_area_std, const double *particle_area_std, tc_msg msg);
+
+/* Read and verify a table file written by table.write_table (the .npz): format name and version (1 or 2),
+ * array shapes and values (version 2: the areas too), and the content hash recomputed exactly as table.py
+ * computes it. */
 TC_API int tc_table_read(const char *path, tc_table **out, tc_msg msg);
 
 TC_API void tc_table_free(tc_table *table);

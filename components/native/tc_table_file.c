@@ -32,7 +32,6 @@
 #include "tc_table.h"
 
 #define FORMAT_NAME "tribocosim-friction-table"
-#define FORMAT_VERSION 1
 /* a sanity bound: the shipped table is 180 kB, a 200^3 table 64 MB */
 #define MAX_FILE_SIZE ((size_t)1 << 30)
 
@@ -172,7 +171,10 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
     char detail[512], shape[128], want[128];
     tc_msg d = {detail, sizeof detail};
     detail[0] = '\0';
-    numeric arrays[4] = {{.name = "pressure"}, {.name = "velocity"}, {.name = "beta"}, {.name = "mu"}};
+    numeric arrays[8] = {{.name = "pressure"},     {.name = "velocity"},      {.name = "beta"},
+                         {.name = "mu"},           {.name = "contact_area"},  {.name = "particle_area"},
+                         {.name = "contact_area_std"}, {.name = "particle_area_std"}};
+    int version = 1, n_arrays = 4; /* version 2 adds the four areas */
     char *text = NULL, *hashed = NULL;
     size_t text_n = 0, hashed_n = 0;
     tc_table *table = NULL;
@@ -188,18 +190,22 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
     /* 3. format and version; like Python's ==, 1.0 and true equal 1 */
     {
         tc_json_value format = tc_json_member(text, text_n, "format");
-        tc_json_value version = tc_json_member(text, text_n, "format_version");
+        tc_json_value vvalue = tc_json_member(text, text_n, "format_version");
         double v;
-        if (!tc_json_string_equals(text, format, FORMAT_NAME) || !tc_json_number(text, version, &v) ||
-            v != FORMAT_VERSION) {
+        if (!tc_json_string_equals(text, format, FORMAT_NAME) || !tc_json_number(text, vvalue, &v) ||
+            (v != 1 && v != 2)) {
             char f[128], vr[80];
             tc_json_repr(text, format, f, sizeof f);
-            tc_json_repr(text, version, vr, sizeof vr);
+            tc_json_repr(text, vvalue, vr, sizeof vr);
             rc = tc_fail(msg, TC_ERROR,
-                         "friction table %s has format %s version %s; this version reads '%s' version %d", path, f,
-                         vr, FORMAT_NAME, FORMAT_VERSION);
+                         "friction table %s has format %s version %s; this version reads '%s' versions 1 and 2", path,
+                         f, vr, FORMAT_NAME);
             goto done;
         }
+        version = (int)v;
+        n_arrays = version == 2 ? 8 : 4;
+        for (int k = 4; k < n_arrays; ++k)
+            if ((rc = load_numeric(&zip, &arrays[k], d)) != TC_OK) goto malformed;
     }
 
     /* 4. shapes, then the value checks of FrictionTable.__post_init__ */
@@ -211,13 +217,16 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
             goto malformed;
         }
     const numeric *mu = &arrays[3];
-    if (mu->npy.ndim != 3 || mu->npy.shape[0] != arrays[0].count || mu->npy.shape[1] != arrays[1].count ||
-        mu->npy.shape[2] != arrays[2].count) {
-        tc_npy_shape_repr(&mu->npy, shape, sizeof shape);
-        snprintf(want, sizeof want, "(%llu, %llu, %llu)", (unsigned long long)arrays[0].count,
-                 (unsigned long long)arrays[1].count, (unsigned long long)arrays[2].count);
-        rc = tc_fail(d, TC_ERROR, "table mu has shape %s; the axes need %s", shape, want);
-        goto malformed;
+    for (int k = 3; k < n_arrays; ++k) {
+        const numeric *a = &arrays[k];
+        if (a->npy.ndim != 3 || a->npy.shape[0] != arrays[0].count || a->npy.shape[1] != arrays[1].count ||
+            a->npy.shape[2] != arrays[2].count) {
+            tc_npy_shape_repr(&a->npy, shape, sizeof shape);
+            snprintf(want, sizeof want, "(%llu, %llu, %llu)", (unsigned long long)arrays[0].count,
+                     (unsigned long long)arrays[1].count, (unsigned long long)arrays[2].count);
+            rc = tc_fail(d, TC_ERROR, "table %s has shape %s; the axes need %s", a->name, shape, want);
+            goto malformed;
+        }
     }
     {
         tc_json_value bt_value = tc_json_member(text, text_n, "beta_threshold");
@@ -227,6 +236,8 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
          * with Python's message (its value as repr prints it) */
         rc = tc_table_from_arrays(arrays[0].count, arrays[1].count, arrays[2].count, arrays[0].values,
                                   arrays[1].values, arrays[2].values, mu->values, bt_ok ? bt : 1.0, &table, d);
+        if (rc == TC_OK && version == 2)
+            rc = tc_table_set_areas(table, arrays[4].values, arrays[5].values, arrays[6].values, arrays[7].values, d);
         if (rc != TC_OK) goto malformed;
         if (!bt_ok) {
             char r[80];
@@ -254,9 +265,9 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
         char hex[65];
         char head[64];
         tc_sha256_init(&h);
-        snprintf(head, sizeof head, "%s:%d", FORMAT_NAME, FORMAT_VERSION);
+        snprintf(head, sizeof head, "%s:%d", FORMAT_NAME, version);
         hash_text(&h, head);
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < n_arrays; ++k) {
             hash_text(&h, arrays[k].name);
             tc_npy_shape_repr(&arrays[k].npy, shape, sizeof shape);
             hash_text(&h, shape);
@@ -271,7 +282,7 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
         }
         memcpy(table->content_hash, hex, sizeof hex);
     }
-    table->format_version = FORMAT_VERSION;
+    table->format_version = version;
     {
         /* str(metadata.get("provenance", "unknown")), cut to the struct's 31 bytes */
         tc_json_value p = tc_json_member(text, text_n, "provenance");
@@ -288,7 +299,7 @@ malformed:
     if (rc == TC_NOMEM) rc = tc_fail(msg, TC_NOMEM, "friction table %s cannot be read: %s", path, detail);
     else rc = tc_fail(msg, TC_ERROR, "friction table %s is malformed: %s", path, detail);
 done:
-    for (int k = 0; k < 4; ++k) free(arrays[k].values);
+    for (int k = 0; k < 8; ++k) free(arrays[k].values);
     free(text);
     free(hashed);
     free(data);

@@ -25,7 +25,7 @@ from tribocosim.components.errors import TableError
 from tribocosim.components.native import toolchain
 from tribocosim.components.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import closed_form_table
-from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
+from tribocosim.components.stripdraw.table import AREAS, FrictionTable, read_table, write_table
 
 SOURCES = ("tc_common.c", "tc_table.c", "tc_table_file.c", "tc_sha256.c", "tc_npz.c", "tc_json.c")
 TC_OK, TC_ERROR, TC_NOMEM = 0, 2, 3
@@ -41,6 +41,7 @@ class _Table(ctypes.Structure):
     _fields_ = [("n_pressure", ctypes.c_size_t), ("n_velocity", ctypes.c_size_t), ("n_beta", ctypes.c_size_t),
                 ("pressure", ctypes.POINTER(ctypes.c_double)), ("velocity", ctypes.POINTER(ctypes.c_double)),
                 ("beta", ctypes.POINTER(ctypes.c_double)), ("mu", ctypes.POINTER(ctypes.c_double)),
+                *[(a, ctypes.POINTER(ctypes.c_double)) for a in AREAS],
                 ("beta_threshold", ctypes.c_double), ("format_version", ctypes.c_int),
                 ("content_hash", ctypes.c_char * 65), ("provenance", ctypes.c_char * 32)]
 
@@ -83,8 +84,11 @@ def c_read(lib, path):
     t = ptr.contents
     sizes = {"pressure": t.n_pressure, "velocity": t.n_velocity, "beta": t.n_beta}
     out = {name: np.ctypeslib.as_array(getattr(t, name), (n,)).copy() for name, n in sizes.items()}
-    out["mu"] = np.ctypeslib.as_array(t.mu, (t.n_pressure * t.n_velocity * t.n_beta,)).copy().reshape(
-        t.n_pressure, t.n_velocity, t.n_beta)
+    shape = (t.n_pressure, t.n_velocity, t.n_beta)
+    for name in ("mu", *(AREAS if t.format_version == 2 else ())):
+        out[name] = np.ctypeslib.as_array(getattr(t, name), (int(np.prod(shape)),)).copy().reshape(shape)
+    if t.format_version != 2:
+        assert not any(getattr(t, a) for a in AREAS), "a version 1 table must leave the areas NULL"
     out.update(beta_threshold=t.beta_threshold, format_version=t.format_version,
                content_hash=t.content_hash.decode(), provenance=t.provenance.decode())
     lib.tc_table_free(ptr)
@@ -93,14 +97,14 @@ def c_read(lib, path):
 
 def same_as_python(c_table: dict, table: FrictionTable) -> list[str]:
     """What differs between the C reading and read_table's (bit for bit for the arrays)."""
-    bad = [name for name in ("pressure", "velocity", "beta", "mu")
-           if c_table[name].shape != getattr(table, name).shape
+    bad = [name for name in ("pressure", "velocity", "beta", *table.arrays())
+           if name not in c_table or c_table[name].shape != getattr(table, name).shape
            or not np.array_equal(c_table[name].view(np.uint64), getattr(table, name).view(np.uint64))]
     if c_table["beta_threshold"] != table.beta_threshold:
         bad.append("beta_threshold")
     if c_table["provenance"] != table.provenance[:31]:
         bad.append("provenance")
-    if c_table["content_hash"] != table.metadata["content_hash"] or c_table["format_version"] != 1:
+    if c_table["content_hash"] != table.metadata["content_hash"] or c_table["format_version"] != table.version:
         bad.append("content_hash")
     return bad
 
@@ -151,28 +155,39 @@ def _rewrite(src, dst, change) -> Path:
 # ---- reading ---------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("which", ["shipped", "closed_form"])
-def test_reads_tables_exactly_as_read_table(table_file_lib, closed_form_file, which):
-    path = DEFAULT_TABLE if which == "shipped" else closed_form_file
+@pytest.fixture(scope="module")
+def version1_file(table_file_dir) -> Path:
+    """A version 1 table (mu only): the closed form's, without its areas."""
+    base = closed_form_table()
+    path = table_file_dir / "version1.npz"
+    write_table(path, FrictionTable(base.pressure, base.velocity, base.beta, base.mu, dict(base.metadata)))
+    return path
+
+
+@pytest.mark.parametrize("which", ["shipped", "closed_form", "version1"])
+def test_reads_tables_exactly_as_read_table(table_file_lib, closed_form_file, version1_file, which):
+    path = {"shipped": DEFAULT_TABLE, "closed_form": closed_form_file, "version1": version1_file}[which]
     rc, msg, table = c_read(table_file_lib, path)
     assert rc == TC_OK, msg
     reference = read_table(path)
     assert same_as_python(table, reference) == []
     assert table["content_hash"] == reference.content_hash()
+    if which != "shipped":
+        assert table["format_version"] == (1 if which == "version1" else 2)
     assert table["provenance"] == ("mesoscale" if which == "shipped" else "closed_form")
 
 
 @pytest.mark.parametrize("key, value",
-                         [("format_version", 1.0), ("beta_threshold", " 0.25 "), ("beta_threshold", True)])
+                         [("format_version", 2.0), ("beta_threshold", " 0.25 "), ("beta_threshold", True)])
 def test_metadata_values_compare_like_python(table_file_lib, table_file_dir, closed_form_file, key, value):
-    """read_table's ``format_version != 1`` takes 1.0 for 1, and ``float(beta_threshold)`` reads a numeric string
+    """read_table's ``format_version in (1, 2)`` takes 2.0 for 2, and ``float(beta_threshold)`` reads a numeric string
     or a bool: files so written (with their hash) are read by both readers alike."""
     arrays = _arrays(closed_form_file)
     meta = json.loads(str(arrays["metadata"]))
     meta.pop("content_hash")
     meta[key] = value
     meta["content_hash"] = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"],
-                                         meta).content_hash()
+                                         meta, **{a: arrays[a] for a in AREAS}).content_hash()
     arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
     path = table_file_dir / f"{key}_{type(value).__name__}.npz"
     np.savez(path, **arrays)
@@ -189,7 +204,20 @@ def _wrong_name(arrays, meta):
 
 
 def _wrong_version(arrays, meta):
-    meta["format_version"] = 2
+    meta["format_version"] = 3
+
+
+def _area_missing(arrays, meta):
+    del arrays["particle_area_std"]
+
+
+def _area_wrong_shape(arrays, meta):
+    arrays["contact_area"] = arrays["contact_area"][:, :, :-1].copy()
+
+
+def _area_negative(arrays, meta):
+    arrays["particle_area"] = arrays["particle_area"].copy()
+    arrays["particle_area"][0, 1, 2] = -1e-300
 
 
 def _modified_value(arrays, meta):
@@ -224,9 +252,9 @@ def _beta_threshold_missing(arrays, meta):
 REFUSALS = {
     # name: (change, part of the message); read_table refuses each of them too
     "wrong format name": (_wrong_name, "has format 'other-table' version 1; this version reads "
-                          "'tribocosim-friction-table' version 1"),
-    "wrong format version": (_wrong_version, "has format 'tribocosim-friction-table' version 2; this version "
-                             "reads 'tribocosim-friction-table' version 1"),
+                          "'tribocosim-friction-table' versions 1 and 2"),
+    "wrong format version": (_wrong_version, "has format 'tribocosim-friction-table' version 3; this version "
+                             "reads 'tribocosim-friction-table' versions 1 and 2"),
     "modified value": (_modified_value, "fails its content hash check (modified or corrupt)"),
     "modified metadata": (_modified_metadata, "fails its content hash check (modified or corrupt)"),
     "missing member": (_missing_member, "is malformed: there is no item named 'beta.npy' in the archive"),
@@ -238,10 +266,20 @@ REFUSALS = {
 }
 
 
-@pytest.mark.parametrize("case", list(REFUSALS))
-def test_refuses_a_bad_table_naming_path_and_problem(table_file_lib, table_file_dir, closed_form_file, case):
-    change, expected = REFUSALS[case]
-    path = _rewrite(closed_form_file, table_file_dir / f"bad_{case.replace(' ', '_')}.npz", change)
+VERSION2_REFUSALS = {
+    "area missing": (_area_missing, "is malformed: there is no item named 'particle_area_std.npy' in the archive"),
+    "area wrong shape": (_area_wrong_shape, "is malformed: table contact_area has shape (13, 41, 20); the axes "
+                         "need (13, 41, 21)"),
+    "area negative": (_area_negative, "is malformed: table particle_area must be finite and >= 0 everywhere"),
+}
+
+
+@pytest.mark.parametrize("case", [*REFUSALS, *VERSION2_REFUSALS])
+def test_refuses_a_bad_table_naming_path_and_problem(table_file_lib, table_file_dir, closed_form_file, version1_file,
+                                                     case):
+    change, expected = REFUSALS.get(case) or VERSION2_REFUSALS[case]
+    base = closed_form_file if case in VERSION2_REFUSALS else version1_file
+    path = _rewrite(base, table_file_dir / f"bad_{case.replace(' ', '_')}.npz", change)
     rc, msg, _ = c_read(table_file_lib, path)
     assert rc == TC_ERROR
     assert msg.startswith(f"friction table {path} ") and expected in msg, msg
@@ -281,18 +319,20 @@ def test_refuses_metadata_not_in_json_dumps_form(table_file_lib, table_file_dir,
     read_table(path)  # Python re-serialises the metadata and reads it: a difference documented in tc_json.h
 
 
-def test_allocation_failures_leak_nothing(table_file_fuzz_lib, closed_form_file):
+@pytest.mark.parametrize("which", ["closed_form", "version1"])
+def test_allocation_failures_leak_nothing(table_file_fuzz_lib, closed_form_file, version1_file, which):
     lib = _load(table_file_fuzz_lib, counting=True)
+    path = closed_form_file if which == "closed_form" else version1_file
     statuses = []
     for n in range(100):
         lib.tc_count_fail_after(n)
-        rc, msg, _ = c_read(lib, closed_form_file)
+        rc, msg, _ = c_read(lib, path)
         lib.tc_count_fail_after(-1)
         assert lib.tc_count_live() == 0, f"allocation {n} failing leaks"
         statuses.append(rc)
         if rc == TC_OK:
             break
-        assert rc == TC_NOMEM and str(closed_form_file) in msg and "memory" in msg, msg
+        assert rc == TC_NOMEM and str(path) in msg and "memory" in msg, msg
     assert statuses[-1] == TC_OK and len(statuses) > 5
 
 
@@ -542,15 +582,17 @@ def _fuzz_main(lib_path: str, workdir: str, per_file: int, seed: int, *bases: st
     print(json.dumps(summary))
 
 
-def test_fuzzed_files_are_refused_or_intact_never_crash_nor_leak(table_file_fuzz_lib, table_file_dir, closed_form_file):
-    per_file = 1250
+def test_fuzzed_files_are_refused_or_intact_never_crash_nor_leak(table_file_fuzz_lib, table_file_dir, closed_form_file,
+                                                                 version1_file):
+    per_file = 900
     workdir = table_file_dir / "fuzz"
     workdir.mkdir(exist_ok=True)
     code = ("import importlib.util, sys; spec = importlib.util.spec_from_file_location('t', sys.argv[1]); "
             "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); "
             "m._fuzz_main(sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), *sys.argv[6:])")
     t0 = time.perf_counter()
-    args = [str(table_file_fuzz_lib), str(workdir), str(per_file), "11", str(closed_form_file), str(DEFAULT_TABLE)]
+    args = [str(table_file_fuzz_lib), str(workdir), str(per_file), "11", str(closed_form_file), str(version1_file),
+            str(DEFAULT_TABLE)]
     proc = subprocess.run([sys.executable, "-c", code, __file__, *args], capture_output=True, text=True, timeout=300)
     seconds = time.perf_counter() - t0
     lines = proc.stderr.strip().splitlines() or [""]
@@ -560,7 +602,7 @@ def test_fuzzed_files_are_refused_or_intact_never_crash_nor_leak(table_file_fuzz
     print(f"fuzz: {summary['variants']} variants in {seconds:.1f} s, {summary['c_ok']} read intact, "
           f"{summary['c_refused']} refused; read_table accepted {sum(summary['python_only'].values())} of the "
           f"refused ones: {summary['python_only']}; read_table raised non-TableError: {summary['python_raised']}")
-    assert summary["variants"] == 2 * per_file
+    assert summary["variants"] == 3 * per_file
     assert summary["violations"] == []
     assert summary["c_refused"] > 0.5 * summary["variants"]
 
