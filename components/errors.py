@@ -74,6 +74,15 @@ class CosimStepError(TribocosimError):
     """A co-simulation step failed."""
 
 
+class RunFailed(CosimStepError):
+    """A co-simulation run stopped at a step it could not recover; ``result`` holds (and, when the run
+    writes files, has written) everything accepted up to that point."""
+
+    def __init__(self, message: str, result) -> None:
+        super().__init__(message)
+        self.result = result
+
+
 def check_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ``ParameterError`` if it is NaN or infinite."""
     x = float(value)

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from tribocosim.components.errors import CosimStepError, RunFailed
 from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.graph import gauss_seidel_order
 from tribocosim.cosim.master import Master
@@ -226,9 +227,12 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     if bar is not None:
         m.observers.append(bar)
     t0 = time.perf_counter()
+    failure = None
     try:
         m.initialize(ex.start, ex.stop, b.parameters)
         m.run()
+    except CosimStepError as exc:  # a step that could not be recovered: keep what was accepted
+        failure = exc
     finally:
         if bar is not None:
             bar.close()
@@ -237,6 +241,9 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
         b.close()
     meta = _metadata(b, started, total, fmu_times, calls)
+    if failure is not None:
+        meta["failure"] = {"message": str(failure), "last_accepted_time": m.grid.time(m.n),
+                           "recorded_rows": len(m.recorder.time)}
     result = Result(m.recorder.time, m.recorder.columns(), meta)
     if write:
         out = Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path)
@@ -248,6 +255,8 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
             result.metadata_path = out / f"{plan.scene.path.stem}.run.json"
         meta["outputs"]["csv"] = str(result.csv_path) if result.csv_path else None
         result.metadata_path.write_text(json.dumps(meta, indent=2, default=_json_default), encoding="utf-8")
+    if failure is not None:
+        raise RunFailed(f"{failure}; the run stopped at t = {m.grid.time(m.n):.9g} s", result) from failure
     return result
 
 

@@ -5,7 +5,9 @@ with a progress bar on stderr for runs longer than two seconds, writes the CSV a
 JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
 base scene, :mod:`tribocosim.cosim.sweep`) runs its cases in parallel processes instead.
 
-Exit codes: 0 success, 1 the run failed (FMU error, divergence), 2 the scene has problems.
+Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
+smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
+was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import logging
 import sys
 from pathlib import Path
 
-from tribocosim.components.errors import SceneError, TribocosimError
+from tribocosim.components.errors import RunFailed, SceneError, TribocosimError
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -72,6 +74,13 @@ def main(argv: list[str] | None = None) -> int:
     except SceneError as exc:
         print(f"tribocosim run: {exc}", file=sys.stderr)
         return 2
+    except RunFailed as exc:
+        r = exc.result
+        print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
+        kept = f"{len(r.time)} rows up to t = {r.time[-1]:.9g} s" if len(r.time) else "no rows"
+        where = ", ".join(str(p) for p in (r.csv_path, r.metadata_path) if p is not None)
+        print(f"tribocosim run: what was accepted is written ({kept}): {where}", file=sys.stderr)
+        return 1
     except TribocosimError as exc:
         print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
         return 1
