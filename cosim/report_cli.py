@@ -1,4 +1,4 @@
-"""``tribocosim report accuracy|stability [--quick] --out DIR [--only FAMILY ...]``.
+"""``tribocosim report accuracy|stability|paper [--quick] --out DIR [--only FAMILY ...]``.
 
 ``accuracy`` writes work-precision data (error against wall time and doStep calls) of the master on
 the two-mass oscillator and the demo scene, of the strip-draw bar integrators, of the friction table
@@ -6,7 +6,9 @@ and of the BEM solver; ``stability`` writes the matrix of stiff and extreme case
 largest stable steps. Each writes ``accuracy.md`` / ``stability.md``, one CSV and one PNG per family,
 and ``<report>.json`` (settings, timings, load, the families that were not available and why)
 into ``--out``. ``--quick`` runs small sweeps (CI: under 5 minutes on 2 cores); without it the
-full report runs (a benchmark: tens of minutes).
+full report runs (a benchmark: tens of minutes). ``paper`` writes ``paper.md`` with the paper's macro
+results against the model's for both contact-area conventions (:mod:`tribocosim.cosim.reports.paper`;
+``--table`` another friction table, ``--workers`` processes).
 """
 
 from __future__ import annotations
@@ -22,18 +24,39 @@ from pathlib import Path
 
 def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="tribocosim report", description=__doc__.splitlines()[0])
-    ap.add_argument("kind", choices=("accuracy", "stability"), help="which report")
+    ap.add_argument("kind", choices=("accuracy", "stability", "paper"), help="which report")
     ap.add_argument("--quick", action="store_true", help="small sweeps (CI mode, < 5 min on 2 cores)")
     ap.add_argument("--out", required=True, help="output folder (created)")
     ap.add_argument("--only", nargs="+", metavar="FAMILY", help="run only these families")
     ap.add_argument("--surrogate-results", help="JSON of benchmarks/bench_table.py (default: searched in docs/reports, "
                                                 "benchmarks, the working directory)")
+    ap.add_argument("--table", help="paper: the friction table (default: the shipped one)")
+    ap.add_argument("--workers", type=int, help="paper: worker processes (default: one per core)")
     ap.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     return ap
 
 
+def _paper(args) -> int:
+    from tribocosim.components.errors import TribocosimError
+    from tribocosim.cosim.reports.paper import run_report
+
+    def log(msg):
+        if not args.quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    try:
+        run_report(Path(args.out), args.table, args.quick, args.workers, log)
+    except TribocosimError as exc:
+        print(f"tribocosim report paper: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {Path(args.out) / 'paper.md'}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    if args.kind == "paper":
+        return _paper(args)
     from tribocosim.cosim.reports import markdown
     from tribocosim.cosim.reports.common import Settings, load_average
 

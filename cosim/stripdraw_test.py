@@ -35,6 +35,12 @@ class Point:
 
 def mu_bar(point: Point) -> list[float]:
     """mu_bar of every pass of ``point`` (the last one is the measured value after ``passes`` passes)."""
+    return [p["mu_bar"] for p in draw(point)]
+
+
+def draw(point: Point) -> list[dict]:
+    """Every pass of ``point``: ``mu_bar``, ``beta_max`` (the largest debris fraction on the strip at the
+    end of the pass) and ``table_clamps`` (nodal table lookups outside the table's axes in the pass)."""
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.model import StripDrawModel
 
@@ -50,17 +56,19 @@ def mu_bar(point: Point) -> list[float]:
         for k in range(n):
             v = V0 * min(1.0, (k + 0.5) * STEP / RAMP)
             mus[k] = model.step(STEP, {"normal_force": fn, "grip_velocity": v})["pull_force"] / (2.0 * fn)
-        out.append(float(mus[int((1.0 - LAST) * n):].mean()))
+        out.append({"mu_bar": float(mus[int((1.0 - LAST) * n):].mean()), "beta_max": float(model.beta.max()),
+                    "table_clamps": int(model.clamp_count)})
         beta = model.beta.copy()
     return out
 
 
-def run_points(points: list[Point], workers: int | None = None) -> list[list[float]]:
-    """:func:`mu_bar` of every point, in parallel processes (spawned; at most one per point)."""
+def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
+    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
+    per point)."""
     n = max(1, min(workers or os.cpu_count() or 1, len(points)))
     if n == 1:
-        return [mu_bar(p) for p in points]
+        return [fn(p) for p in points]
     import multiprocessing
 
     with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return list(pool.map(mu_bar, points))
+        return list(pool.map(fn, points))

@@ -18,9 +18,10 @@ A_c (``contact_area``):
     than any contact capped at p_crit (docs/model.md section 4): blocked flakes take a larger share,
     which is the regime of the paper's macro figures (Eq. 9).
 
-The cap of beta (Eq. 24) is where A_p reaches A_c: :meth:`TableFriction.beta_cap` finds it on the
+The cap of beta (Eq. 24) is where s A_p reaches A_c: :meth:`TableFriction.beta_cap` finds it on the
 table's beta axis at the interval's pressure and sliding velocity (A_p and A_c are piecewise linear
-in beta there, so the crossing is exact), limited to 1.
+in beta there, so the crossing is exact), limited to 1; the largest of these caps at the table's
+(P, v) nodes bounds beta everywhere (``beta_threshold``: the initial debris is checked against it).
 
 Laws, sharing ``mu(pressure, velocity, beta) -> (mu, clamped)`` and ``beta_cap(pressure, velocity)``:
 
@@ -36,6 +37,7 @@ Laws, sharing ``mu(pressure, velocity, beta) -> (mu, clamped)`` and ``beta_cap(p
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -44,6 +46,9 @@ import numpy as np
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable
+
+
+REACH_RTOL = 1e-12  # s A_p "reaches" A_c within this relative tolerance
 
 
 @dataclass(frozen=True)
@@ -121,10 +126,15 @@ class TableFriction:
                 "friction table of format version 2 (with the contact areas); this table is version 1 (mu only): "
                 "rebuild it with tribocosim surrogate table")
 
-    @property
+    @functools.cached_property
     def beta_threshold(self) -> float:
-        """The largest cap of beta: the table's (Eq. 24), or 1 when the convention caps it per (P, v)."""
-        return self.table.beta_threshold if self.table.version == 1 else 1.0
+        """The largest cap of beta: the table's (version 1), else the largest of the caps at the table's
+        (P, v) nodes (:meth:`beta_cap`): above it, s A_p exceeds A_c at every node."""
+        t = self.table
+        if t.version == 1:
+            return t.beta_threshold
+        return max((self._crossing(float(p), float(v)) for p in t.pressure if p > 0 for v in t.velocity),
+                   default=1.0)
 
     def contact(self, pressure, velocity, beta):
         """A_c/A0 at the query points: the table's (``mesoscale``) or Eq. 8 (``eq8``)."""
@@ -146,19 +156,24 @@ class TableFriction:
 
     def beta_cap(self, pressure: float, velocity: float) -> float:
         """Where s A_p reaches A_c along the beta axis at (P, |v|) (Eq. 24; exact: both are piecewise linear
-        in beta), limited to 1; the whole axis when A_p stays below A_c, and no cap without pressure."""
-        t = self.table
-        if t.version == 1 or not pressure > 0:
+        in beta), limited to 1; 1 when A_p stays below A_c on the whole axis; without pressure (or with a
+        version 1 table) :attr:`beta_threshold`."""
+        if self.table.version == 1 or not pressure > 0:
             return self.beta_threshold
+        return self._crossing(pressure, abs(velocity))
+
+    def _crossing(self, pressure: float, velocity: float) -> float:
+        t = self.table
         b = t.beta
-        ap, _ = t.interpolate_array(t.particle_area, pressure, abs(velocity), b, "clamp")
-        d = self.particle_area_scale * ap - self.contact(pressure, abs(velocity), b)
+        ap, _ = t.interpolate_array(t.particle_area, pressure, velocity, b, "clamp")
+        ac = self.contact(pressure, velocity, b)
+        d = self.particle_area_scale * ap - ac
         for k in range(b.size):
-            if d[k] >= 0.0:
+            if d[k] >= -REACH_RTOL * ac[k]:  # reached, up to rounding (a table tabulated to its cap)
                 if k == 0:
                     return 0.0
                 return min(1.0, float(b[k - 1] + (b[k] - b[k - 1]) * (-d[k - 1]) / (d[k] - d[k - 1])))
-        return self.beta_threshold
+        return 1.0
 
 
 def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None):
