@@ -24,12 +24,16 @@
  *   Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by an Armijo
  *   line search on the step's convex incremental potential Pi (kernels.py states Pi); a step that does not
  *   converge in 60 iterations is halved, up to 12 times;
- * - friction (Eq. 6-9, 23): constant mu_const; closed form mu = mu0 (1 - alpha(v) beta h'_rms / kappa) with
- *   alpha(v) = b (1 - exp(-|v|/v_ref)) (evaluated with expm1, as NumPy does); or the table (tc_table_mu);
- *   v is the grip speed |V0| or each node's slip rate of the last interval (friction_velocity);
+ * - friction (Eq. 6-9, 23): constant mu_const; closed form mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) with
+ *   alpha(v) = b (1 - exp(-|v|/v_ref)) (evaluated with expm1, as NumPy does) or b when v_ref = 0; or the table:
+ *   version 2, mu = mu0 (1 - s A_p / A_c) with A_p from the table and A_c from it (mesoscale) or Eq. 8,
+ *   version 1, its mu (tc_table_lookup); v is the grip speed |V0| or each node's slip rate of the last
+ *   interval (friction_velocity);
  * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
  *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
- *   tridiagonal M-matrix, Thomas algorithm), then the cap beta <= beta_thres (Eq. 24) whose removal is summed.
+ *   tridiagonal M-matrix, Thomas algorithm), then the cap beta <= beta_thres (Eq. 24) whose removal is summed;
+ *   unless beta_threshold is set, the cap of a version 2 table is where s A_p reaches A_c at the interval's
+ *   pressure and grip speed (friction.TableFriction.beta_cap).
  *
  * Coupling (model.py): a step is split into n_int = max(1, ceil(dt / h_max - 1e-9)) intervals with
  * h_max = window_courant l_e / |V0|; per interval mu is evaluated on the nodes that can reach the pad
@@ -72,7 +76,8 @@ struct tc_stripdraw {
     /* mesh (mesh.BarMesh) and constants */
     double le, half_le, a_lo, a_hi, ke, ks, wT, dt_explicit, pad_area;
     double am, af, gamma, beta_nm; /* generalized-alpha */
-    double beta_cap;
+    double beta_cap;      /* params.beta_threshold if > 0, else the law's threshold */
+    double law_threshold; /* law_beta_threshold */
     long long reach; /* ceil(window_courant) + 1 */
     double *X, *mass, *minv;
     /* state (model._ARRAYS, model._SCALARS) */
@@ -83,7 +88,7 @@ struct tc_stripdraw {
     /* derived from U: contact weights (model._w) */
     double *w;
     /* work arrays */
-    double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *bsrc, *bnew, *over, *awork;
+    double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *over, *awork;
     double *fwork;          /* explicit: nodal forces */
     double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
     unsigned char *clamped; /* table lookups flagged as clamped */
@@ -398,14 +403,78 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
  * friction laws (friction.py)
  * ------------------------------------------------------------------------------------------------- */
 
-/* beta_threshold of the law (Eq. 24): constant 1; closed form kappa / (b h'_rms) limited to 1; the table's. */
-static double law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table) {
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE) return table->beta_threshold;
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM) {
-        if (p->alpha_b <= 0) return 1.0;
-        return py_min(1.0, p->kappa / (p->alpha_b * p->rms_slope));
+#define REACH_RTOL 1e-12 /* friction.REACH_RTOL: s A_p "reaches" A_c within this relative tolerance */
+
+static const tc_msg NO_MSG = {NULL, 0}; /* for lookups under the clamp policy, which cannot fail */
+
+static int table_v2(const tc_stripdraw_params *p, const tc_table *table) {
+    return p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table->format_version >= 2;
+}
+
+/* A_c/A0 by the contact_area convention (TableFriction.contact) at one pressure for n (velocity, beta):
+ * Eq. 8, kappa P / (h'_rms E*), or the table's (clamped). */
+static void contact_area(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
+                         const double *velocity, const double *beta, double *ac) {
+    if (p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8) {
+        const double eq8 = p->kappa * pressure / (p->rms_slope * p->e_star);
+        for (size_t k = 0; k < n; ++k) ac[k] = eq8;
+        return;
+    }
+    /* the clamp policy never fails */
+    (void)tc_table_lookup(table, table->contact_area, pressure, n, velocity, beta, TC_TABLE_CLAMP, ac, NULL, NO_MSG);
+}
+
+/* TableFriction._crossing: where s A_p reaches A_c along the table's beta axis at (P, v) (both are piecewise
+ * linear in beta there, so the crossing is exact), limited to 1; 1 when A_p stays below A_c. */
+static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
+    const double *b = table->beta;
+    double d_prev = 0.0;
+    for (size_t k = 0; k < table->n_beta; ++k) {
+        double ap, ac;
+        (void)tc_table_lookup(table, table->particle_area, pressure, 1, &velocity, b + k, TC_TABLE_CLAMP, &ap, NULL,
+                              NO_MSG);
+        contact_area(p, table, pressure, 1, &velocity, b + k, &ac);
+        const double d = p->particle_area_scale * ap - ac;
+        if (d >= -REACH_RTOL * ac) {
+            if (k == 0) return 0.0;
+            return py_min(1.0, b[k - 1] + (b[k] - b[k - 1]) * (-d_prev) / (d - d_prev));
+        }
+        d_prev = d;
     }
     return 1.0;
+}
+
+/* beta_threshold of the law (Eq. 24): constant 1; closed form kappa / (s b h'_rms) limited to 1; a version 1
+ * table's metadata; a version 2 table's largest crossing over its (P > 0, v) nodes. */
+static double law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table) {
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE) {
+        if (!table_v2(p, table)) return table->beta_threshold;
+        double top = 1.0;
+        int first = 1;
+        for (size_t i = 0; i < table->n_pressure; ++i) {
+            if (!(table->pressure[i] > 0)) continue;
+            for (size_t j = 0; j < table->n_velocity; ++j) {
+                const double c = crossing(p, table, table->pressure[i], table->velocity[j]);
+                top = first ? c : py_max(top, c);
+                first = 0;
+            }
+        }
+        return top;
+    }
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM) {
+        const double top = p->particle_area_scale * p->alpha_b * p->rms_slope;
+        if (top <= 0) return 1.0;
+        return py_min(1.0, p->kappa / top);
+    }
+    return 1.0;
+}
+
+/* law.beta_cap(P, |V0|): a version 2 table's crossing at the interval's pressure and speed (the threshold
+ * without pressure); every other law's threshold. */
+static double law_beta_cap(const tc_stripdraw *m, double pressure, double speed) {
+    if (m->table != NULL && table_v2(&m->p, m->table) && pressure > 0)
+        return crossing(&m->p, m->table, pressure, speed);
+    return m->law_threshold;
 }
 
 /* mu of the nodes lo..lo+cnt-1 at pressure P (law.mu with the velocity model.py passes), flags of clamped
@@ -424,8 +493,9 @@ static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t
     case TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM:
         for (size_t k = 0; k < cnt; ++k) {
             const double v = grip ? fabs(vg) : m->slip_rate[lo + k];
-            const double alpha = p->alpha_b * -expm1(-fabs(v) / p->alpha_v_ref); /* Eq. 23 */
-            m->mu[k] = p->mu0 * (1.0 - alpha * b[k] * p->rms_slope / p->kappa); /* Eq. 9 */
+            const double alpha = p->alpha_v_ref == 0 ? p->alpha_b
+                                                     : p->alpha_b * -expm1(-fabs(v) / p->alpha_v_ref); /* Eq. 23 */
+            m->mu[k] = p->mu0 * (1.0 - p->particle_area_scale * alpha * b[k] * p->rms_slope / p->kappa); /* Eq. 9 */
             m->clamped[k] = 0;
         }
         return TC_OK;
@@ -435,7 +505,19 @@ static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t
             for (size_t k = 0; k < cnt; ++k) m->vel[k] = fabs(vg);
             v = m->vel;
         }
-        return tc_table_mu(m->table, pressure, cnt, v, b, p->table_policy, m->mu, m->clamped, msg);
+        if (!table_v2(p, m->table))
+            return tc_table_mu(m->table, pressure, cnt, v, b, p->table_policy, m->mu, m->clamped, msg);
+        /* mu = mu0 (1 - s A_p / A_c), Eq. 7 with Eq. 6 */
+        int rc = tc_table_lookup(m->table, m->table->particle_area, pressure, cnt, v, b, p->table_policy, m->mu,
+                                 m->clamped, msg);
+        if (rc != TC_OK) return rc;
+        contact_area(p, m->table, pressure, cnt, v, b, m->ac);
+        for (size_t k = 0; k < cnt; ++k) {
+            const double share = m->ac[k] > 0 ? p->particle_area_scale * m->mu[k] / m->ac[k] : 0.0;
+            const double rest = 1.0 - share;
+            m->mu[k] = p->mu0 * (rest < 0.0 ? 0.0 : rest); /* np.maximum(0.0, rest) */
+        }
+        return TC_OK;
     }
     }
 }
@@ -532,7 +614,7 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
     for (size_t i = 0; i < n; ++i) m->bsrc[i] = m->beta[i] + kp * fabs(m->dU[i]) * m->weight[i] / hh;
     tc_sd_advect(n, m->bsrc, m->dU, m->weight, p->zeta, m->le, m->bnew, m->awork);
-    const double cap = m->beta_cap;
+    const double cap = p->beta_threshold > 0 ? m->beta_cap : py_min(m->beta_cap, law_beta_cap(m, pressure, fabs(vg)));
     for (size_t i = 0; i < n; ++i) {
         const double d = m->bnew[i] - cap;
         m->over[i] = d < 0.0 ? 0.0 : d;                     /* np.maximum(new - cap, 0.0) */
@@ -673,6 +755,9 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     if (p->table_policy < 0 || p->table_policy > 1)
         return tc_fail(msg, TC_ERROR, "table_policy = %d is not allowed; choose 0 (clamp) or 1 (error)",
                        p->table_policy);
+    if (p->contact_area < 0 || p->contact_area > 1)
+        return tc_fail(msg, TC_ERROR, "contact_area = %d is not allowed; choose 0 (mesoscale) or 1 (eq8)",
+                       p->contact_area);
     if (p->integrator < 0 || p->integrator > 1)
         return tc_fail(msg, TC_ERROR, "integrator = %d is not allowed; choose 0 (explicit) or 1 (implicit)",
                        p->integrator);
@@ -681,7 +766,16 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table == NULL)
         return tc_fail(msg, TC_ERROR, "friction_model = 'table' needs a friction table; none was given");
     const size_t n = (size_t)p->n_elements + 1;
-    const double cap = p->beta_threshold > 0 ? p->beta_threshold : law_beta_threshold(p, table);
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table->format_version < 2 &&
+        (p->contact_area != TC_STRIPDRAW_CONTACT_AREA_MESOSCALE || p->particle_area_scale != 1.0))
+        return tc_fail(msg, TC_ERROR,
+                       "contact_area = '%s' with particle_area_scale = %s needs a friction table of format version 2 "
+                       "(with the contact areas); this table is version 1 (mu only): rebuild it with tribocosim "
+                       "surrogate table",
+                       p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8 ? "eq8" : "mesoscale",
+                       tc_repr_double(p->particle_area_scale, r1));
+    const double law_threshold = law_beta_threshold(p, table);
+    const double cap = p->beta_threshold > 0 ? p->beta_threshold : law_threshold;
     if (beta_field != NULL) {
         int ok = n_beta == n;
         for (size_t i = 0; ok && i < n; ++i) ok = isfinite(beta_field[i]) && !(beta_field[i] < 0);
@@ -703,9 +797,9 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     tc_stripdraw *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
     const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
-    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, work 10, advection 5, then the
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, work 11, advection 5, then the
      * explicit forces (1) or the generalized-alpha work (15) and the overlaps of each halving level (13) */
-    const size_t n_arrays = 3 + 7 + 1 + 10 + 5 + (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 : 1);
+    const size_t n_arrays = 3 + 7 + 1 + 11 + 5 + (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 : 1);
     m->state_size = state_size(n);
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
     m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
@@ -716,7 +810,8 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     double *q = m->pool;
     double **arrays[] = {&m->X,    &m->mass, &m->minv,      &m->U,  &m->V,      &m->A,      &m->Up,
                          &m->beta, &m->slip_rate, &m->fprev, &m->w,  &m->tmax,   &m->U0,     &m->w0,
-                         &m->dU,   &m->weight,    &m->vel,   &m->mu, &m->bsrc,   &m->bnew,   &m->over};
+                         &m->dU,   &m->weight,    &m->vel,   &m->mu, &m->ac,     &m->bsrc,   &m->bnew,
+                         &m->over};
     for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
     m->awork = q;
     q += 5 * n;
@@ -735,6 +830,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
     m->n = n;
     m->beta_cap = cap;
+    m->law_threshold = law_threshold;
     /* mesh.BarMesh.build */
     const double length = LEAD_LENGTH + p->draw_length + p->tool_length + p->free_length;
     const double le = length / (double)p->n_elements;

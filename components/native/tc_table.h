@@ -55,4 +55,10 @@ TC_API void tc_table_free(tc_table *table);
 TC_API int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity,
                        const double *beta, int policy, double *mu, unsigned char *clamped, tc_msg msg);
 
+/* The same lookup in any array of the table with its layout (mu, or an area array of a version 2 table):
+ * FrictionTable.interpolate_array with a scalar pressure, bit for bit. */
+TC_API int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n,
+                           const double *velocity, const double *beta, int policy, double *out,
+                           unsigned char *clamped, tc_msg msg);
+
 #endif

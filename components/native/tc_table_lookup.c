@@ -1,5 +1,6 @@
-/* Trilinear lookup mu(P, v, beta) in a friction table (FrictionTable.interpolate with a scalar pressure,
- * the path the strip-draw model uses; stripdraw/table.py).
+/* Trilinear lookup of mu(P, v, beta), or of an area array of a version 2 table, in a friction table
+ * (FrictionTable.interpolate_array with a scalar pressure, the path the strip-draw model uses;
+ * stripdraw/table.py).
  *
  * Each axis is located as FrictionTable._locate does: the query is clamped to [axis_0, axis_last], the
  * cell index is i = min(searchsorted(axis, q, "right") - 1, n - 2) and the local coordinate
@@ -58,8 +59,8 @@ static int domain_error(const char *name, const char *unit, double bad, const do
                    tc_repr_double(bad, r), unit, axis[0], axis[n - 1], unit);
 }
 
-int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity, const double *beta,
-                int policy, double *mu, unsigned char *clamped, tc_msg msg) {
+int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n, const double *velocity,
+                    const double *beta, int policy, double *out, unsigned char *clamped, tc_msg msg) {
     if (policy != TC_TABLE_CLAMP && policy != TC_TABLE_ERROR)
         return tc_fail(msg, TC_ERROR, "table policy = %d is not allowed; choose clamp (%d) or error (%d)", policy,
                        TC_TABLE_CLAMP, TC_TABLE_ERROR);
@@ -78,8 +79,8 @@ int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *
     double tp, tv, tb;
     locate(table->pressure, nP, pressure, &ip, &tp);
     const size_t sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
-    const double *m0 = table->mu + ip * nv * nb;                  /* mu[ip] */
-    const double *m1 = nP > 1 ? table->mu + (ip + 1) * nv * nb : NULL; /* mu[ip + 1] */
+    const double *m0 = values + ip * nv * nb;                  /* values[ip] */
+    const double *m1 = nP > 1 ? values + (ip + 1) * nv * nb : NULL; /* values[ip + 1] */
     for (size_t k = 0; k < n; ++k) {
         const double v = fabs(velocity[k]), b = beta[k];
         locate(table->velocity, nv, v, &iv, &tv);
@@ -98,9 +99,14 @@ int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *
             p10 = (1.0 - tp) * m0[c10] + tp * m1[c10];
             p11 = (1.0 - tp) * m0[c11] + tp * m1[c11];
         }
-        mu[k] = (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
+        out[k] = (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
         if (clamped != NULL)
             clamped[k] = (unsigned char)(outp || outside(table->velocity, nv, v) || outside(table->beta, nb, b));
     }
     return TC_OK;
+}
+
+int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity, const double *beta,
+                int policy, double *mu, unsigned char *clamped, tc_msg msg) {
+    return tc_table_lookup(table, table->mu, pressure, n, velocity, beta, policy, mu, clamped, msg);
 }

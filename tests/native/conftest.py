@@ -112,6 +112,7 @@ class Core:
         proto = {
             "tc_table_from_arrays": (_int, [_size, _size, _size, _dbl_p, _dbl_p, _dbl_p, _dbl_p, _dbl,
                                             ctypes.POINTER(_vp), Msg]),
+            "tc_table_set_areas": (_int, [_vp, _dbl_p, _dbl_p, _dbl_p, _dbl_p, Msg]),
             "tc_table_free": (None, [_vp]),
             "tc_table_mu": (_int, [_vp, _dbl, _size, _dbl_p, _dbl_p, _int, _dbl_p, _ubyte_p, Msg]),
             "tc_stripdraw_create": (_int, [ctypes.POINTER(self.StripDrawParams), _vp, _dbl_p, _size,
@@ -190,7 +191,8 @@ class Core:
 
 
 class NativeTable:
-    """A ``tc_table`` built with tc_table_from_arrays from a FrictionTable."""
+    """A ``tc_table`` built with tc_table_from_arrays from a FrictionTable (and tc_table_set_areas for a
+    version 2 table)."""
 
     def __init__(self, core: Core, table):
         self.core = core
@@ -201,6 +203,11 @@ class NativeTable:
         core.check(core.lib.tc_table_from_arrays(p.size, v.size, b.size, _ptr(p), _ptr(v), _ptr(b), _ptr(mu),
                                                  table.beta_threshold, ctypes.byref(handle), core.msg()))
         self.handle = handle
+        if table.version == 2:
+            areas = [np.ascontiguousarray(getattr(table, name), dtype=float)
+                     for name in ("contact_area", "particle_area", "contact_area_std", "particle_area_std")]
+            self.arrays += areas
+            core.check(core.lib.tc_table_set_areas(handle, *(_ptr(a) for a in areas), core.msg()))
 
     def mu(self, pressure: float, velocity, beta, policy: int):
         """tc_table_mu -> (mu, clamped); raises NativeError with the C message."""

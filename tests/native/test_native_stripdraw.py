@@ -10,6 +10,7 @@ the acceptance bar of the native code is 1e-9.
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import math
 
 import numpy as np
@@ -20,7 +21,7 @@ from tribocosim.components.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw import kernels
 from tribocosim.components.stripdraw import model as sdmodel
 from tribocosim.components.stripdraw import transport
-from tribocosim.components.stripdraw.friction import make_friction_law
+from tribocosim.components.stripdraw.friction import closed_form_law, closed_form_table, make_friction_law
 from tribocosim.components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable, read_table
@@ -372,7 +373,7 @@ def test_creation_checks_like_python(native_core, table):
         native_core.stripdraw(StripDrawParameters())
     assert nexc.value.message == str(exc.value)
     # a field that is accepted starts the run
-    field = np.linspace(0.0, 0.2, n)
+    field = np.linspace(0.0, 0.9 * make_friction_law(p).beta_threshold, n)
     py, nat = _pair(native_core, p, None, field)
     a, b = _run_both(py, nat, [(1e-3, F_N, 0.08)] * 5)
     _assert_agree(a, b, py, nat, "beta_field")
@@ -494,3 +495,71 @@ def test_fields_window_and_time_match_python(native_core, table):
     inside = fields["contact"][(x > lo + py.mesh.element_length) & (x < hi - py.mesh.element_length)]
     np.testing.assert_allclose(inside, 1.0, rtol=1e-9)
     assert np.all(fields["contact"][(x < lo - py.mesh.element_length) | (x > hi + py.mesh.element_length)] == 0.0)
+
+
+# ------------------------------------------------------------------------------------------------------
+# friction from areas (format version 2): mu = mu0 (1 - s A_p / A_c), the cap where s A_p reaches A_c
+# ------------------------------------------------------------------------------------------------------
+def _areas_table():
+    """A version 2 table from the closed form with a velocity-dependent alpha (v_ref = 50 mm/s), speeds from
+    30 mm/s (alpha = 0.45 b) and a beta axis to five times the closed form's cap, so that the caps
+    s A_p = A_c fall inside the axis and move with the grip speed."""
+    base = StripDrawParameters(alpha_v_ref=0.05)
+    cap = closed_form_law(base).beta_threshold
+    return closed_form_table(base, velocity=np.geomspace(0.03, 3.0, 9), beta=np.linspace(0.0, 5.0 * cap, 21))
+
+
+@pytest.mark.parametrize("contact_area,scale,velocity", [("mesoscale", 1.0, "grip"), ("eq8", 1.6, "grip"),
+                                                         ("mesoscale", 0.7, "slip_rate"), ("eq8", 1.0, "slip_rate")])
+def test_version2_table_law_and_speed_dependent_cap_match_python(native_core, contact_area, scale, velocity):
+    """Both A_c conventions and A_p scales, with enough wear that beta runs into the cap of each interval."""
+    v2 = _areas_table()
+    p = StripDrawParameters(friction_model="table", contact_area=contact_area, particle_area_scale=scale,
+                            friction_velocity=velocity, draw_length=0.03, n_elements=150, archard_k=0.05)
+    py, nat = _pair(native_core, p, v2)
+    a, b = _run_both(py, nat, _pressure_ramp_reversing(200, 1e-3, 0.1))
+    _assert_agree(a, b, py, nat, f"version 2 table, {contact_area}, s = {scale}, {velocity}")
+    assert py.beta_removed > 0, "the run never reached the cap"
+    assert 0 < py.law.beta_threshold < 1
+
+
+@pytest.mark.parametrize("contact_area,scale", [("mesoscale", 1.0), ("eq8", 2.5), ("mesoscale", 0.8)])
+def test_version2_threshold_is_pythons_to_the_bit(native_core, contact_area, scale):
+    """The largest node cap (TableFriction.beta_threshold): an initial beta equal to it starts in both models,
+    the next float above it is refused by both with the same message."""
+    v2 = _areas_table()
+    p = StripDrawParameters(friction_model="table", contact_area=contact_area, particle_area_scale=scale,
+                            n_elements=40)
+    top = make_friction_law(p, v2).beta_threshold
+    assert 0 < top < 1, "the largest cap lies inside the beta axis"
+    _pair(native_core, p.replace(beta_initial=top), v2)
+    over = p.replace(beta_initial=float(np.nextafter(top, 2.0)))
+    with pytest.raises(ParameterError) as exc:
+        StripDrawModel(over, make_friction_law(over, v2))
+    with pytest.raises(native_core.NativeError) as nexc:
+        native_core.stripdraw(over, v2)
+    assert nexc.value.message == str(exc.value)
+
+
+def test_version1_table_refuses_what_needs_the_areas_like_python(native_core):
+    v1 = dataclasses.replace(_areas_table(), contact_area=None, particle_area=None, contact_area_std=None,
+                             particle_area_std=None)
+    assert v1.version == 1
+    for kw in ({"contact_area": "eq8"}, {"particle_area_scale": 1.5}):
+        p = StripDrawParameters(friction_model="table", n_elements=40, **kw)
+        with pytest.raises(ParameterError) as exc:
+            make_friction_law(p, v1)
+        with pytest.raises(native_core.NativeError) as nexc:
+            native_core.stripdraw(p, v1)
+        assert nexc.value.status == TC_ERROR
+        assert nexc.value.message == str(exc.value)
+
+
+@pytest.mark.parametrize("v_ref,scale", [(0.0, 1.0), (0.0, 0.5), (0.05, 1.3)])
+def test_closed_form_with_and_without_a_velocity_law_matches_python(native_core, v_ref, scale):
+    p = StripDrawParameters(friction_model="closed_form", friction_velocity="slip_rate", alpha_v_ref=v_ref,
+                            particle_area_scale=scale, draw_length=0.03, n_elements=150, archard_k=0.05)
+    py, nat = _pair(native_core, p)
+    a, b = _run_both(py, nat, _pressure_ramp_reversing(150, 1e-3, 0.1))
+    _assert_agree(a, b, py, nat, f"closed form, v_ref = {v_ref}, s = {scale}")
+    assert py.beta_removed > 0
