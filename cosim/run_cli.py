@@ -1,4 +1,4 @@
-"""``tribocosim run SCENE [--out DIR] [--plot]``: run a co-simulation scene.
+"""``tribocosim run SCENE [--out DIR] [--plot]``: run a co-simulation scene, or an SSP package (``RIG.ssp``).
 
 A thin layer over :func:`tribocosim.cosim.api.run`: validates the scene (all problems at once), runs it
 with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
@@ -8,6 +8,9 @@ base scene, :mod:`tribocosim.cosim.sweep`) runs its cases in parallel processes 
 Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
 smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
 was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems.
+
+An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp_import`) runs with its default experiment and
+our master; ``--set`` overrides the keys of the scene it is read as (``master.*``, ``experiment.*``, ...).
 """
 
 from __future__ import annotations
@@ -21,10 +24,12 @@ from tribocosim.components.errors import RunFailed, SceneError, TribocosimError
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="tribocosim run", description="Run a co-simulation scene (TOML).")
-    p.add_argument("scene", help="scene file (TOML), or the name of a packaged scene (e.g. demo, pressure_sweep)")
+    p = argparse.ArgumentParser(prog="tribocosim run",
+                                description="Run a co-simulation scene (TOML) or SSP package (.ssp).")
+    p.add_argument("scene", help="scene file (TOML), SSP 1.0 package (.ssp), or the name of a packaged scene "
+                                 "(e.g. demo, pressure_sweep)")
     p.add_argument("--out", type=Path, default=None,
-                   help="output folder (default: the scene's folder; ./NAME for a packaged scene); "
+                   help="output folder (default: the scene's or package's folder; ./NAME for a packaged scene); "
                         "[output] file is written there")
     p.add_argument("--plot", action="store_true", help="also write a PNG plot of the recorded variables")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -60,17 +65,22 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         args.scene = scene_file(args.scene)
-        if is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
+        if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp_import)
+            from tribocosim.cosim.ssp_import import run_ssp
+
+            result = run_ssp(args.scene, args.out, _overrides(args.set), progress=not args.quiet)
+        elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
             from tribocosim.cosim.sweep import main as sweep_main
 
             return sweep_main(args)
-        from tribocosim.cosim.reference_components import load_component_scene
+        else:
+            from tribocosim.cosim.reference_components import load_component_scene
 
-        # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
-        plan = load_component_scene(args.scene, _overrides(args.set))
-        result = run(plan, args.out, progress=not args.quiet)
+            # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
+            plan = load_component_scene(args.scene, _overrides(args.set))
+            result = run(plan, args.out, progress=not args.quiet)
     except SceneError as exc:
         print(f"tribocosim run: {exc}", file=sys.stderr)
         return 2

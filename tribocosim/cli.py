@@ -12,7 +12,8 @@ import sys
 #: subcommand -> (module providing ``main(argv)``, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("tribocosim.cosim.demo", "run the default strip-draw case and print mu_bar"),
-    "run": ("tribocosim.cosim.run_cli", "run a co-simulation scene (TOML)"),
+    "run": ("tribocosim.cosim.run_cli", "run a co-simulation scene (TOML) or SSP package (.ssp)"),
+    "ssp": ("tribocosim.cosim.ssp", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
     "report": ("tribocosim.cosim.report_cli", "error-vs-run-time, stability and paper-figure reports"),
     "calibrate": ("tribocosim.cosim.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
     "fmu": ("tribocosim.components.fmus.cli", "build the project's FMUs"),

@@ -1,0 +1,160 @@
+"""SSP 1.0 packages (System Structure and Parameterization, Modelica Association, 2019): shared names and
+the ``tribocosim ssp`` command.
+
+An SSP package is a zip with ``SystemStructure.ssd`` (the system: components, connectors,
+connections, parameter bindings, default experiment) and, under ``resources/``, the FMUs and the
+parameter sets (``.ssv``). :mod:`tribocosim.cosim.ssp_export` writes a scene as one;
+:mod:`tribocosim.cosim.ssp_import` reads one back as a scene for our master (``tribocosim run RIG.ssp``).
+
+The fixed master step is not part of SSP 1.0: it travels in the Open Simulation Platform's
+annotation of ``ssd:DefaultExperiment`` (``osp:FixedStepAlgorithm baseStepSize``), which libcosim
+reads. Our master's settings and the recorded outputs (the scene's ``[master]``, ``[[power_bonds]]``
+and ``[output]`` tables, as TOML text) travel in a ``org.tribocosim.scene`` annotation of the
+SSD, which other tools ignore.
+
+This module holds the namespaces, the small TOML writer both directions use, and ``main`` of
+``tribocosim ssp export SCENE -o RIG.ssp``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+from pathlib import Path
+
+#: the SSP 1.0 namespaces by their customary prefixes (libcosim's parser matches the prefixes literally)
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+    "ssm": "http://ssp-standard.org/SSP1/SystemStructureParameterMapping",
+    "ssb": "http://ssp-standard.org/SSP1/SystemStructureSignalDictionary",
+    "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+    "tc": "https://tribocosim.org/SSP/SceneAnnotation",
+}
+SSD_NAME = "SystemStructure.ssd"
+FMU_TYPE = "application/x-fmu-sharedlibrary"
+PARAMETER_SET_TYPE = "application/x-ssp-parameter-set"
+OSP_ANNOTATION = "com.opensimulationplatform"
+SCENE_ANNOTATION = "org.tribocosim.scene"
+#: scene tables carried in the ``org.tribocosim.scene`` annotation (the rest is in the SSD proper)
+SCENE_TABLES = ("master", "power_bonds", "output")
+
+
+def q(name: str) -> str:
+    """``"ssd:System"`` -> ``"{http://...}System"`` (ElementTree's qualified name)."""
+    prefix, local = name.split(":")
+    return f"{{{NS[prefix]}}}{local}"
+
+
+def prefixed(tag: str) -> str:
+    """``"{http://...}System"`` -> ``"ssd:System"`` (for messages); unknown namespaces as they are."""
+    for prefix, uri in NS.items():
+        if tag.startswith(f"{{{uri}}}"):
+            return f"{prefix}:{tag[len(uri) + 2:]}"
+    return tag
+
+
+# ------------------------------------------------------------------ TOML text
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def toml_text(doc: dict) -> str:
+    """A TOML document for ``doc`` (tables, arrays of tables, str/int/float/bool values and lists).
+
+    ``tomllib.loads(toml_text(doc)) == doc`` for such documents; floats are written with ``repr``,
+    so they read back bit for bit.
+    """
+    lines: list[str] = []
+    _table(lines, [], doc)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def _table(lines: list[str], path: list[str], table: dict) -> None:
+    body, subtables, arrays = [], [], []
+    for k, v in table.items():
+        if isinstance(v, dict):
+            subtables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            arrays.append((k, v))
+        else:
+            body.append(f"{_key(k)} = {_value(v)}")
+    if path and (body or not (subtables or arrays)):
+        lines += ["", f"[{'.'.join(map(_key, path))}]"]
+    lines += body
+    for k, v in subtables:
+        _table(lines, path + [k], v)
+    for k, items in arrays:
+        for item in items:
+            lines += ["", f"[[{'.'.join(map(_key, path + [k]))}]]"]
+            lines += [f"{_key(ik)} = {_value(iv)}" for ik, iv in item.items()]
+
+
+def _key(k: str) -> str:
+    return k if _BARE_KEY.match(k) else _string(k)
+
+
+def _string(s: str) -> str:
+    return json.dumps(s, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
+def _value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ("nan" if math.isnan(v) else ("inf" if v > 0 else "-inf"))
+    if isinstance(v, str):
+        return _string(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"no TOML value for {v!r} ({type(v).__name__})")
+
+
+# ------------------------------------------------------------------ command line
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="tribocosim ssp", description="SSP 1.0 packages of co-simulation scenes.")
+    sub = p.add_subparsers(dest="action", required=True)
+    ex = sub.add_parser("export", help="write a scene as an SSP package (SystemStructure.ssd + FMUs + .ssv)",
+                        description="Write a scene as an SSP 1.0 package: the system, its FMUs (from the FMU cache "
+                                    "for component = \"...\" FMUs), the parameters as .ssv parameter sets and the "
+                                    "default experiment. Run it with 'tribocosim run RIG.ssp', fmpy or libcosim.")
+    ex.add_argument("scene", help="scene file (TOML), or the name of a packaged scene (e.g. demo)")
+    ex.add_argument("-o", "--output", type=Path, default=None, help="the .ssp file (default: ./SCENE.ssp)")
+    ex.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a scene key first, e.g. --set experiment.stop=0.5 (TOML value syntax)")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``tribocosim ssp``."""
+    args = _parser().parse_args(argv)
+    from tribocosim.components.errors import SceneError, TribocosimError
+    from tribocosim.components.paths import scene_file
+    from tribocosim.cosim.run_cli import _overrides
+    from tribocosim.cosim.ssp_export import export_ssp
+
+    try:
+        scene = scene_file(args.scene)
+        out = args.output if args.output is not None else Path.cwd() / f"{scene.stem}.ssp"
+        package = export_ssp(scene, out, _overrides(args.set))
+    except SceneError as exc:
+        print(f"tribocosim ssp export: {exc}", file=sys.stderr)
+        return 2
+    except (TribocosimError, OSError) as exc:
+        print(f"tribocosim ssp export: {exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {package.path}: {len(package.components)} components ({', '.join(package.components)}), "
+          f"{package.connections} connections, {package.parameters} parameter values, "
+          f"resources {', '.join(package.resources)}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
