@@ -90,18 +90,35 @@ class Built:
 
 
 @dataclass(frozen=True)
+class ArraySize:
+    """The length of a native FMU's array outputs (FMI 3.0): the UInt64 structural parameter ``name``,
+    equal to the integer parameter ``parameter`` plus ``offset``. ``parameter`` is a structural
+    parameter of the FMI 3.0 FMU too; setting either sets both (e.g. ``n_nodes = n_elements + 1``).
+    """
+
+    name: str
+    parameter: str
+    offset: int
+    description: str
+
+
+@dataclass(frozen=True)
 class Native:
     """The C implementation of a component (sources in :mod:`tribocosim.components.native`).
 
     ``prefix`` names its C functions (``<prefix>_create``, ``_step``, ...); ``sources`` are the C
     files of the model and of its FMU glue (``tc_<name>_fmu.c``: the component functions of
     ``tc_fmu.h``), beside the shared ones (``tc_common.c``, the FMI wrapper); ``params_header`` is
-    the header the build generates with the parameter struct (``<prefix>_params``).
+    the header the build generates with the parameter struct (``<prefix>_params``). ``arrays`` are
+    outputs only the FMI 3.0 FMU has: Float64 arrays of ``array_size`` values (the glue's
+    ``tc_component_array``).
     """
 
     prefix: str
     sources: tuple[str, ...]
     params_header: str
+    arrays: tuple[Port, ...] = ()
+    array_size: ArraySize | None = None
 
 
 @dataclass(frozen=True)

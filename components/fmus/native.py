@@ -1,20 +1,25 @@
-"""Build the native FMUs (FMI 2.0 co-simulation, C, no Python at run time) of the components.
+"""Build the native FMUs (FMI 2.0 or 3.0 co-simulation, C, no Python at run time) of the components.
 
 For each component with a native implementation (``Component.native``) the build
 
 1. generates, from the component's description, the parameter header and the FMU's variable table
-   (:mod:`tribocosim.components.native.declarations`) and the model description (this module),
-   with the same names, units, descriptions, start values, ranges and value references as the
-   Python variant;
-2. compiles the model's C sources, its glue and the generic FMI wrapper (``tc_fmi2.c``, against
-   the standard's headers that fmpy ships) into ``binaries/{linux64,win64,darwin64}`` with the C
-   compiler of the ``ziglang`` package (:mod:`tribocosim.components.native.toolchain`);
+   (:mod:`tribocosim.components.native.declarations`) and the model description (FMI 2.0: this
+   module, with the same names, units, descriptions, start values, ranges and value references as
+   the Python variant; FMI 3.0: :mod:`.modeldescription3`, the same variables plus ``time`` and
+   the strip's nodal-field arrays);
+2. compiles the model's C sources, its glue, the FMI core (``tc_fmu_instance.c``) and the wrapper
+   of the FMI version (``tc_fmi2.c`` or ``tc_fmi3.c``, against the standard's headers that fmpy
+   ships) with the C compiler of the ``ziglang`` package
+   (:mod:`tribocosim.components.native.toolchain`) into ``binaries/{linux64,win64,darwin64}``
+   (FMI 2.0) or ``binaries/{x86_64-linux,x86_64-windows,x86_64-darwin}`` (FMI 3.0);
 3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table)
    into ``<ModelIdentifier>.fmu`` (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
    it into place atomically, next to a JSON record of its source digest.
 
-The GUID is derived from the source digest (C sources, generated text, resources, compiler flags
-and zig version), so a model description and a binary of different builds do not load together.
+The GUID (FMI 3.0: instantiation token) is derived from the source digest (C sources, generated
+text, resources, compiler flags, zig version and FMI version), so a model description and a binary
+of different builds do not load together. Both versions run the same C models through the same
+core, so their outputs agree to the last bit.
 """
 
 from __future__ import annotations
@@ -30,12 +35,18 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 from tribocosim.components import registry
 from tribocosim.components.description import Component
 from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
+from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import describe, unit_definitions
 from tribocosim.components.native import declarations, toolchain
 
-#: the sources every native FMU compiles beside its component's (the FMI wrapper and the shared helpers)
-SHARED_SOURCES = ("tc_common.c", "tc_fmi2.c")
+#: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
+#: version-independent FMI core and the version's wrapper
+SHARED_SOURCES = {2: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi2.c"),
+                  3: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi3.c")}
 PLATFORMS = tuple(toolchain.PLATFORMS)
+FMI_VERSIONS = (2, 3)
+#: the FMI 3.0 binaries folder (platform tuple) of each platform
+FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "darwin64": "x86_64-darwin"}
 
 
 def fmus() -> dict[str, Component]:
@@ -60,9 +71,37 @@ def fmi2_headers() -> Path:
     return folder
 
 
-def sources(comp: Component) -> list[Path]:
+def _check_version(fmi_version: int) -> int:
+    if fmi_version not in FMI_VERSIONS:
+        raise FmuBuildError(f"fmi_version = {fmi_version!r} is not one of {', '.join(map(str, FMI_VERSIONS))}")
+    return fmi_version
+
+
+def fmi3_headers() -> Path:
+    """The folder of the FMI 3.0 headers (``fmi3Functions.h``...) that fmpy ships."""
+    folder = fmi2_headers()
+    if not (folder / "fmi3Functions.h").is_file():
+        raise FmuBuildError(f"the FMI 3.0 headers are not in {folder} (fmpy installation)")
+    return folder
+
+
+def sources(comp: Component, fmi_version: int = 2) -> list[Path]:
     """The C files of a component's native FMU."""
-    return [toolchain.SOURCE_DIR / name for name in (*SHARED_SOURCES, *comp.native.sources)]
+    return [toolchain.SOURCE_DIR / name for name in (*SHARED_SOURCES[_check_version(fmi_version)],
+                                                     *comp.native.sources)]
+
+
+def binary_path(name: str, platform: str, fmi_version: int = 2) -> str:
+    """Where FMU ``name``'s library for ``platform`` (linux64, win64, darwin64) is inside the FMU."""
+    folder = platform if _check_version(fmi_version) == 2 else FMI3_PLATFORMS[platform]
+    return f"binaries/{folder}/{name}{toolchain.PLATFORMS[platform][1]}"
+
+
+def description(comp: Component, fmu_guid: str, fmi_version: int = 2) -> str:
+    """The model description of a component's native FMU for an FMI version."""
+    if _check_version(fmi_version) == 3:
+        return modeldescription3.model_description(comp, fmu_guid)
+    return model_description(comp, fmu_guid)
 
 
 def _zig_version() -> str:
@@ -74,16 +113,16 @@ def _zig_version() -> str:
         return "?"
 
 
-def source_digest(name: str) -> str:
+def source_digest(name: str, fmi_version: int = 2) -> str:
     """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
     comp = component(name)
     h = hashlib.sha256()
-    for path in sorted({*sources(comp), *toolchain.SOURCE_DIR.glob("*.h")}):
+    for path in sorted({*sources(comp, fmi_version), *toolchain.SOURCE_DIR.glob("*.h")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     h.update(declarations.params_header(comp).encode())
     h.update(declarations.model_header(comp, "").encode())
-    h.update(model_description(comp, "").encode())
+    h.update(description(comp, "", fmi_version).encode())
     for path in comp.resource_files:
         h.update(path.name.encode())
         h.update(path.read_bytes())
@@ -161,36 +200,44 @@ def model_description(comp: Component, fmu_guid: str) -> str:
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 
 
-def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, digest: str | None = None) -> dict:
+def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, digest: str | None = None,
+                     fmi_version: int = 2) -> dict:
     """Generate the headers of FMU ``name`` into ``folder/include`` and compile its binaries into
-    ``folder/binaries/<platform>/``; returns ``{platform: library path}``."""
+    ``folder/`` at their places in the FMU (:func:`binary_path`); returns ``{platform: library path}``."""
     comp = component(name)
     folder = Path(folder)
     include = folder / "include"
     include.mkdir(parents=True, exist_ok=True)
     declarations.write_params_headers(include, [comp])
     (include / "tc_fmu_model.h").write_text(
-        declarations.model_header(comp, guid(digest or source_digest(name))), encoding="ascii")
+        declarations.model_header(comp, guid(digest or source_digest(name, fmi_version))), encoding="ascii")
+    if fmi_version == 2:
+        headers = {"include_dirs": [include, fmi2_headers()]}
+    else:  # fmi3FunctionTypes.h declares callbacks without prototypes: system headers, exempt from -Werror
+        headers = {"include_dirs": [include], "extra_flags": ["-isystem", str(fmi3_headers())]}
     built = {}
     for platform in platforms:
-        ext = toolchain.PLATFORMS[platform][1]
-        out = folder / "binaries" / platform / f"{name}{ext}"
+        out = folder / binary_path(name, platform, fmi_version)
         try:
-            built[platform] = toolchain.compile_shared(sources(comp), out, platform,
-                                                       include_dirs=[include, fmi2_headers()])
+            built[platform] = toolchain.compile_shared(sources(comp, fmi_version), out, platform, **headers)
         except toolchain.CompileError as exc:
             raise FmuBuildError(f"FMU {name}: {exc}") from exc
     return built
 
 
-def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORMS) -> dict[str, Path]:
+def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORMS,
+                      fmi_version: int = 2) -> dict[str, Path]:
     """Build native FMUs into ``out_dir`` and return ``{name: path to .fmu}`` (see the module docstring).
+
+    ``fmi_version`` 2 or 3; the file names are the same (``<ModelIdentifier>.fmu``), so FMUs of the two
+    versions go to different folders.
 
     Raises
     ------
     FmuBuildError
         Naming the FMU and the cause (missing resource, compiler output, validation problems).
     """
+    _check_version(fmi_version)
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
     selected = list(fmus()) if names is None else list(names)
@@ -198,28 +245,29 @@ def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORM
         for path in component(name).resource_files:
             if not path.is_file():
                 raise FmuBuildError(f"FMU {name}: required file {path} is missing")
-    return {name: _build_one(name, out, tuple(platforms)) for name in selected}
+    return {name: _build_one(name, out, tuple(platforms), fmi_version) for name in selected}
 
 
-def _build_one(name: str, out: Path, platforms) -> Path:
+def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
     comp = component(name)
-    digest = source_digest(name)
+    digest = source_digest(name, fmi_version)
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp:
         stage = Path(tmp)
-        compile_binaries(name, stage, platforms, digest)
+        compile_binaries(name, stage, platforms, digest, fmi_version)
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", model_description(comp, guid(digest)))
+            z.writestr("modelDescription.xml", description(comp, guid(digest), fmi_version))
             for platform in platforms:
-                lib = stage / "binaries" / platform / f"{name}{toolchain.PLATFORMS[platform][1]}"
-                z.write(lib, f"binaries/{platform}/{lib.name}")
+                inside = binary_path(name, platform, fmi_version)
+                z.write(stage / inside, inside)
             for path in comp.resource_files:
                 z.write(path, f"resources/{path.name}")
             if not comp.resource_files:
                 z.writestr("resources/", "")
-    return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "source_digest": digest,
-                                                    "platforms": list(platforms), "python": sys.version.split()[0],
-                                                    "ziglang": _zig_version()})
+    return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
+                                                    "source_digest": digest, "platforms": list(platforms),
+                                                    "python": sys.version.split()[0], "ziglang": _zig_version()})
 
 
-__all__ = ["build_native_fmus", "compile_binaries", "fmus", "model_description", "source_digest"]
+__all__ = ["binary_path", "build_native_fmus", "compile_binaries", "description", "fmi3_headers", "fmus",
+           "model_description", "source_digest"]

@@ -12,7 +12,10 @@ Two headers, written into a build folder next to the sources:
     the parameters, then the inputs, then the outputs, in the order and with the names, units,
     start values, ranges and choices of the model description), ``TC_P_<name>`` indices of the
     parameters, and ``<prefix>_fill_params(values, p)`` that fills the model's struct from the
-    FMU's parameter values. The generic FMI wrapper (``tc_fmi2.c``) and the component's glue
+    FMU's parameter values; for FMI 3.0 the value references of the variables only it has
+    (:func:`fmi3_variables`: ``TC_VR_TIME``, and with array outputs ``TC_N_ARRAYS``, ``TC_ARRAYS``,
+    ``TC_A_<name>``, ``TC_VR_ARRAY_SIZE``, ``TC_VR_ARRAYS``). The generic FMI wrappers
+    (``tc_fmi2.c``, ``tc_fmi3.c``, their core ``tc_fmu_instance.c``) and the component's glue
     (``tc_<name>_fmu.c``) include it.
 """
 
@@ -24,6 +27,7 @@ import math
 from pathlib import Path
 
 from tribocosim.components.description import Component
+from tribocosim.components.errors import TribocosimError
 
 
 def _c_string(text: str) -> str:
@@ -100,6 +104,55 @@ def variables(comp: Component) -> list[dict]:
     return out
 
 
+def fmi3_variables(comp: Component) -> list[dict]:
+    """The variables only the FMI 3.0 FMU has, numbered on after :func:`variables` (``vr``): the
+    independent variable ``time``, and for a component with array outputs (``Native.arrays``) the
+    UInt64 structural parameter of their length, then the arrays (``dimension``: that parameter's
+    value reference). The parameter the length derives from is ``structural_parameter``."""
+    vr = len(variables(comp))
+    out = [{"name": "time", "kind": "real", "causality": "independent", "vr": vr, "unit": "s",
+            "description": "simulation time"}]
+    native = comp.native
+    if native is None or not native.arrays:
+        return out
+    size = native.array_size
+    fields = {f.name: f for f in comp.parameter_fields}
+    if size is None or size.parameter not in fields or _kind(fields[size.parameter]) != "integer":
+        raise TribocosimError(f"component {comp.name}: array outputs need an array_size derived from an integer "
+                              "parameter")
+    meta = fields[size.parameter].metadata
+    shift = lambda x: None if x is None else int(x) + size.offset  # noqa: E731
+    out.append({"name": size.name, "kind": "uint64", "causality": "structuralParameter", "vr": vr + 1, "unit": "",
+                "start": shift(fields[size.parameter].default), "low": shift(meta.get("low")),
+                "high": shift(meta.get("high")), "description": size.description,
+                "structural_parameter": size.parameter, "offset": size.offset})
+    for k, port in enumerate(native.arrays):
+        out.append({"name": port.name, "kind": "real", "causality": "output", "vr": vr + 2 + k,
+                    "unit": port.unit or "1", "description": port.description, "dimension": vr + 1})
+    return out
+
+
+def _fmi3_lines(comp: Component) -> list[str]:
+    """The FMI 3.0 value references of ``tc_fmu_model.h``."""
+    extra = fmi3_variables(comp)
+    arrays = [v for v in extra if "dimension" in v]
+    lines = ["/* FMI 3.0 only (tc_fmi3.c): value references after the FMI 2.0 variables */",
+             f"#define TC_VR_TIME {extra[0]['vr']}", f"#define TC_N_ARRAYS {len(arrays)}"]
+    if arrays:
+        size = extra[1]
+        index = {v["name"]: v["index"] for v in variables(comp) if v["causality"] == "parameter"}
+        lines += [f"#define TC_VR_ARRAY_SIZE {size['vr']} /* {size['name']}: UInt64 structural parameter */",
+                  f"#define TC_ARRAY_SIZE_NAME {_c_string(size['name'])}",
+                  f"#define TC_ARRAY_SIZE_PARAMETER {index[size['structural_parameter']]} "
+                  f"/* {size['name']} = {size['structural_parameter']} + TC_ARRAY_SIZE_OFFSET */",
+                  f"#define TC_ARRAY_SIZE_OFFSET {size['offset']}",
+                  f"#define TC_VR_ARRAYS {arrays[0]['vr']} /* array k: TC_VR_ARRAYS + k */"]
+        lines += [f"#define TC_A_{v['name']} {k}" for k, v in enumerate(arrays)]
+        lines.append(f"static const char *const TC_ARRAYS[TC_N_ARRAYS] = "
+                     f"{{{', '.join(_c_string(v['name']) for v in arrays)}}};")
+    return lines + [""]
+
+
 def model_header(comp: Component, guid: str) -> str:
     """The ``tc_fmu_model.h`` of a component's FMU (see the module docstring)."""
     prefix = comp.native.prefix
@@ -147,6 +200,7 @@ def model_header(comp: Component, guid: str) -> str:
             f"{int(high is not None)}, {int(bool(v['low_inclusive']))}, {_c_double(low if low is not None else 0)}, "
             f"{_c_double(high if high is not None else 0)}, {choices[0]}, {choices[1]}}},")
     lines += ["};", ""]
+    lines += _fmi3_lines(comp)
     lines += [f"/* {comp.parameters.__name__} from the FMU's parameter values (choices by index) */",
               f"static inline void {prefix}_fill_params(const tc_param_value *v, {prefix}_params *p) {{"]
     index = {v["name"]: v["index"] for v in vs if v["causality"] == "parameter"}

@@ -1,4 +1,5 @@
-/* What the generic FMI wrapper (tc_fmi2.c) knows of an FMU: its variables, and its component's glue.
+/* What the generic FMI wrappers (tc_fmi2.c, tc_fmi3.c, on the core tc_fmu_instance.c) know of an FMU: its
+ * variables, and its component's glue.
  *
  * The variable table (TC_VARIABLES), the value references and the function that fills a model's parameter
  * struct are GENERATED from the component's description (tribocosim/components/<name>/component.py) by
@@ -7,7 +8,9 @@
  * (tc_<name>_fmu.c) implements the tc_component functions below on top of its native model.
  *
  * Variables are numbered as in the model description: the parameters (the model's fields, then the FMU's
- * files), the inputs, then the outputs; the value reference of variable k is k.
+ * files), the inputs, then the outputs; the value reference of variable k is k. The FMI 3.0 FMU adds, after
+ * them, the independent variable time and, for a component with array outputs (TC_N_ARRAYS > 0), the UInt64
+ * structural parameter of their length and the arrays themselves (TC_VR_* in "tc_fmu_model.h").
  */
 #ifndef TC_FMU_H
 #define TC_FMU_H
@@ -66,5 +69,8 @@ void tc_component_get_state(const tc_component *c, void *buf);
 int tc_component_set_state(tc_component *c, const void *buf, size_t size, tc_msg msg);
 /* A line to log after creation ("" for none), e.g. which friction table is used. */
 const char *tc_component_note(const tc_component *c);
+/* FMI 3.0, components with array outputs only (TC_N_ARRAYS > 0): array output k (in the order of TC_ARRAYS)
+ * into out, when out is not NULL; returns its length (the node count). */
+size_t tc_component_array(const tc_component *c, int k, double *out);
 
 #endif

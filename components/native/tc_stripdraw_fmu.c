@@ -8,7 +8,8 @@
  *   - field_input: the strip starts from the last beta row of a field file written for this mesh;
  *   - field_output / field_output_interval: the nodal fields recorded at the start, after every step at
  *     least the interval after the last row, and written at terminate with the final state (tc_fields);
- *     a restored state drops the rows recorded after its time.
+ *     a restored state drops the rows recorded after its time;
+ *   - FMI 3.0: the nodal fields beta, U and contact of the current state as array outputs.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -208,3 +209,10 @@ int tc_component_set_state(tc_component *c, const void *buf, size_t size, tc_msg
 }
 
 const char *tc_component_note(const tc_component *c) { return c->note; }
+
+size_t tc_component_array(const tc_component *c, int k, double *out) {
+    if (out != NULL)
+        tc_stripdraw_fields(c->model, NULL, k == TC_A_U ? out : NULL, k == TC_A_beta ? out : NULL, NULL,
+                            k == TC_A_contact ? out : NULL);
+    return c->n;
+}

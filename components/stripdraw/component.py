@@ -7,7 +7,9 @@ Variables
     One parameter per field of :class:`~tribocosim.components.stripdraw.parameters.StripDrawParameters`,
     then the FMU's files (:class:`StripDrawFiles`), the inputs ``normal_force`` [N] and
     ``grip_velocity`` [m/s], and the outputs (:data:`OUTPUTS`, the model's ``OUTPUT_NAMES`` in order;
-    ``table_clamp_count`` is an Integer).
+    ``table_clamp_count`` is an Integer). The native FMI 3.0 FMU also outputs the nodal fields
+    (:data:`FIELDS`: ``beta``, ``U``, ``contact``) as Float64 arrays of ``n_nodes = n_elements + 1``
+    values; ``n_elements`` and ``n_nodes`` are its structural parameters (setting either sets both).
 
 ``table_file``
     Used when ``friction_model = "table"``. A relative path is taken relative to the FMU's
@@ -37,7 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from tribocosim.components.description import Built, Component, Native, Port
+from tribocosim.components.description import ArraySize, Built, Component, Native, Port
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
@@ -90,6 +92,13 @@ OUTPUTS = (
     Port("grip_position", "m", "displacement of the grip"),
     Port("table_clamp_count", "1", "cumulative number of nodal table lookups outside the table (clamped)",
          integer=True),
+)
+
+#: the nodal fields (as in field_output), array outputs of the FMI 3.0 FMU (one value per node)
+FIELDS = (
+    Port("beta", "1", "debris area fraction at the nodes"),
+    Port("U", "m", "displacement of the nodes"),
+    Port("contact", "1", "contact weight of the nodes (1 under the pad, 0 outside)"),
 )
 
 
@@ -190,6 +199,7 @@ COMPONENT = Component(
     native=Native(prefix="tc_stripdraw",
                   sources=("tc_stripdraw.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
                            "tc_sha256.c", "tc_json.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
-                  params_header="tc_stripdraw_params.h"),
+                  params_header="tc_stripdraw_params.h", arrays=FIELDS,
+                  array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1")),
     default_experiment=(0.0, 1.75, 1e-3),
 )

@@ -1,0 +1,100 @@
+/* The part of a native FMU instance that does not depend on the FMI version: shared by the FMI 2.0 wrapper
+ * (tc_fmi2.c) and the FMI 3.0 wrapper (tc_fmi3.c), which add only the standard's function signatures, its
+ * state machine and its logger.
+ *
+ * An instance holds the parameter values, the inputs and outputs, the time and the component (tc_fmu.h); the
+ * functions below carry the status contract both wrappers promise:
+ *
+ *   - tc_inst_make_component checks every parameter against its declared range or choices and makes the
+ *     component; a bad parameter or file fails the instance (TC_LOG_ERROR, a message naming the parameter, its
+ *     value and what is allowed), after which every call that needs the model is an error;
+ *   - tc_inst_do_step with a bad input or a step the model cannot take is TC_LOG_DISCARD with the state
+ *     unchanged and a message naming the cause, the inputs and the time;
+ *   - an FMU state (tc_inst_get_state...) holds the parameters, inputs, outputs, time and the component's
+ *     state image, so that a restored state replays bit-identically, also in another instance; deserializing
+ *     bytes that are not such a state is an error, never a crash;
+ *   - no global mutable state; memory is the C library's, all of it freed by tc_inst_release.
+ *
+ * Statuses are the TC_LOG_* numbers, which are those of fmi2Status and fmi3Status alike.
+ */
+#ifndef TC_FMU_INSTANCE_H
+#define TC_FMU_INSTANCE_H
+
+#include <stddef.h>
+
+#include "tc_fmu.h"
+#include "tc_fmu_model.h"
+
+enum tc_log_status { TC_LOG_OK = 0, TC_LOG_WARNING = 1, TC_LOG_DISCARD = 2, TC_LOG_ERROR = 3, TC_LOG_FATAL = 4 };
+
+enum tc_phase { TC_PHASE_INSTANTIATED, TC_PHASE_INITIALIZATION, TC_PHASE_STEPPING, TC_PHASE_TERMINATED,
+                TC_PHASE_FAILED };
+
+typedef struct tc_instance tc_instance;
+
+/* The wrapper's logger: one finished message with its status and category ("logStatusError"...). */
+typedef void tc_emit_fn(const tc_instance *c, int status, const char *category, const char *text);
+
+struct tc_instance {
+    tc_emit_fn *emit; /* NULL: nothing is logged */
+    char *name;
+    char *resources; /* the FMU's resources folder, no trailing separator */
+    int logging_on;
+    int phase; /* enum tc_phase */
+    double time;
+    tc_param_value values[TC_N_PARAMETERS];
+    double inputs[TC_N_INPUTS > 0 ? TC_N_INPUTS : 1];
+    double outputs[TC_N_OUTPUTS];
+    tc_component *component;
+    char message[2048];
+    char failure[2048]; /* why the instance is unusable */
+};
+
+/* Log a message (an OK one only when logging is on). */
+void tc_inst_logf(const tc_instance *c, int status, const char *fmt, ...)
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* A copy of s ("" for NULL) from malloc; NULL when out of memory. */
+char *tc_inst_copy_text(const char *s);
+
+/* Set up c (zeroed by the caller, emit set) with its name, resources folder (owned by c from now on, even on
+ * failure) and the start values; 0 when out of memory (c released). */
+int tc_inst_init(tc_instance *c, const char *name, char *resources, int logging_on);
+/* Free what c owns (the component, texts); c itself is the caller's. */
+void tc_inst_release(tc_instance *c);
+/* Back to the start values and the instantiated phase, the component freed; 0 when out of memory. */
+int tc_inst_reset(tc_instance *c);
+
+/* Fail the instance with a message (logged as an error); returns TC_LOG_ERROR. */
+int tc_inst_fail(tc_instance *c, const char *what);
+/* Check the parameters and make the component, outputs from it (TC_LOG_OK), or fail (TC_LOG_ERROR). */
+int tc_inst_make_component(tc_instance *c);
+/* Leave initialization: make the component, keep the start time, step from here on. */
+int tc_inst_exit_initialization(tc_instance *c);
+/* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */
+int tc_inst_terminate(tc_instance *c);
+/* Advance by dt from t (the contract above). */
+int tc_inst_do_step(tc_instance *c, double t, double dt);
+
+/* The variable behind FMI 2.0 value reference vr, of kind `kind` (enum tc_kind); NULL, logged as an error
+ * naming `function`, if there is none or it is another kind (kind_names: how the standard calls the kinds). */
+const tc_variable *tc_inst_variable(const tc_instance *c, unsigned vr, int kind, const char *function,
+                                    const char *const kind_names[3], unsigned last_vr);
+/* The current value of a Real or Integer variable. */
+double tc_inst_number(const tc_instance *c, const tc_variable *v);
+
+/* FMU states (opaque): get into *state (reused when not NULL), set, free. */
+int tc_inst_get_state(tc_instance *c, void **state, const char *function);
+int tc_inst_set_state(tc_instance *c, const void *state);
+void tc_inst_free_state(void *state);
+/* The serialized state into buf (when size suffices; NULL to measure); returns the bytes it needs. */
+size_t tc_inst_serialize(const void *state, unsigned char *buf, size_t size);
+/* A state from serialized bytes into *state (an old one there is freed); TC_LOG_ERROR naming `function` for
+ * bytes that are not a state of this FMU (token_label: what the standard calls TC_GUID). */
+int tc_inst_deserialize(tc_instance *c, const unsigned char *bytes, size_t size, void **state,
+                        const char *function, const char *token_label);
+
+#endif

@@ -1,0 +1,479 @@
+"""The FMI 3.0 variants of the native FMUs (issue 19, item 1): ``tribocosim fmu build --fmi 3``.
+
+- the model descriptions have the FMI 2.0 variables (names, value references, units, descriptions, starts,
+  ranges), plus ``time``, and for StripDraw the structural parameter ``n_nodes = n_elements + 1`` and the
+  nodal fields ``beta``, ``U``, ``contact`` as arrays of that length; ``fmpy validate`` is clean; the CLI
+  writes the same file names for linux64, win64 and darwin64, every binary exporting every fmi3 function;
+- run through fmpy's FMI 3 API and through a C host with no Python (tests/native/host/fmi3_host.c), the
+  outputs are those of the FMI 2.0 FMUs to the last bit (StripDraw on a short draw, Press, DrawingMachine),
+  and the arrays are the FMI 2.0 FMU's field_output rows to the last bit (and the Python model's fields);
+- FMU states (get/set, serialize into another instance) replay bit-identically; a bad parameter is fmi3Error
+  at initialization naming it; a negative normal force is fmi3Discard with the state unchanged (its
+  serialized image byte for byte); what does not apply is fmi3Error naming the function; nothing leaks.
+
+The FMUs are built for linux64 only, except Press through the command line for all three platforms.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+HERE = Path(__file__).resolve().parent
+NAMES = ("DrawingMachine", "Press", "StripDraw")
+STRIP_OUTPUTS = ("pull_force", "mu_mean", "beta_max", "friction_force", "beta_mean", "sliding_distance",
+                 "contact_pressure", "grip_position")
+FIELDS = ("beta", "U", "contact")
+
+
+def _fmi3_functions() -> set[str]:
+    """Every function of the FMI 3.0 standard, from its header (the names fmi3Functions.h maps through
+    fmi3FullName)."""
+    import re
+
+    from tribocosim.components.fmus.native import fmi3_headers
+
+    text = (fmi3_headers() / "fmi3Functions.h").read_text()
+    return set(re.findall(r"#define (fmi3\w+)\s+fmi3FullName\(", text))
+
+
+def exported_functions(path):
+    """tests/native/exports.py (a sibling module: loaded by path under pytest's importlib mode)."""
+    spec = importlib.util.spec_from_file_location("native_exports", HERE / "exports.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.exported_functions(path)
+
+
+# ----------------------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def built(tmp_path_factory) -> dict[int, dict[str, Path]]:
+    """``{2: FMI 2.0 FMUs, 3: FMI 3.0 FMUs}`` of the three components, linux64, from the same tree."""
+    from tribocosim.components.fmus.native import build_native_fmus
+
+    return {v: build_native_fmus(tmp_path_factory.mktemp(f"fmi{v}"), platforms=["linux64"], fmi_version=v)
+            for v in (2, 3)}
+
+
+@pytest.fixture(scope="module")
+def unzipped(built, tmp_path_factory):
+    from fmpy import extract
+
+    return {(v, n): Path(extract(str(p), str(tmp_path_factory.mktemp(f"u{v}_{n}"))))
+            for v, fmus in built.items() for n, p in fmus.items()}
+
+
+@pytest.fixture(scope="module")
+def md(built):
+    from fmpy import read_model_description
+
+    return {(v, n): read_model_description(str(p)) for v, fmus in built.items() for n, p in fmus.items()}
+
+
+@pytest.fixture(scope="module")
+def hosts(tmp_path_factory) -> dict[int, Path]:
+    """The C hosts of both versions (linux64 executables, no Python)."""
+    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.native.toolchain import compile_executable
+
+    folder = tmp_path_factory.mktemp("hosts")
+    flags = ["-isystem", str(fmi3_headers())]  # fmi3FunctionTypes.h has prototype-less callbacks
+    return {v: compile_executable([HERE / "host" / f"fmi{v}_host.c"], folder / f"fmi{v}_host", extra_flags=flags,
+                                  libs=["-ldl"]) for v in (2, 3)}
+
+
+def _vr(description, name: str) -> int:
+    return next(v.valueReference for v in description.modelVariables if v.name == name)
+
+
+def _schedule(n: int, dt: float = 1e-3):
+    """(dt, normal_force, grip_velocity): a pressure ramp 5 -> 15 MPa on the 35 mm pad, the grip speeding up
+    over 10 ms and reversing for the last quarter."""
+    rows = []
+    for k in range(n):
+        t, frac = (k + 0.5) * dt, k / max(1, n - 1)
+        v = 0.08 * min(1.0, t / 0.01) * (1.0 if frac < 0.75 else -1.0)
+        rows.append((dt, (5e6 + 10e6 * frac) * 0.035 * 0.035, v))
+    return rows
+
+
+def _slave(unzipped, md, name: str, messages: list, instance: str = "x"):
+    """An instantiated FMU3Slave whose log goes to ``messages`` as (status, text)."""
+    from fmpy.fmi3 import FMU3Slave
+
+    def log(env, status, category, message):
+        messages.append((int(status), message.decode()))
+
+    s = FMU3Slave(guid=md.guid, unzipDirectory=str(unzipped), modelIdentifier=name, instanceName=instance)
+    s.instantiate(logMessage=log)
+    return s
+
+
+def _run_host(host, folder, description, tmp_path, steps, *, inputs=(), outputs=(), sets=(), extra=()):
+    """Run a C host; returns its stdout rows (t, outputs..., arrays...) as an array of floats, and the process."""
+    vr = {v.name: v for v in description.modelVariables}
+    kind = {"Real": "r", "Float64": "r", "Integer": "i", "Int32": "i", "String": "s", "UInt64": "u"}
+    args = []
+    for name, value in sets:
+        args += ["--set", f"{kind[vr[name].type]}:{vr[name].valueReference}={value}"]
+    if inputs:
+        args += ["--inputs", ",".join(str(vr[n].valueReference) for n in inputs)]
+    args += ["--outputs", ",".join(f"{kind[vr[n].type]}:{vr[n].valueReference}" for n in outputs)]
+    steps_file = tmp_path / "steps.txt"
+    steps_file.write_text("\n".join(",".join(repr(float(x)) for x in row) for row in steps) + "\n")
+    cmd = [str(host), str(folder), description.coSimulation.modelIdentifier, description.guid, *args,
+           "--steps", str(steps_file), *extra]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env={"PATH": "/usr/bin:/bin"},
+                          cwd=tmp_path)
+    assert proc.returncode == 0, f"exit {proc.returncode}\n{proc.stderr[-3000:]}"
+    return np.array([[float(x) for x in line.split(",")] for line in proc.stdout.split()]), proc
+
+
+# ----------------------------------------------------------------------------------- the FMUs as files
+def test_cli_builds_fmi3_fmus_for_three_platforms_exporting_every_function(tmp_path, hosts):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", "3", "--only", "Press",
+                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    fmu = tmp_path.resolve() / "Press.fmu"
+    assert [Path(p) for p in proc.stdout.split()] == [fmu]
+    assert validate_fmu(str(fmu)) == []
+    assert read_model_description(str(fmu)).fmiVersion == "3.0"
+    assert json.loads((tmp_path / "Press.fmu.json").read_text())["fmi_version"] == 3
+    folder = tmp_path / "unzipped"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+        assert not [f for f in z.namelist() if f.endswith((".py", ".pyc"))]
+    functions = _fmi3_functions()
+    assert len(functions) == 75
+    for platform, ext in (("x86_64-linux", ".so"), ("x86_64-windows", ".dll"), ("x86_64-darwin", ".dylib")):
+        exported = exported_functions(folder / "binaries" / platform / f"Press{ext}")
+        assert functions <= exported, (platform, sorted(functions - exported))
+        assert not [f for f in exported if f.startswith(("tc_", "fmi2"))], "internal and FMI 2.0 functions stay out"
+    symbols = subprocess.run([str(hosts[3]), str(folder), "Press", "x", "--symbols"], capture_output=True, text=True)
+    assert symbols.stdout.strip() == "75 functions exported", symbols.stderr
+    bad = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", "3", "--python"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "FMI 2.0 FMUs only" in bad.stderr
+
+
+def test_model_descriptions_have_the_fmi2_variables_plus_time_and_the_nodal_arrays(built, md):
+    from fmpy.validation import validate_fmu
+
+    types = {"Real": "Float64", "Integer": "Int32", "String": "String"}
+    num = lambda x: None if x is None else float(x)  # noqa: E731
+    for name in NAMES:
+        assert validate_fmu(str(built[3][name])) == [], name
+        two, three = md[2, name], md[3, name]
+        by_vr = {v.valueReference: v for v in three.modelVariables}
+        assert three.fmiVersion == "3.0" and three.guid != two.guid
+        assert three.coSimulation.canGetAndSetFMUstate and three.coSimulation.canSerializeFMUstate
+        for a in two.modelVariables:
+            b = by_vr[a.valueReference]
+            assert (b.name, b.type, b.unit, b.description, b.variability) == \
+                   (a.name, types[a.type], a.unit, a.description, a.variability), a.name
+            assert b.causality == ("structuralParameter" if a.name == "n_elements" else a.causality), a.name
+            assert (num(b.min), num(b.max)) == (num(a.min), num(a.max)), a.name
+            start = (lambda x: x) if a.type == "String" else float
+            assert (a.start is None) == (b.start is None) and (a.start is None or start(a.start) == start(b.start))
+        extra = [v for v in three.modelVariables if v.valueReference >= len(two.modelVariables)]
+        assert extra[0].name == "time" and extra[0].causality == "independent" and extra[0].unit == "s"
+        if name != "StripDraw":
+            assert len(extra) == 1
+            continue
+        size, *arrays = extra[1:]
+        assert (size.name, size.type, size.causality, int(size.start)) == ("n_nodes", "UInt64", "structuralParameter",
+                                                                          451)
+        assert [(v.name, v.unit, v.shape, v.dimensions[0].valueReference) for v in arrays] == \
+               [(f, u, (451,), size.valueReference) for f, u in zip(FIELDS, ("1", "m", "1"))]
+        assert {u.variable.name for u in three.outputs} >= set(FIELDS)
+
+
+# ----------------------------------------------------------------------------------- FMI 3 == FMI 2
+def test_stripdraw_through_fmpy_equals_the_fmi2_fmu_and_its_field_output_to_the_bit(unzipped, md, tmp_path):
+    """n_nodes = 101 set in Configuration Mode (FMI 3) against n_elements = 100 (FMI 2, with field_output every
+    step); the arrays are the field file's rows, and close to the Python model's fields."""
+    from fmpy.fmi2 import FMU2Slave
+
+    from tribocosim.components.stripdraw.component import COMPONENT
+    from tribocosim.components.stripdraw.fields import read_fields
+
+    schedule = _schedule(60)
+    m2, m3 = md[2, "StripDraw"], md[3, "StripDraw"]
+    v2 = {v.name: v.valueReference for v in m2.modelVariables}
+    v3 = {v.name: v.valueReference for v in m3.modelVariables}
+    field = tmp_path / "fields.npz"
+    two = FMU2Slave(guid=m2.guid, unzipDirectory=str(unzipped[2, "StripDraw"]), modelIdentifier="StripDraw",
+                    instanceName="two")
+    two.instantiate()
+    two.setupExperiment(startTime=0.0)
+    two.enterInitializationMode()
+    two.setInteger([v2["n_elements"]], [100])
+    two.setString([v2["field_output"]], [str(field)])
+    two.exitInitializationMode()
+    messages = []
+    three = _slave(unzipped[3, "StripDraw"], m3, "StripDraw", messages)
+    three.enterConfigurationMode()
+    three.setUInt64([v3["n_nodes"]], [101])
+    three.exitConfigurationMode()
+    three.enterInitializationMode(startTime=0.0)
+    three.exitInitializationMode()
+    assert three.getInt32([v3["n_elements"]]) == [100] and three.getUInt64([v3["n_nodes"]]) == [101]
+    rows2, rows3, arrays, t = [], [], [], 0.0
+    for dt, f, v in schedule:
+        two.setReal([v2["normal_force"], v2["grip_velocity"]], [f, v])
+        two.doStep(t, dt)
+        three.setFloat64([v3["normal_force"], v3["grip_velocity"]], [f, v])
+        event, terminate, early, last = three.doStep(t, dt)
+        t += dt
+        assert (event, terminate, early, last) == (False, False, False, t)
+        rows2.append(two.getReal([v2[n] for n in STRIP_OUTPUTS]) + two.getInteger([v2["table_clamp_count"]]))
+        rows3.append(three.getFloat64([v3[n] for n in STRIP_OUTPUTS]) + three.getInt32([v3["table_clamp_count"]]))
+        arrays.append(three.getFloat64([v3[n] for n in FIELDS], nValues=3 * 101))
+    assert three.getFloat64([v3["time"]]) == [t]
+    two.terminate()
+    two.freeInstance()
+    three.terminate()
+    three.freeInstance()
+    assert_array_equal(np.array(rows3), np.array(rows2))
+    assert np.array(rows3)[:, 0].max() > 0, "the strip must be pulled"
+    recorded = read_fields(field)
+    arrays = np.array(arrays).reshape(len(schedule), 3, 101)
+    for k, name in enumerate(FIELDS):
+        assert_array_equal(arrays[:, k], recorded[name][1:], err_msg=name)  # row 0: the initial state
+    model = COMPONENT.make({"n_elements": 100}).model
+    for dt, f, v in schedule:
+        model.step(dt, {"normal_force": f, "grip_velocity": v})
+    python = model.fields()
+    for k, name in enumerate(FIELDS):
+        scale = max(np.abs(python[name]).max(), 1e-300)
+        assert_allclose(arrays[-1, k], python[name], rtol=0, atol=1e-9 * scale, err_msg=name)
+
+
+def test_c_hosts_give_the_same_outputs_to_the_bit_and_replay_a_serialized_state(hosts, unzipped, md, tmp_path):
+    """Both hosts on StripDraw (default mesh), Press and DrawingMachine; the FMI 3 host also prints the arrays,
+    replays from a state serialized after step 40 in a second instance, and fuzzes the FMU."""
+    rng = np.random.default_rng(5)
+    dts = rng.uniform(2e-4, 3e-3, 150)
+    cases = [("StripDraw", _schedule(80), ("normal_force", "grip_velocity"), (*STRIP_OUTPUTS, "table_clamp_count")),
+             ("Press", [(dt,) for dt in dts], (), ("normal_force", "force_reference")),
+             ("DrawingMachine", list(zip(dts, rng.uniform(0, 4000, dts.size))), ("pull_force",),
+              ("grip_velocity", "grip_position", "velocity_reference", "motor_force"))]
+    for name, steps, inputs, outputs in cases:
+        sets = [("setpoint_table", "0 0; 0.05 12250; 0.2 20000")] if name == "Press" else []
+        field = tmp_path / f"{name}.npz"
+        got2, _ = _run_host(hosts[2], unzipped[2, name], md[2, name], tmp_path, steps, inputs=inputs, outputs=outputs,
+                            sets=sets + ([("field_output", str(field))] if name == "StripDraw" else []))
+        extra = ["--replay", "40", "--fuzz", "1500", "3"]
+        if name == "StripDraw":
+            v3 = {v.name: v.valueReference for v in md[3, name].modelVariables}
+            extra += ["--arrays", f"{v3['n_nodes']}:" + ",".join(str(v3[f]) for f in FIELDS)]
+        got3, proc = _run_host(hosts[3], unzipped[3, name], md[3, name], tmp_path, steps, inputs=inputs,
+                               outputs=outputs, sets=sets, extra=extra)
+        assert_array_equal(got3[:, :1 + len(outputs)], got2, err_msg=name)
+        assert "replay from step 40 bit-identical" in proc.stderr, proc.stderr[-2000:]
+        fuzz = [line for line in proc.stderr.splitlines() if "fuzz:" in line][-1]
+        assert int(fuzz.split()[-5]) > 0 and int(fuzz.split()[-2]) > 0, fuzz
+        if name == "StripDraw":
+            from tribocosim.components.stripdraw.fields import read_fields
+
+            recorded = read_fields(field)
+            arrays = got3[:, 1 + len(outputs):].reshape(len(steps), 3, 451)
+            for k, f in enumerate(FIELDS):
+                assert_array_equal(arrays[:, k], recorded[f][1:], err_msg=f)
+
+
+def test_simulate_fmu_runs_the_fmi3_fmu_as_the_fmi2_one(built):
+    """fmpy's high-level driver: start values in the instantiated state (n_nodes there too), arrays recorded (fmpy
+    sizes them from the model description's start of n_nodes: the default mesh)."""
+    from fmpy import simulate_fmu
+
+    def run(version, **kwargs):
+        return simulate_fmu(str(built[version]["StripDraw"]), stop_time=0.02, output_interval=1e-3, **kwargs)
+
+    two = run(2, start_values={"n_elements": 40}, output=["pull_force", "beta_max"])
+    three = run(3, start_values={"n_nodes": 41}, output=["pull_force", "beta_max"])
+    for name in ("pull_force", "beta_max"):
+        assert_array_equal(three[name], two[name], err_msg=name)
+    two, three = run(2, output=["pull_force", "beta_max"]), run(3, output=["pull_force", "beta"])
+    assert_array_equal(three["pull_force"], two["pull_force"])
+    assert three["beta"].shape == (len(two), 451)
+    assert_array_equal(three["beta"].max(axis=1)[1:], two["beta_max"][1:])
+    press = [simulate_fmu(str(built[v]["Press"]), stop_time=0.3, output_interval=2e-3, output=["normal_force"])
+             for v in (2, 3)]
+    assert_array_equal(press[1]["normal_force"], press[0]["normal_force"])
+
+
+# ----------------------------------------------------------------------------------- state, errors
+def test_fmu_state_get_set_and_serialize_replay_bit_identically(unzipped, md):
+    from fmpy.fmi1 import FMICallException
+
+    m3 = md[3, "StripDraw"]
+    vr = {v.name: v.valueReference for v in m3.modelVariables}
+    schedule = _schedule(50)
+
+    def make(instance):
+        s = _slave(unzipped[3, "StripDraw"], m3, "StripDraw", [], instance)
+        s.setInt32([vr["n_elements"]], [80])
+        s.setString([vr["friction_model"]], ["closed_form"])
+        s.enterInitializationMode(startTime=0.0)
+        s.exitInitializationMode()
+        return s
+
+    def run(s, rows, t):
+        out = []
+        for dt, f, v in rows:
+            s.setFloat64([vr["normal_force"], vr["grip_velocity"]], [f, v])
+            s.doStep(t, dt)
+            t += dt
+            out.append(s.getFloat64([vr[n] for n in (*STRIP_OUTPUTS, *FIELDS)], nValues=len(STRIP_OUTPUTS) + 3 * 81))
+        return np.array(out)
+
+    a, b = make("a"), make("b")
+    run(a, schedule[:20], 0.0)
+    t = sum(dt for dt, _, _ in schedule[:20])
+    state = a.getFMUState()
+    blob = a.serializeFMUState(state)
+    first = run(a, schedule[20:], t)
+    a.setFMUState(state)  # back in the same instance
+    again = run(a, schedule[20:], t)
+    b.setFMUState(b.deserializeFMUState(blob))  # into another instance
+    other = run(b, schedule[20:], t)
+    assert_array_equal(again, first)
+    assert_array_equal(other, first)
+    a.freeFMUState(state)
+    for bad in (blob[:-1], blob + b"\0", b"garbage", b""):  # never a crash
+        with pytest.raises(FMICallException) as exc:
+            b.deserializeFMUState(bad)
+        assert exc.value.status == 3
+    for s in (a, b):
+        s.terminate()
+        s.freeInstance()
+
+
+BAD_PARAMETERS = [
+    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: (0.0001, 1] m"),
+    ("StripDraw", {"friction_model": "tabel"}, "friction_model = 'tabel' is not allowed; choose one of table, "
+                                               "closed_form, constant"),
+    ("StripDraw", {"n_nodes": 3}, "n_elements = 2 is out of range; allowed: [4, 200000]"),
+    ("Press", {"setpoint_table": "0 0; 0.1"}, "setpoint_table = '0 0; 0.1' is malformed"),
+    ("DrawingMachine", {"screw_lead": 0.0}, "screw_lead = 0.0 m is out of range"),
+]
+
+
+@pytest.mark.parametrize("name, parameters, message", BAD_PARAMETERS)
+def test_a_bad_parameter_is_fmi3_error_at_initialization_naming_it(unzipped, md, name, parameters, message):
+    from fmpy.fmi1 import FMICallException
+
+    messages = []
+    description = md[3, name]
+    s = _slave(unzipped[3, name], description, name, messages)
+    variables = {v.name: v for v in description.modelVariables}
+    for key, value in parameters.items():
+        v = variables[key]
+        getattr(s, f"set{v.type}")([v.valueReference], [value])
+    s.enterInitializationMode(startTime=0.0)
+    with pytest.raises(FMICallException) as exc:
+        s.exitInitializationMode()
+    assert exc.value.status == 3, "fmi3Error"
+    assert any(status == 3 and message in text for status, text in messages), messages
+    with pytest.raises(FMICallException):
+        s.doStep(0.0, 1e-3)
+    s.freeInstance()
+
+
+def test_a_negative_normal_force_is_discarded_with_the_state_unchanged(unzipped, md):
+    from fmpy.fmi1 import FMICallException
+
+    m3 = md[3, "StripDraw"]
+    vr = {v.name: v.valueReference for v in m3.modelVariables}
+    watched = [vr[n] for n in (*STRIP_OUTPUTS, *FIELDS)]
+    messages = []
+    s = _slave(unzipped[3, "StripDraw"], m3, "StripDraw", messages)
+    s.setInt32([vr["n_elements"]], [60])
+    s.enterInitializationMode(startTime=0.0)
+    s.exitInitializationMode()
+    t = 0.0
+    for dt, f, v in _schedule(15):
+        s.setFloat64([vr["normal_force"], vr["grip_velocity"]], [f, v])
+        s.doStep(t, dt)
+        t += dt
+    image = s.serializeFMUState(s.getFMUState())
+    before = s.getFloat64(watched, nValues=len(watched) + 3 * 60)
+    s.setFloat64([vr["normal_force"]], [-5.0])
+    with pytest.raises(FMICallException) as exc:
+        s.doStep(t, 1e-3)
+    assert exc.value.status == 2, "fmi3Discard"
+    assert any(status == 2 and "normal_force = -5.0 N" in text and "the FMU state is unchanged" in text
+               for status, text in messages), messages
+    assert s.getFloat64(watched, nValues=len(watched) + 3 * 60) == before
+    s.setFloat64([vr["normal_force"]], [f])  # the image holds the inputs too: the one before the bad one
+    assert s.serializeFMUState(s.getFMUState()) == image
+    assert s.doStep(t, 1e-3)[3] == t + 1e-3, "usable again"
+    s.terminate()
+    s.freeInstance()
+
+
+def test_what_does_not_apply_is_fmi3_error_naming_the_function(unzipped, md):
+    from ctypes import byref, c_size_t
+
+    from fmpy.fmi1 import FMICallException
+
+    m3 = md[3, "StripDraw"]
+    vr = {v.name: v.valueReference for v in m3.modelVariables}
+    messages = []
+    s = _slave(unzipped[3, "StripDraw"], m3, "StripDraw", messages)
+
+    def refused(call, *words):
+        messages.clear()
+        with pytest.raises(FMICallException) as exc:
+            call()
+        assert exc.value.status == 3, exc.value
+        assert any(all(w in text for w in words) for status, text in messages if status == 3), (words, messages)
+
+    refused(lambda: s.getFloat64([vr["beta"]], nValues=451), "fmi3GetFloat64", "beta", "fmi3ExitInitializationMode")
+    s.enterInitializationMode(startTime=0.0)
+    refused(lambda: s.setUInt64([vr["n_nodes"]], [41]), "fmi3SetUInt64", "n_nodes", "structural parameter")
+    refused(lambda: s.setInt32([vr["n_elements"]], [40]), "fmi3SetInt32", "n_elements", "structural parameter")
+    s.exitInitializationMode()
+    refused(lambda: s.fmi3EnterEventMode(s.component), "fmi3EnterEventMode", "hasEventMode")
+    refused(lambda: s.fmi3EnterConfigurationMode(s.component), "fmi3EnterConfigurationMode", "Reconfiguration")
+    refused(lambda: s.fmi3GetNumberOfContinuousStates(s.component, byref(c_size_t())),
+            "fmi3GetNumberOfContinuousStates", "model exchange")
+    refused(lambda: s.getDirectionalDerivative([vr["pull_force"]], [vr["normal_force"]], [1.0]),
+            "fmi3GetDirectionalDerivative")
+    refused(lambda: s.getBoolean([vr["pull_force"]]), "fmi3GetBoolean", "no Boolean variables")
+    refused(lambda: s.getFloat64([vr["beta"]], nValues=3), "fmi3GetFloat64", "nValues = 3", "451 values")
+    refused(lambda: s.setFloat64([vr["tool_length"]], [0.02]), "fmi3SetFloat64", "tool_length", "fixed")
+    refused(lambda: s.setFloat64([vr["time"]], [1.0]), "fmi3SetFloat64", "time", "independent")
+    refused(lambda: s.getFloat64([10_000]), "fmi3GetFloat64", "value reference 10000")
+    assert s.getFloat64([vr["pull_force"]]) == [0.0], "still usable"
+    s.terminate()
+    s.freeInstance()
+
+
+def test_nothing_leaks_valgrind(hosts, unzipped, md, tmp_path):
+    if shutil.which("valgrind") is None:
+        pytest.skip("valgrind is not installed")
+    m3 = md[3, "StripDraw"]
+    v3 = {v.name: v.valueReference for v in m3.modelVariables}
+    _, proc = _run_host(hosts[3], unzipped[3, "StripDraw"], m3, tmp_path, _schedule(30),
+                        inputs=("normal_force", "grip_velocity"), outputs=("pull_force", "table_clamp_count"),
+                        sets=[("n_nodes", 61), ("field_output", str(tmp_path / "f.npz"))],
+                        extra=["--arrays", f"{v3['n_nodes']}:{v3['beta']},{v3['U']}", "--replay", "10",
+                               "--fuzz", "200", "5"])
+    cmd = ["valgrind", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect", "--error-exitcode=9",
+           "--quiet", *proc.args]
+    full = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert full.returncode == 0, full.stderr[-4000:]
