@@ -281,6 +281,9 @@ def _write_zip(out: Path, members: dict[str, bytes]) -> None:
                 info = zipfile.ZipInfo(name, date_time=_EPOCH)
                 info.external_attr = 0o644 << 16  # rw-r--r-- for tools that apply it
                 zf.writestr(info, data, compress_type=zipfile.ZIP_DEFLATED)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; the package is an ordinary file
         os.replace(tmp, out)
     finally:
         if os.path.exists(tmp):
