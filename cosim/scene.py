@@ -19,6 +19,8 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     # min_step = 1e-7
     # max_step = 1e-2
     # estimator = "step-doubling"   # or "energy" (needs [[power_bonds]])
+    # step_quantum = 2.5e-5         # step doubling: steps are multiples of 2 x this (an FMU's internal step,
+                                    # e.g. the strip's internal_step), min_step = 2 x it
 
     # [master.iterative]           # settings of the algorithm of that name (tribocosim.cosim.algorithms)
     # method = "quasi-newton"       # or "fixed-point"

@@ -19,6 +19,12 @@ doi:10.2478/meceng-2013-0005; MasterSim's and PyFMI's error control)
     global error is proportional to it (measured on the two-mass oscillator: about 0.5 tol).
     The run continues from Y2; the next step is H * min(4, max(0.2, safety * err**(-1/p))),
     since err ~ H**p. Rejected steps are rolled back and retried with the smaller step.
+    With ``step_quantum`` q every step is a whole multiple of 2 q (rounded to the nearest, within
+    [min_step, max_step] rounded inwards), so every step starts and every half step ends on the grid
+    k q: an FMU that integrates on that grid internally (the strip-draw model's ``internal_step``) then
+    takes the same internal steps for H and for 2 x H/2, and the estimate sees the coupling error
+    alone, not the FMU's own discretization (which is first order in its step and would hold the error
+    per unit step constant as H shrinks).
 Energy (Sadjina, Kyllingstad, Skjong & Pedersen 2017, Eng. with Computers 33:607-620,
 doi:10.1007/s00366-016-0492-8)
     Rollback-free. For each power bond (effort link e from B to A, flow link f from A to B)
@@ -48,7 +54,10 @@ class Adaptive:
     satisfy max_i |e_i| / (H (absolute_tolerance + tolerance |y_i|)) <= 1 (error per unit
     step: the tolerance is per second of simulated time); the energy estimator normalises the
     energy residual of each power bond by absolute_tolerance + tolerance * energy level.
-    ``estimator`` is a name of :data:`ESTIMATORS`.
+    ``estimator`` is a name of :data:`ESTIMATORS`. ``step_quantum`` (step doubling; default none):
+    steps are whole multiples of twice it, so that half steps land on the grid k * step_quantum
+    (set it to the strip's ``internal_step``); it must be a whole number of grid ticks
+    (min_step / 2**VARIABLE_SUBDIVISION), e.g. min_step = 2 * step_quantum.
     """
 
     tolerance: float = 1e-4
@@ -57,6 +66,7 @@ class Adaptive:
     max_step: float = 1e-2
     estimator: str = "step-doubling"
     safety: float = 0.9
+    step_quantum: float | None = None
 
     @property
     def atol(self) -> float:
@@ -73,11 +83,25 @@ class Adaptive:
         hmax = p.number(table, "max_step", key, max(d.max_step, step), positive=True)
         est = p.choice(table, "estimator", key, tuple(ESTIMATORS), d.estimator)
         safety = p.number(table, "safety", key, d.safety, positive=True)
+        quantum = p.number(table, "step_quantum", key, None, positive=True)
         if not hmin <= step <= hmax:
             p.add(key, f"need min_step <= experiment.step <= max_step, got {hmin!r} <= {step!r} <= {hmax!r}")
         if safety >= 1.0:
             p.add(f"{key}.safety", f"must be in (0, 1), got {safety!r}")
-        return cls(float(tol), atol if atol is None else float(atol), float(hmin), float(hmax), est, float(safety))
+        if quantum is not None:
+            from tribocosim.cosim.timegrid import VARIABLE_SUBDIVISION
+
+            tick = hmin / 2**VARIABLE_SUBDIVISION
+            ratio = quantum / tick
+            if est != StepDoubling.name:
+                p.add(f"{key}.step_quantum", f"is used by the step-doubling estimator only, not by {est!r}")
+            elif ratio < 0.5 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+                p.add(f"{key}.step_quantum", f"must be a whole number of grid ticks (min_step / "
+                      f"{2**VARIABLE_SUBDIVISION} = {tick!r} s), e.g. min_step = 2 * step_quantum; got {quantum!r}")
+            elif 2 * quantum > hmax * (1 + 1e-12):
+                p.add(f"{key}.step_quantum", f"two quanta ({2 * quantum!r} s) exceed max_step = {hmax!r}")
+        return cls(float(tol), atol if atol is None else float(atol), float(hmin), float(hmax), est, float(safety),
+                   quantum if quantum is None else float(quantum))
 
 
 class FixedStep:
@@ -128,8 +152,14 @@ class StepDoubling:
         grid = master.grid
         hmin = grid.even_ticks(self.s.min_step)
         hmax = grid.even_ticks(self.s.max_step)
+        q2 = 2 * grid.ticks(self.s.step_quantum) if self.s.step_quantum else 0
+        if q2:  # whole multiples of 2 quanta: the bounds rounded inwards, the step to the nearest
+            hmin = q2 * max(1, -(-hmin // q2))
+            hmax = max(hmin, q2 * (hmax // q2))
         while True:
             k = min(max(self.k, hmin), hmax)
+            if q2:
+                k = q2 * max(1, round(k / q2))
             remaining = grid.end_ticks - n
             if k >= remaining:
                 k = remaining
@@ -176,6 +206,8 @@ class StepDoubling:
             master.release(snap)
             master.stats.rejected_error += 1
             self.k = grid.even_ticks(k * grid.tick * factor)
+            if q2:  # rounded to whole quanta the smaller step could come back as k: shrink by one at least
+                self.k = min(self.k, k - q2)
 
 
 class EnergyControl:

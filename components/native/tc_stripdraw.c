@@ -35,10 +35,11 @@
  *   unless beta_threshold is set, the cap of a version 2 table is where s A_p reaches A_c at the interval's
  *   pressure and grip speed (friction.TableFriction.beta_cap).
  *
- * Coupling (model.py): a step is split into n_int = max(1, ceil(dt / h_max - 1e-9)) intervals with
- * h_max = window_courant l_e / |V0|; per interval mu is evaluated on the nodes that can reach the pad
- * (contact nodes +- ceil(window_courant) + 1) and held, the bar advanced, then beta updated from the nodal
- * slip increments with the contact weights averaged over the interval.
+ * Coupling (model.py): a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one
+ * piece, the step, when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max -
+ * 1e-9)) intervals with h_max = window_courant l_e / |V0|; per interval mu is evaluated on the nodes that can
+ * reach the pad (contact nodes +- ceil(window_courant) + 1) and held, the bar advanced, then beta updated from
+ * the nodal slip increments with the contact weights averaged over the interval.
  *
  * Outputs: pull_force = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 F_N)), friction_force
  * F_S = sum of nodal friction forces, mu_mean = F_S / F_N (Eq. 28), contact-weighted means under the pad.
@@ -62,6 +63,7 @@
 #define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* model._NEWTON_MAX_ITER; the tests build with fewer to exercise the halving */
 #endif
 #define NEWTON_RTOL 1e-10 /* model._NEWTON_RTOL: residual relative to the friction capacity + grip pull */
+#define GRID_TOLERANCE 1e-6 /* model.GRID_TOLERANCE: a step's end this close to a grid point (in internal_step) is on it */
 #define STATE_MAGIC 0x44534354u /* "TCSD" in little-endian bytes */
 #define STATE_VERSION 1u
 #define STATE_HEADER 16
@@ -624,31 +626,80 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     return TC_OK;
 }
 
-/* StripDrawModel._advance: split the step into coupling intervals. */
+/* model.grid_pieces: the pieces of the step [t, t + dt] cut at the grid points k tau strictly inside it, as at
+ * most three runs of len[j] x count[j] (counts as doubles: they are integers, and a step with more pieces than
+ * TC_STRIPDRAW_MAX_INTERVALS is refused by the caller before any is taken). Returns the number of runs. Where
+ * Python's math.floor/ceil of an infinite t / tau raises OverflowError, the counts come out infinite. */
+static int grid_pieces(double t, double dt, double tau, double len[3], double count[3]) {
+    if (!(tau > 0)) {
+        len[0] = dt;
+        count[0] = 1.0;
+        return 1;
+    }
+    const double end = t + dt;
+    const double a = t / tau;
+    const double b = end / tau;
+    const double ka = nearbyint(a); /* round(); ties (never within the tolerance) may go either way */
+    const double kb = nearbyint(b);
+    const int start_on = fabs(a - ka) <= GRID_TOLERANCE;
+    const int end_on = fabs(b - kb) <= GRID_TOLERANCE;
+    const double first = start_on ? ka + 1.0 : floor(a) + 1.0; /* first grid point inside */
+    const double last = end_on ? kb - 1.0 : ceil(b) - 1.0;     /* last grid point inside */
+    if (!isfinite(first) || !isfinite(last)) {
+        len[0] = dt;
+        count[0] = INFINITY;
+        return 1;
+    }
+    if (first > last) {
+        len[0] = start_on && end_on && kb == ka + 1.0 ? tau : dt;
+        count[0] = 1.0;
+        return 1;
+    }
+    int k = 0;
+    len[k] = start_on ? tau : first * tau - t;
+    count[k++] = 1.0;
+    if (last > first) {
+        len[k] = tau;
+        count[k++] = last - first;
+    }
+    len[k] = end_on ? tau : end - last * tau;
+    count[k++] = 1.0;
+    return k;
+}
+
+/* StripDrawModel._advance: cut the step on the internal grid, each piece into coupling intervals. */
 static int advance(tc_stripdraw *m, double dt, double fn, double vg, tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
     char r1[TC_REPR_SIZE], r2[TC_REPR_SIZE];
     m->normal_force = fn;
     const double pressure = fn / (p->tool_length * p->tool_width);
     const double h_max = vg != 0 ? p->window_courant * m->le / fabs(vg) : INFINITY;
-    const double q = ceil(dt / h_max - 1e-9);
-    if (!(q <= TC_STRIPDRAW_MAX_INTERVALS))
+    double len[3], count[3], n_int[3], h[3];
+    const int runs = grid_pieces(m->time, dt, p->internal_step, len, count);
+    double total = 0.0, total_sub = 0.0; /* intervals and explicit steps of the whole step */
+    for (int j = 0; j < runs; ++j) {
+        const double q = ceil(len[j] / h_max - 1e-9);
+        n_int[j] = q > 1.0 ? q : 1.0;
+        h[j] = len[j] / n_int[j];
+        total += count[j] * n_int[j];
+        if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+            const double qs = ceil(h[j] / m->dt_explicit - 1e-9);
+            total_sub += count[j] * n_int[j] * (qs > 1.0 ? qs : 1.0);
+        }
+    }
+    if (!(total <= TC_STRIPDRAW_MAX_INTERVALS))
         return tc_fail(msg, TC_DISCARD,
                        "dt = %s s at grip_velocity = %s m/s needs %.3g coupling intervals; at most %.0e are allowed",
-                       tc_repr_double(dt, r1), tc_repr_double(vg, r2), q, TC_STRIPDRAW_MAX_INTERVALS);
-    const long long n_int = q > 1.0 ? (long long)q : 1;
-    const double h = dt / (double)n_int;
-    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
-        const double qs = ceil(h / m->dt_explicit - 1e-9);
-        const double total = (double)n_int * (qs > 1.0 ? qs : 1.0);
-        if (!(total <= TC_STRIPDRAW_MAX_SUBSTEPS))
-            return tc_fail(msg, TC_DISCARD,
-                           "dt = %s s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step",
-                           tc_repr_double(dt, r1), total, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
-    }
-    for (long long k = 0; k < n_int; ++k) {
-        int rc = interval(m, h, pressure, vg, msg);
-        if (rc != TC_OK) return rc;
+                       tc_repr_double(dt, r1), tc_repr_double(vg, r2), total, TC_STRIPDRAW_MAX_INTERVALS);
+    if (!(total_sub <= TC_STRIPDRAW_MAX_SUBSTEPS))
+        return tc_fail(msg, TC_DISCARD, "dt = %s s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step",
+                       tc_repr_double(dt, r1), total_sub, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
+    for (int j = 0; j < runs; ++j) {
+        const long long n = (long long)count[j] * (long long)n_int[j];
+        for (long long k = 0; k < n; ++k) {
+            int rc = interval(m, h[j], pressure, vg, msg);
+            if (rc != TC_OK) return rc;
+        }
     }
     return TC_OK;
 }

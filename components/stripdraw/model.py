@@ -39,6 +39,18 @@ the nodal slip increments (implicit upwind, exact mass balance) and capped where
 overrides it). Both integrators share this, so
 their comparison measures the bar integrator alone.
 
+Internal time grid (``internal_step`` tau > 0). Within a coupling interval mu and the contact overlaps are
+held, so the outputs lag by a fraction of the interval: they are first order in the model's own step, and
+co-simulation step doubling (one step H against two steps H/2), whose criterion is the error per unit
+step, would measure that constant lag instead of the coupling error and shrink the step without end.
+With tau > 0 the model integrates on the fixed absolute grid t_k = k tau (k an integer, t the model's
+time, the sum of the requested steps): a step [t, t + dt] is first cut at the grid points strictly inside it
+(:func:`grid_pieces`), and each piece is split into coupling intervals as above. An end of the step within
+``GRID_TOLERANCE`` tau of a grid point counts as that grid point (no sliver piece), and a piece between two
+grid points is exactly tau long. So one step H and two steps H/2 from a grid point take the same
+intervals, bit for bit, whenever t + H/2 is a grid point too, and step doubling sees only the coupling
+(the inputs) change. tau = 0 (default) leaves one piece, the requested step.
+
 Outputs (one pad, one face; ``pull_force`` for the whole strip):
 
 - ``pull_force`` = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 normal_force));
@@ -81,6 +93,38 @@ _SCALARS = ("time", "n_steps", "friction_force", "reaction", "normal_force", "cl
 _MAX_HALVINGS = 12
 _NEWTON_MAX_ITER = 60
 _NEWTON_RTOL = 1e-10  # residual tolerance relative to the friction capacity + grip pull
+#: a step's end within this fraction of internal_step of a grid point is on the grid point (the model's time is
+#: the float sum of the requested steps, whose rounding is many orders below it over any practical run)
+GRID_TOLERANCE = 1e-6
+
+
+def grid_pieces(t: float, dt: float, tau: float) -> list[tuple[float, int]]:
+    """The pieces of the step [t, t + dt] cut at the grid points k * tau strictly inside it, as runs
+    ``(length, count)`` in time order (``[(dt, 1)]`` when tau <= 0 or no grid point is inside).
+
+    An end within ``GRID_TOLERANCE * tau`` of a grid point counts as that grid point; a piece between two
+    grid points is ``tau`` exactly (not a difference of rounded times), so that the same grid interval has
+    the same length whichever step it belongs to. The grid indices are integers held in floats (exact below
+    2**53), as the native model holds them.
+    """
+    if not tau > 0:
+        return [(dt, 1)]
+    end = t + dt
+    a = t / tau
+    b = end / tau
+    ka = float(round(a))
+    kb = float(round(b))
+    start_on = abs(a - ka) <= GRID_TOLERANCE
+    end_on = abs(b - kb) <= GRID_TOLERANCE
+    first = ka + 1.0 if start_on else math.floor(a) + 1.0  # first grid point inside
+    last = kb - 1.0 if end_on else math.ceil(b) - 1.0  # last grid point inside
+    if first > last:
+        return [(tau, 1)] if start_on and end_on and kb == ka + 1.0 else [(dt, 1)]
+    runs = [(tau if start_on else first * tau - t, 1)]
+    if last > first:
+        runs.append((tau, int(last - first)))
+    runs.append((tau if end_on else end - last * tau, 1))
+    return runs
 
 
 class StripDrawModel:
@@ -201,10 +245,11 @@ class StripDrawModel:
         self.normal_force = fn
         pressure = p.pressure(fn)
         h_max = p.window_courant * m.element_length / abs(vg) if vg != 0 else math.inf
-        n_int = max(1, math.ceil(dt / h_max - 1e-9))
-        h = dt / n_int
-        for _ in range(n_int):
-            self._interval(h, pressure, vg)
+        for piece, count in grid_pieces(self.time, dt, p.internal_step):
+            n_int = max(1, math.ceil(piece / h_max - 1e-9))
+            h = piece / n_int
+            for _ in range(count * n_int):
+                self._interval(h, pressure, vg)
 
     def _interval(self, h: float, pressure: float, vg: float) -> None:
         p, m = self.params, self.mesh

@@ -99,6 +99,11 @@ class StripDrawParameters:
     window_courant: float = _p(
         2.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0, False
     )
+    internal_step: float = _p(
+        0.0, "s", "fixed internal time grid k * internal_step: every requested step is cut at the grid points "
+        "inside it, so that one step H and two steps H/2 take the same internal intervals when H/2 is a multiple "
+        "of it (step-doubling error control); 0: the coupling intervals follow the requested step", 0.0, 1.0
+    )
 
     def __post_init__(self) -> None:
         validate_fields(self)

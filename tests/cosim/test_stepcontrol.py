@@ -107,3 +107,109 @@ def test_step_doubling_shrinks_on_discard(tmp_path, make_scene, fmu_dir):
     inside = (mid >= 0.3) & (mid < 0.6)  # where Fragile refuses steps longer than 0.01
     assert steps[inside].max() <= 0.01 + 1e-12 and steps[~inside].max() > 0.02
     assert res.metadata["steps"]["rejected_failure"] > 0
+
+
+# ------------------------------------------------------------------ step_quantum (issue 18)
+def test_step_quantum_puts_every_step_and_half_step_on_its_grid(tmp_path, osc_scene):
+    """step_quantum q: every step is a multiple of 2 q (and at least 2 q), so every communication point, the
+    half steps included, lies on the grid k q; the tolerance is still met."""
+    tol, q = 1e-3, 2.5e-3
+    res = run(osc_scene(tmp_path, name="quantum.toml", stop=30.0, step=0.01, extrapolation=1,
+                        extra_master=f'[master.adaptive]\ntolerance = {tol}\nmin_step = {2 * q}\nmax_step = 1.0\n'
+                                     f'estimator = "step-doubling"\nstep_quantum = {q}'), write=False)
+    k = res.time[:-1] / q
+    np.testing.assert_allclose(k, np.round(k), rtol=0, atol=1e-6, err_msg="communication points off the grid k q")
+    pairs = np.diff(res.time)[::2]  # step doubling records both halves of each accepted step
+    assert pairs.min() >= q * (1 - 1e-9)
+    assert res.metadata["steps"]["rejected_error"] > 0
+    assert _sup_error(res) <= tol
+
+
+class _FakeMaster:
+    """The primitives StepDoubling uses, for one signal that a step of k ticks leaves at 1 + c k**3: the one-step
+    and two-half-step values differ by 7/8 c k**3, so the error per unit step grows as k**2 (order 2)."""
+
+    def __init__(self, grid, c):
+        from types import SimpleNamespace
+
+        self.grid, self.c, self.n = grid, c, 0
+        self.system = SimpleNamespace(y=np.zeros(1))
+        self.continuous = np.array([True])
+        self.stats = SimpleNamespace(rejected_failures=0, rejected_error=0, error_estimates=[])
+        self.attempts = []
+
+    def snapshot(self):
+        return self.n
+
+    def restore(self, snap):
+        self.n = snap
+
+    def release(self, snap):
+        pass
+
+    def attempt(self, n, k):
+        self.attempts.append(k)
+        if len(self.attempts) > 100:
+            raise RuntimeError(f"the controller loops: attempts {sorted(set(self.attempts))}")
+        self.system.y = np.array([1.0 + self.c * k**3])
+        return True
+
+    def accept(self, n):
+        self.n = n
+
+    def fail_at_minimum(self, n, k):
+        raise CosimStepError(f"minimum at {n}")
+
+
+def test_a_rejected_step_shrinks_by_a_quantum_at_least():
+    """A rejection whose smaller step rounds back to the same whole number of double quanta (err = 1.05 at four:
+    0.9 x 4 / sqrt(1.05) = 3.5 rounds to 4) must still shrink the step, not retry it for ever."""
+    from tribocosim.cosim.stepcontrol import Adaptive, StepDoubling
+    from tribocosim.cosim.timegrid import TimeGrid
+
+    q, tol = 1e-3, 1e-3
+    grid = TimeGrid.variable(0.0, 1.0, 2 * q)  # 32 ticks per quantum
+    q2 = 2 * grid.ticks(q)
+    k_bad = 4 * q2
+    # err = |y2 - y1| / 3 / (h (atol + tol |y2|)) with |y2 - y1| = 7/8 c k^3 and y2 ~ 1
+    c = 1.05 * 3 * (k_bad * grid.tick) * (tol + tol) / (7 / 8 * k_bad**3)
+    ctrl = StepDoubling(Adaptive(tolerance=tol, min_step=2 * q, max_step=1.0, step_quantum=q), k_bad, order=2)
+    master = _FakeMaster(grid, c)
+    taken = ctrl.advance(master, 0)
+    assert master.stats.rejected_error == 1 and taken == 3 * q2
+    assert master.stats.error_estimates[0] < 1.0
+
+
+def test_step_quantum_is_checked_against_the_grid(tmp_path, osc_scene):
+    from tribocosim.components.errors import SceneError
+
+    bad = {"1.5e-7": "whole number of grid ticks", "0.6": "exceed max_step"}
+    for quantum, words in bad.items():
+        scene = osc_scene(tmp_path, name=f"bad{quantum}.toml", stop=1.0, step=0.01, extrapolation=1,
+                          extra_master=f'[master.adaptive]\ntolerance = 1e-3\nmin_step = 1e-5\nmax_step = 1.0\n'
+                                       f'estimator = "step-doubling"\nstep_quantum = {quantum}')
+        with pytest.raises(SceneError, match=words):
+            run(scene, write=False)
+    scene = osc_scene(tmp_path, name="badest.toml", stop=1.0, step=0.01, extrapolation=1, extra=BOND,
+                      extra_master='[master.adaptive]\ntolerance = 1e-3\nmin_step = 1e-5\nmax_step = 1.0\n'
+                                   'estimator = "energy"\nstep_quantum = 1e-4')
+    with pytest.raises(SceneError, match="step-doubling estimator only"):
+        run(scene, write=False)
+
+
+def test_step_doubling_on_the_strips_internal_grid_does_not_collapse():
+    """Issue 18 on the demo (press + strip + drive, first 0.2 s): without the strip's internal grid its own
+    first-order lag keeps the error per unit step above the tolerance and every step is the smallest allowed;
+    with internal_step = step_quantum the estimate sees the coupling alone and the step grows after the ramps."""
+    ad = {"tolerance": 1e-2, "min_step": 1e-4, "max_step": 0.05, "estimator": "step-doubling"}
+    base = {"experiment.stop": 0.2, "master.extrapolation": 1, "master.adaptive": ad}
+    plain = run("demo", overrides=base, write=False)
+    grid = run("demo", overrides={**base, "fmus.strip.parameters.internal_step": 5e-5,
+                                  "master.adaptive": {**ad, "step_quantum": 5e-5}}, write=False)
+    late = {}
+    for name, res in (("plain", plain), ("grid", grid)):
+        steps = np.diff(res.time)[::2] * 2  # the step H of each accepted pair of half steps
+        late[name] = steps[res.time[1::2][: len(steps)] > 0.1]
+    assert late["plain"].max() <= 2e-4 * (1 + 1e-9), "without the grid the step stays at min_step"
+    assert late["grid"].min() >= 20 * late["plain"].max()
+    assert grid.metadata["fmi_calls"]["strip"]["doStep"] < 0.5 * plain.metadata["fmi_calls"]["strip"]["doStep"]

@@ -301,6 +301,56 @@ def test_pressure_ramp_with_reversing_grip_matches_python_explicit(native_core, 
     _assert_agree(a, b, py, nat, f"explicit, {law}")
 
 
+# ------------------------------------------------------------------------------------------------------
+# the internal time grid (internal_step > 0): model.grid_pieces
+# ------------------------------------------------------------------------------------------------------
+def _grid_schedule(n_steps, tau, base):
+    """The reversing pressure ramp with step lengths on and off the grid k tau: whole multiples, halves that
+    return to the grid, fractions that leave it, an end within the grid tolerance of a grid point (1e-9 tau
+    past it), a step shorter than the tolerance, and long steps that need several coupling intervals per piece."""
+    factors = (3.0, 0.5, 0.5, 0.37, 2.1, 0.53, 1.0 + 1e-9, 1e-8, 4.0, 7.25)
+    ramp = _pressure_ramp_reversing(n_steps, base, 60 * base)
+    return [(factors[k % len(factors)] * tau, fn, vg) for k, (_, fn, vg) in enumerate(ramp)]
+
+
+@pytest.mark.parametrize("law,velocity", [("table", "grip"), ("closed_form", "slip_rate")])
+def test_internal_grid_matches_python_implicit(native_core, table, law, velocity):
+    p = StripDrawParameters(friction_model=law, friction_velocity=velocity, draw_length=0.03, n_elements=150,
+                            internal_step=4e-4)
+    py, nat = _pair(native_core, p, table)
+    a, b = _run_both(py, nat, _grid_schedule(200, 4e-4, 1e-3) + [(7e-3, 3 * F_N, 0.3)] * 3)
+    _assert_agree(a, b, py, nat, f"internal grid, implicit, {law}, {velocity}")
+    assert nat.time == py.time
+
+
+def test_internal_grid_matches_python_explicit(native_core, table):
+    p = StripDrawParameters(friction_model="closed_form", integrator="explicit", draw_length=0.01, n_elements=60,
+                            beta_initial=0.05, internal_step=7e-5)
+    py, nat = _pair(native_core, p, table)
+    a, b = _run_both(py, nat, _grid_schedule(12, 7e-5, 2e-4))
+    _assert_agree(a, b, py, nat, "internal grid, explicit")
+
+
+def test_internal_grid_step_doubling_is_bit_identical_in_c(native_core, table):
+    """From a grid point, one step H and two steps H/2 (H/2 a multiple of internal_step, inputs held) end in
+    the same state, byte for byte; without the grid they do not."""
+    for tau, same in ((2.5e-4, True), (0.0, False)):
+        p = StripDrawParameters(draw_length=0.03, n_elements=150, internal_step=tau)
+        nat = native_core.stripdraw(p, table)
+        for k in range(40):
+            nat.step(2.5e-4, {"normal_force": F_N, "grip_velocity": _ramp((k + 0.5) * 2.5e-4)})
+        saved = nat.get_state()
+        u = {"normal_force": F_N, "grip_velocity": 0.06}
+        one = nat.step(1e-3, u)
+        fields_one = nat.fields()
+        nat.set_state(saved)
+        nat.step(5e-4, u)
+        two = nat.step(5e-4, u)
+        fields_two = nat.fields()
+        identical = one == two and all(np.array_equal(fields_one[k], fields_two[k]) for k in fields_one)
+        assert identical == same, f"internal_step = {tau}"
+
+
 @pytest.mark.parametrize("max_iter", [3, 1])
 def test_step_halving_matches_python(native_core_newton, table, monkeypatch, max_iter):
     """With the Newton limit lowered, steps are halved (up to 12 times; with 1 iteration some steps fail even
@@ -420,8 +470,10 @@ def test_set_state_refuses_foreign_images(native_core):
         assert nat.get_state() == after
 
 
-@pytest.mark.parametrize("integrator,policy", [("implicit", "clamp"), ("implicit", "error"), ("explicit", "clamp")])
-def test_random_bad_inputs_are_discarded_like_python_with_the_state_unchanged(native_core, table, integrator, policy):
+@pytest.mark.parametrize("integrator,policy,tau", [("implicit", "clamp", 0.0), ("implicit", "error", 0.0),
+                                                  ("explicit", "clamp", 0.0), ("implicit", "clamp", 3e-4)])
+def test_random_bad_inputs_are_discarded_like_python_with_the_state_unchanged(native_core, table, integrator, policy,
+                                                                               tau):
     """1500 random calls with NaN, inf, negative, tiny and huge inputs: never a crash; a discarded step leaves
     the state bit-identical; the native model accepts exactly the steps the Python model takes, with the same
     results, and refuses the others (the input checks with Python's messages). Steps that would need more than
@@ -432,7 +484,8 @@ def test_random_bad_inputs_are_discarded_like_python_with_the_state_unchanged(na
     fns = specials + [1e3, F_N, 3 * F_N]
     vgs = specials + [0.08, -0.08, 1.0]
     rng = np.random.default_rng(6)
-    p = StripDrawParameters(integrator=integrator, draw_length=0.01, n_elements=20, table_policy=policy)
+    p = StripDrawParameters(integrator=integrator, draw_length=0.01, n_elements=20, table_policy=policy,
+                            internal_step=tau)
     py, nat = _pair(native_core, p, table)
     counts = {"ok": 0, "refused": 0, "capped": 0}
     for _ in range(1500):

@@ -1,0 +1,203 @@
+"""The strip-draw model's internal time grid (``internal_step``; model.grid_pieces), issue 18 item 1.
+
+Within a coupling interval the model holds mu and the contact overlaps, so its outputs are first order in its
+own step: one step H and two steps H/2 from the same state differ by e ~ c H (c: a few N/s to thousands of
+N/s), and step doubling, whose criterion is e / H, cannot shrink that. On the grid k * internal_step the two
+take the same internal intervals, so with inputs held they agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tribocosim.components.errors import ParameterError
+from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.components.stripdraw.friction import make_friction_law
+from tribocosim.components.stripdraw.model import GRID_TOLERANCE, StripDrawModel, grid_pieces
+from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.table import read_table
+
+F_N = 12250.0  # 10 MPa on the 35 x 35 mm pad
+OUTPUTS = ("pull_force", "friction_force", "mu_mean", "beta_max", "grip_position", "table_clamp_count")
+
+
+def _expand(runs):
+    return [length for length, count in runs for _ in range(count)]
+
+
+def _model(**kw) -> StripDrawModel:
+    p = StripDrawParameters(**{"draw_length": 0.03, "n_elements": 150, **kw})
+    table = read_table(DEFAULT_TABLE) if p.friction_model == "table" else None
+    return StripDrawModel(p, make_friction_law(p, table))
+
+
+def _ramp_up(m: StripDrawModel, steps: int, dt: float) -> None:
+    """Pads loaded, grip ramped to 0.08 m/s over the first ``steps`` steps."""
+    for k in range(steps):
+        m.step(dt, {"normal_force": F_N, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / steps)})
+
+
+def _doubling(m: StripDrawModel, H: float, inputs: dict) -> tuple[dict, dict, dict, dict]:
+    """Outputs and fields after one step H and after two steps H/2 from the model's current state."""
+    saved = m.get_state()
+    one = m.step(H, inputs)
+    f_one = m.fields()
+    m.set_state(saved)
+    m.step(0.5 * H, inputs)
+    two = m.step(0.5 * H, inputs)
+    f_two = m.fields()
+    m.set_state(saved)
+    return one, two, f_one, f_two
+
+
+# ------------------------------------------------------------------ grid_pieces
+def test_without_a_grid_the_step_is_one_piece():
+    assert grid_pieces(0.123, 4.5e-3, 0.0) == [(4.5e-3, 1)]
+    assert grid_pieces(0.0, 1e-3, 0.0) == [(1e-3, 1)]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pieces_cut_at_the_grid_points_and_cover_the_step(seed):
+    """Random steps: pieces in (0, tau], interior ones exactly tau, the cuts on the grid, their sum the step to
+    within the tolerance at each end."""
+    rng = np.random.default_rng(seed)
+    tau = float(rng.choice([1e-4, 2.5e-4, 7e-5]))
+    for _ in range(200):
+        t = float(rng.uniform(0.0, 2.0))
+        if rng.random() < 0.3:
+            t = round(t / tau) * tau  # start on a grid point
+        dt = float(rng.choice([rng.uniform(0.0, 0.5), rng.uniform(0.5, 3.0), rng.uniform(3.0, 40.0)])) * tau
+        pieces = _expand(grid_pieces(t, dt, tau))
+        assert all(0.0 < d <= tau * (1 + 2.1 * GRID_TOLERANCE) for d in pieces) or len(pieces) == 1
+        assert all(d == tau for d in pieces[1:-1]), "a piece between two grid points is tau exactly"
+        assert math.isclose(sum(pieces), dt, rel_tol=0, abs_tol=2.1 * GRID_TOLERANCE * tau + 1e-15)
+        if len(pieces) > 1:  # the first cut is the first grid point after t
+            cut = t + pieces[0]
+            assert abs(cut / tau - round(cut / tau)) <= 1.1 * GRID_TOLERANCE
+
+
+def test_ends_within_the_tolerance_of_a_grid_point_are_on_it():
+    tau = 1e-4
+    near = 7 * tau * (1 + 0.3 * GRID_TOLERANCE / 7)  # 0.3 tolerance past grid point 7
+    assert grid_pieces(3 * tau, near - 3 * tau, tau) == [(tau, 1), (tau, 2), (tau, 1)]
+    assert grid_pieces(near, 2 * tau, tau) == [(tau, 1), (tau, 1)]
+    assert grid_pieces(7 * tau, 1e-3 * GRID_TOLERANCE * tau, tau) == [(1e-3 * GRID_TOLERANCE * tau, 1)]
+    assert grid_pieces(2 * tau, tau, tau) == [(tau, 1)]  # from grid point to grid point: tau, not a difference
+    off = grid_pieces(2.5 * tau, tau, tau)  # half way between grid points: cut at 3 tau
+    assert len(off) == 2 and math.isclose(off[0][0], 0.5 * tau) and math.isclose(off[1][0], 0.5 * tau)
+
+
+@pytest.mark.parametrize("t_grid,half", [(0, 1), (3, 1), (50, 2), (4999, 5), (12345, 17)])
+def test_two_half_steps_take_the_intervals_of_one_step(t_grid, half):
+    """From a grid point t (a sum of rounded steps, as the model's time), H/2 a multiple of tau: the pieces of
+    [t, t + H/2] and [t + H/2, t + H] are those of [t, t + H], to the bit."""
+    tau = 1e-4
+    t = 0.0
+    for _ in range(t_grid):  # the model's time: accumulated
+        t += tau
+    H = 2 * half * tau
+    whole = _expand(grid_pieces(t, H, tau))
+    halves = _expand(grid_pieces(t, 0.5 * H, tau)) + _expand(grid_pieces(t + 0.5 * H, 0.5 * H, tau))
+    assert whole == halves == [tau] * (2 * half)
+
+
+# ------------------------------------------------------------------ the model
+@pytest.mark.parametrize("kw", [dict(friction_model="closed_form"), dict(friction_model="table"),
+                                dict(friction_model="closed_form", friction_velocity="slip_rate", archard_k=1e-3),
+                                dict(friction_model="constant", archard_k=0.0)])
+def test_one_step_equals_two_half_steps_on_the_grid(kw):
+    """Inputs held: one step H and two steps H/2 (H/2 = 1, 2, 4 x internal_step) give the same outputs and
+    fields bit for bit, during the ramp and in the steady draw."""
+    tau = 1e-4
+    m = _model(internal_step=tau, **kw)
+    for n_ramp in (10, 40):
+        _ramp_up(m, n_ramp, 5e-4)
+        for H in (2 * tau, 4 * tau, 8 * tau):
+            one, two, f_one, f_two = _doubling(m, H, {"normal_force": F_N, "grip_velocity": 0.08})
+            for name in OUTPUTS:
+                assert one[name] == two[name], f"{kw}, t = {m.time:.4g} s, H = {H:g} s: {name}"
+            for key in f_one:
+                np.testing.assert_array_equal(f_one[key], f_two[key], err_msg=f"{kw}, H = {H:g} s: field {key}")
+
+
+def test_explicit_integrator_on_the_grid_as_well():
+    tau = 5e-5
+    m = _model(integrator="explicit", friction_model="closed_form", draw_length=0.005, n_elements=30,
+               internal_step=tau)
+    _ramp_up(m, 4, 1e-4)
+    one, two, _, _ = _doubling(m, 4 * tau, {"normal_force": F_N, "grip_velocity": 0.08})
+    assert all(one[k] == two[k] for k in OUTPUTS)
+
+
+def test_without_the_grid_the_difference_is_first_order():
+    """The cause (the lead's diagnosis, issue 18): internal_step = 0, closed-form friction with wear, steady
+    draw: |y(H) - y(2 x H/2)| / H of friction_force is the same for H from 0.2 to 1.6 ms (first order in the
+    model's own step, so step doubling's error per unit step does not fall as the step shrinks); with the grid
+    it is 0."""
+    ratios = {}
+    for tau in (0.0, 1e-4):
+        m = _model(friction_model="closed_form", internal_step=tau)
+        _ramp_up(m, 20, 5e-4)
+        ratios[tau] = []
+        for H in (1.6e-3, 8e-4, 4e-4, 2e-4):
+            one, two, _, _ = _doubling(m, H, {"normal_force": F_N, "grip_velocity": 0.08})
+            ratios[tau].append(abs(two["friction_force"] - one["friction_force"]) / H)
+    e_over_h = np.array(ratios[0.0])
+    assert e_over_h.min() > 100.0, e_over_h  # N/s: ~1950 N/s here
+    assert e_over_h.max() / e_over_h.min() < 1.05, f"e/H should not depend on H: {e_over_h}"
+    assert ratios[1e-4] == [0.0] * 4
+
+
+def test_a_run_on_the_grid_does_not_depend_on_the_communication_step():
+    """Inputs held over each 1 ms: steps of 1 ms, 0.5 ms or 0.1 ms (all on the 0.1 ms grid) end bit-identical."""
+    ends = []
+    for dt in (1e-3, 5e-4, 1e-4):
+        m = _model(friction_model="closed_form", internal_step=1e-4)
+        n_sub = int(round(1e-3 / dt))
+        for k in range(30):
+            u = {"normal_force": F_N * min(1.0, (k + 1) / 10), "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 20)}
+            for _ in range(n_sub):
+                out = m.step(dt, u)
+        ends.append((tuple(out[k] for k in OUTPUTS), m.U.copy(), m.beta.copy()))
+    for other in ends[1:]:
+        assert other[0] == ends[0][0]
+        np.testing.assert_array_equal(other[1], ends[0][1])
+        np.testing.assert_array_equal(other[2], ends[0][2])
+
+
+#: the closed-form law with every parameter it reads spelled out (the regression numbers must not move with defaults)
+PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", mu0=0.15, alpha_b=63.37, alpha_v_ref=0.0,
+                  kappa=2.0, rms_slope=0.34, e_star=55e9, particle_area_scale=1.0, archard_k=1e-4, hardness=0.8e9,
+                  zeta=0.2, particle_thickness=0.5e-6, beta_threshold=0.0, beta_initial=0.0)
+
+
+def test_internal_step_zero_is_bit_identical_to_before():
+    """Regression numbers derived from the model before internal_step existed (commit c950822): 60 steps of
+    1, 0.37 and 2.3 ms, closed form with slip-rate velocity, varying normal force, ramped grip."""
+    m = _model(**PINNED_LAW)
+    for k in range(60):
+        dt = (1e-3, 3.7e-4, 2.3e-3)[k % 3]
+        out = m.step(dt, {"normal_force": F_N * (1 + 0.2 * ((k % 7) / 7)), "grip_velocity": 0.08 * min(1, (k + 1) / 12)})
+    assert out["pull_force"] == 3424.2322477864595
+    assert out["friction_force"] == 1712.5117604633908
+    assert out["beta_max"] == 0.014484737859703082
+    assert float(m.beta.sum()) == 0.6333113201955827
+
+
+def test_a_grid_never_crossed_is_no_grid():
+    """internal_step = 1 s, a run shorter than 1 s: every step is one piece, as with internal_step = 0."""
+    runs = []
+    for tau in (0.0, 1.0):
+        m = _model(friction_model="closed_form", internal_step=tau)
+        _ramp_up(m, 30, 7e-4)
+        runs.append(m.outputs())
+    assert runs[0] == runs[1]
+
+
+@pytest.mark.parametrize("bad", [-1e-4, 2.0, math.nan])
+def test_internal_step_is_validated(bad):
+    with pytest.raises(ParameterError, match="internal_step"):
+        StripDrawParameters(internal_step=bad)
