@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from tribocosim.components.errors import CosimStepError, RunFailed
+from tribocosim.components.errors import ConvergenceError, CosimStepError, RunFailed
 from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.graph import gauss_seidel_order
 from tribocosim.cosim.master import Master
@@ -231,7 +231,9 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     try:
         m.initialize(ex.start, ex.stop, b.parameters)
         m.run()
-    except CosimStepError as exc:  # a step that could not be recovered: keep what was accepted
+    # a step that could not be recovered (an FMU's refusal, a non-finite output, a coupling iteration that
+    # does not converge): keep what was accepted
+    except (CosimStepError, ConvergenceError) as exc:
         failure = exc
     finally:
         if bar is not None:

@@ -109,3 +109,26 @@ done:
     buf[k < size ? k : size - 1] = '\0';
     return buf;
 }
+
+/* NumPy's pairwise summation (numpy/_core/src/umath/loops_utils.h), as np.sum reduces a contiguous
+ * float64 array: plain loop below 8 terms, eight interleaved partial sums up to 128, halves above. */
+double tc_pairwise_sum(const double *a, size_t n) {
+    if (n < 8) {
+        double res = 0.0;
+        for (size_t i = 0; i < n; ++i) res += a[i];
+        return res;
+    }
+    if (n <= 128) {
+        double r[8];
+        size_t i;
+        for (i = 0; i < 8; ++i) r[i] = a[i];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (size_t j = 0; j < 8; ++j) r[j] += a[i + j];
+        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; ++i) res += a[i];
+        return res;
+    }
+    size_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return tc_pairwise_sum(a, n2) + tc_pairwise_sum(a + n2, n - n2);
+}

@@ -20,14 +20,6 @@
 #  endif
 #else
 #  define TC_API
-/* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
-#define TC_REPR_SIZE 32
-TC_API const char *tc_repr_double(double x, char buf[TC_REPR_SIZE]);
-
-/* Python's repr() of a str (quotes chosen and escapes as Python does for ASCII; other UTF-8 bytes are
- * copied), truncated to size; returns buf. */
-TC_API const char *tc_repr_string(const char *s, char *buf, size_t size);
-
 #endif
 
 enum tc_status {
@@ -49,6 +41,9 @@ int tc_fail(tc_msg msg, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* NumPy's pairwise summation of a contiguous float64 array, as np.sum reduces it (sums match bit for bit). */
+double tc_pairwise_sum(const double *a, size_t n);
 
 /* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
 #define TC_REPR_SIZE 32

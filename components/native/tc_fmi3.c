@@ -418,54 +418,30 @@ fmi3Status fmi3GetUInt64(fmi3Instance inst, const fmi3ValueReference valueRefere
     return fmi3OK;
 }
 
-fmi3Status fmi3GetFloat32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Float32 values[],
-                          size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetFloat32", "Float32", vr, nvr);
-}
-fmi3Status fmi3GetInt8(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Int8 values[],
-                       size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetInt8", "Int8", vr, nvr);
-}
-fmi3Status fmi3GetUInt8(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3UInt8 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetUInt8", "UInt8", vr, nvr);
-}
-fmi3Status fmi3GetInt16(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Int16 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetInt16", "Int16", vr, nvr);
-}
-fmi3Status fmi3GetUInt16(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3UInt16 values[],
-                         size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetUInt16", "UInt16", vr, nvr);
-}
-fmi3Status fmi3GetUInt32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3UInt32 values[],
-                         size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetUInt32", "UInt32", vr, nvr);
-}
-fmi3Status fmi3GetInt64(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Int64 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetInt64", "Int64", vr, nvr);
-}
-fmi3Status fmi3GetBoolean(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
-                          size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3GetBoolean", "Boolean", vr, nvr);
-}
+/* The scalar types this project's FMUs have no variables of: getting or setting any returns fmi3Error
+ * naming the function and the type (nothing to get or set is fmi3OK). */
+#define TC_NO_VARIABLES_OF(T)                                                                                    \
+    fmi3Status fmi3Get##T(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3##T values[],      \
+                          size_t nValues) {                                                                    \
+        (void)values;                                                                                          \
+        (void)nValues;                                                                                         \
+        return no_variables(inst, "fmi3Get" #T, #T, vr, nvr);                                                 \
+    }                                                                                                          \
+    fmi3Status fmi3Set##T(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3##T values[], \
+                          size_t nValues) {                                                                    \
+        (void)values;                                                                                          \
+        (void)nValues;                                                                                         \
+        return no_variables(inst, "fmi3Set" #T, #T, vr, nvr);                                                 \
+    }
+TC_NO_VARIABLES_OF(Float32)
+TC_NO_VARIABLES_OF(Int8)
+TC_NO_VARIABLES_OF(UInt8)
+TC_NO_VARIABLES_OF(Int16)
+TC_NO_VARIABLES_OF(UInt16)
+TC_NO_VARIABLES_OF(UInt32)
+TC_NO_VARIABLES_OF(Int64)
+TC_NO_VARIABLES_OF(Boolean)
+#undef TC_NO_VARIABLES_OF
 fmi3Status fmi3GetBinary(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
                          fmi3Binary values[], size_t nValues) {
     (void)valueSizes;
@@ -572,54 +548,6 @@ fmi3Status fmi3SetString(fmi3Instance inst, const fmi3ValueReference valueRefere
     return fmi3OK;
 }
 
-fmi3Status fmi3SetFloat32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Float32 values[],
-                          size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetFloat32", "Float32", vr, nvr);
-}
-fmi3Status fmi3SetInt8(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Int8 values[],
-                       size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetInt8", "Int8", vr, nvr);
-}
-fmi3Status fmi3SetUInt8(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3UInt8 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetUInt8", "UInt8", vr, nvr);
-}
-fmi3Status fmi3SetInt16(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Int16 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetInt16", "Int16", vr, nvr);
-}
-fmi3Status fmi3SetUInt16(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3UInt16 values[],
-                         size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetUInt16", "UInt16", vr, nvr);
-}
-fmi3Status fmi3SetUInt32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3UInt32 values[],
-                         size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetUInt32", "UInt32", vr, nvr);
-}
-fmi3Status fmi3SetInt64(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Int64 values[],
-                        size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetInt64", "Int64", vr, nvr);
-}
-fmi3Status fmi3SetBoolean(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Boolean values[],
-                          size_t nValues) {
-    (void)values;
-    (void)nValues;
-    return no_variables(inst, "fmi3SetBoolean", "Boolean", vr, nvr);
-}
 fmi3Status fmi3SetBinary(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
                          const fmi3Binary values[], size_t nValues) {
     (void)valueSizes;

@@ -13,28 +13,6 @@
 
 #define MAXD TC_LINEAR_MAX_DIM
 
-/* NumPy's pairwise summation (numpy/_core/src/umath/loops_utils.h), as np.sum reduces a contiguous
- * float64 array: plain loop below 8 terms, eight interleaved partial sums up to 128, halves above. */
-static double pairwise_sum(const double *a, size_t n) {
-    if (n < 8) {
-        double res = 0.0;
-        for (size_t i = 0; i < n; ++i) res += a[i];
-        return res;
-    }
-    if (n <= 128) {
-        double r[8];
-        size_t i;
-        for (i = 0; i < 8; ++i) r[i] = a[i];
-        for (i = 8; i < n - (n % 8); i += 8)
-            for (size_t j = 0; j < 8; ++j) r[j] += a[i + j];
-        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-        for (; i < n; ++i) res += a[i];
-        return res;
-    }
-    size_t n2 = n / 2;
-    n2 -= n2 % 8;
-    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
-}
 
 void tc_balance(size_t n, const double *M, double *d) {
     double A[MAXD * MAXD], v[MAXD];
@@ -46,11 +24,11 @@ void tc_balance(size_t n, const double *M, double *d) {
             size_t k = 0;
             for (size_t j = 0; j < n; ++j)
                 if (j != i) v[k++] = fabs(A[j * n + i]);
-            double c = pairwise_sum(v, k); /* 1-norm of column i without the diagonal */
+            double c = tc_pairwise_sum(v, k); /* 1-norm of column i without the diagonal */
             k = 0;
             for (size_t j = 0; j < n; ++j)
                 if (j != i) v[k++] = fabs(A[i * n + j]);
-            double r = pairwise_sum(v, k); /* 1-norm of row i without the diagonal */
+            double r = tc_pairwise_sum(v, k); /* 1-norm of row i without the diagonal */
             if (c == 0.0 || r == 0.0) continue;
             /* linear.balance would loop forever on an infinite norm; such a matrix fails in tc_expm */
             if (!isfinite(c) || !isfinite(r)) continue;

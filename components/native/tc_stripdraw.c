@@ -106,27 +106,6 @@ struct tc_stripdraw {
  * ------------------------------------------------------------------------------------------------- */
 
 
-/* NumPy's pairwise summation, as np.sum reduces a contiguous float64 array (so that sums match bit for bit). */
-static double pairwise_sum(const double *a, size_t n) {
-    if (n < 8) {
-        double res = 0.0;
-        for (size_t i = 0; i < n; ++i) res += a[i];
-        return res;
-    }
-    if (n <= 128) {
-        double r[8];
-        size_t i;
-        for (i = 0; i < 8; ++i) r[i] = a[i];
-        for (i = 8; i < n - (n % 8); i += 8)
-            for (size_t j = 0; j < 8; ++j) r[j] += a[i + j];
-        double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-        for (; i < n; ++i) res += a[i];
-        return res;
-    }
-    size_t n2 = n / 2;
-    n2 -= n2 % 8;
-    return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
-}
 
 /* Python's max(a, b) / min(a, b) for floats (numba compiles them the same way): b replaces a only if
  * strictly larger / smaller. */
@@ -622,7 +601,7 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
         m->over[i] = d < 0.0 ? 0.0 : d;                     /* np.maximum(new - cap, 0.0) */
         m->beta[i] = m->bnew[i] > cap ? cap : m->bnew[i]; /* np.minimum(new, cap) */
     }
-    m->beta_removed += pairwise_sum(m->over, n);
+    m->beta_removed += tc_pairwise_sum(m->over, n);
     return TC_OK;
 }
 
@@ -952,7 +931,7 @@ int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double gr
 void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
     const size_t n = m->n;
     const double fn = m->normal_force;
-    const double wsum = pairwise_sum(m->w, n);
+    const double wsum = tc_pairwise_sum(m->w, n);
     double wu = 0.0, wb = 0.0, bmax = m->beta[0];
     for (size_t i = 0; i < n; ++i) {
         wu += m->w[i] * m->U[i];

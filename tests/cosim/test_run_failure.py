@@ -81,3 +81,39 @@ def test_a_step_the_fmu_discards_at_every_size_stops_the_run(tmp_path, lag_compo
     meta = json.loads((tmp_path / "out" / "failing.json").read_text())
     assert "discarded the step" in meta["failure"]["message"]
     assert (tmp_path / "out" / "failing.csv").is_file()
+
+
+def test_a_coupling_iteration_that_does_not_converge_stops_the_run_and_keeps_its_work(tmp_path, monkeypatch, capsys):
+    """The strip-draw rig (native FMUs) under iterative coupling limited to 2 fixed-point iterations: the loop
+    strip.pull_force <-> drive.grip_velocity cannot converge to 1e-8 in 2 iterations once the drive pulls."""
+    monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "cache"))
+    scene = _scene(tmp_path, """
+        [master]
+        algorithm = "iterative"
+        [master.iterative]
+        method = "fixed-point"
+        max_iterations = 2
+        [fmus.strip]
+        component = "stripdraw"
+        parameters = { friction_model = "constant", n_elements = 60 }
+        [fmus.drive]
+        component = "drawingmachine"
+        [[connections]]
+        from = "press.normal_force"
+        to = "strip.normal_force"
+        [[connections]]
+        from = "drive.grip_velocity"
+        to = "strip.grip_velocity"
+        [[connections]]
+        from = "strip.pull_force"
+        to = "drive.pull_force"
+        """, ["strip.pull_force", "drive.grip_velocity"])
+    assert run_main([str(scene), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "iterative coupling did not converge in 2 iterations at t = " in err and "the run stopped at t = " in err, err
+    meta = json.loads((tmp_path / "out" / "failing.json").read_text())
+    assert "did not converge" in meta["failure"]["message"]
+    csv = np.atleast_1d(np.genfromtxt(tmp_path / "out" / "failing.csv", delimiter=",", names=True))
+    assert meta["failure"]["recorded_rows"] == csv.size
+    assert meta["failure"]["last_accepted_time"] == csv["time"][-1]
+    assert np.all(np.isfinite(csv["strippull_force"]))
