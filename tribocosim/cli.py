@@ -7,6 +7,7 @@ numba, pyfftw or the mesoscale code. Each module named below provides ``main(arg
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 #: subcommand -> (module providing ``main(argv)``, one-line help)
@@ -50,5 +51,18 @@ def main(argv: list[str] | None = None) -> int:
     return int(module.main(rest) or 0)
 
 
+def console() -> None:
+    """The console script: :func:`main`, then exit. When a pythonfmu FMU ran in this process (the reports'
+    oscillator FMUs, a scene's ``variant = "python"``), its embedded interpreter state can corrupt the heap
+    during Python's own teardown (pythonfmu 0.7.0; seen once as "corrupted double-linked list" after a report
+    had written all its files), so then the process ends without the teardown, once every output is flushed."""
+    code = main()
+    if "pythonfmu" in sys.modules:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console()
