@@ -37,7 +37,17 @@ class TableDomainError(TribocosimError, ValueError):
 
 
 class ConvergenceError(TribocosimError):
-    """An iterative solver did not converge to its tolerance."""
+    """An iterative solver did not converge to its tolerance.
+
+    ``contraction``: the ratio of successive residuals the solver observed (its geometric mean), NaN
+    if it does not know one; ``iterations``: how many it took before giving up (0 if not counted).
+    The message says both in words.
+    """
+
+    def __init__(self, message: str = "", *, contraction: float = float("nan"), iterations: int = 0) -> None:
+        super().__init__(message)
+        self.contraction = float(contraction)
+        self.iterations = int(iterations)
 
 
 @dataclass(frozen=True)

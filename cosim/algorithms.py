@@ -254,7 +254,8 @@ class IterativeCoupling(Algorithm):
             raise ConvergenceError(
                 f"iterative coupling did not converge in {st.max_iterations} iterations at t = {t:.9g} s "
                 f"(h = {h:.3g} s): scaled residual {errs[-1]:.3g} > 1; estimated contraction factor "
-                f"{_rate(norms):.3g}; largest residual in {_worst(sys, r, scale)}"
+                f"{_rate(norms):.3g}; largest residual in {_worst(sys, r, scale)}",
+                contraction=_rate(norms), iterations=len(norms),
             )
         finally:
             sys.release(snap)
@@ -271,7 +272,8 @@ class IterativeCoupling(Algorithm):
             f"iterative coupling diverges at t = {t:.9g} s: the residual grew from {norms[0]:.3g} to "
             f"{norms[-1]:.3g} in {len(norms)} iterations (observed contraction factor {rate:.3g} >= 1: the "
             f"coupling map is not a contraction); largest residual in {_worst(sys, r, scale)}. A fixed-point "
-            "iteration cannot converge here; use method = \"quasi-newton\""
+            "iteration cannot converge here; use method = \"quasi-newton\"",
+            contraction=rate, iterations=len(norms),
         )
 
     def _iqn_ils(self, own: _Secants, r: np.ndarray, g: np.ndarray, scale: np.ndarray) -> np.ndarray:

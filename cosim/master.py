@@ -25,7 +25,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.components.errors import ConvergenceError, CosimStepError
 from tribocosim.cosim.algorithms import ALGORITHMS, Algorithm
 from tribocosim.cosim.recorder import Observer, Recorder
 from tribocosim.cosim.system import CoupledSystem, NonFiniteOutput
@@ -41,7 +41,9 @@ class RunStats:
     ``steps`` counts accepted communication points (for step doubling both halves of a step),
     ``rejected_error`` steps rejected by the error estimate, ``rejected_failures`` attempts
     refused by an FMU (discard) or with a non-finite output, ``iterations`` passes over the
-    slaves (> steps for iterative coupling and start-up correctors).
+    slaves (> steps for iterative coupling and start-up correctors), ``observed_contraction`` the
+    largest contraction factor an iterated step showed (the step whose iteration failed included; NaN
+    if no step was iterated).
     """
 
     steps: int = 0
@@ -136,6 +138,10 @@ class Master:
         except NonFiniteOutput as exc:
             self.last_failure = f"FMU instance '{self.names[exc.slave_index]}': {exc}"
             return False
+        except ConvergenceError as exc:  # the run stops; its stats say how far from a contraction it was
+            self.stats.iterations += exc.iterations
+            self._observe_contraction(exc.contraction)
+            raise
         self.stats.iterations += res.iterations
         if res.ok:
             bad = [name for obs in self.observers for name in obs.step_attempted(t + h)]
@@ -144,9 +150,7 @@ class Master:
                 self.last_failure = (f"FMU instance {insts}: non-finite output {', '.join(bad)} at t = {t + h:.9g} s "
                                      f"(step from t = {t:.9g} s)")
                 return False
-        if res.contraction == res.contraction:  # not NaN: an iterated step
-            c = self.stats.observed_contraction
-            self.stats.observed_contraction = res.contraction if c != c else max(c, res.contraction)
+        self._observe_contraction(res.contraction)
         if not res.ok:
             i = res.discarded_by
             msgs = list(self.system.slaves[i].messages)[-3:]
@@ -154,6 +158,11 @@ class Master:
                                  + (f" (FMU log: {' | '.join(msgs)})" if msgs else ""))
             return False
         return True
+
+    def _observe_contraction(self, rate: float) -> None:
+        if rate == rate:  # not NaN: an iterated step
+            c = self.stats.observed_contraction
+            self.stats.observed_contraction = rate if c != c else max(c, rate)
 
     def snapshot(self):
         """Save FMU states, coupling values, history, the observers' positions and the step count."""
