@@ -188,7 +188,9 @@ def stability_markdown(fams: list[Family], files: dict[str, list[Path]], header:
     out = [header, "", "## Definition of stable", "", criterion_text, "",
            "A cell is `stable`, `unstable` (with the first failed test) or `error` (the run stopped with an error; "
            "the message). Below each verdict: the largest stable step found by bisection (`>= h`: stable up to the end "
-           "of the range searched; `< h`: not stable even at the smallest step tried).", ""]
+           "of the range searched; `< h`: not stable even at the smallest step tried). Iterative coupling: `rho_obs`, the "
+           "largest contraction factor observed in a step of the nominal run (the geometric mean ratio of successive "
+           "coupling residuals; for the step whose iteration failed, its estimate up to the failure).", ""]
     for fam in fams:
         out += _head(fam, files.get(fam.name, []))
         if not fam.rows:
@@ -205,6 +207,9 @@ def stability_markdown(fams: list[Family], files: dict[str, list[Path]], header:
                     cells.append("")
                     continue
                 cell = r["status"] if r["status"] == "stable" else f"**{r['status']}** [{len(notes) + 1}]"
+                rho = r.get("observed_contraction")
+                if isinstance(rho, float) and math.isfinite(rho):
+                    cell += f", rho_obs = {fmt(rho, 2)}"
                 if r["status"] != "stable":
                     notes.append(f"[{len(notes) + 1}] {c}, {s}: {r['reason']}")
                 if "stable_step" in r:

@@ -29,8 +29,9 @@ def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int =
 
     Returns a dict: ``time``, ``columns``, ``wall_time`` (build + initialization + loop), ``do_steps``
     (summed over the FMUs, rejected attempts included), ``steps``, ``rejected``, ``iterations``,
+    ``observed_contraction`` (iterative coupling: the largest contraction factor of a step, else NaN),
     ``halvings``, ``t_end``, ``stopped`` ('' if the run reached the end), ``last_failure``,
-    ``controller``. Raises what the master raises (CosimStepError, FMU errors).
+    ``controller``. Raises what the master raises (CosimStepError, ConvergenceError, FMU errors).
     """
     from tribocosim.cosim.api import build
 
@@ -58,7 +59,8 @@ def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int =
         out["wall_time"] = time.perf_counter() - t0
         st = m.stats
         out.update(steps=st.steps, rejected=st.rejected_error + st.rejected_failures, halvings=st.rejected_failures,
-                   iterations=st.iterations, t_end=m.grid.time(m.n), last_failure=m.last_failure,
+                   iterations=st.iterations, observed_contraction=st.observed_contraction,
+                   t_end=m.grid.time(m.n), last_failure=m.last_failure,
                    controller=m.controller.name,
                    do_steps=int(sum(getattr(s, "calls", {}).get("doStep", 0) for s in m.system.slaves)))
         b.close()
@@ -69,7 +71,12 @@ def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int =
 
 def judged_run(plan, scales: dict[str, float], criterion: Criterion = Criterion(), *, budget: float = 60.0,
                check_every: int = 10) -> tuple[Verdict, dict]:
-    """Run ``plan`` and judge it; returns (verdict, the dict of :func:`run_plan`, without the arrays on error)."""
+    """Run ``plan`` and judge it; returns (verdict, the dict of :func:`run_plan`, without the arrays on error).
+
+    The verdict's ``extra["observed_contraction"]`` is the run's largest observed contraction factor of
+    an iterated step (from the master's stats, or from the ConvergenceError that stopped it); absent for
+    schemes that do not iterate.
+    """
     bounds = {n: criterion.bound_factor * s for n, s in scales.items() if s and s > 0}
     cols = {}
 
@@ -86,9 +93,11 @@ def judged_run(plan, scales: dict[str, float], criterion: Criterion = Criterion(
     names = [str(ref) for ref, _, _ in plan.recorded]
     try:
         info = run_plan(plan, budget=budget, monitor=monitor, check_every=check_every)
-    except Exception as exc:  # FMU errors, CosimStepError: the cell says which
+    except Exception as exc:  # FMU errors, CosimStepError, ConvergenceError: the cell says which
         msg = " ".join(str(exc).split())
-        return Verdict(ERROR, f"{type(exc).__name__}: {msg[:240]}"), {}
+        rate = getattr(exc, "contraction", math.nan)
+        return Verdict(ERROR, f"{type(exc).__name__}: {msg[:240]}",
+                       extra={"observed_contraction": rate} if rate == rate else {}), {}
     checked = {n: v for n, v in info["columns"].items() if n in scales}
     v = classify(info["time"], checked, scales, criterion)
     if v.stable and info["halvings"] and info["controller"] == "fixed":
@@ -98,6 +107,8 @@ def judged_run(plan, scales: dict[str, float], criterion: Criterion = Criterion(
         v = Verdict(UNSTABLE, info["stopped"], v.growth, v.peak_ratio)
     elif info["stopped"] and v.status != ERROR and info["stopped"] not in v.reason:
         v = Verdict(v.status, (v.reason + "; " if v.reason else "") + info["stopped"], v.growth, v.peak_ratio)
+    if info["observed_contraction"] == info["observed_contraction"]:
+        v.extra["observed_contraction"] = info["observed_contraction"]
     return v, info
 
 

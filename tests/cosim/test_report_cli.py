@@ -53,6 +53,26 @@ def test_stability_report_matrix_with_reasons(tmp_path, monkeypatch):
     assert (tmp_path / "fake.csv").exists() and (tmp_path / "fake.png").exists()
 
 
+def test_stability_cells_of_iterative_coupling_show_the_observed_contraction(tmp_path, monkeypatch):
+    from tribocosim.cosim.reports.stability import Verdict
+
+    @timed
+    def fake(settings):
+        fam = Family("fake", "Fake cases")
+        fam.rows.append(stability_report._cell_row("near p_crit", "jacobi/0", Verdict("stable"), None))
+        fam.rows.append(stability_report._cell_row("near p_crit", "iterative/0", Verdict(
+            "stable", extra={"observed_contraction": 0.04621785}), None))
+        fam.rows.append(stability_report._cell_row("near p_crit", "iterative/1", Verdict(
+            "error", "ConvergenceError: did not converge", extra={"observed_contraction": 0.873}), None))
+        return fam
+
+    monkeypatch.setattr(stability_report, "FAMILIES", {"fake": fake})
+    assert report_cli.main(["stability", "--quick", "--quiet", "--out", str(tmp_path), "--only", "fake"]) == 0
+    md = (tmp_path / "stability.md").read_text()
+    assert "| near p_crit | stable | stable, rho_obs = 0.046 | **error** [1], rho_obs = 0.87 |" in md, md
+    assert "`rho_obs`, the largest contraction factor observed" in md
+
+
 def test_unknown_family_is_refused(capsys):
     assert report_cli.main(["accuracy", "--out", "x", "--only", "nope"]) == 2
     assert "unknown family nope" in capsys.readouterr().err
