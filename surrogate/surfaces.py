@@ -29,6 +29,23 @@ doi:10.1088/2051-672X/aa51f8):
 - Radially averaged PSD ``C(q) = L^2 |h_q|^2 / n^4``, normalised so that
   ``h_rms^2 = sum_q C(q) / L^2 = (2 pi)^-2 * integral C(q) d^2q``.
 
+- Summit density: pixels higher than all 8 periodic neighbours, per unit area (the discrete summit
+  definition of Greenwood, Proc. R. Soc. A 393 (1984) 133, doi:10.1098/rspa.1984.0050; it depends on
+  the pixel size, so it is only comparable between maps of the same dx).
+
+Because the amplitudes are deterministic, the RMS height and both RMS slopes of a generated surface
+are functions of the PSD alone (the same for every seed): ``h_rms^2 = C0 sum_q C(q) / C0``,
+``h'_rms^2 = C0 sum_q |q|^2 C(q) / C0`` and, for finite differences,
+``C0 sum_q ((2 sin(q_x dx/2))^2 + (2 sin(q_y dx/2))^2) / dx^2 C(q) / C0`` (sums over the grid's modes,
+the moments of the discrete PSD). :func:`predicted_rms_slopes` evaluates them and
+:func:`rolloff_wavelength` solves them for the roll-off wavelength 2 pi / q_r that gives a target RMS
+slope with a target RMS height: the ratio h'_rms / h_rms grows from its pure power-law value
+(q_r = 2 pi / L) to that of a flat spectrum up to q_s (q_r -> q_s). Measured targets that a pure power law
+on the domain cannot meet (paper Sec. 2.4: h_rms 1.40 um and h'_rms 0.34 with H = 0.8 on 500 um; see
+docs/physics/surfaces.md) are met this way; the grid must then resolve the shortest wavelength
+2 pi / q_s with at least 4 pixels (:data:`MIN_PIXELS_PER_WAVELENGTH`), because the slope is carried by
+the short wavelengths.
+
 Axis convention: ``h[i, j]`` is the height at ``x = i L / n`` (axis 0, the sliding direction of
 the coupling loop) and ``y = j L / n``. Heights are in metres.
 """
@@ -37,13 +54,17 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from tribocosim.components.errors import ParameterError, check_range
 
 #: the two RMS-slope definitions
 SLOPE_DEFINITIONS = ("spectral", "finite_difference")
+#: pixels per shortest wavelength required of a surface with a roll-off
+MIN_PIXELS_PER_WAVELENGTH = 4.0
 
 
 def validate_height_map(h, name: str = "heights", n: int | None = None) -> np.ndarray:
@@ -135,10 +156,7 @@ def self_affine_surface(n: int, size: float, hurst: float, q_roll: float, q_cut:
     if slope_definition not in SLOPE_DEFINITIONS:
         raise ParameterError(f"slope_definition = {slope_definition!r} is not allowed; "
                              f"allowed: {SLOPE_DEFINITIONS}")
-    q = _wavenumbers(n, size)
-    psd = np.zeros_like(q)
-    mask = (q > 0) & (q <= q_cut)
-    psd[mask] = np.where(q[mask] < q_roll, 1.0, (q[mask] / q_roll) ** (-2.0 * (1.0 + hurst)))
+    psd = _model_psd(_wavenumbers(n, size), hurst, q_roll, q_cut)
     noise = np.fft.rfft2(np.random.default_rng(seed).standard_normal((n, n)))
     mag = np.abs(noise)
     phase = np.divide(noise, mag, out=np.ones_like(noise), where=mag > 0)
@@ -150,6 +168,14 @@ def self_affine_surface(n: int, size: float, hurst: float, q_roll: float, q_cut:
         target = check_range("rms_slope", rms_slope, 0.0, low_inclusive=False)
         current = _slope(h, size, slope_definition)
     return h * (target / current)
+
+
+def _model_psd(q: np.ndarray, hurst: float, q_roll: float, q_cut: float) -> np.ndarray:
+    """C(q) / C0 of the module docstring on the wavenumbers ``q``."""
+    psd = np.zeros_like(q)
+    mask = (q > 0) & (q <= q_cut)
+    psd[mask] = np.where(q[mask] < q_roll, 1.0, (q[mask] / q_roll) ** (-2.0 * (1.0 + hurst)))
+    return psd
 
 
 def rms_height(h) -> float:
@@ -227,6 +253,175 @@ def radial_psd(h, size: float) -> tuple[np.ndarray, np.ndarray]:
     ksum = np.bincount(ring[keep], weights=k.ravel()[keep], minlength=n // 2 + 1)
     ok = count > 0
     return 2.0 * np.pi / size * ksum[ok] / count[ok], csum[ok] / count[ok]
+
+
+def surface_wavenumbers(size: float, wavelength_ratio: float,
+                        rolloff_wavelength: float | None = None) -> tuple[float, float]:
+    """(q_r, q_s) [rad/m] of a surface on a domain of side ``size``, as the slide generates it.
+
+    q_s = (2 pi / L) / wavelength_ratio (the shortest wavelength is ``wavelength_ratio * L``); q_r is
+    2 pi / ``rolloff_wavelength``, or 2 pi / L (a pure power law from the longest wavelength) when it is
+    None. One function for the slide and for :func:`rolloff_wavelength`, so that both evaluate the
+    same float wavenumbers (modes that sit on a cutoff are counted alike).
+    """
+    q_long = 2.0 * math.pi / size
+    q_roll = q_long if rolloff_wavelength is None else 2.0 * math.pi / rolloff_wavelength
+    return q_roll, q_long / wavelength_ratio
+
+
+def _psd_moments(n: int, size: float, hurst: float, q_roll: float, q_cut: float):
+    """sum C, sum |q|^2 C and the finite-difference analogue over the grid's modes (C0 = 1)."""
+    dx = size / n
+    w = _rfft_weights(n)[None, :] * _model_psd(_wavenumbers(n, size), hurst, q_roll, q_cut)
+    qx = 2.0 * np.pi * np.fft.fftfreq(n, d=dx)
+    qy = 2.0 * np.pi * np.fft.rfftfreq(n, d=dx)
+    fd = ((2.0 * np.sin(0.5 * qx * dx) / dx) ** 2)[:, None] \
+        + ((2.0 * np.sin(0.5 * qy * dx) / dx) ** 2)[None, :]
+    return float(w.sum()), float(np.sum(w * _wavenumbers(n, size) ** 2)), float(np.sum(w * fd))
+
+
+def predicted_rms_slopes(n: int, size: float, hurst: float, q_roll: float, q_cut: float,
+                         rms_height: float) -> dict:
+    """RMS slopes of ``self_affine_surface(n, size, hurst, q_roll, q_cut, rms_height=...)``.
+
+    Exact for every seed (deterministic amplitudes; module docstring), from the moments of the PSD.
+
+    Returns
+    -------
+    dict
+        ``{"spectral": ..., "finite_difference": ...}`` [-].
+    """
+    m0, m2, m2_fd = _psd_moments(int(n), size, hurst, q_roll, q_cut)
+    return {"spectral": rms_height * math.sqrt(m2 / m0),
+            "finite_difference": rms_height * math.sqrt(m2_fd / m0)}
+
+
+def rolloff_wavelength(rms_height: float, rms_slope: float, hurst: float, size: float, n: int,
+                       wavelength_ratio: float, slope_definition: str = "spectral") -> float:
+    """Roll-off wavelength [m] at which a surface of RMS height ``rms_height`` has the RMS slope
+    ``rms_slope``.
+
+    The PSD is that of :func:`self_affine_surface` with q_r = 2 pi / result and the short cutoff of
+    :func:`surface_wavenumbers`; the ratio h'_rms / h_rms of its moments (module docstring) is solved
+    for q_r by Brent's method on log(wavelength) between the shortest wavelength and L.
+
+    Parameters
+    ----------
+    rms_height : float
+        Target RMS height [m] (> 0).
+    rms_slope : float
+        Target RMS slope [-] (> 0), in the definition ``slope_definition``.
+    hurst : float
+        Hurst exponent H, in (0, 1].
+    size : float
+        Side L of the periodic domain [m].
+    n : int
+        Grid points per side.
+    wavelength_ratio : float
+        Shortest wavelength / L; the shortest wavelength must span at least
+        :data:`MIN_PIXELS_PER_WAVELENGTH` pixels of L / n.
+    slope_definition : {"spectral", "finite_difference"}
+
+    Returns
+    -------
+    float
+        Roll-off wavelength 2 pi / q_r [m], between the shortest wavelength and L.
+
+    Raises
+    ------
+    ParameterError
+        On bad input, or when the target lies outside what this PSD can give (the message names the
+        reachable range).
+    """
+    if isinstance(n, bool) or int(n) != n or n < 4:
+        raise ParameterError(f"n = {n!r} is not allowed; an integer >= 4 is required")
+    n = int(n)
+    rms_height = check_range("rms_height", rms_height, 0.0, low_inclusive=False, unit="m")
+    rms_slope = check_range("rms_slope", rms_slope, 0.0, low_inclusive=False)
+    hurst = check_range("hurst", hurst, 0.0, 1.0, low_inclusive=False)
+    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
+    check_range("wavelength_ratio", wavelength_ratio, 0.0, 1.0, low_inclusive=False,
+                high_inclusive=False)
+    pixels = wavelength_ratio * n
+    if pixels < MIN_PIXELS_PER_WAVELENGTH:
+        raise ParameterError(
+            f"wavelength_ratio = {wavelength_ratio!r} puts the shortest wavelength on {pixels:.3g} "
+            f"pixels of the {n}-point grid; allowed: >= {MIN_PIXELS_PER_WAVELENGTH:g} pixels, i.e. "
+            f"wavelength_ratio >= {MIN_PIXELS_PER_WAVELENGTH / n:g}")
+    if slope_definition not in SLOPE_DEFINITIONS:
+        raise ParameterError(f"slope_definition = {slope_definition!r} is not allowed; "
+                             f"allowed: {SLOPE_DEFINITIONS}")
+    shortest = wavelength_ratio * size
+    _, q_cut = surface_wavenumbers(size, wavelength_ratio)
+
+    def slope_at(log_wavelength: float) -> float:
+        q_roll, _ = surface_wavenumbers(size, wavelength_ratio, math.exp(log_wavelength))
+        return predicted_rms_slopes(n, size, hurst, q_roll, q_cut, rms_height)[slope_definition]
+
+    lo, hi = math.log(shortest), math.log(size)
+    s_flat, s_power = slope_at(lo), slope_at(hi)
+    if not s_power < rms_slope < s_flat:
+        raise ParameterError(
+            f"rms_slope = {rms_slope!r} ({slope_definition}) with rms_height = {rms_height!r} m is out "
+            f"of reach of a roll-off PSD with H = {hurst:g}, L = {size:g} m, shortest wavelength "
+            f"{shortest:g} m on {n} points; allowed: ({s_power:.4g}, {s_flat:.4g}) (a pure power law "
+            f"from L to a flat spectrum up to the cutoff); a steeper surface needs a shorter shortest "
+            f"wavelength (and a finer grid)")
+    root = brentq(lambda x: slope_at(x) - rms_slope, lo, hi, xtol=1e-12, rtol=1e-14)
+    return math.exp(root)
+
+
+@dataclass(frozen=True)
+class SurfaceStatistics:
+    """Statistics of one periodic height map (definitions in the module docstring).
+
+    Attributes
+    ----------
+    rms_height : float
+        RMS height about the mean [m].
+    rms_slope_psd : float
+        RMS slope from the map's PSD (``"spectral"``: second moment of the PSD) [-].
+    rms_slope_fd : float
+        RMS slope from periodic forward differences on the grid (``"finite_difference"``) [-].
+    summit_count : int
+        Pixels higher than their 8 periodic neighbours.
+    summit_density : float
+        ``summit_count / L^2`` [1/m^2].
+    """
+
+    rms_height: float
+    rms_slope_psd: float
+    rms_slope_fd: float
+    summit_count: int
+    summit_density: float
+
+
+def surface_statistics(h, size: float) -> SurfaceStatistics:
+    """RMS height, RMS slope (PSD and finite differences) and summit density of a periodic map.
+
+    Parameters
+    ----------
+    h : array_like, shape (n, n)
+        Heights [m].
+    size : float
+        Side length L [m].
+    """
+    h = validate_height_map(h, "h")
+    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
+    count = summit_count(h)
+    return SurfaceStatistics(_rms(h), _slope(h, size, "spectral"),
+                             _slope(h, size, "finite_difference"), count, count / size**2)
+
+
+def summit_count(h) -> int:
+    """Number of pixels strictly higher than all 8 periodic neighbours."""
+    h = validate_height_map(h, "h")
+    peak = np.ones(h.shape, dtype=bool)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            if di or dj:
+                peak &= h > np.roll(h, (di, dj), axis=(0, 1))
+    return int(peak.sum())
 
 
 def load_height_map(path) -> np.ndarray:
