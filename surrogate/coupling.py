@@ -199,11 +199,12 @@ class SlideSimulation:
                                    max_iter=c.bem_max_iter, threads=c.threads)
         self.solver = solver
         self.shape = dem.FlakeShape(c.flake_diameter, c.flake_thickness, c.flake_density)
+        damping = c.damping(self.shape)
         params = dem.DemParams.build(self.shape, c.size, c.dx, c.e_star, c.penalty_velocity,
-                                     c.damping_rate,
+                                     damping,
                                      spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety)
         self.n_sub = max(1, math.ceil(c.dx / (c.v0 * params.dt)))
-        self.params = dem.DemParams(params.shape, c.size, c.dx, params.k_area, c.damping_rate,
+        self.params = dem.DemParams(params.shape, c.size, c.dx, params.k_area, damping,
                                     c.dx / (c.v0 * self.n_sub), params.samples, params.weights)
         self.k = 0  # pixels slid so far
         self.u_p = np.zeros_like(self.h_def0)
@@ -333,12 +334,12 @@ class SlideSimulation:
 
 
 def _generate_surfaces(c: SlideConfig):
-    from .surfaces import self_affine_surface
+    from .surfaces import self_affine_surface, surface_wavenumbers
 
-    q_roll = 2.0 * math.pi / c.size
-    q_cut = q_roll / c.wavelength_ratio
+    q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.sheet_rolloff_wavelength)
     h_def0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
                                  rms_height=c.sheet_rms_height, seed=c.sheet_seed)
+    q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.tool_rolloff_wavelength)
     h_tool0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
                                   rms_height=c.tool_rms_height, seed=c.tool_seed)
     return h_def0, h_tool0

@@ -1,6 +1,6 @@
 """Numba kernels of the flake DEM (private; use :mod:`tribocosim.surrogate.dem`).
 
-Two kernels, both ``njit(cache=True)`` with float64 arrays:
+Two kernels (and their helpers), all ``njit(cache=True)`` with float64 arrays:
 
 - ``_forces``: surface + flake-flake penalty forces, torques, potential energy and the largest
   overlap of each flake, for one configuration (tested against a NumPy oracle);
@@ -254,13 +254,39 @@ def _free_rotation(q, L, i1, i3, dt, tmp_r, tmp_a, tmp_b):
 
 
 @_jit
+def _damp_axes(q, v, L, dec_vp, dec_va, dec_lp, dec_la):
+    """Damping half-flow in the principal axes of a flake (in place on v and L).
+
+    The components along the symmetry axis n = R(q) e_z are multiplied by ``dec_va`` / ``dec_la``,
+    the rest by ``dec_vp`` / ``dec_lp`` (exact: the orientation does not change in this sub-flow).
+    """
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    nx = 2.0 * (x * z + w * y)
+    ny = 2.0 * (y * z - w * x)
+    nz = 1.0 - 2.0 * (x * x + y * y)
+    vn = (dec_va - dec_vp) * (v[0] * nx + v[1] * ny + v[2] * nz)
+    ln = (dec_la - dec_lp) * (L[0] * nx + L[1] * ny + L[2] * nz)
+    v[0] = dec_vp * v[0] + vn * nx
+    v[1] = dec_vp * v[1] + vn * ny
+    v[2] = dec_vp * v[2] + vn * nz
+    L[0] = dec_lp * L[0] + ln * nx
+    L[1] = dec_lp * L[1] + ln * ny
+    L[2] = dec_lp * L[2] + ln * nz
+
+
+@_jit
 def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, hmax_low, hmin_top, shift0, dshift,
              top_offset, dtop, dx, size, a, c,
-             samples, weights, k_area, mass, i1, i3, damping, dt, n_steps, max_overlap,
-             force, torque, overlap):
+             samples, weights, k_area, mass, i1, i3, gamma_vp, gamma_va, gamma_lp, gamma_la, dt,
+             n_steps, max_overlap, force, torque, overlap):
     """``n_steps`` integrator steps; at step s the tool is shifted by ``shift0 + s*dshift`` and
     sits at the height ``top_offset + s*dtop``, and the lower surface is
     ``h_low + ramp (s/n_steps) dh_low`` (ramp = 0 or 1).
+
+    Damping rates [1/s] in the flake's principal axes: ``gamma_vp`` / ``gamma_va`` for the velocity
+    in the flake's plane / along its axis, ``gamma_lp`` / ``gamma_la`` for the angular momentum
+    about a diameter / about the axis. When all four are equal the half-flow is the scalar decay
+    v, L *= exp(-gamma dt/2) (bit for bit the one-rate integrator).
 
     Returns (status, step, flake): status 0 = fine, 1 = non-finite state, 2 = overlap above
     ``max_overlap``; ``step`` is the 1-based step within this call (0 = initial state).
@@ -270,7 +296,12 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, hmax_low, hmin_
     tmp_r = np.empty((3, 3))
     tmp_a = np.empty(4)
     tmp_b = np.empty(4)
-    decay = math.exp(-0.5 * damping * dt)
+    uniform = gamma_vp == gamma_va and gamma_vp == gamma_lp and gamma_vp == gamma_la
+    decay = math.exp(-0.5 * gamma_vp * dt)
+    dec_va = math.exp(-0.5 * gamma_va * dt)
+    dec_lp = math.exp(-0.5 * gamma_lp * dt)
+    dec_la = math.exp(-0.5 * gamma_la * dt)
+    decay_d = decay if uniform else 1.0  # 1: the damping is left to _damp_axes
     for i in range(nf):
         for d in range(3):
             if not (math.isfinite(pos[i, d]) and math.isfinite(vel[i, d])
@@ -283,9 +314,11 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, hmax_low, hmin_
             return 2, 0, i
     for s in range(1, n_steps + 1):
         for i in range(nf):
+            if not uniform:
+                _damp_axes(quat[i], vel[i], angmom[i], decay, dec_va, dec_lp, dec_la)
             for d in range(3):
-                vel[i, d] = vel[i, d] * decay + 0.5 * dt * force[i, d] / mass
-                angmom[i, d] = angmom[i, d] * decay + 0.5 * dt * torque[i, d]
+                vel[i, d] = vel[i, d] * decay_d + 0.5 * dt * force[i, d] / mass
+                angmom[i, d] = angmom[i, d] * decay_d + 0.5 * dt * torque[i, d]
                 pos[i, d] += dt * vel[i, d]
             pos[i, 0] -= size * math.floor(pos[i, 0] / size)
             pos[i, 1] -= size * math.floor(pos[i, 1] / size)
@@ -295,8 +328,10 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, hmax_low, hmin_
                 k_area, force, torque, overlap)
         for i in range(nf):
             for d in range(3):
-                vel[i, d] = (vel[i, d] + 0.5 * dt * force[i, d] / mass) * decay
-                angmom[i, d] = (angmom[i, d] + 0.5 * dt * torque[i, d]) * decay
+                vel[i, d] = (vel[i, d] + 0.5 * dt * force[i, d] / mass) * decay_d
+                angmom[i, d] = (angmom[i, d] + 0.5 * dt * torque[i, d]) * decay_d
+            if not uniform:
+                _damp_axes(quat[i], vel[i], angmom[i], decay, dec_va, dec_lp, dec_la)
         for i in range(nf):
             ok = True
             for d in range(3):

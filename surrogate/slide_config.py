@@ -9,6 +9,11 @@ A TOML file holds the same keys, either at the top level or under a ``[slide]`` 
     flake_diameter = 12e-6 # m
 
 Unknown keys are reported all at once.
+
+Options added after the shipped friction table was built (``oil_viscosity``,
+``sheet_rolloff_wavelength``, ``tool_rolloff_wavelength``) default to None, which is today's model,
+and :meth:`SlideConfig.to_dict` leaves them out while they are None, so the configurations (and the
+case ids of :mod:`tribocosim.surrogate.campaign`) of existing campaigns do not change.
 """
 
 from __future__ import annotations
@@ -18,6 +23,11 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
 from tribocosim.components.errors import ParameterError, check_range
+
+#: damping rate gamma [1/s] when neither damping_rate nor oil_viscosity is given (the shipped table's)
+DEFAULT_DAMPING_RATE = 5e7
+#: keys left out of to_dict() while None (see the module docstring)
+OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
 
 
 @dataclass(frozen=True)
@@ -39,9 +49,15 @@ class SlideConfig:
     hurst : float
         Hurst exponent of both surfaces.
     wavelength_ratio : float
-        Shortest / longest wavelength of the surfaces (longest = size).
+        Shortest wavelength of the surfaces / size.
     sheet_rms_height, tool_rms_height : float
         RMS heights of the aluminium sheet (below) and of the rigid tool (above) [m].
+    sheet_rolloff_wavelength, tool_rolloff_wavelength : float or None
+        Roll-off wavelength 2 pi / q_r [m] of each surface's PSD (flat above it, power law below it
+        down to the shortest wavelength; :mod:`tribocosim.surrogate.surfaces`), in
+        (wavelength_ratio * size, size]; :func:`tribocosim.surrogate.surfaces.rolloff_wavelength`
+        finds the one that gives a target RMS slope. None (default): a pure power law from size.
+        With a roll-off the shortest wavelength must span >= 4 pixels (wavelength_ratio >= 4/n).
     sheet_seed, tool_seed, flake_seed : int
         Seeds of the two surfaces and of the flake placement.
     n_flakes : int
@@ -55,9 +71,16 @@ class SlideConfig:
         time step); must be >= v0. It is one value for every run that is to be compared (default
         50 m/s, the paper's highest sliding speed): were it v0, the contact law itself would change
         with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
-    damping_rate : float
-        gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I). Default 5e7: Stokes drag 16 mu a v of a
-        12 um disc in an oil of 0.05 Pa s over its mass.
+    damping_rate : float or None
+        gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I), one rate for translation and rotation: an
+        expert override of ``oil_viscosity``. None with no oil_viscosity means 5e7
+        (:data:`DEFAULT_DAMPING_RATE`, the shipped table's: Stokes drag 16 mu a v of a 12 um disc in
+        an oil of 0.05 Pa s over its mass); giving both is an error.
+    oil_viscosity : float or None
+        Dynamic viscosity eta of the lubricant [Pa s] (>= 0): the flakes are damped by the Stokes drag
+        of a thin disc, with separate translational and rotational rates
+        (:meth:`tribocosim.surrogate.dem.DampingRates.from_viscosity`; reference: ISO VG 32 at 40 C,
+        0.028 Pa s). None (default): ``damping_rate``.
     dt_safety : float
         Safety factor on the Verlet limit 2/omega_max.
     sample_spacing_px : float
@@ -83,6 +106,8 @@ class SlideConfig:
     wavelength_ratio: float = 0.02
     sheet_rms_height: float = 1.40e-6
     tool_rms_height: float = 0.60e-6
+    sheet_rolloff_wavelength: float | None = None
+    tool_rolloff_wavelength: float | None = None
     sheet_seed: int = 1
     tool_seed: int = 2
     flake_seed: int = 3
@@ -91,7 +116,8 @@ class SlideConfig:
     flake_thickness: float = 0.5e-6
     flake_density: float = 2700.0
     penalty_velocity: float = 50.0
-    damping_rate: float = 5e7
+    damping_rate: float | None = None
+    oil_viscosity: float | None = None
     dt_safety: float = 0.1
     sample_spacing_px: float = 1.0
     pinch_overlap_fraction: float = 0.1
@@ -113,6 +139,18 @@ class SlideConfig:
         check_range("wavelength_ratio", self.wavelength_ratio, 2.0 / self.n, 1.0)
         check_range("sheet_rms_height", self.sheet_rms_height, unit="m", **pos)
         check_range("tool_rms_height", self.tool_rms_height, unit="m", **pos)
+        for name in ("sheet_rolloff_wavelength", "tool_rolloff_wavelength"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            _number(name, value, "m")
+            check_range(name, value, self.wavelength_ratio * self.size, self.size,
+                        low_inclusive=False, unit="m")
+            if self.wavelength_ratio * self.n < 4.0:
+                raise ParameterError(
+                    f"wavelength_ratio = {self.wavelength_ratio!r} puts the shortest wavelength on "
+                    f"{self.wavelength_ratio * self.n:.3g} pixels; with {name} set, >= 4 pixels are "
+                    f"required; allowed: wavelength_ratio >= 4/n = {4.0 / self.n:g}")
         _int("n_flakes", self.n_flakes, 0)
         check_range("flake_diameter", self.flake_diameter, high=0.5 * self.size,
                     high_inclusive=False, unit="m", **pos)
@@ -120,7 +158,20 @@ class SlideConfig:
                     high_inclusive=False, unit="m", **pos)
         check_range("flake_density", self.flake_density, unit="kg/m^3", **pos)
         check_range("penalty_velocity", self.penalty_velocity, low=self.v0, unit="m/s")
-        check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
+        if self.oil_viscosity is not None:
+            _number("oil_viscosity", self.oil_viscosity, "Pa s")
+            check_range("oil_viscosity", self.oil_viscosity, 0.0, unit="Pa s")
+            if self.damping_rate is not None:
+                raise ParameterError(
+                    f"damping_rate = {self.damping_rate!r} 1/s and oil_viscosity = "
+                    f"{self.oil_viscosity!r} Pa s are both given; allowed: one of them (damping_rate "
+                    f"is an expert override of the damping from the oil's viscosity; "
+                    f"dataclasses.replace(config, oil_viscosity=..., damping_rate=None) switches)")
+        elif self.damping_rate is None:
+            object.__setattr__(self, "damping_rate", DEFAULT_DAMPING_RATE)
+        if self.damping_rate is not None:
+            _number("damping_rate", self.damping_rate, "1/s")
+            check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
         check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)
         check_range("pinch_overlap_fraction", self.pinch_overlap_fraction, 0.0, 0.5)
@@ -146,9 +197,23 @@ class SlideConfig:
         """Flake area fraction beta = N_p pi (d_p/2)^2 / L^2 (Eq. 10)."""
         return self.n_flakes * 3.141592653589793 * (0.5 * self.flake_diameter) ** 2 / self.size**2
 
+    def damping(self, shape):
+        """The DEM damping for flakes of ``shape`` (a :class:`~tribocosim.surrogate.dem.FlakeShape`):
+        the rate ``damping_rate`` [1/s], or the Stokes-drag rates of ``oil_viscosity``."""
+        from .dem import DampingRates
+
+        if self.oil_viscosity is not None:
+            return DampingRates.from_viscosity(shape, self.oil_viscosity)
+        return self.damping_rate
+
     def to_dict(self) -> dict:
-        """Plain dict of the fields (for metadata)."""
-        return asdict(self)
+        """Plain dict of the fields (for metadata); the :data:`OPTIONAL_KEYS` that are None are left
+        out (module docstring)."""
+        d = asdict(self)
+        for key in OPTIONAL_KEYS:
+            if d[key] is None:
+                del d[key]
+        return d
 
     @classmethod
     def from_dict(cls, data: dict) -> "SlideConfig":
@@ -174,6 +239,11 @@ class SlideConfig:
             raise ParameterError(f"configuration file {str(path)!r} is not valid TOML: {exc}") \
                 from None
         return cls.from_dict(data)
+
+
+def _number(name: str, value, unit: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{name} = {value!r} {unit} is not a number; allowed: a finite number")
 
 
 def _int(name: str, value, low: int) -> None:

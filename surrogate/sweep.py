@@ -18,7 +18,7 @@ by every slide. Example (SI units everywhere)::
 
     [[surfaces]]                   # surface pairs; the ensemble runs over surfaces x seeds
     sheet_seed = 1
-    tool_seed = 2                  # optional here: wavelength_ratio, hurst, *_rms_height
+    tool_seed = 2                  # optional: wavelength_ratio, hurst, *_rms_height, *_rolloff_wavelength
 
     [slide]                        # every other SlideConfig key (surrogate.slide_config)
     n = 64
@@ -55,7 +55,7 @@ PRESET_DIR = Path(__file__).resolve().parent / "presets"
 SWEPT_KEYS = ("pressure", "v0", "n_flakes", "flake_diameter", "flake_seed", "sheet_seed", "tool_seed")
 #: SlideConfig keys a [[surfaces]] entry may set besides the two seeds
 SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_rms_height",
-                "tool_rms_height")
+                "tool_rms_height", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
 _TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table")
 _GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
 _FLAKE_KEYS = ("count", "diameter")
