@@ -111,7 +111,8 @@ class Native:
     ``tc_fmu.h``), beside the shared ones (``tc_common.c``, the FMI wrapper); ``params_header`` is
     the header the build generates with the parameter struct (``<prefix>_params``). ``arrays`` are
     outputs only the FMI 3.0 FMU has: Float64 arrays of ``array_size`` values (the glue's
-    ``tc_component_array``).
+    ``tc_component_array``). ``interpolates_inputs``: the model takes its inputs' time derivatives at the
+    step's start (FMI 2.0 ``canInterpolateInputs``, ``fmi2SetRealInputDerivatives``, orders 1 and 2).
     """
 
     prefix: str
@@ -119,6 +120,7 @@ class Native:
     params_header: str
     arrays: tuple[Port, ...] = ()
     array_size: ArraySize | None = None
+    interpolates_inputs: bool = False
 
 
 @dataclass(frozen=True)

@@ -152,7 +152,7 @@ def model_description(comp: Component, fmu_guid: str) -> str:
     })
     SubElement(root, "CoSimulation", {
         "modelIdentifier": comp.model_identifier, "needsExecutionTool": "false",
-        "canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "false",
+        "canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "true" if comp.native.interpolates_inputs else "false",
         "maxOutputDerivativeOrder": "0", "canRunAsynchronuously": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false", "canNotUseMemoryManagementFunctions": "true",
         "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "false",

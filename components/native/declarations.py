@@ -175,6 +175,7 @@ def model_header(comp: Component, guid: str) -> str:
         f"#define TC_N_INPUTS {len(comp.inputs)}",
         f"#define TC_N_OUTPUTS {len(comp.outputs)}",
         f"#define TC_N_VARIABLES {len(vs)}",
+        f"#define TC_CAN_INTERPOLATE_INPUTS {int(comp.native.interpolates_inputs)}",
         "",
     ]
     for v in vs:

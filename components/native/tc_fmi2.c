@@ -272,7 +272,7 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
             return fmi2Error;
         }
         if (v->causality == TC_CAUSALITY_INPUT) {
-            c->inputs[v->index] = value[k]; /* checked by the model at the next step */
+            tc_inst_set_input(c, v, value[k]);
         } else if (parameter_settable(c, v)) {
             c->values[v->index].number = value[k];
         } else {
@@ -395,15 +395,17 @@ fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2S
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
+    /* The derivatives at the current communication point, for the next fmi2DoStep only; setting the input's
+     * value (fmi2SetReal) makes them zero again (tc_fmu_instance.h). */
     tc_instance *c = checked(comp, "fmi2SetRealInputDerivatives");
-    (void)vr;
-    (void)order;
-    (void)value;
-    if (c == NULL) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
-    tc_inst_logf(c, TC_LOG_ERROR, "fmi2SetRealInputDerivatives: %s holds its inputs over a step "
-                 "(canInterpolateInputs = false)", TC_MODEL_IDENTIFIER);
-    return fmi2Error;
+    if (c == NULL || (nvr > 0 && (vr == NULL || order == NULL || value == NULL))) return fmi2Error;
+    for (size_t k = 0; k < nvr; ++k) {
+        const tc_variable *v = variable(c, vr[k], TC_KIND_REAL, "fmi2SetRealInputDerivatives");
+        if (v == NULL) return fmi2Error;
+        if (tc_inst_set_input_derivative(c, v, (int)order[k], value[k], "fmi2SetRealInputDerivatives") != TC_LOG_OK)
+            return fmi2Error;
+    }
+    return fmi2OK;
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr,

@@ -480,7 +480,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance inst, const fmi3ValueReference valueRefer
                              "Mode, not %s", function, v->name);
                 return fmi3Error;
             }
-            c->core.inputs[v->index] = values[k]; /* checked by the model at the next step */
+            tc_inst_set_input(&c->core, v, values[k]);
         } else if (settable(c, v->name, is_structural(v), function)) {
             c->core.values[v->index].number = values[k];
         } else {

@@ -54,8 +54,11 @@ typedef struct tc_component tc_component;
  * is the FMU's resources folder (no trailing separator). TC_ERROR names the parameter or file at fault. */
 int tc_component_create(const tc_param_value *values, const char *resources, tc_component **out, tc_msg msg);
 void tc_component_free(tc_component *c);
-/* Advance by dt [s] with the inputs (in their order) held. */
-int tc_component_step(tc_component *c, double dt, const double *inputs, tc_msg msg);
+/* Advance by dt [s] from the inputs (in their order) at the step's start; derivatives holds, per input k, its
+ * first and second time derivative there (derivatives[2k], [2k + 1]): all zero (inputs held over the step)
+ * unless the component interpolates inputs (TC_CAN_INTERPOLATE_INPUTS; FMI 2.0 canInterpolateInputs) and
+ * the importer set them (fmi2SetRealInputDerivatives). */
+int tc_component_step(tc_component *c, double dt, const double *inputs, const double *derivatives, tc_msg msg);
 /* The outputs, in their order (Integer outputs as doubles). */
 void tc_component_outputs(const tc_component *c, double *outputs);
 /* After every accepted step (side outputs: the strip's field file); a failure makes the instance unusable. */

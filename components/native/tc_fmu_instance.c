@@ -13,6 +13,7 @@ typedef struct saved_state {
     double time;
     tc_param_value values[TC_N_PARAMETERS];
     double inputs[TC_N_INPUTS > 0 ? TC_N_INPUTS : 1];
+    double input_derivatives[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)];
     double outputs[TC_N_OUTPUTS];
     int has_component;
     size_t size;
@@ -88,6 +89,7 @@ static int set_defaults(tc_instance *c) {
             c->outputs[v->index] = v->start;
         }
     }
+    memset(c->input_derivatives, 0, sizeof c->input_derivatives);
     c->time = 0.0;
     return 1;
 }
@@ -224,7 +226,8 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         tc_inst_logf(c, TC_LOG_ERROR, "doStep refused: the FMU has not left initialization mode");
         return TC_LOG_ERROR;
     }
-    int rc = tc_component_step(c->component, dt, c->inputs, msg_of(c));
+    int rc = tc_component_step(c->component, dt, c->inputs, c->input_derivatives, msg_of(c));
+    memset(c->input_derivatives, 0, sizeof c->input_derivatives); /* they were for this step */
     if (rc != TC_OK) {
         for (int k = 0; k < TC_N_VARIABLES; ++k) {
             const tc_variable *v = &TC_VARIABLES[k];
@@ -247,6 +250,37 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         snprintf(text, sizeof text, "after the step to t = %s s: %s", tc_repr_double(c->time, a), c->message);
         return tc_inst_fail(c, text);
     }
+    return TC_LOG_OK;
+}
+
+void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value) {
+    c->inputs[v->index] = value; /* checked by the model at the next step */
+    c->input_derivatives[2 * v->index] = 0.0;
+    c->input_derivatives[2 * v->index + 1] = 0.0;
+}
+
+int tc_inst_set_input_derivative(tc_instance *c, const tc_variable *v, int order, double value, const char *function) {
+    char a[TC_REPR_SIZE];
+    if (!TC_CAN_INTERPOLATE_INPUTS) {
+        tc_inst_logf(c, TC_LOG_ERROR, "%s: %s holds its inputs over a step (canInterpolateInputs = false)", function,
+                     TC_MODEL_IDENTIFIER);
+        return TC_LOG_ERROR;
+    }
+    if (v->causality != TC_CAUSALITY_INPUT || v->kind != TC_KIND_REAL) {
+        tc_inst_logf(c, TC_LOG_ERROR, "%s: %s is not a Real input; only inputs have derivatives", function, v->name);
+        return TC_LOG_ERROR;
+    }
+    if (order != 1 && order != 2) {
+        tc_inst_logf(c, TC_LOG_ERROR, "%s: derivative order %d of %s; this FMU takes orders 1 and 2", function, order,
+                     v->name);
+        return TC_LOG_ERROR;
+    }
+    if (!isfinite(value)) {
+        tc_inst_logf(c, TC_LOG_ERROR, "%s: derivative %d of %s = %s is not finite; a finite number is required",
+                     function, order, v->name, tc_repr_double(value, a));
+        return TC_LOG_ERROR;
+    }
+    c->input_derivatives[2 * v->index + (order - 1)] = value;
     return TC_LOG_OK;
 }
 
@@ -292,6 +326,7 @@ int tc_inst_get_state(tc_instance *c, void **state, const char *function) {
     s->phase = c->phase;
     s->time = c->time;
     memcpy(s->inputs, c->inputs, sizeof s->inputs);
+    memcpy(s->input_derivatives, c->input_derivatives, sizeof s->input_derivatives);
     memcpy(s->outputs, c->outputs, sizeof s->outputs);
     memcpy(s->failure, c->failure, sizeof s->failure);
     s->has_component = c->component != NULL;
@@ -333,13 +368,14 @@ int tc_inst_set_state(tc_instance *c, const void *state) {
     c->phase = s->phase;
     c->time = s->time;
     memcpy(c->inputs, s->inputs, sizeof c->inputs);
+    memcpy(c->input_derivatives, s->input_derivatives, sizeof c->input_derivatives);
     memcpy(c->outputs, s->outputs, sizeof c->outputs);
     memcpy(c->failure, s->failure, sizeof c->failure);
     return TC_LOG_OK;
 }
 
 /* Serialized layout (little-endian fixed-size fields written byte by byte):
- *   magic "TCFMUST1", GUID (length-prefixed), phase, time, inputs, outputs, failure text,
+ *   magic "TCFMUST2", GUID (length-prefixed), phase, time, inputs, input derivatives, outputs, failure text,
  *   per parameter: number (8 bytes), choice, text (length-prefixed, or length ~0 for none), has_component,
  *   component bytes (length-prefixed). */
 typedef struct writer {
@@ -377,11 +413,12 @@ static void put_text(writer *w, const char *s) {
 size_t tc_inst_serialize(const void *state, unsigned char *buf, size_t size) {
     const saved_state *s = state;
     writer w = {buf, size, 0};
-    put(&w, "TCFMUST1", 8);
+    put(&w, "TCFMUST2", 8);
     put_text(&w, TC_GUID);
     put_u64(&w, (unsigned long long)s->phase);
     put_double(&w, s->time);
     for (int k = 0; k < (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1); ++k) put_double(&w, s->inputs[k]);
+    for (int k = 0; k < 2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1); ++k) put_double(&w, s->input_derivatives[k]);
     for (int k = 0; k < TC_N_OUTPUTS; ++k) put_double(&w, s->outputs[k]);
     put_text(&w, s->failure);
     for (int k = 0; k < TC_N_PARAMETERS; ++k) {
@@ -463,7 +500,7 @@ int tc_inst_deserialize(tc_instance *c, const unsigned char *bytes, size_t size,
     if (s == NULL) return TC_LOG_ERROR;
     const unsigned char *magic = take(&r, 8);
     char *guid = NULL;
-    if (magic == NULL || memcmp(magic, "TCFMUST1", 8) != 0) r.ok = 0;
+    if (magic == NULL || memcmp(magic, "TCFMUST2", 8) != 0) r.ok = 0;
     if (r.ok) guid = get_text(&r, &none);
     if (r.ok && (guid == NULL || strcmp(guid, TC_GUID) != 0)) {
         tc_inst_logf(c, TC_LOG_ERROR, "%s: the state was serialized by another FMU (%s %s; this FMU is %s)", function,
@@ -478,6 +515,7 @@ int tc_inst_deserialize(tc_instance *c, const unsigned char *bytes, size_t size,
     if (phase > TC_PHASE_FAILED) r.ok = 0;
     s->time = get_double(&r);
     for (int k = 0; k < (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1); ++k) s->inputs[k] = get_double(&r);
+    for (int k = 0; k < 2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1); ++k) s->input_derivatives[k] = get_double(&r);
     for (int k = 0; k < TC_N_OUTPUTS; ++k) s->outputs[k] = get_double(&r);
     char *failure = get_text(&r, &none);
     if (failure != NULL) {

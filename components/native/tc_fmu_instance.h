@@ -44,6 +44,7 @@ struct tc_instance {
     double time;
     tc_param_value values[TC_N_PARAMETERS];
     double inputs[TC_N_INPUTS > 0 ? TC_N_INPUTS : 1];
+    double input_derivatives[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)]; /* per input: 1st, 2nd; for the next step */
     double outputs[TC_N_OUTPUTS];
     tc_component *component;
     char message[2048];
@@ -76,8 +77,14 @@ int tc_inst_make_component(tc_instance *c);
 int tc_inst_exit_initialization(tc_instance *c);
 /* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */
 int tc_inst_terminate(tc_instance *c);
-/* Advance by dt from t (the contract above). */
+/* Advance by dt from t (the contract above); the input derivatives apply to this step only (zero after it). */
 int tc_inst_do_step(tc_instance *c, double t, double dt);
+/* Set input variable v (causality input) to value; its derivatives (if any were set) are zero again. */
+void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value);
+/* The order-th time derivative (1 or 2) of input variable v at the start of the next step; TC_LOG_ERROR,
+ * logged naming `function`, if the FMU cannot interpolate inputs, v is not an input, the order is not 1 or 2
+ * or the value is not finite. */
+int tc_inst_set_input_derivative(tc_instance *c, const tc_variable *v, int order, double value, const char *function);
 
 /* The variable behind FMI 2.0 value reference vr, of kind `kind` (enum tc_kind); NULL, logged as an error
  * naming `function`, if there is none or it is another kind (kind_names: how the standard calls the kinds). */

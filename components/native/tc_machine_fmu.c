@@ -31,7 +31,8 @@ void tc_component_free(tc_component *c) {
     free(c);
 }
 
-int tc_component_step(tc_component *c, double dt, const double *inputs, tc_msg msg) {
+int tc_component_step(tc_component *c, double dt, const double *inputs, const double *derivatives, tc_msg msg) {
+    (void)derivatives; /* canInterpolateInputs = false: always zero */
     return tc_machine_step(c->model, dt, inputs[0], msg); /* pull_force */
 }
 

@@ -31,7 +31,8 @@ void tc_component_free(tc_component *c) {
     free(c);
 }
 
-int tc_component_step(tc_component *c, double dt, const double *inputs, tc_msg msg) {
+int tc_component_step(tc_component *c, double dt, const double *inputs, const double *derivatives, tc_msg msg) {
+    (void)derivatives;
     (void)inputs;
     return tc_press_step(c->model, dt, msg);
 }

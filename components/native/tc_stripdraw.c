@@ -37,7 +37,9 @@
  *
  * Coupling (model.py): a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one
  * piece, the step, when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max -
- * 1e-9)) intervals with h_max = window_courant l_e / |V0|; per interval mu is evaluated on the nodes that can
+ * 1e-9)) intervals with h_max = window_courant l_e / |V0| (the largest |V0| of the piece's ends and middle);
+ * the inputs are polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly)
+ * and each interval takes their means (input_mean); per interval mu is evaluated on the nodes that can
  * reach the pad (contact nodes +- ceil(window_courant) + 1) and held, the bar advanced, then beta updated from
  * the nodal slip increments with the contact weights averaged over the interval.
  *
@@ -646,38 +648,72 @@ static int grid_pieces(double t, double dt, double tau, double len[3], double co
     return k;
 }
 
-/* StripDrawModel._advance: cut the step on the internal grid, each piece into coupling intervals. */
-static int advance(tc_stripdraw *m, double dt, double fn, double vg, tc_msg msg) {
+/* model.input_mean: the mean over [a, b] of the input polynomial c[0] + c[1] s + c[2] s^2 (its value at a when
+ * a == b); the same operations in the same order as Python. */
+static double input_mean(const double c[3], double a, double b) {
+    return c[0] + c[1] * 0.5 * (a + b) + c[2] * (a * a + a * b + b * b) / 3.0;
+}
+
+/* StripDrawModel._piece: the number of coupling intervals of the piece [s, s + len] (at the largest grip speed
+ * of its ends and middle, as Python's max of the three). */
+static double piece_intervals(const tc_stripdraw *m, const double vg[3], double s, double len) {
+    double speed = fabs(input_mean(vg, s, s));
+    speed = py_max(speed, fabs(input_mean(vg, s + 0.5 * len, s + 0.5 * len)));
+    speed = py_max(speed, fabs(input_mean(vg, s + len, s + len)));
+    const double h_max = speed != 0 ? m->p.window_courant * m->le / speed : INFINITY;
+    const double q = ceil(len / h_max - 1e-9);
+    return q > 1.0 ? q : 1.0;
+}
+
+/* StripDrawModel._advance: cut the step on the internal grid, each piece into coupling intervals; the inputs
+ * are the polynomials fn, vg (Taylor coefficients at the step's start), each interval takes their mean. */
+static int advance(tc_stripdraw *m, double dt, const double fn[3], const double vg[3], tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
     char r1[TC_REPR_SIZE], r2[TC_REPR_SIZE];
-    m->normal_force = fn;
-    const double pressure = fn / (p->tool_length * p->tool_width);
-    const double h_max = vg != 0 ? p->window_courant * m->le / fabs(vg) : INFINITY;
-    double len[3], count[3], n_int[3], h[3];
+    const int held = fn[1] == 0.0 && fn[2] == 0.0 && vg[1] == 0.0 && vg[2] == 0.0;
+    double len[3], count[3];
     const int runs = grid_pieces(m->time, dt, p->internal_step, len, count);
-    double total = 0.0, total_sub = 0.0; /* intervals and explicit steps of the whole step */
+    /* the refusals before any interval is taken: the intervals (and explicit steps) of the whole step */
+    double total = 0.0, total_sub = 0.0, pieces = 0.0;
+    for (int j = 0; j < runs; ++j) pieces += count[j];
+    if (!(pieces <= TC_STRIPDRAW_MAX_INTERVALS))
+        return tc_fail(msg, TC_DISCARD, "dt = %s s cuts into %.3g pieces of internal_step, so as many coupling "
+                       "intervals at least; at most %.0e are allowed", tc_repr_double(dt, r1), pieces, TC_STRIPDRAW_MAX_INTERVALS);
+    double s = 0.0;
     for (int j = 0; j < runs; ++j) {
-        const double q = ceil(len[j] / h_max - 1e-9);
-        n_int[j] = q > 1.0 ? q : 1.0;
-        h[j] = len[j] / n_int[j];
-        total += count[j] * n_int[j];
-        if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
-            const double qs = ceil(h[j] / m->dt_explicit - 1e-9);
-            total_sub += count[j] * n_int[j] * (qs > 1.0 ? qs : 1.0);
+        const long long reps = held ? 1 : (long long)count[j];
+        for (long long k = 0; k < reps; ++k) {
+            const double n_int = piece_intervals(m, vg, s, len[j]);
+            const double times = held ? count[j] : 1.0;
+            total += times * n_int;
+            if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+                const double qs = ceil(len[j] / n_int / m->dt_explicit - 1e-9);
+                total_sub += times * n_int * (qs > 1.0 ? qs : 1.0);
+            }
+            s += len[j];
         }
     }
     if (!(total <= TC_STRIPDRAW_MAX_INTERVALS))
         return tc_fail(msg, TC_DISCARD,
                        "dt = %s s at grip_velocity = %s m/s needs %.3g coupling intervals; at most %.0e are allowed",
-                       tc_repr_double(dt, r1), tc_repr_double(vg, r2), total, TC_STRIPDRAW_MAX_INTERVALS);
+                       tc_repr_double(dt, r1), tc_repr_double(vg[0], r2), total, TC_STRIPDRAW_MAX_INTERVALS);
     if (!(total_sub <= TC_STRIPDRAW_MAX_SUBSTEPS))
         return tc_fail(msg, TC_DISCARD, "dt = %s s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step",
                        tc_repr_double(dt, r1), total_sub, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
+    s = 0.0;
     for (int j = 0; j < runs; ++j) {
-        const long long n = (long long)count[j] * (long long)n_int[j];
-        for (long long k = 0; k < n; ++k) {
-            int rc = interval(m, h[j], pressure, vg, msg);
-            if (rc != TC_OK) return rc;
+        for (long long k = 0; k < (long long)count[j]; ++k) {
+            const double n_int = piece_intervals(m, vg, s, len[j]);
+            const double h = len[j] / n_int;
+            for (long long i = 0; i < (long long)n_int; ++i) {
+                const double a = s + (double)i * h, b = s + (double)(i + 1) * h;
+                /* a normal force interpolated below zero is a pad that lifts off: no pressure (no adhesion) */
+                m->normal_force = py_max(0.0, input_mean(fn, a, b));
+                const double pressure = m->normal_force / (p->tool_length * p->tool_width);
+                int rc = interval(m, h, pressure, input_mean(vg, a, b), msg);
+                if (rc != TC_OK) return rc;
+            }
+            s += len[j];
         }
     }
     return TC_OK;
@@ -900,6 +936,15 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
 }
 
 int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double grip_velocity, tc_msg msg) {
+    const double none[2] = {0.0, 0.0};
+    return tc_stripdraw_step_poly(m, dt, normal_force, none, grip_velocity, none, msg);
+}
+
+int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, const double d_normal_force[2],
+                           double grip_velocity, const double d_grip_velocity[2], tc_msg msg) {
+    static const char *const names[4] = {"d(normal_force)/dt", "d2(normal_force)/dt2", "d(grip_velocity)/dt",
+                                         "d2(grip_velocity)/dt2"};
+    const double d[4] = {d_normal_force[0], d_normal_force[1], d_grip_velocity[0], d_grip_velocity[1]};
     char r1[TC_REPR_SIZE];
     if (!isfinite(dt))
         return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r1));
@@ -912,8 +957,13 @@ int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double gr
     if (!isfinite(grip_velocity))
         return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
                        tc_repr_double(grip_velocity, r1));
+    for (int k = 0; k < 4; ++k)
+        if (!isfinite(d[k]))
+            return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
+                           tc_repr_double(d[k], r1));
+    const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
     write_state(m, m->backup);
-    int rc = advance(m, dt, normal_force, grip_velocity, msg);
+    int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
         int finite = isfinite(m->reaction);
         for (size_t i = 0; finite && i < m->n; ++i) finite = isfinite(m->U[i]);

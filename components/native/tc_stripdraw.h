@@ -49,6 +49,10 @@ TC_API void tc_stripdraw_free(tc_stripdraw *m);
  * step so long that it would need more than TC_STRIPDRAW_MAX_INTERVALS coupling intervals (or, explicit,
  * TC_STRIPDRAW_MAX_SUBSTEPS central-difference steps), where the Python model would run for days. */
 TC_API int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double grip_velocity, tc_msg msg);
+/* The same with the inputs' first and second time derivatives at the step's start (d[0], d[1]): each input is
+ * u + d[0] s + d[1] s^2 / 2 over the step, each coupling interval takes its mean (model.StripDrawModel.step). */
+TC_API int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, const double d_normal_force[2],
+                                  double grip_velocity, const double d_grip_velocity[2], tc_msg msg);
 #define TC_STRIPDRAW_MAX_INTERVALS 1e8
 #define TC_STRIPDRAW_MAX_SUBSTEPS 1e10
 

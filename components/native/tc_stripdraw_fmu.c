@@ -163,8 +163,9 @@ int tc_component_create(const tc_param_value *values, const char *resources, tc_
     return TC_OK;
 }
 
-int tc_component_step(tc_component *c, double dt, const double *inputs, tc_msg msg) {
-    return tc_stripdraw_step(c->model, dt, inputs[0], inputs[1], msg); /* normal_force, grip_velocity */
+int tc_component_step(tc_component *c, double dt, const double *inputs, const double *derivatives, tc_msg msg) {
+    /* normal_force, grip_velocity with their derivatives (canInterpolateInputs = true) */
+    return tc_stripdraw_step_poly(c->model, dt, inputs[0], derivatives, inputs[1], derivatives + 2, msg);
 }
 
 void tc_component_outputs(const tc_component *c, double *outputs) { tc_stripdraw_outputs(c->model, outputs); }

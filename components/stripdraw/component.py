@@ -27,6 +27,13 @@ Variables
     a file: the strip starts from its last ``beta`` row (a later pass over the same strip without
     cleaning, paper Fig. 2b); it must have been written for this mesh.
 
+Input derivatives (native FMI 2.0 FMU: ``canInterpolateInputs = true``)
+    ``fmi2SetRealInputDerivatives`` (orders 1 and 2) gives ``normal_force`` and ``grip_velocity`` as
+    polynomials over the next step (the model's ``step(..., derivatives=...)``): with ``internal_step`` > 0
+    friction and debris then follow the inputs within a communication step and Jacobi or Gauss-Seidel with
+    extrapolation 1 are second-order. The derivatives apply to the next ``fmi2DoStep`` only and are zero
+    again after it or after ``fmi2SetReal`` of the input. The pythonfmu variant holds its inputs.
+
 Errors particular to this model
     NaN/inf/negative ``normal_force``, NaN/inf ``grip_velocity``, a table lookup outside the table
     under ``table_policy = "error"``, an implicit solve that does not converge: the step is
@@ -200,6 +207,7 @@ COMPONENT = Component(
                   sources=("tc_stripdraw.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
                            "tc_sha256.c", "tc_json.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
-                  array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1")),
+                  array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
+                  interpolates_inputs=True),
     default_experiment=(0.0, 1.75, 1e-3),
 )

@@ -51,6 +51,16 @@ grid points is exactly tau long. So one step H and two steps H/2 from a grid poi
 intervals, bit for bit, whenever t + H/2 is a grid point too, and step doubling sees only the coupling
 (the inputs) change. tau = 0 (default) leaves one piece, the requested step.
 
+Inputs within a step. By default the inputs are held over the step. Given their first and second time
+derivatives at the step's start (``step(..., derivatives=...)``; the FMU's ``fmi2SetRealInputDerivatives``,
+canInterpolateInputs = true), each input is the polynomial u(s) = u + u' s + u'' s^2 / 2 of the time s into
+the step, and each coupling interval [a, b] takes its mean (1/(b - a)) int_a^b u ds: the exact impulse of the
+normal force and the exact grip displacement of a polynomial input. With tau > 0 the friction, the contact
+overlaps and the debris then follow the inputs every tau within a communication step H, so the model's
+response to a linearly extrapolated input is second order in H (a held input is first order: the end-of-step
+outputs see the input of the start or the mean). A normal force interpolated below zero on an interval is a
+pad that lifts off: pressure 0 there (the interface carries no tension); the input itself must be >= 0.
+
 Outputs (one pad, one face; ``pull_force`` for the whole strip):
 
 - ``pull_force`` = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 normal_force));
@@ -125,6 +135,17 @@ def grid_pieces(t: float, dt: float, tau: float) -> list[tuple[float, int]]:
         runs.append((tau, int(last - first)))
     runs.append((tau if end_on else end - last * tau, 1))
     return runs
+
+
+def input_mean(poly: tuple[float, float, float], a: float, b: float) -> float:
+    """Mean over [a, b] of the input polynomial u(s) = c0 + c1 s + c2 s^2 (its value at a when a == b).
+
+    A coupling interval takes this mean: it carries the exact impulse of a force and the exact
+    displacement of a velocity that vary as the polynomial (Taylor coefficients about the step's
+    start, ``c2`` = half the second derivative).
+    """
+    c0, c1, c2 = poly
+    return c0 + c1 * 0.5 * (a + b) + c2 * (a * a + a * b + b * b) / 3.0
 
 
 class StripDrawModel:
@@ -204,20 +225,25 @@ class StripDrawModel:
         self._w = self._weights(self.U)
 
     # ------------------------------------------------------------------ stepping
-    def step(self, dt: float, inputs: dict) -> dict:
-        """Advance by ``dt`` seconds with inputs held constant; return the outputs.
+    def step(self, dt: float, inputs: dict, derivatives: dict | None = None) -> dict:
+        """Advance by ``dt`` seconds; return the outputs.
 
         Parameters
         ----------
         dt : float
             Step length [s], > 0.
         inputs : dict
-            ``normal_force`` [N] on one pad (>= 0) and ``grip_velocity`` [m/s].
+            ``normal_force`` [N] on one pad (>= 0) and ``grip_velocity`` [m/s] at the start of the step.
+        derivatives : dict, optional
+            Input name -> its first and second time derivatives at the start of the step, ``(d1, d2)``
+            [unit/s, unit/s^2] (what ``fmi2SetRealInputDerivatives`` gives). The input is then the
+            polynomial u(s) = u + d1 s + d2 s^2 / 2 of the time s into the step, and every coupling
+            interval [a, b] takes its mean over the interval (:func:`input_mean`). Missing: held.
 
         Raises
         ------
         ParameterError
-            For a non-finite or negative input or step; the state is unchanged.
+            For a non-finite or negative input or step, or a non-finite derivative; the state is unchanged.
         ConvergenceError
             If the implicit solve fails even after step halving; the state is unchanged.
         """
@@ -228,9 +254,13 @@ class StripDrawModel:
         if fn < 0:
             raise ParameterError(f"normal_force = {fn!r} N must be >= 0")
         vg = check_finite("grip_velocity", inputs["grip_velocity"])
+        polys = {}
+        for name, value in (("normal_force", fn), ("grip_velocity", vg)):
+            d1, d2 = (derivatives or {}).get(name, (0.0, 0.0))
+            polys[name] = (value, check_finite(f"d({name})/dt", d1), 0.5 * check_finite(f"d2({name})/dt2", d2))
         saved = self.get_state()
         try:
-            self._advance(dt, fn, vg)
+            self._advance(dt, polys["normal_force"], polys["grip_velocity"])
             if not (np.all(np.isfinite(self.U)) and math.isfinite(self.reaction)):
                 raise ConvergenceError(f"non-finite bar state at t = {self.time + dt:.9g} s")
         except BaseException:
@@ -240,16 +270,26 @@ class StripDrawModel:
         self.n_steps += 1
         return self.outputs()
 
-    def _advance(self, dt: float, fn: float, vg: float) -> None:
+    def _advance(self, dt: float, fn: tuple, vg: tuple) -> None:
+        s = 0.0  # time into the step at the start of the piece
+        for piece, count in grid_pieces(self.time, dt, self.params.internal_step):
+            for _ in range(count):
+                self._piece(s, piece, fn, vg)
+                s += piece
+
+    def _piece(self, s: float, piece: float, fn: tuple, vg: tuple) -> None:
+        """One piece [s, s + piece] of the step, cut into coupling intervals in which the pad slides at most
+        window_courant elements (at the largest grip speed of the piece's ends and middle)."""
         p, m = self.params, self.mesh
-        self.normal_force = fn
-        pressure = p.pressure(fn)
-        h_max = p.window_courant * m.element_length / abs(vg) if vg != 0 else math.inf
-        for piece, count in grid_pieces(self.time, dt, p.internal_step):
-            n_int = max(1, math.ceil(piece / h_max - 1e-9))
-            h = piece / n_int
-            for _ in range(count * n_int):
-                self._interval(h, pressure, vg)
+        speed = max(abs(input_mean(vg, x, x)) for x in (s, s + 0.5 * piece, s + piece))
+        h_max = p.window_courant * m.element_length / speed if speed != 0 else math.inf
+        n_int = max(1, math.ceil(piece / h_max - 1e-9))
+        h = piece / n_int
+        for j in range(n_int):
+            a, b = s + j * h, s + (j + 1) * h
+            # a normal force interpolated below zero is a pad that lifts off: no pressure (no adhesion)
+            self.normal_force = max(0.0, input_mean(fn, a, b))
+            self._interval(h, p.pressure(self.normal_force), input_mean(vg, a, b))
 
     def _interval(self, h: float, pressure: float, vg: float) -> None:
         p, m = self.params, self.mesh

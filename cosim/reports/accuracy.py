@@ -379,8 +379,9 @@ def bem(settings: Settings) -> Family:
     return fam
 
 
+from tribocosim.cosim.reports.coupling_order import coupling_order  # noqa: E402 (issue 18, item 2; imports this lazily)
 from tribocosim.cosim.reports.iteration import near_pcrit  # noqa: E402 (issue 18, item 3; it imports this module lazily)
 
 #: report order: name -> family function
-FAMILIES = {"oscillator": oscillator, "demo": demo, "near_pcrit": near_pcrit, "stripdraw": stripdraw, "surrogate": surrogate,
-            "bem": bem}
+FAMILIES = {"oscillator": oscillator, "demo": demo, "coupling_order": coupling_order, "near_pcrit": near_pcrit,
+            "stripdraw": stripdraw, "surrogate": surrogate, "bem": bem}

@@ -119,6 +119,7 @@ class Core:
                                            ctypes.POINTER(_vp), Msg]),
             "tc_stripdraw_free": (None, [_vp]),
             "tc_stripdraw_step": (_int, [_vp, _dbl, _dbl, _dbl, Msg]),
+            "tc_stripdraw_step_poly": (_int, [_vp, _dbl, _dbl, _dbl_p, _dbl, _dbl_p, Msg]),
             "tc_stripdraw_outputs": (None, [_vp, _dbl_p]),
             "tc_stripdraw_state_size": (_size, [_vp]),
             "tc_stripdraw_get_state": (None, [_vp, _vp]),
@@ -248,8 +249,15 @@ class NativeStripDraw:
         """The raw status of one step (the message is in core.last_message())."""
         return self.core.lib.tc_stripdraw_step(self.handle, dt, normal_force, grip_velocity, self.core.msg())
 
-    def step(self, dt, inputs: dict) -> dict:
-        self.core.check(self.step_status(dt, inputs["normal_force"], inputs["grip_velocity"]))
+    def step(self, dt, inputs: dict, derivatives: dict | None = None) -> dict:
+        if derivatives is None:
+            self.core.check(self.step_status(dt, inputs["normal_force"], inputs["grip_velocity"]))
+        else:
+            d = {k: np.ascontiguousarray(derivatives.get(k, (0.0, 0.0)), dtype=float)
+                 for k in ("normal_force", "grip_velocity")}
+            self.core.check(self.core.lib.tc_stripdraw_step_poly(
+                self.handle, dt, inputs["normal_force"], _ptr(d["normal_force"]), inputs["grip_velocity"],
+                _ptr(d["grip_velocity"]), self.core.msg()))
         return self.outputs()
 
     def outputs(self) -> dict:

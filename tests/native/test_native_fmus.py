@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numpy.testing import assert_array_equal
+from numpy.testing import assert_allclose, assert_array_equal
 
 HERE = Path(__file__).resolve().parent
 
@@ -353,6 +353,73 @@ def test_bad_inputs_are_discarded_with_the_state_unchanged_and_a_message(unzippe
     s.doStep(1e-3, 1e-3)  # usable again
     s.terminate()
     s.freeInstance()
+
+
+def test_input_derivatives_reach_the_strip_for_one_step_and_only_it_takes_them(unzipped, descriptions):
+    """The StripDraw FMU declares canInterpolateInputs and follows fmi2SetRealInputDerivatives as the Python
+    model follows step(..., derivatives) (bit for bit); the derivatives apply to the next doStep only (a step
+    after it without new ones equals a held step), fmi2SetReal of the input clears them, a state round trip
+    carries them, and the Press and DrawingMachine (canInterpolateInputs = false) refuse them."""
+    from fmpy.fmi1 import FMICallException
+
+    from tribocosim.components.stripdraw.friction import make_friction_law
+    from tribocosim.components.stripdraw.model import StripDrawModel
+    from tribocosim.components.stripdraw.parameters import StripDrawParameters
+
+    assert descriptions["StripDraw"].coSimulation.canInterpolateInputs
+    assert not descriptions["Press"].coSimulation.canInterpolateInputs
+    assert not descriptions["DrawingMachine"].coSimulation.canInterpolateInputs
+    md = descriptions["StripDraw"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outs = [vr[n] for n in STRIP_OUTPUTS if n != "table_clamp_count"]
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"friction_model": "closed_form", "internal_step": 2e-4}, msgs)
+    s.exitInitializationMode()
+    p = StripDrawParameters(friction_model="closed_form", internal_step=2e-4)
+    py = StripDrawModel(p, make_friction_law(p, None))
+    u, d = {"normal_force": 12250.0, "grip_velocity": 0.02}, {"normal_force": (4e5, -1e6), "grip_velocity": (3.0, 0.0)}
+    t = 0.0
+    for k in range(6):
+        s.setReal([vr["normal_force"], vr["grip_velocity"]], [u["normal_force"], u["grip_velocity"]])
+        if k % 2 == 0:  # even steps interpolate, odd ones must be held again
+            s.setRealInputDerivatives([vr["normal_force"], vr["normal_force"], vr["grip_velocity"]], [1, 2, 1],
+                                      [d["normal_force"][0], d["normal_force"][1], d["grip_velocity"][0]])
+        s.doStep(t, 1e-3)
+        ref = py.step(1e-3, u, d if k % 2 == 0 else None)
+        assert_allclose(s.getReal(outs), [ref[n] for n in STRIP_OUTPUTS if n != "table_clamp_count"], rtol=1e-12,
+                        atol=0, err_msg=str(k))  # rounding of the contact-weighted means (NumPy's dot product)
+        t += 1e-3
+    # fmi2SetReal after the derivatives clears them: the step is a held one
+    s.setRealInputDerivatives([vr["normal_force"]], [1], [4e5])
+    s.setReal([vr["normal_force"]], [u["normal_force"]])
+    s.doStep(t, 1e-3)
+    ref = py.step(1e-3, u)
+    assert_allclose(s.getReal(outs), [ref[n] for n in STRIP_OUTPUTS if n != "table_clamp_count"], rtol=1e-12, atol=0)
+    # a state taken with derivatives set replays them
+    s.setRealInputDerivatives([vr["grip_velocity"]], [1], [3.0])
+    state = s.getFMUstate()
+    s.doStep(t + 1e-3, 1e-3)
+    first = s.getReal(outs)
+    s.setFMUstate(state)
+    s.doStep(t + 1e-3, 1e-3)
+    assert s.getReal(outs) == first
+    for order, value, text in ((3, 1.0, "derivative order 3 of normal_force; this FMU takes orders 1 and 2"),
+                               (1, float("nan"), "derivative 1 of normal_force = nan is not finite")):
+        with pytest.raises(FMICallException):
+            s.setRealInputDerivatives([vr["normal_force"]], [order], [value])
+        assert any(st == 3 and text in m for st, m in msgs), msgs
+    with pytest.raises(FMICallException):
+        s.setRealInputDerivatives([vr["pull_force"]], [1], [1.0])
+    s.terminate()
+    s.freeInstance()
+    mm = descriptions["DrawingMachine"]
+    msgs = []
+    m = _fmpy_instance(unzipped["DrawingMachine"], mm, {}, msgs)
+    m.exitInitializationMode()
+    with pytest.raises(FMICallException):
+        m.setRealInputDerivatives([{v.name: v.valueReference for v in mm.modelVariables}["pull_force"]], [1], [1.0])
+    assert any("canInterpolateInputs = false" in text for _, text in msgs), msgs
+    m.freeInstance()
 
 
 @pytest.mark.parametrize("name, inputs", [("StripDraw", ("normal_force", "grip_velocity")), ("Press", ()),

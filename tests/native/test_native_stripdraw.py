@@ -351,6 +351,56 @@ def test_internal_grid_step_doubling_is_bit_identical_in_c(native_core, table):
         assert identical == same, f"internal_step = {tau}"
 
 
+def _interpolated_schedule(n_steps: int, tau: float):
+    """(dt, inputs, derivatives): a pressure ramp up and down with a grip that accelerates, reverses and
+    decelerates, in steps of 1-5 internal steps, with first and second derivatives (the master's Taylor
+    coefficients of a quadratic extrapolation)."""
+    out, t = [], 0.0
+    for k in range(n_steps):
+        dt = (1 + k % 5) * tau
+        fn = F_N * (1.0 + 0.8 * math.sin(40.0 * t))
+        vg = 0.08 * math.cos(25.0 * t)
+        out.append((dt, {"normal_force": fn, "grip_velocity": vg},
+                    {"normal_force": (32.0 * F_N * math.cos(40.0 * t), -1280.0 * F_N * math.sin(40.0 * t)),
+                     "grip_velocity": (-2.0 * math.sin(25.0 * t), -50.0 * math.cos(25.0 * t))}))
+        t += dt
+    return out
+
+
+@pytest.mark.parametrize("integrator,law", [("implicit", "table"), ("implicit", "closed_form"),
+                                            ("explicit", "constant")])
+def test_input_derivatives_match_python(native_core, table, integrator, law):
+    """tc_stripdraw_step_poly (fmi2SetRealInputDerivatives' path) follows StripDrawModel.step with derivatives:
+    each coupling interval takes the mean of the input polynomial, in the same operations."""
+    tau = 2e-4 if integrator == "implicit" else 5e-5
+    p = StripDrawParameters(friction_model=law, integrator=integrator, draw_length=0.01,
+                            n_elements=60 if integrator == "implicit" else 30, internal_step=tau)
+    py, nat = _pair(native_core, p, table)
+    a, b = [], []
+    for dt, u, d in _interpolated_schedule(120 if integrator == "implicit" else 40, tau):
+        ref, out = py.step(dt, u, d), nat.step(dt, u, d)
+        a.append([ref[k] for k in OUTPUT_NAMES])
+        b.append([out[k] for k in OUTPUT_NAMES])
+    _assert_agree(np.array(a), np.array(b), py, nat, f"input derivatives, {integrator}, {law}")
+
+
+def test_input_derivatives_refuse_non_finite_values_with_the_state_unchanged(native_core, table):
+    p = StripDrawParameters(draw_length=0.01, n_elements=30, internal_step=1e-4)
+    nat = native_core.stripdraw(p, table)
+    nat.step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08})
+    before = nat.get_state()
+    d = np.array([math.nan, 0.0])
+    status = native_core.lib.tc_stripdraw_step_poly(nat.handle, 1e-3, F_N, d.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                     0.08, np.zeros(2).ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                                     native_core.msg())
+    assert status == TC_DISCARD
+    assert native_core.last_message() == "d(normal_force)/dt = nan is not finite; a finite number is required"
+    assert nat.get_state() == before
+    with pytest.raises(ParameterError, match=r"d\(normal_force\)/dt = nan"):
+        StripDrawModel(p, make_friction_law(p, table)).step(1e-3, {"normal_force": F_N, "grip_velocity": 0.08},
+                                                             {"normal_force": (math.nan, 0.0)})
+
+
 @pytest.mark.parametrize("max_iter", [3, 1])
 def test_step_halving_matches_python(native_core_newton, table, monkeypatch, max_iter):
     """With the Newton limit lowered, steps are halved (up to 12 times; with 1 iteration some steps fail even
