@@ -198,7 +198,8 @@ def demo(settings: Settings) -> Family:
     settings.log(f"  demo: reference (dt = {dt_ref:g} s) in {ref_time:.1f} s; with internal_step = "
                  f"{DEMO_INTERNAL_STEP:g} s: {grid_ref_note}")
     fam = Family("demo", title, curve="curve", error="error", cost="wall_time", label="setting",
-                 errors=("error", "error_after_ramps"))
+                 errors=("error", "error_after_ramps"),
+                 summary_curves=("jacobi/1", "adaptive step-doubling", "adaptive energy"))
     fam.note = (f"demo.toml with stop = {stop} s{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
                 f"Error: max |F - F_ref| / max |F_ref| of strip.pull_force over the communication points; F_ref is the "
                 f"monolithic reference (cosim.reference_components.reference_for_scene: pure models, coupling solved every "

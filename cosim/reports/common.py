@@ -74,6 +74,7 @@ class Family:
     load: str = ""
     extra_md: str = ""
     errors: tuple = ()  # several error columns (one plot panel and one summary row each); default (error,)
+    summary_curves: tuple = ()  # curves that also get their own summary rows (besides the family's cheapest)
 
     @property
     def error_columns(self) -> tuple:

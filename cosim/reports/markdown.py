@@ -165,6 +165,12 @@ def accuracy_markdown(fams: list[Family], files: dict[str, list[Path]], header: 
         for e in fam.error_columns:
             best = cheapest_reaching(fam.rows, TARGETS, error=e, cost=fam.cost, label=fam.label)
             out.append(f"| {fam.name} | {e} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS) + " |")
+        for c in fam.summary_curves:
+            for e in fam.error_columns:
+                best = cheapest_reaching([r for r in fam.rows if r.get("curve") == c], TARGETS, error=e,
+                                         cost=fam.cost, label=fam.label)
+                out.append(f"| {fam.name}: {c} | {e} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS)
+                           + " |")
     out.append("")
     for fam in fams:
         out += _head(fam, files.get(fam.name, []))

@@ -54,3 +54,19 @@ def test_cheapest_setting_per_target():
     assert best[1e-3]["setting"] == "d"
     assert best[1e-4]["setting"] == "d"
     assert best[1e-6] is None
+
+
+def test_summary_curves_get_their_own_cheapest_rows():
+    """A family's summary_curves are summarised alone too: the adaptive rows of the demo show even when a fixed
+    step is the family's cheapest."""
+    from tribocosim.cosim.reports.common import Family
+    from tribocosim.cosim.reports.markdown import accuracy_markdown
+
+    rows = [{"curve": "fixed", "setting": "h=1", "error": 1e-3, "wall_time": 1.0, "do_steps": 10},
+            {"curve": "adaptive", "setting": "tol=1", "error": 5e-4, "wall_time": 3.0, "do_steps": 30},
+            {"curve": "adaptive", "setting": "tol=2", "error": 5e-2, "wall_time": 2.0, "do_steps": 20}]
+    fam = Family("f", "F", rows=rows, curve="curve", summary_curves=("adaptive",))
+    text = accuracy_markdown([fam], {}, "# r")
+    summary = text.split("## Summary")[1].split("\n\n")[1]
+    assert "| f | error | h=1 (1 s, 10 doSteps) | h=1 (1 s, 10 doSteps) | not reached |" in summary
+    assert "| f: adaptive | error | tol=1 (3 s, 30 doSteps) | tol=1 (3 s, 30 doSteps) | not reached |" in summary
