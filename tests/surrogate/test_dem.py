@@ -10,6 +10,7 @@ from numpy.testing import assert_allclose
 
 from tribocosim.components.errors import ParameterError
 from tribocosim.surrogate import dem
+from tribocosim.surrogate import dem_kernels as kernels
 from tribocosim.surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape
 from tribocosim.surrogate.flakes import axis_angle_quaternion, rotation_matrices
 
@@ -354,3 +355,272 @@ def test_bad_parameters_are_rejected():
         make_params(shape=FlakeShape(60e-6, 0.5e-6))
     with pytest.raises(ParameterError, match="v_ref"):
         dem.penalty_stiffness(SHAPE, 55e9, 0.0)
+
+
+# ------------------------------------------------------------------------------------------
+# clearance records and pair candidates (issue 17, item 4): faces, points and flake pairs that are
+# provably out of contact are not read; the numbers do not change, bit for bit
+# ------------------------------------------------------------------------------------------
+def slope_bound_ref(h, dh, w, ic, jc, half, dx):
+    """Largest forward pixel difference of h and h + w dh over the (2 half + 1)^2 window, / dx."""
+    out = 0.0
+    for f in ([h] if w == 0 else [h, h + w * dh]):
+        ex = np.abs(np.roll(f, -1, axis=0) - f)
+        ey = np.abs(np.roll(f, -1, axis=1) - f)
+        rows = np.arange(ic - half, ic + half + 1) % h.shape[0]
+        cols = np.arange(jc - half, jc + half + 1) % h.shape[1]
+        out = max(out, ex[np.ix_(rows, cols)].max(), ey[np.ix_(rows, cols)].max())
+    return out / dx
+
+
+def face_modes_ref(clear, pos, quat, shift, offset, a, reach, tol):
+    """The rule of dem_kernels' module docstring: (mode, approach, age after the call)."""
+    nf = len(pos)
+    mode, app = np.full((nf, 2), kernels._WHOLE), np.zeros((nf, 2))
+    age = clear[:, :, kernels._AGE].copy()
+    for i in range(nf):
+        side = -1.0 if rotation_matrices(quat[i])[0][2, 2] >= 0 else 1.0
+        for f in range(2):
+            rec = clear[i, f]
+            if rec[kernels._SIDE] != side:
+                continue
+            q_ref = rec[kernels._QUAT:kernels._QUAT + 4]
+            rel = qmul(quat[i], q_ref * np.array([1, -1, -1, -1]))
+            move = (np.linalg.norm(pos[i] - rec[kernels._POS:kernels._POS + 3])
+                    + 2 * a * np.linalg.norm(rel[1:]))
+            ds = abs(shift - rec[kernels._SHIFT]) if f == 1 else 0.0
+            dz = abs(offset - rec[kernels._OFFSET]) if f == 1 else 0.0
+            if move + ds > reach:
+                continue
+            approach = move + rec[kernels._SLOPE] * (2 * move + ds) + dz
+            if rec[kernels._GAP] - approach > tol:
+                mode[i, f] = kernels._SKIP
+            elif rec[kernels._AGE] < kernels.RENEW_STEPS:
+                mode[i, f], app[i, f] = kernels._PARTIAL, approach
+                age[i, f] += 1
+    return mode, app, age
+
+
+def tracked_forces(state, p, h_low, dh, lam, lam_end, h_top, shift, offset, work=None):
+    """The kernel's forces with clearance records (kept in ``work`` between calls)."""
+    nf, ns = len(state.pos), len(p.samples)
+    if work is None:
+        work = dict(clear=np.zeros((nf, 2, kernels._RECORD)), gaps=np.zeros((nf, 2, ns)),
+                    slopes=np.full((nf, 2, 3), -1.0), mode=np.zeros((nf, 2), dtype=np.int64),
+                    approach=np.zeros((nf, 2)))
+    F, T, ov = np.zeros((nf, 3)), np.zeros((nf, 3)), np.zeros(nf)
+    pairs = np.ascontiguousarray(np.stack(np.triu_indices(nf, 1), axis=1), dtype=np.int64)
+    e = kernels._forces(state.pos, state.quat, h_low, dh, lam, lam_end, h_top, shift, offset, p.dx,
+                        p.size, p.shape.a, p.shape.c, p.samples,
+                        kernels._face_heights(p.samples, p.shape.a, p.shape.c), p.weights,
+                        p.k_area, F, T, ov, np.empty((nf, 3, 3)), work["clear"], work["gaps"],
+                        work["slopes"], work["mode"], work["approach"], kernels.REACH_PX, pairs,
+                        len(pairs))
+    return (F, T, ov, e), work
+
+
+def point_overlaps_ref(state, p, h_low, dh, lam, h_top, shift, offset):
+    """Vertical overlap (nf, 2, ns) of every face point (face 0 against the sheet h_low + lam dh,
+    face 1 against the tool), NumPy."""
+    a, c = p.shape.a, p.shape.c
+    zb = c * np.sqrt(np.maximum(0, 1 - np.sum(p.samples**2, 1) / a**2))
+    rot = rotation_matrices(state.quat)
+    out = np.zeros((len(state.pos), 2, len(p.samples)))
+    for i, (x0, R) in enumerate(zip(state.pos, rot)):
+        down = -1.0 if R[2, 2] >= 0 else 1.0
+        for k, (xb, yb) in enumerate(p.samples):
+            lo = x0 + R @ np.array([xb, yb, down * zb[k]])
+            hi = x0 + R @ np.array([xb, yb, -down * zb[k]])
+            out[i, 0, k] = (bilinear_ref(h_low, lo[0], lo[1], p.dx)[0]
+                            + lam * bilinear_ref(dh, lo[0], lo[1], p.dx)[0] - lo[2])
+            out[i, 1, k] = hi[2] - (bilinear_ref(h_top, hi[0] - shift, hi[1], p.dx)[0] + offset)
+    return out
+
+
+def test_face_heights_and_slope_bound_match_numpy():
+    p = make_params(spacing=DX / 2)
+    a, c = SHAPE.a, SHAPE.c
+    assert_allclose(kernels._face_heights(p.samples, a, c),
+                    c * np.sqrt(np.maximum(0, 1 - np.sum(p.samples**2, 1) / a**2)), rtol=0, atol=0)
+    h, dh = rough(1, 0.3e-6), rough(4, 0.1e-6)
+    for ic, jc, w in ((0, 0, 1.0), (31, 5, 0.0), (17, 30, 1.0), (3, 12, 0.4)):
+        got = kernels._slope_bound(h, dh, w, ic, jc, 3, 1.0 / DX)
+        assert_allclose(got, slope_bound_ref(h, dh, w, ic, jc, 3, DX), rtol=1e-14,
+                        err_msg=str((ic, jc, w)))
+
+
+def test_pair_candidates_match_numpy():
+    rng = np.random.default_rng(11)
+    pos = np.column_stack([rng.uniform(0, L, 40), rng.uniform(0, L, 40),
+                           rng.uniform(-1e-6, 1e-6, 40)])
+    pairs = np.zeros((40 * 39 // 2, 2), dtype=np.int64)
+    m = kernels._pair_candidates(pos, L, 30e-6, pairs)
+    expect = []
+    for i in range(40):
+        for j in range(i + 1, 40):
+            d = pos[j] - pos[i]
+            d[:2] -= L * np.round(d[:2] / L)
+            if np.linalg.norm(d) < 30e-6:
+                expect.append((i, j))
+    assert 10 < len(expect) < 400, "the test must cover both kinds of pairs"
+    assert pairs[:m].tolist() == [list(e) for e in expect]
+
+
+def test_face_modes_match_numpy():
+    """Random records against the rule: skipped, partial, renewed (age), expired, the other face
+    down."""
+    rng = np.random.default_rng(5)
+    nf, a, reach, tol = 400, SHAPE.a, DX, 1e-9 * SHAPE.c
+    pos = rng.uniform(0, L, (nf, 3))
+    quat = np.array([axis_angle_quaternion(rng.standard_normal(3), rng.uniform(0, 0.3))
+                     for _ in range(nf)])
+    quat[:20] = [axis_angle_quaternion([1, 0, 0], 3.0)] * 20  # upside down: other face down
+    clear = np.zeros((nf, 2, kernels._RECORD))
+    for i in range(nf):
+        for f in range(2):
+            turn = axis_angle_quaternion(rng.standard_normal(3), rng.uniform(0, 0.02))
+            q_ref = qmul(turn, quat[i])
+            clear[i, f, kernels._GAP] = rng.uniform(-2e-8, 3e-8)
+            clear[i, f, kernels._SLOPE] = rng.uniform(0, 0.5)
+            step = rng.uniform(-1, 1, 3) * rng.choice([0, 3e-8, 1e-6])
+            clear[i, f, kernels._POS:kernels._POS + 3] = pos[i] + step
+            clear[i, f, kernels._QUAT:kernels._QUAT + 4] = q_ref if rng.random() < 0.7 else quat[i]
+            clear[i, f, kernels._SHIFT] = rng.uniform(-0.3, 0.3) * DX
+            clear[i, f, kernels._OFFSET] = rng.uniform(-1e-8, 1e-8)
+            clear[i, f, kernels._SIDE] = rng.choice([-1.0, 1.0, 0.0], p=[0.8, 0.1, 0.1])
+            clear[i, f, kernels._AGE] = rng.choice([0, 5, kernels.RENEW_STEPS])
+    ref = face_modes_ref(clear, pos, quat, 0.05 * DX, 2e-9, a, reach, tol)
+    mode, app = np.zeros((nf, 2), dtype=np.int64), np.zeros((nf, 2))
+    kernels._face_modes(clear, pos, quat, 0.05 * DX, 2e-9, a, reach, tol, mode, app)
+    assert np.array_equal(mode, ref[0])
+    assert {kernels._SKIP, kernels._PARTIAL, kernels._WHOLE} <= set(mode.ravel().tolist())
+    part = mode == kernels._PARTIAL
+    assert_allclose(app[part], ref[1][part], rtol=1e-12, atol=1e-24)
+    assert np.array_equal(clear[:, :, kernels._AGE], ref[2])
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_what_a_record_proves_clear_has_no_overlap(seed):
+    """The records of a configuration, then the flakes, the tool and the sheet move (less than a
+    pixel, the sheet's weight grows): every face or point the records still prove clear has no
+    overlap in the NumPy oracle, and the forces are the oracle's."""
+    rng = np.random.default_rng(seed)
+    p = make_params(spacing=DX)
+    h_low, dh, h_top = rough(1, 0.08e-6) - 0.5e-6, rough(3, 0.03e-6), rough(2, 0.08e-6) + 0.5e-6
+    nf = 60
+    pos = np.column_stack([rng.uniform(0, 60e-6, nf), rng.uniform(0, L, nf),
+                           rng.uniform(-0.35e-6, 0.35e-6, nf)])
+    quat = np.array([axis_angle_quaternion(rng.standard_normal(3), rng.uniform(0, 0.04))
+                     for _ in range(nf)])
+    s0 = DemState(pos, quat, np.zeros((nf, 3)), np.zeros((nf, 3)))
+    lam0, shift0, off0 = 0.2, 0.1 * DX, 0.0
+    _, work = tracked_forces(s0, p, h_low, dh, lam0, 1.0, h_top, shift0, off0)
+    counts = np.zeros(3, dtype=int)
+    proven = 0
+    for trial in range(6):
+        s1 = s0.copy()
+        scale = [1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 0.0][trial]
+        s1.pos += scale * rng.standard_normal((nf, 3))
+        for i in range(nf):
+            turn = axis_angle_quaternion(rng.standard_normal(3), scale / SHAPE.a)
+            s1.quat[i] = qmul(turn, s1.quat[i])
+        lam1 = rng.uniform(lam0, 1.0)
+        shift1 = shift0 + rng.uniform(0, 0.5) * DX
+        off1 = off0 + rng.uniform(-1, 1) * scale
+        mode, app = np.zeros((nf, 2), dtype=np.int64), np.zeros((nf, 2))
+        clear = work["clear"].copy()
+        kernels._face_modes(clear, s1.pos, s1.quat, shift1, off1, SHAPE.a, kernels.REACH_PX * DX,
+                            kernels.CLEARANCE_TOL * SHAPE.c, mode, app)
+        d = point_overlaps_ref(s1, p, h_low, dh, lam1, h_top, shift1, off1)
+        tol = kernels.CLEARANCE_TOL * SHAPE.c
+        for i in range(nf):
+            for f in range(2):
+                counts[mode[i, f]] += 1
+                if mode[i, f] == kernels._SKIP:
+                    assert d[i, f].max() <= 0, (trial, i, f, d[i, f].max())
+                    proven += len(d[i, f])
+                elif mode[i, f] == kernels._PARTIAL:
+                    clear_pts = work["gaps"][i, f] > app[i, f] + tol
+                    assert np.all(d[i, f][clear_pts] <= 0), (trial, i, f)
+                    proven += int(clear_pts.sum())
+        fresh = {**work, "clear": work["clear"].copy(), "gaps": work["gaps"].copy()}
+        got, _ = tracked_forces(s1, p, h_low, dh, lam1, 1.0, h_top, shift1, off1, work=fresh)
+        ref = forces_ref(s1.pos, s1.quat, p, h_low, h_top, shift1, off1, dh, lam1)
+        for g, r, name in zip(got, ref, ("force", "torque", "overlap", "energy")):
+            assert_allclose(g, r, rtol=1e-10, atol=1e-12 * np.max(np.abs(r)), err_msg=name)
+    assert counts.min() > 0, f"skip/partial/whole must all occur: {counts}"
+    assert proven > 1000
+
+
+def test_records_and_pair_list_change_no_bit_over_many_steps():
+    """Flakes resting, bouncing, colliding (one then travels further than the pair list's skin),
+    crossing the periodic boundary, under a sliding, sinking tool on a moving sheet: skipping what the
+    records prove clear = reading every face, bit for bit, with one and with four damping rates."""
+    rng = np.random.default_rng(8)
+    h_low, h_top = rough(1) - 0.3e-6, rough(2) + 0.3e-6
+    dh = 0.5 * rough(5)
+    pos = np.array([[10e-6, 50e-6, 0.0], [23e-6, 50.5e-6, 0.02e-6], [50e-6, 20e-6, -0.01e-6],
+                    [80e-6, 80e-6, 0.0], [98e-6, 5e-6, 0.05e-6], [40e-6, 75e-6, 0.0]])
+    quat = np.array([axis_angle_quaternion(rng.standard_normal(3), 0.05) for _ in range(6)])
+    vel = np.zeros((6, 3))
+    vel[0] = [300.0, 0.0, 5.0]  # hits flake 1, which travels further than the skin
+    vel[4] = [100.0, 250.0, 0.0]  # crosses x = L
+    vel[2] = [0.0, 0.0, 30.0]  # bounces between the sheet and the tool
+    angmom = np.zeros((6, 3))
+    angmom[4] = [2e-18, 0.0, 1e-18]
+    for damping in (3e7, dem.DampingRates.from_viscosity(SHAPE, 0.05)):
+        p = make_params(damping=damping, spacing=DX)
+        out = []
+        for clearance in (True, False):
+            s = DemState(pos.copy(), quat.copy(), vel.copy(), angmom.copy())
+            for call in range(4):
+                dem.advance(s, p, h_low + call * dh, h_top, 2500, shift0=call * DX,
+                            dshift=DX / 2500, top_offset=-call * 2e-9, dtop=-2e-9 / 2500,
+                            dh_low=dh, clearance=clearance)
+            out.append(np.concatenate([s.pos.ravel(), s.quat.ravel(), s.vel.ravel(),
+                                       s.angmom.ravel()]))
+        assert np.array_equal(out[0], out[1])
+        assert np.all(np.isfinite(out[0]))
+
+
+def steps_ref(s: DemState, p: DemParams, h_low, h_top, n, shift0, dshift, offset, dtop, dh_low):
+    """``n`` steps of the documented splitting (one rate gamma) with the sheet h_low + (s/n) dh_low,
+    NumPy."""
+    s = s.copy()
+    m = p.shape.mass
+    i1, i3 = p.shape.inertia
+    dec = math.exp(-0.5 * p.damping * p.dt)
+    F, T, _, _ = forces_ref(s.pos, s.quat, p, h_low, h_top, shift0, offset, dh_low, 0.0)
+    for k in range(1, n + 1):
+        s.vel = s.vel * dec + 0.5 * p.dt * F / m
+        s.angmom = s.angmom * dec + 0.5 * p.dt * T
+        s.pos = s.pos + p.dt * s.vel
+        s.pos[:, :2] %= L
+        for i in range(len(s.pos)):
+            Lv = s.angmom[i]
+            nrm = rotation_matrices(s.quat[i])[0][:, 2]
+            q = qmul(axis_angle_quaternion(Lv, np.linalg.norm(Lv) * p.dt / i1) if np.any(Lv) else
+                     np.array([1.0, 0, 0, 0]), s.quat[i])
+            q = qmul(q, axis_angle_quaternion([0, 0, 1], (Lv @ nrm) * (1 / i3 - 1 / i1) * p.dt))
+            s.quat[i] = q / np.linalg.norm(q)
+        F, T, _, _ = forces_ref(s.pos, s.quat, p, h_low, h_top, shift0 + k * dshift,
+                                offset + k * dtop, dh_low, k / n)
+        s.vel = (s.vel + 0.5 * p.dt * F / m) * dec
+        s.angmom = (s.angmom + 0.5 * p.dt * T) * dec
+    return s
+
+
+def test_advance_many_steps_with_records_matches_numpy_reference():
+    """40 steps (records made, used, partly used) against the NumPy splitting."""
+    p = make_params(damping=3e7, spacing=DX)
+    s = tangled_state()
+    s.vel[3] = [0.0, 0.0, 0.0]  # one flake at rest, floating
+    s.angmom[3] = 0.0
+    h_low, h_top = rough(1) - 0.25e-6, rough(2) + 0.25e-6
+    dh = 0.3 * rough(5)
+    ref = steps_ref(s, p, h_low, h_top, 40, 0.1 * DX, 0.01 * DX, 0.02e-6, -3e-10, dh)
+    dem.advance(s, p, h_low, h_top, 40, shift0=0.1 * DX, dshift=0.01 * DX, top_offset=0.02e-6,
+                dtop=-3e-10, dh_low=dh)
+    for name in ("pos", "quat", "vel", "angmom"):
+        assert_allclose(getattr(s, name), getattr(ref, name), rtol=1e-9,
+                        atol=1e-12 * np.max(np.abs(getattr(ref, name))), err_msg=name)
