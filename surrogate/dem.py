@@ -464,8 +464,8 @@ def compute_forces(state: DemState, params: DemParams, h_low, h_top, top_shift=0
                         _k._face_heights(params.samples, sh.a, sh.c), params.weights, params.k_area,
                         force, torque, overlap, np.empty((nf, 3, 3)), np.empty((0, 2, _k._RECORD)),
                         np.empty((0, 2, len(params.samples))), np.empty((0, 2, 3)),
-                        np.empty((nf, 2), dtype=np.int64), np.zeros((nf, 2)), _k.REACH_PX, pairs,
-                        len(pairs))
+                        np.empty((0, 2, 1), dtype=np.int64), np.empty((nf, 2), dtype=np.int64),
+                        np.zeros((nf, 2)), _k.REACH_PX, pairs, len(pairs))
     return force, torque, overlap, float(energy)
 
 

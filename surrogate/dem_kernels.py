@@ -109,7 +109,8 @@ PAIR_SKIN = 1.0
 RENEW_STEPS = 32
 #: columns of a clearance record (``clear[i, face]``, face 0 = against the sheet, 1 = the tool); no
 #: record while _SIDE is 0
-_GAP, _SLOPE, _POS, _QUAT, _SHIFT, _OFFSET, _SIDE, _AGE, _RECORD = 0, 1, 2, 5, 9, 10, 11, 12, 13
+_GAP, _SLOPE, _POS, _QUAT, _SHIFT, _OFFSET, _SIDE, _AGE, _CAP, _RECORD = (
+    0, 1, 2, 5, 9, 10, 11, 12, 13, 14)
 #: how a face is treated in one step (``mode[i, face]``)
 _SKIP, _PARTIAL, _WHOLE = 0, 1, 2
 
@@ -140,11 +141,17 @@ def _slope_bound(h, dh, w_dh, ic, jc, half, inv_dx):
 
 
 @_jit
-def _face_modes(clear, pos, quat, shift, offset, a, reach, tol, mode, approach):
+def _face_modes(clear, gaps, pos, quat, shift, offset, a, reach, tol, mode, approach, near):
     """How each face is read in this step (module docstring): ``mode[i, face]`` = _SKIP where the
     record ``clear[i, face]`` still proves the whole face out of contact; _PARTIAL where it is valid
     but cannot (then only the points whose own gap does not exceed ``approach[i, face]`` + tol are
     read), for at most RENEW_STEPS steps; _WHOLE where there is no valid record.
+
+    ``near[i, face]`` lists, in increasing order, the points of a _PARTIAL face whose gap in
+    ``gaps[i, face]`` does not exceed a cap >= approach + tol (the first entry holds their number, -1
+    when there is no list; the cap is in ``clear[i, face, _CAP]``): the points that may have to be
+    read. It is made at the first _PARTIAL step after a record, with room for the approach to grow
+    linearly over RENEW_STEPS steps, and made again if the approach outgrows it.
 
     (One call for all flakes: a helper called per flake with array arguments costs two atomic
     reference counts per array and call, more than the test itself.)
@@ -184,10 +191,20 @@ def _face_modes(clear, pos, quat, shift, offset, a, reach, tol, mode, approach):
                 mode[i, face] = _PARTIAL
                 approach[i, face] = app
                 clear[i, face, _AGE] += 1.0
+                if near[i, face, 0] < 0 or app + tol > clear[i, face, _CAP]:
+                    cap = (RENEW_STEPS + 1.0) * (app + tol)
+                    m = 0
+                    for k in range(gaps.shape[2]):
+                        if gaps[i, face, k] <= cap:
+                            m += 1
+                            near[i, face, m] = k
+                    near[i, face, 0] = m
+                    clear[i, face, _CAP] = cap
 
 
 @_inline
-def _keep_record(clear, i, face, gap, slope, pos, quat, side, shift, offset):
+def _keep_record(clear, near, i, face, gap, slope, pos, quat, side, shift, offset):
+    near[i, face, 0] = -1
     clear[i, face, _AGE] = 0.0
     clear[i, face, _GAP] = gap
     clear[i, face, _SLOPE] = slope
@@ -234,8 +251,8 @@ def _face_heights(samples, a, c):
 
 @_jit
 def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offset, dx, size, a, c,
-            samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, mode,
-            approach, reach_px, pairs, n_pairs):
+            samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, near,
+            mode, approach, reach_px, pairs, n_pairs):
     """Penalty forces/torques (space frame) on every flake; returns the penalty energy.
 
     ``samples`` (ns, 2) are body-frame in-plane points of the face, ``weights`` (ns,) their
@@ -251,7 +268,9 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
     docstring and the gap of every point when they were made, used and renewed (what they prove clear
     is not read); with zero rows every face is read and nothing is kept. ``slopes`` (nf, 2, 3): the
     last slope bound of each face and the pixel it was taken around ([ic, jc, G], ic = -1: none).
-    ``mode`` (nf, 2) and ``approach`` (nf, 2) are work arrays (:func:`_face_modes`).
+    ``near`` (nf, 2, ns + 1), ``mode`` (nf, 2) and ``approach`` (nf, 2) are work arrays
+    (:func:`_face_modes`). The points are visited in the order k = 0..ns-1, the sheet's face before
+    the tool's, whichever are skipped, so that the sums are those of reading every point.
     ``reach_px``: the displacement (in pixels) a record allows.
 
     ``pairs[:n_pairs]`` (i < j, in the order of i then j): the flake pairs tested for contact; every
@@ -272,7 +291,8 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
     allowed = reach_px * dx
     half = int(math.ceil(a * inv_dx)) + 2 + reach_px  # window of the slope bound (pixels)
     if track:
-        _face_modes(clear, pos, quat, top_shift, top_offset, a, allowed, tol, mode, approach)
+        _face_modes(clear, gaps, pos, quat, top_shift, top_offset, a, allowed, tol, mode, approach,
+                    near)
     else:
         mode[:, :] = _WHOLE
     for i in range(nf):
@@ -288,61 +308,82 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
         _rotmat(quat, i, rot)
         gap_low = np.inf
         gap_top = np.inf
-        for k in range(ns):
+        # the points to visit: all (_WHOLE), the near list (_PARTIAL) or none (_SKIP), merged in
+        # the order (k, face)
+        n_low = ns if mode_low == _WHOLE else (near[i, 0, 0] if mode_low == _PARTIAL else 0)
+        n_top = ns if mode_top == _WHOLE else (near[i, 1, 0] if mode_top == _PARTIAL else 0)
+        p_low = 0
+        p_top = 0
+        while p_low < n_low or p_top < n_top:
+            k_low = ns
+            if p_low < n_low:
+                k_low = p_low if mode_low == _WHOLE else near[i, 0, p_low + 1]
+            k_top = ns
+            if p_top < n_top:
+                k_top = p_top if mode_top == _WHOLE else near[i, 1, p_top + 1]
+            if k_low <= k_top:
+                face = 0
+                k = k_low
+                p_low += 1
+                m = mode_low
+                if m == _PARTIAL and gaps[i, 0, k] > app_low:
+                    continue  # proven clear
+            else:
+                face = 1
+                k = k_top
+                p_top += 1
+                m = mode_top
+                if m == _PARTIAL and gaps[i, 1, k] > app_top:
+                    continue  # proven clear
             xb = samples[k, 0]
             yb = samples[k, 1]
             zb = zface[k]
-            for face in range(2):
-                m = mode_low if face == 0 else mode_top
-                if m == _SKIP or (m == _PARTIAL and gaps[i, face, k] > (app_low if face == 0
-                                                                         else app_top)):
-                    continue  # proven clear
-                sz = s_low * zb if face == 0 else -s_low * zb
-                rx = rot[i, 0, 0] * xb + rot[i, 0, 1] * yb + rot[i, 0, 2] * sz
-                ry = rot[i, 1, 0] * xb + rot[i, 1, 1] * yb + rot[i, 1, 2] * sz
-                rz = rot[i, 2, 0] * xb + rot[i, 2, 1] * yb + rot[i, 2, 2] * sz
-                px = pos[i, 0] + rx
-                py = pos[i, 1] + ry
-                pz = pos[i, 2] + rz
-                if face == 0:
-                    hv, gx, gy = _bilinear(h_low, px, py, inv_dx)
-                    hv2 = 0.0
-                    if low_w != 0.0 or (track and low_end != 0.0):
-                        hv2, gx2, gy2 = _bilinear(dh_low, px, py, inv_dx)
-                        if low_w != 0.0:
-                            hv += low_w * hv2
-                            gx += low_w * gx2
-                            gy += low_w * gy2
-                    if track and m == _WHOLE:  # the highest the sheet gets here in the call
-                        rise = (low_end - low_w) * hv2
-                        g = pz - (hv + max(rise, 0.0))
-                        gaps[i, 0, k] = g
-                        gap_low = min(gap_low, g)
-                    d = hv - pz
-                    fx, fy, fz = -gx, -gy, 1.0
-                else:
-                    hv, gx, gy = _bilinear(h_top, px - top_shift, py, inv_dx)
-                    if track and m == _WHOLE:
-                        g = hv + top_offset - pz
-                        gaps[i, 1, k] = g
-                        gap_top = min(gap_top, g)
-                    d = pz - (hv + top_offset)
-                    fx, fy, fz = gx, gy, -1.0
-                if d > 0.0:
-                    kw = k_area * weights[k]
-                    f = kw * d
-                    fx *= f
-                    fy *= f
-                    fz *= f
-                    force[i, 0] += fx
-                    force[i, 1] += fy
-                    force[i, 2] += fz
-                    torque[i, 0] += ry * fz - rz * fy
-                    torque[i, 1] += rz * fx - rx * fz
-                    torque[i, 2] += rx * fy - ry * fx
-                    energy += 0.5 * kw * d * d
-                    if d > overlap[i]:
-                        overlap[i] = d
+            sz = s_low * zb if face == 0 else -s_low * zb
+            rx = rot[i, 0, 0] * xb + rot[i, 0, 1] * yb + rot[i, 0, 2] * sz
+            ry = rot[i, 1, 0] * xb + rot[i, 1, 1] * yb + rot[i, 1, 2] * sz
+            rz = rot[i, 2, 0] * xb + rot[i, 2, 1] * yb + rot[i, 2, 2] * sz
+            px = pos[i, 0] + rx
+            py = pos[i, 1] + ry
+            pz = pos[i, 2] + rz
+            if face == 0:
+                hv, gx, gy = _bilinear(h_low, px, py, inv_dx)
+                hv2 = 0.0
+                if low_w != 0.0 or (track and low_end != 0.0):
+                    hv2, gx2, gy2 = _bilinear(dh_low, px, py, inv_dx)
+                    if low_w != 0.0:
+                        hv += low_w * hv2
+                        gx += low_w * gx2
+                        gy += low_w * gy2
+                if track and m == _WHOLE:  # the highest the sheet gets here in the call
+                    rise = (low_end - low_w) * hv2
+                    g = pz - (hv + max(rise, 0.0))
+                    gaps[i, 0, k] = g
+                    gap_low = min(gap_low, g)
+                d = hv - pz
+                fx, fy, fz = -gx, -gy, 1.0
+            else:
+                hv, gx, gy = _bilinear(h_top, px - top_shift, py, inv_dx)
+                if track and m == _WHOLE:
+                    g = hv + top_offset - pz
+                    gaps[i, 1, k] = g
+                    gap_top = min(gap_top, g)
+                d = pz - (hv + top_offset)
+                fx, fy, fz = gx, gy, -1.0
+            if d > 0.0:
+                kw = k_area * weights[k]
+                f = kw * d
+                fx *= f
+                fy *= f
+                fz *= f
+                force[i, 0] += fx
+                force[i, 1] += fy
+                force[i, 2] += fz
+                torque[i, 0] += ry * fz - rz * fy
+                torque[i, 1] += rz * fx - rx * fz
+                torque[i, 2] += rx * fy - ry * fx
+                energy += 0.5 * kw * d * d
+                if d > overlap[i]:
+                    overlap[i] = d
         if track:
             jc = int(math.floor(pos[i, 1] * inv_dx)) % n1
             for face in range(2):
@@ -361,9 +402,9 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                     else:
                         slopes[i, face, 2] = _slope_bound(h_top, h_top, 0.0, ic, jc, half, inv_dx)
                 if face == 0:
-                    _keep_record(clear, i, 0, gap_low, slopes[i, 0, 2], pos, quat, s_low, 0.0, 0.0)
+                    _keep_record(clear, near, i, 0, gap_low, slopes[i, 0, 2], pos, quat, s_low, 0.0, 0.0)
                 else:
-                    _keep_record(clear, i, 1, gap_top, slopes[i, 1, 2], pos, quat, s_low,
+                    _keep_record(clear, near, i, 1, gap_top, slopes[i, 1, 2], pos, quat, s_low,
                                  top_shift, top_offset)
     # flake-flake: sphere-swept mid-plane discs (core radius a - c, sweep radius c)
     ac = a - c
@@ -515,6 +556,7 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
     clear = np.zeros((nt, 2, _RECORD))  # _SIDE = 0: no record yet
     gaps = np.empty((nt, 2, samples.shape[0]))
     slopes = np.full((nt, 2, 3), -1.0)
+    near = np.full((nt, 2, samples.shape[0] + 1), -1, dtype=np.int64)
     mode = np.empty((nf, 2), dtype=np.int64)
     approach = np.zeros((nf, 2))
     # flake pairs within 2a + skin; rebuilt once a flake may have travelled skin/2 (L1 path length)
@@ -535,8 +577,8 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
                     and math.isfinite(angmom[i, d])):
                 return 1, 0, i
     _forces(pos, quat, h_low, dh_low, 0.0, ramp, h_top, shift0, top_offset, dx, size, a, c,
-            samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, mode,
-            approach, REACH_PX, pairs, n_pairs)
+            samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, near,
+            mode, approach, REACH_PX, pairs, n_pairs)
     for i in range(nf):
         if overlap[i] > max_overlap:
             return 2, 0, i
@@ -569,8 +611,8 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
             far_travel = 0.0
         _forces(pos, quat, h_low, dh_low, ramp * s / n_steps, ramp, h_top, shift0 + s * dshift,
                 top_offset + s * dtop, dx, size, a, c, samples, zface, weights, k_area, force,
-                torque, overlap, rot, clear, gaps, slopes, mode, approach, REACH_PX, pairs,
-                n_pairs)
+                torque, overlap, rot, clear, gaps, slopes, near, mode, approach, REACH_PX,
+                pairs, n_pairs)
         for i in range(nf):
             if rest[i] and (force[i, 0] == 0.0 and force[i, 1] == 0.0 and force[i, 2] == 0.0
                             and torque[i, 0] == 0.0 and torque[i, 1] == 0.0

@@ -373,9 +373,11 @@ def slope_bound_ref(h, dh, w, ic, jc, half, dx):
     return out / dx
 
 
-def face_modes_ref(clear, pos, quat, shift, offset, a, reach, tol):
-    """The rule of dem_kernels' module docstring: (mode, approach, age after the call)."""
+def face_modes_ref(clear, gaps, near, pos, quat, shift, offset, a, reach, tol):
+    """The rule of dem_kernels' module docstring: (mode, approach, age after the call, the points
+    listed for each face: None where the list is not used)."""
     nf = len(pos)
+    lists = [[None, None] for _ in range(nf)]
     mode, app = np.full((nf, 2), kernels._WHOLE), np.zeros((nf, 2))
     age = clear[:, :, kernels._AGE].copy()
     for i in range(nf):
@@ -398,7 +400,12 @@ def face_modes_ref(clear, pos, quat, shift, offset, a, reach, tol):
             elif rec[kernels._AGE] < kernels.RENEW_STEPS:
                 mode[i, f], app[i, f] = kernels._PARTIAL, approach
                 age[i, f] += 1
-    return mode, app, age
+                if near[i, f, 0] < 0 or approach + tol > rec[kernels._CAP]:  # a new list
+                    cap = (kernels.RENEW_STEPS + 1) * (approach + tol)
+                    lists[i][f] = np.flatnonzero(gaps[i, f] <= cap).tolist()
+                else:
+                    lists[i][f] = near[i, f, 1:near[i, f, 0] + 1].tolist()
+    return mode, app, age, lists
 
 
 def tracked_forces(state, p, h_low, dh, lam, lam_end, h_top, shift, offset, work=None):
@@ -406,16 +413,17 @@ def tracked_forces(state, p, h_low, dh, lam, lam_end, h_top, shift, offset, work
     nf, ns = len(state.pos), len(p.samples)
     if work is None:
         work = dict(clear=np.zeros((nf, 2, kernels._RECORD)), gaps=np.zeros((nf, 2, ns)),
-                    slopes=np.full((nf, 2, 3), -1.0), mode=np.zeros((nf, 2), dtype=np.int64),
-                    approach=np.zeros((nf, 2)))
+                    slopes=np.full((nf, 2, 3), -1.0),
+                    near=np.full((nf, 2, ns + 1), -1, dtype=np.int64),
+                    mode=np.zeros((nf, 2), dtype=np.int64), approach=np.zeros((nf, 2)))
     F, T, ov = np.zeros((nf, 3)), np.zeros((nf, 3)), np.zeros(nf)
     pairs = np.ascontiguousarray(np.stack(np.triu_indices(nf, 1), axis=1), dtype=np.int64)
     e = kernels._forces(state.pos, state.quat, h_low, dh, lam, lam_end, h_top, shift, offset, p.dx,
                         p.size, p.shape.a, p.shape.c, p.samples,
                         kernels._face_heights(p.samples, p.shape.a, p.shape.c), p.weights,
                         p.k_area, F, T, ov, np.empty((nf, 3, 3)), work["clear"], work["gaps"],
-                        work["slopes"], work["mode"], work["approach"], kernels.REACH_PX, pairs,
-                        len(pairs))
+                        work["slopes"], work["near"], work["mode"], work["approach"],
+                        kernels.REACH_PX, pairs, len(pairs))
     return (F, T, ov, e), work
 
 
@@ -489,10 +497,27 @@ def test_face_modes_match_numpy():
             clear[i, f, kernels._OFFSET] = rng.uniform(-1e-8, 1e-8)
             clear[i, f, kernels._SIDE] = rng.choice([-1.0, 1.0, 0.0], p=[0.8, 0.1, 0.1])
             clear[i, f, kernels._AGE] = rng.choice([0, 5, kernels.RENEW_STEPS])
-    ref = face_modes_ref(clear, pos, quat, 0.05 * DX, 2e-9, a, reach, tol)
+    ns = 12
+    gaps = rng.uniform(-1e-8, 5e-7, (nf, 2, ns))
+    near = np.full((nf, 2, ns + 1), -1, dtype=np.int64)
+    for i in range(0, nf, 2):  # lists kept from an earlier step, some too short by now
+        for f in range(2):
+            clear[i, f, kernels._CAP] = rng.choice([1e-9, 1e-6])
+            listed = np.flatnonzero(gaps[i, f] <= clear[i, f, kernels._CAP])
+            near[i, f, 0] = len(listed)
+            near[i, f, 1:len(listed) + 1] = listed
+    ref = face_modes_ref(clear, gaps, near, pos, quat, 0.05 * DX, 2e-9, a, reach, tol)
     mode, app = np.zeros((nf, 2), dtype=np.int64), np.zeros((nf, 2))
-    kernels._face_modes(clear, pos, quat, 0.05 * DX, 2e-9, a, reach, tol, mode, app)
+    kernels._face_modes(clear, gaps, pos, quat, 0.05 * DX, 2e-9, a, reach, tol, mode, app, near)
     assert np.array_equal(mode, ref[0])
+    kept = made = 0
+    for i in range(nf):
+        for f in range(2):
+            if mode[i, f] == kernels._PARTIAL:
+                assert near[i, f, 1:near[i, f, 0] + 1].tolist() == ref[3][i][f], (i, f)
+                kept += i % 2 == 0 and clear[i, f, kernels._CAP] == 1e-6
+                made += i % 2 == 1
+    assert kept > 0 and made > 0, (kept, made)
     assert {kernels._SKIP, kernels._PARTIAL, kernels._WHOLE} <= set(mode.ravel().tolist())
     part = mode == kernels._PARTIAL
     assert_allclose(app[part], ref[1][part], rtol=1e-12, atol=1e-24)
@@ -528,9 +553,9 @@ def test_what_a_record_proves_clear_has_no_overlap(seed):
         shift1 = shift0 + rng.uniform(0, 0.5) * DX
         off1 = off0 + rng.uniform(-1, 1) * scale
         mode, app = np.zeros((nf, 2), dtype=np.int64), np.zeros((nf, 2))
-        clear = work["clear"].copy()
-        kernels._face_modes(clear, s1.pos, s1.quat, shift1, off1, SHAPE.a, kernels.REACH_PX * DX,
-                            kernels.CLEARANCE_TOL * SHAPE.c, mode, app)
+        clear, near = work["clear"].copy(), work["near"].copy()
+        kernels._face_modes(clear, work["gaps"], s1.pos, s1.quat, shift1, off1, SHAPE.a,
+                            kernels.REACH_PX * DX, kernels.CLEARANCE_TOL * SHAPE.c, mode, app, near)
         d = point_overlaps_ref(s1, p, h_low, dh, lam1, h_top, shift1, off1)
         tol = kernels.CLEARANCE_TOL * SHAPE.c
         for i in range(nf):
@@ -543,7 +568,10 @@ def test_what_a_record_proves_clear_has_no_overlap(seed):
                     clear_pts = work["gaps"][i, f] > app[i, f] + tol
                     assert np.all(d[i, f][clear_pts] <= 0), (trial, i, f)
                     proven += int(clear_pts.sum())
-        fresh = {**work, "clear": work["clear"].copy(), "gaps": work["gaps"].copy()}
+                    listed = set(near[i, f, 1:near[i, f, 0] + 1].tolist())
+                    assert set(np.flatnonzero(~clear_pts).tolist()) <= listed, (trial, i, f)
+        fresh = {**work, "clear": work["clear"].copy(), "gaps": work["gaps"].copy(),
+                 "near": work["near"].copy()}
         got, _ = tracked_forces(s1, p, h_low, dh, lam1, 1.0, h_top, shift1, off1, work=fresh)
         ref = forces_ref(s1.pos, s1.quat, p, h_low, h_top, shift1, off1, dh, lam1)
         for g, r, name in zip(got, ref, ("force", "torque", "overlap", "energy")):
