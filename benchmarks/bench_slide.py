@@ -1,7 +1,12 @@
 """Benchmarks of the BEM-DEM sliding loop (issue 5).
 
 ``perf``: one full 2L slide for each grid size (default 256 and 512) with 20 flakes of 12 um at
-v0 = 50 m/s and p = 10 MPa, split into DEM, BEM and classification time.
+v0 = 50 m/s and p = 10 MPa, split into DEM, BEM, classification and the rest (set-up: surfaces, first
+solve, placement), with the DEM's cost per pixel and per substep and the load average before and
+after. It only reads ``SlideResult.timings`` and ``info``, so the same script times an older checkout:
+``PYTHONPATH=<a package tree of that checkout> python benchmarks/bench_slide.py perf`` (issue 17, item
+4; set ``TRIBOCOSIM_FFTW_WISDOM`` to one file for both runs so that they use the same FFT plans, and
+so the same numbers).
 
 ``physics``: reduced-size checks of Sec. 6 on a 256^2 grid with 20 flakes:
 <A_p>/A0 vs flake diameter (6, 12, 24 um at 10 MPa) and vs pressure (2..30 MPa at 12 um); the
@@ -52,17 +57,45 @@ def _load_note() -> str:
         return "loadavg unavailable"
 
 
+def time_split(r: dict) -> dict:
+    """DEM / BEM / classification / rest of one ``run_case`` row [s], and the DEM's cost per pixel and
+    per substep."""
+    wall = r["wall_s"]  # set-up included
+    dem, bem, cls = r["time_dem_s"], r["time_bem_s"], r["time_classify_s"]
+    sub = r.get("dem_steps_per_pixel", 0)
+    return {"wall_s": wall, "dem_s": dem, "bem_s": bem, "classify_s": cls,
+            "other_s": wall - dem - bem - cls, "dem_ms_per_pixel": 1e3 * dem / r["steps"],
+            "dem_us_per_substep": 1e6 * dem / (r["steps"] * sub) if sub else float("nan")}
+
+
+def split_line(n: int, t: dict) -> str:
+    parts = " + ".join(f"{name} {t[key]:.1f} s ({t[key] / t['wall_s']:.0%})" for name, key in (
+        ("DEM", "dem_s"), ("BEM", "bem_s"), ("classify", "classify_s"), ("other", "other_s")))
+    return (f"split n={n}: wall {t['wall_s']:.1f} s = {parts}; DEM {t['dem_ms_per_pixel']:.1f} ms "
+            f"per pixel, {t['dem_us_per_substep']:.2f} us per substep")
+
+
 def perf(args) -> dict:
+    from tribocosim.surrogate import coupling
+
+    print(f"code under test: {os.path.dirname(coupling.__file__)}", flush=True)
     rows = []
     for n in args.sizes:
         kw = dict(n=n, n_flakes=20, flake_diameter=12e-6, v0=50.0, pressure=10e6)
         if args.steps:
             kw["n_slide_steps"] = args.steps
-        print(f"perf n={n} ... ({_load_note()})", flush=True)
+        load0 = _load_note()
+        print(f"perf n={n} ... ({load0})", flush=True)
         r = run_case(kw)
-        rows.append(r)
+        r["load_before"], r["load_after"] = load0, _load_note()
         print(json.dumps(r, indent=1), flush=True)
-    return {"mode": "perf", "rows": rows, "load": _load_note()}
+        if "error" not in r:
+            r["split"] = time_split(r)
+            print(split_line(n, r["split"]), f"(before: {load0}; after: {r['load_after']})",
+                  flush=True)
+        rows.append(r)
+    return {"mode": "perf", "code": os.path.dirname(coupling.__file__), "rows": rows,
+            "load": _load_note()}
 
 
 def fit_alpha(rows, e_star: float) -> dict:
