@@ -78,9 +78,31 @@ def overlap_clusters(fp: Footprint, h_top) -> int:
     return int(ndimage.label(mask, structure=_EIGHT)[1])
 
 
+def _stacked(fps: list[Footprint], field) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """z_lo, z_hi, inside and the windows of ``field``, stacked over flakes (all windows of a
+    :func:`~tribocosim.surrogate.flakes.footprints` call have one size)."""
+    ix = np.stack([fp.ix for fp in fps])
+    iy = np.stack([fp.iy for fp in fps])
+    z_lo = np.stack([fp.z_lo for fp in fps])
+    z_hi = np.stack([fp.z_hi for fp in fps])
+    return z_lo, z_hi, np.isfinite(z_lo), np.asarray(field)[ix[:, :, None], iy[:, None, :]]
+
+
 def classify(fps: list[Footprint], h_top) -> tuple[np.ndarray, np.ndarray]:
-    """Blocked flags (cluster rule, Fig. 8) and overlap-cluster counts against the tool ``h_top``."""
-    counts = np.array([overlap_clusters(fp, h_top) for fp in fps], dtype=np.int64)
+    """Blocked flags (cluster rule, Fig. 8) and overlap-cluster counts against the tool ``h_top``
+    (:func:`overlap_clusters` of every flake, labelled in one call)."""
+    if len({fp.z_lo.shape for fp in fps}) != 1:
+        counts = np.array([overlap_clusters(fp, h_top) for fp in fps], dtype=np.int64)
+        return counts >= MIN_CLUSTERS_BLOCKED, counts
+    _, z_hi, inside, window = _stacked(fps, h_top)
+    mask = inside & (np.nan_to_num(z_hi, nan=-np.inf) > window)
+    # 8-connected within each flake's window, never across flakes
+    labels, _ = ndimage.label(mask, structure=np.stack([np.zeros((3, 3), bool), _EIGHT,
+                                                        np.zeros((3, 3), bool)]))
+    flat = labels.reshape(len(fps), -1)
+    which, first = np.unique(flat, return_index=True)
+    first = first[which > 0]
+    counts = np.bincount(first // flat.shape[1], minlength=len(fps)).astype(np.int64)
     return counts >= MIN_CLUSTERS_BLOCKED, counts
 
 
@@ -106,14 +128,15 @@ def attach_to_tool(fp: Footprint, h_top) -> tuple[Footprint, float]:
 
 def pinched(fps: list[Footprint], h_top, h_low, limit: float) -> np.ndarray:
     """Flakes into which both the tool and the sheet cut by more than ``limit`` [m] (grid)."""
-    out = np.zeros(len(fps), dtype=bool)
-    for j, fp in enumerate(fps):
-        win = np.ix_(fp.ix, fp.iy)
-        inside = fp.inside
-        top = np.max((fp.z_hi - h_top[win])[inside])
-        low = np.max((h_low[win] - fp.z_lo)[inside])
-        out[j] = top > limit and low > limit
-    return out
+    if not fps:
+        return np.zeros(0, dtype=bool)
+    if len({fp.z_lo.shape for fp in fps}) != 1:
+        return np.concatenate([pinched([fp], h_top, h_low, limit) for fp in fps])
+    z_lo, z_hi, inside, top_win = _stacked(fps, h_top)
+    low_win = _stacked(fps, h_low)[3]
+    top = np.where(inside, z_hi - top_win, -np.inf).max(axis=(1, 2))
+    low = np.where(inside, low_win - z_lo, -np.inf).max(axis=(1, 2))
+    return (top > limit) & (low > limit)
 
 
 def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:

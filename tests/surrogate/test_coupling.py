@@ -223,6 +223,36 @@ def test_pinched_flake_is_detected_only_when_both_surfaces_cut_in():
     assert not pinched(fps, tool, sheet_in, 0.2 * SHAPE.thickness)[0]
 
 
+def test_all_flakes_at_once_classify_and_pinch_as_one_at_a_time():
+    """classify() labels every flake's window in one call and pinched() takes every flake's maxima
+    at once (issue 17, item 4): the same counts and flags as flake by flake."""
+    from tribocosim.surrogate.coupling import overlap_clusters, pinched
+    from tribocosim.surrogate.flakes import axis_angle_quaternion
+
+    rng = np.random.default_rng(6)
+    n, size = 64, 64e-6
+    totals = np.zeros(3, dtype=int)
+    for _ in range(10):
+        pos = np.column_stack([rng.uniform(0, size, 15), rng.uniform(0, size, 15),
+                               rng.uniform(-0.3e-6, 0.3e-6, 15)])
+        quat = np.array([axis_angle_quaternion(rng.standard_normal(3), rng.uniform(0, 0.2))
+                         for _ in range(15)])
+        fps = footprints(pos, quat, SHAPE, n, size)
+        tool = 0.15e-6 * rng.standard_normal((n, n)) + rng.uniform(0.0, 0.3e-6)
+        sheet = 0.15e-6 * rng.standard_normal((n, n)) - rng.uniform(0.0, 0.3e-6)
+        blocked, counts = classify(fps, tool)
+        one_by_one = [overlap_clusters(fp, tool) for fp in fps]
+        assert counts.tolist() == one_by_one and np.array_equal(blocked, counts >= 3)
+        flags = pinched(fps, tool, sheet, 0.05e-6)
+        for fp, flag in zip(fps, flags):
+            win = np.ix_(fp.ix, fp.iy)
+            top = np.max((fp.z_hi - tool[win])[fp.inside])
+            low = np.max((sheet[win] - fp.z_lo)[fp.inside])
+            assert flag == (top > 0.05e-6 and low > 0.05e-6)
+        totals += [counts.sum(), blocked.sum(), flags.sum()]
+    assert np.all(totals > 0), totals
+
+
 def test_real_solve_with_a_blocked_flake_gives_particle_area():
     """A flake cut by four tool bumps is blocked; the solve then carries load through it."""
     n, size = 64, 128e-6  # dx = 2 um

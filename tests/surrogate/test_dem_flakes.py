@@ -89,3 +89,36 @@ def test_placement_errors_are_clear():
         random_placement(40, SHAPE, L, flat, flat + 1e-6, seed=0)
     with pytest.raises(ParameterError, match="could not place flake 0"):
         random_placement(1, SHAPE, L, flat, flat + 0.3e-6, seed=0)  # gap thinner than h_p
+
+
+def footprint_ref(r, R, shape, n, size):
+    """One flake's footprint, NumPy, one flake at a time (module docstring of flakes)."""
+    dx, a, c = size / n, shape.a, shape.c
+    half = int(math.ceil(a / dx)) + 1
+    offs = np.arange(-half, half + 1)
+    m = R @ np.diag([a**-2, a**-2, c**-2]) @ R.T
+    i0, j0 = int(math.floor(r[0] / dx)), int(math.floor(r[1] / dx))
+    dX, dY = np.meshgrid((i0 + offs) * dx - r[0], (j0 + offs) * dx - r[1], indexing="ij")
+    qa = m[2, 2]
+    qb = 2.0 * (m[0, 2] * dX + m[1, 2] * dY)
+    qc = m[0, 0] * dX**2 + 2.0 * m[0, 1] * dX * dY + m[1, 1] * dY**2 - 1.0
+    disc = qb * qb - 4.0 * qa * qc
+    root = np.sqrt(np.where(disc >= 0.0, disc, np.nan))
+    return ((i0 + offs) % n, (j0 + offs) % n, r[2] + (-qb - root) / (2.0 * qa),
+            r[2] + (-qb + root) / (2.0 * qa))
+
+
+def test_footprints_of_all_flakes_at_once_equal_one_at_a_time_bit_for_bit():
+    """footprints() rasterises every flake in one set of array operations (issue 17, item 4)."""
+    rng = np.random.default_rng(4)
+    pos = np.column_stack([rng.uniform(-2e-6, L, 30), rng.uniform(0, L, 30),
+                           rng.uniform(-1e-6, 1e-6, 30)])
+    quat = np.array([axis_angle_quaternion(rng.standard_normal(3), rng.uniform(0, 3.1))
+                     for _ in range(30)])
+    fps = footprints(pos, quat, SHAPE, N, L)
+    for r, R, fp in zip(pos, rotation_matrices(quat), fps):
+        ix, iy, z_lo, z_hi = footprint_ref(r, R, SHAPE, N, L)
+        assert np.array_equal(fp.ix, ix) and np.array_equal(fp.iy, iy)
+        assert np.array_equal(fp.z_lo, z_lo, equal_nan=True)
+        assert np.array_equal(fp.z_hi, z_hi, equal_nan=True)
+    assert footprints(np.zeros((0, 3)), np.zeros((0, 4)), SHAPE, N, L) == []
