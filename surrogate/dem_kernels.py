@@ -98,6 +98,37 @@ def _bilinear(h, x, y, inv_dx):
     return val, (ca + ty * cc) * inv_dx, (cb + tx * cc) * inv_dx
 
 
+@_inline
+def _bilinear_pair(h, g, x, y, inv_dx):
+    """:func:`_bilinear` of two fields at one point (the cell is found once)."""
+    n0, n1 = h.shape
+    u = x * inv_dx
+    v = y * inv_dx
+    fu = math.floor(u)
+    fv = math.floor(v)
+    tx = u - fu
+    ty = v - fv
+    i0 = int(fu)
+    j0 = int(fv)
+    if i0 < 0 or i0 >= n0:
+        i0 -= n0 * (i0 // n0)
+    if j0 < 0 or j0 >= n1:
+        j0 -= n1 * (j0 // n1)
+    i1 = i0 + 1 if i0 + 1 < n0 else 0
+    j1 = j0 + 1 if j0 + 1 < n1 else 0
+    h00 = h[i0, j0]
+    ca = h[i1, j0] - h00
+    cb = h[i0, j1] - h00
+    cc = h[i1, j1] - h[i1, j0] - h[i0, j1] + h00
+    g00 = g[i0, j0]
+    da = g[i1, j0] - g00
+    db = g[i0, j1] - g00
+    dc = g[i1, j1] - g[i1, j0] - g[i0, j1] + g00
+    return (h00 + tx * ca + ty * cb + tx * ty * cc, (ca + ty * cc) * inv_dx,
+            (cb + tx * cc) * inv_dx, g00 + tx * da + ty * db + tx * ty * dc,
+            (da + ty * dc) * inv_dx, (db + tx * dc) * inv_dx)
+
+
 #: tolerance of the clearance test, relative to the half-thickness c
 CLEARANCE_TOL = 1e-9
 #: displacement (pixels) of a flake plus the tool's shift that a clearance record allows
@@ -346,14 +377,15 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
             py = pos[i, 1] + ry
             pz = pos[i, 2] + rz
             if face == 0:
-                hv, gx, gy = _bilinear(h_low, px, py, inv_dx)
                 hv2 = 0.0
                 if low_w != 0.0 or (track and low_end != 0.0):
-                    hv2, gx2, gy2 = _bilinear(dh_low, px, py, inv_dx)
+                    hv, gx, gy, hv2, gx2, gy2 = _bilinear_pair(h_low, dh_low, px, py, inv_dx)
                     if low_w != 0.0:
                         hv += low_w * hv2
                         gx += low_w * gx2
                         gy += low_w * gy2
+                else:
+                    hv, gx, gy = _bilinear(h_low, px, py, inv_dx)
                 if track and m == _WHOLE:  # the highest the sheet gets here in the call
                     rise = (low_end - low_w) * hv2
                     g = pz - (hv + max(rise, 0.0))

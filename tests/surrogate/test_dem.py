@@ -457,6 +457,16 @@ def test_face_heights_and_slope_bound_match_numpy():
                         err_msg=str((ic, jc, w)))
 
 
+def test_bilinear_pair_matches_numpy():
+    h, g = rough(1, 0.3e-6), rough(4, 0.1e-6)
+    for x, y in ((0.3e-6, 5.1e-6), (-2.2e-6, 99.9e-6), (L + 1.7e-6, -0.4e-6), (50e-6, 50e-6)):
+        got = kernels._bilinear_pair(h, g, x, y, 1.0 / DX)
+        for field, val, grad in ((h, got[0], got[1:3]), (g, got[3], got[4:6])):
+            ref_val, ref_grad = bilinear_ref(field, x, y, DX)
+            assert_allclose(val, ref_val, rtol=1e-12, atol=1e-20, err_msg=str((x, y)))
+            assert_allclose(grad, ref_grad, rtol=1e-10, atol=1e-14, err_msg=str((x, y)))
+
+
 def test_pair_candidates_match_numpy():
     rng = np.random.default_rng(11)
     pos = np.column_stack([rng.uniform(0, L, 40), rng.uniform(0, L, 40),
