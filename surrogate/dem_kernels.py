@@ -73,9 +73,8 @@ def _rotmat(quat, i, out):
 
 
 @_inline
-def _bilinear(h, x, y, inv_dx):
-    """Periodic bilinear value and exact gradient of the interpolant at (x, y)."""
-    n0, n1 = h.shape
+def _cell(n0, n1, x, y, inv_dx):
+    """The periodic grid cell (i0, j0)-(i1, j1) of (x, y) and the fractions (tx, ty) inside it."""
     u = x * inv_dx
     v = y * inv_dx
     fu = math.floor(u)
@@ -90,6 +89,13 @@ def _bilinear(h, x, y, inv_dx):
         j0 -= n1 * (j0 // n1)
     i1 = i0 + 1 if i0 + 1 < n0 else 0
     j1 = j0 + 1 if j0 + 1 < n1 else 0
+    return i0, j0, i1, j1, tx, ty
+
+
+@_inline
+def _bilinear(h, x, y, inv_dx):
+    """Periodic bilinear value and exact gradient of the interpolant at (x, y)."""
+    i0, j0, i1, j1, tx, ty = _cell(h.shape[0], h.shape[1], x, y, inv_dx)
     h00 = h[i0, j0]
     ca = h[i1, j0] - h00
     cb = h[i0, j1] - h00
@@ -101,21 +107,7 @@ def _bilinear(h, x, y, inv_dx):
 @_inline
 def _bilinear_pair(h, g, x, y, inv_dx):
     """:func:`_bilinear` of two fields at one point (the cell is found once)."""
-    n0, n1 = h.shape
-    u = x * inv_dx
-    v = y * inv_dx
-    fu = math.floor(u)
-    fv = math.floor(v)
-    tx = u - fu
-    ty = v - fv
-    i0 = int(fu)
-    j0 = int(fv)
-    if i0 < 0 or i0 >= n0:
-        i0 -= n0 * (i0 // n0)
-    if j0 < 0 or j0 >= n1:
-        j0 -= n1 * (j0 // n1)
-    i1 = i0 + 1 if i0 + 1 < n0 else 0
-    j1 = j0 + 1 if j0 + 1 < n1 else 0
+    i0, j0, i1, j1, tx, ty = _cell(h.shape[0], h.shape[1], x, y, inv_dx)
     h00 = h[i0, j0]
     ca = h[i1, j0] - h00
     cb = h[i0, j1] - h00
