@@ -155,6 +155,16 @@ def _cheapest_cell(row: dict | None, fam: Family) -> str:
     return f"{row[fam.label]} ({fmt(cost)} {unit}{extra})"
 
 
+def _cheapest_row(label: str, rows: list, fam: Family, error: str) -> str:
+    """One summary line: the cheapest of ``rows`` reaching each target of ``error``."""
+    best = cheapest_reaching(rows, TARGETS, error=error, cost=fam.cost, label=fam.label)
+    return f"| {label} | {error} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS) + " |"
+
+
+def _curve_rows(fam: Family, curve: str) -> list:
+    return [r for r in fam.rows if r.get("curve") == curve]
+
+
 def accuracy_markdown(fams: list[Family], files: dict[str, list[Path]], header: str) -> str:
     out = [header, "", "## Summary: the cheapest setting reaching each error", "",
            "| family | error | <= 1 % | <= 0.1 % | <= 0.01 % |", "|---|---|---|---|---|"]
@@ -162,15 +172,9 @@ def accuracy_markdown(fams: list[Family], files: dict[str, list[Path]], header: 
         if not fam.available:
             out.append(f"| {fam.name} | | {fam.note} | | |")
             continue
-        for e in fam.error_columns:
-            best = cheapest_reaching(fam.rows, TARGETS, error=e, cost=fam.cost, label=fam.label)
-            out.append(f"| {fam.name} | {e} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS) + " |")
-        for c in fam.summary_curves:
-            for e in fam.error_columns:
-                best = cheapest_reaching([r for r in fam.rows if r.get("curve") == c], TARGETS, error=e,
-                                         cost=fam.cost, label=fam.label)
-                out.append(f"| {fam.name}: {c} | {e} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS)
-                           + " |")
+        out += [_cheapest_row(fam.name, fam.rows, fam, e) for e in fam.error_columns]
+        out += [_cheapest_row(f"{fam.name}: {c}", _curve_rows(fam, c), fam, e)
+                for c in fam.summary_curves for e in fam.error_columns]
     out.append("")
     for fam in fams:
         out += _head(fam, files.get(fam.name, []))
@@ -179,11 +183,7 @@ def accuracy_markdown(fams: list[Family], files: dict[str, list[Path]], header: 
             if len(curves) > 1:
                 out += ["Cheapest setting of each curve reaching each error:", "",
                         "| curve | error | <= 1 % | <= 0.1 % | <= 0.01 % |", "|---|---|---|---|---|"]
-                for c in curves:
-                    for e in fam.error_columns:
-                        best = cheapest_reaching([r for r in fam.rows if r.get("curve") == c], TARGETS, error=e,
-                                                 cost=fam.cost, label=fam.label)
-                        out.append(f"| {c} | {e} | " + " | ".join(_cheapest_cell(best[t], fam) for t in TARGETS) + " |")
+                out += [_cheapest_row(c, _curve_rows(fam, c), fam, e) for c in curves for e in fam.error_columns]
                 out.append("")
             cols = [c for c in fam.rows[0] if c not in ("curve",)]
             out += ["All settings:", "", table(fam.rows, cols), ""]
