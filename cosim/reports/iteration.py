@@ -84,7 +84,8 @@ def _run_row(plan, setting: str, iterative: dict, t_ref, refs: dict) -> tuple[di
 @timed
 def near_pcrit(settings: Settings) -> Family:
     """demo.toml at 0.99 p_crit: iterative coupling by quasi-Newton, fixed point (w = 1, Aitken, w from rho)."""
-    from tribocosim.cosim.reference_components import component_of, reference_for_scene
+    from tribocosim.cosim.reference_components import reference_for_scene
+    from tribocosim.cosim.reports.stability_report import _instance
     from tribocosim.cosim.reports.accuracy import demo_scene_path
     from tribocosim.cosim.validate import load_scene
 
@@ -94,8 +95,9 @@ def near_pcrit(settings: Settings) -> Family:
         return Family.unavailable("near_pcrit", title, "models/scenes/demo.toml (issue 8) is missing")
     try:
         plan = load_scene(path, {"experiment.stop": STEP})
-        kinds = {getattr(component_of(s), "name", None): n for n, s in plan.scene.fmus.items()}
-        press, strip = kinds["press"], kinds["stripdraw"]
+        press, strip = _instance(plan, "press"), _instance(plan, "stripdraw")
+        if press is None or strip is None:
+            raise LookupError("no press or no stripdraw instance")
     except Exception as exc:
         return Family.unavailable("near_pcrit", title, f"demo.toml has no press and stripdraw FMUs: {exc}")
     sp = plan.scene.fmus[strip].parameters
