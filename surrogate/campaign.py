@@ -43,7 +43,7 @@ from tribocosim.components.errors import TribocosimError
 from .slide_config import SlideConfig
 from .sweep import Sweep
 
-CASE_FORMAT = 1
+CASE_FORMAT = 2
 CASE_LOG_ENV = "TRIBOCOSIM_CASE_LOG"
 SERIES = ("slide_distance", "contact_fraction", "particle_fraction", "particle_fraction_clusters",
           "n_blocked", "n_blocked_clusters", "bem_iterations", "tool_height")

@@ -12,22 +12,29 @@ grid: h_tool0 rolled by k along x) the loop
    n_sub steps with n_sub v0 dt = dx;
 2. classifies each flake: *blocked* if the pixels of its footprint where its upper surface
    z_hi exceeds the tool h_top form >= 3 spatially distinct 8-connected clusters (Fig. 8), else
-   free. Our addition (docs/model.md section 7 leaves the criterion open): a flake is also blocked when
-   it is *pinched*, i.e. the tool and the sheet both cut into it by more than
-   ``pinch_overlap_fraction`` h_p (on the grid: max(z_hi - h_top) and max(h_low - z_lo) over its
-   footprint). A smooth tool asperity wider than the flake overlaps it in one cluster only,
-   however hard it squeezes it; without this rule such a flake, ignored by the contact solve, is
-   crushed between the two rigid surfaces until the DEM stops with an overlap > 50 % h_p. A
-   pinched flake made part of the tool lets the solve dent the sheet under it (u_p), which is
-   the sheet's real answer. With this rule on, a blocked flake also stays blocked while the
-   tool still touches it (>= 1 overlap cluster): released earlier, the elastic part of its dent
-   springs back and crushes it against the tool again. Both A_p (all blocked flakes) and A_p by the cluster
-   rule alone are recorded;
+   free. Our addition (docs/model.md section 7 leaves the criterion open; issue 17): a flake is also
+   blocked when it is *pinched*, i.e. it does not fit between the sheet h_low and the tool's
+   *envelope over the coming pixel*, h_env = min(h_top(k), h_top(k + 1)) (the lowest the tool comes
+   at each pixel during the next DEM phase): the depths by which they cut into it, max(z_hi - h_env)
+   and max(h_low - z_lo) over its footprint (grid), add up to more than 2
+   ``pinch_overlap_fraction`` h_p, default 0 (touching both, or cut by one surface deeper than its
+   clearance to the other). The rule is the non-penetration condition of the staggered
+   scheme, not a friction criterion: during a DEM phase both surfaces are rigid, so a flake that
+   the contact solve did not see is squeezed kinematically wherever the gap closes below h_p.
+   A smooth tool asperity wider than the flake overlaps it in one cluster only, however hard it
+   squeezes it, and on steep (roll-off) surfaces a tool flank can close the gap by ~slope x dx
+   = 0.34 um within one pixel: a flake ignored by the solve was then crushed (overlap > 50 % h_p,
+   the DEM stops; measured on the roll-off surfaces with the rule read at h_top(k) and a 10 %
+   threshold). A pinched flake made part of the tool lets the solve dent the sheet under it
+   (u_p), which is the sheet's real answer. A blocked flake also stays blocked while the tool
+   still touches it (>= 1 overlap cluster): released earlier, the elastic part of its dent springs
+   back and crushes it against the tool again. A_p counts every load-bearing (blocked) flake; A_p
+   by the paper's cluster rule alone is recorded too (``particle_fraction_clusters``);
 3. builds the modified tool (Eq. 18) h*_top = min(h_top, min_j z_lo_j) over the blocked flakes j
    (z_lo: the flake's lower surface: the blocked flake becomes part of the tool). A blocked flake
    enters the solve attached to the tool's underside (Fig. 7: "the particles are rigidly
-   attached to the tool"): moved down by the depth the tool cuts into it (the penalty overlap of
-   the DEM), so that the rigid tool + flake body has no interpenetration and the solve dents the
+   attached to the tool"): moved down by the depth the tool's envelope h_env cuts into it (so that
+   it still fits under the tool after the coming pixel), so that the rigid tool + flake body has no interpenetration and the solve dents the
    sheet by the flake's full thickness; its faces are rasterised pixel-consistently with the
    DEM's bilinear surfaces (:func:`attach_to_tool`). The DEM flake itself is not moved: the
    tool's cut pushes it into the dent as the sheet moves there in the next DEM phase. Without
@@ -43,7 +50,13 @@ grid: h_tool0 rolled by k along x) the loop
    the new h_low (the surfaces move continuously; a jump of the order of h_p, e.g. the elastic
    spring-back under a released flake or the tool landing after it, would otherwise hit the
    flakes at once). The blocked flakes are not moved
-   by the solve: the DEM pushes them with the tool into the sheet's dent;
+   by the solve: the DEM pushes them with the tool into the sheet's dent. The set of load-bearing
+   flakes must agree with the solve's answer: a flake the solve did not see that its new tool
+   (envelope) and sheet pinch is added and the solve repeated from the same state (``resolves``
+   counts these; the set only grows, so at most n_flakes repeats). Without this, at low pressure a
+   flake that carries much of the load flip-flops: blocked, it lifts the tool off itself (by
+   0.3 um = 0.6 h_p at 2 MPa on the roll-off surfaces), is released at the next pixel, and the
+   solve without it drops the tool onto it; two such cycles crushed it (measured);
 5. measures A_c = area with traction > 0 and A_p = area with traction > 0 under a blocked flake
    (Sec. 6.2).
 
@@ -127,7 +140,11 @@ def attach_to_tool(fp: Footprint, h_top) -> tuple[Footprint, float]:
 
 
 def pinched(fps: list[Footprint], h_top, h_low, limit: float) -> np.ndarray:
-    """Flakes into which both the tool and the sheet cut by more than ``limit`` [m] (grid)."""
+    """Flakes that do not fit between the tool and the sheet: the depths by which the tool and the
+    sheet cut into the flake (maxima over its footprint, grid) add up to more than 2 ``limit`` [m].
+    A flake touching only one surface with a gap to the other larger than the cut fits (the DEM moves
+    it into the gap); one touching both, or cut by one deeper than its clearance to the other, does
+    not."""
     if not fps:
         return np.zeros(0, dtype=bool)
     if len({fp.z_lo.shape for fp in fps}) != 1:
@@ -136,7 +153,7 @@ def pinched(fps: list[Footprint], h_top, h_low, limit: float) -> np.ndarray:
     low_win = _stacked(fps, h_low)[3]
     top = np.where(inside, z_hi - top_win, -np.inf).max(axis=(1, 2))
     low = np.where(inside, low_win - z_lo, -np.inf).max(axis=(1, 2))
-    return (top > limit) & (low > limit)
+    return top + low > 2.0 * limit
 
 
 def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:
@@ -234,6 +251,7 @@ class SlideSimulation:
         self.z_top = 0.0
         self.z_prev = 0.0  # tool height at the start of the next DEM phase
         self._last = None
+        self.resolves = 0  # contact solves repeated because a flake the solve did not see was pinched
         self.timings = {"dem": 0.0, "bem": 0.0, "classify": 0.0}
         t0 = time.perf_counter()
         self.traction = self._contact(self.h_tool0 + self.z_top)
@@ -243,6 +261,10 @@ class SlideSimulation:
                                c.flake_seed)
         self.state = dem.DemState.at_rest(pos)
         self.blocked_prev = np.zeros(len(pos), dtype=bool)
+
+    def tool_envelope(self, h_top) -> np.ndarray:
+        """The lowest the tool comes at each pixel during the next DEM phase (shift k -> k+1)."""
+        return np.minimum(h_top, np.roll(self.h_tool0, self.k + 1, axis=0) + self.z_top)
 
     def tool_grid(self) -> np.ndarray:
         """The tool on the grid at the current integer shift, lab frame [m]."""
@@ -296,19 +318,30 @@ class SlideSimulation:
         c = self.cfg
         t1 = time.perf_counter()
         h_top = self.tool_grid()
+        h_env = self.tool_envelope(h_top)
         fps = footprints(self.state.pos, self.state.quat, self.shape, c.n, c.size)
         by_clusters, counts = classify(fps, h_top)
         blocked = by_clusters.copy()
-        if c.pinch_overlap_fraction > 0.0:
-            blocked |= pinched(fps, h_top, self.h_low, c.pinch_overlap_fraction * c.flake_thickness)
-            blocked |= self.blocked_prev & (counts >= 1)  # held until the tool lets go
+        # load-bearing: pinched between the sheet and the tool of the coming pixel (module docstring)
+        limit = c.pinch_overlap_fraction * c.flake_thickness
+        blocked |= pinched(fps, h_env, self.h_low, limit)
+        blocked |= self.blocked_prev & (counts >= 1)  # held until the tool lets go
         attached = list(fps)
         for j in np.flatnonzero(blocked):  # the solve sees it attached to the tool's underside
-            attached[j] = attach_to_tool(fps[j], h_top)[0]
-        h_star = modified_tool(h_top, attached, blocked)
-        self.blocked_prev = blocked
+            attached[j] = attach_to_tool(fps[j], h_env)[0]
         t2 = time.perf_counter()
-        self.traction = self._contact(h_star)
+        before = (self.u_p, self.h_low, self.z_top)
+        while True:  # until the solve's tool and sheet pinch no flake it did not see (docstring, 4)
+            self.traction = self._contact(modified_tool(h_top, attached, blocked))
+            missed = ~blocked & pinched(fps, self.tool_envelope(self.tool_grid()), self.h_low, limit)
+            if not missed.any():
+                break
+            blocked |= missed
+            for j in np.flatnonzero(missed):
+                attached[j] = attach_to_tool(fps[j], h_env)[0]
+            self.u_p, self.h_low, self.z_top = before
+            self.resolves += 1
+        self.blocked_prev = blocked
         t3 = time.perf_counter()
         mask = blocked_mask(fps, blocked, c.n)
         self.timings["classify"] += t2 - t1 + time.perf_counter() - t3
@@ -351,7 +384,8 @@ class SlideSimulation:
                 "particle_fraction_clusters", "n_blocked", "n_blocked_clusters",
                 "bem_iterations", "tool_height")
         cols = {k: np.array([r[k] for r in recs]) for k in keys}
-        info = {**init, "dem_dt": self.params.dt, "dem_steps_per_pixel": self.n_sub,
+        info = {**init, "contact_resolves": self.resolves, "dem_dt": self.params.dt,
+                "dem_steps_per_pixel": self.n_sub,
                 "penalty_k_area": self.params.k_area, "face_samples": len(self.params.samples)}
         return SlideResult(c, **cols, snapshots=snaps, timings=dict(self.timings), info=info)
 

@@ -14,7 +14,7 @@ Equations of motion (Eq. 15-16), with the damping written as a rate gamma [1/s]
 L = I omega the angular momentum in the space frame. Gravity is neglected (it is ~1e-9 of the
 contact forces).
 
-Damping from the lubricant (opt-in, :meth:`DampingRates.from_viscosity`). The paper's single eta for
+Damping from the lubricant (the default since issue 17, :meth:`DampingRates.from_viscosity`). The paper's single eta for
 translation and rotation cannot be one physical coefficient (a force per velocity and a torque per
 angular velocity differ by a length squared); the flakes move in the oil film, so the damping can
 instead be the quasi-steady Stokes drag of a thin disc of radius a (thickness << a) in a Newtonian
@@ -38,7 +38,7 @@ flake's principal axes with four rates,
 the components of v and L along n decaying at the axial rates, the rest at the others (L = I omega
 with I1 about a diameter, I3 about the axis). (The orientation-averaged translational resistance, the
 harmonic mean 12 eta a, would be the single coefficient of an isotropic model.) Reference viscosity
-(no default: unless a viscosity is given, the one rate gamma applies): ISO 3448 grade VG 32, 32 mm^2/s
+(the default of a slide, ``SlideConfig.oil_viscosity``): ISO 3448 grade VG 32, 32 mm^2/s
 at 40 C, times a mineral-oil density of ~870 kg/m^3, is 0.028 Pa s (:data:`VG32_VISCOSITY_40C`);
 mineral oils span ~0.01-0.5 Pa s at 40 C (VG 10 to VG 460). For a 12 um flake in VG 32 the rates are
 1.8e7 (plane), 2.6e7 (axial), 8.7e7 (diameter) and 4.4e7 (axis) 1/s.
@@ -116,6 +116,7 @@ import numpy as np
 from tribocosim.components.errors import ParameterError, TribocosimError, check_range
 
 from . import dem_kernels as _k
+from .slide_config import DEFAULT_OIL_VISCOSITY
 
 #: allowed overlap (fraction of h_p) at the Hertz-estimated peak force
 OVERLAP_FRACTION = 0.05
@@ -129,7 +130,7 @@ DISC_BROADSIDE = 16.0
 DISC_EDGEWISE = 32.0 / 3.0
 DISC_ROTATION = 32.0 / 3.0
 #: reference dynamic viscosity [Pa s]: ISO 3448 VG 32 (32 mm^2/s at 40 C) x 870 kg/m^3
-VG32_VISCOSITY_40C = 32e-6 * 870.0
+VG32_VISCOSITY_40C = DEFAULT_OIL_VISCOSITY
 
 
 class DemBlowUpError(TribocosimError):

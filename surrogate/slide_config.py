@@ -10,10 +10,14 @@ A TOML file holds the same keys, either at the top level or under a ``[slide]`` 
 
 Unknown keys are reported all at once.
 
-Options added after the shipped friction table was built (``oil_viscosity``,
-``sheet_rolloff_wavelength``, ``tool_rolloff_wavelength``) default to None, which is today's model,
-and :meth:`SlideConfig.to_dict` leaves them out while they are None, so the configurations (and the
-case ids of :mod:`tribocosim.surrogate.campaign`) of existing campaigns do not change.
+The roll-off wavelengths (``sheet_rolloff_wavelength``, ``tool_rolloff_wavelength``) default to None,
+a pure power law, and :meth:`SlideConfig.to_dict` leaves them out while they are None; so is
+``oil_viscosity`` when the expert override ``damping_rate`` is given instead.
+
+Damping (issue 17): by default the flakes are damped by the Stokes drag of the oil they move in,
+``oil_viscosity`` = :data:`DEFAULT_OIL_VISCOSITY` (ISO VG 32 at 40 C); the one rate ``damping_rate``
+[1/s] of earlier campaigns (5e7) is an expert override. docs/physics/alpha_velocity.md gives the study
+behind the default.
 """
 
 from __future__ import annotations
@@ -24,8 +28,9 @@ from pathlib import Path
 
 from tribocosim.components.errors import ParameterError, check_range
 
-#: damping rate gamma [1/s] when neither damping_rate nor oil_viscosity is given (the shipped table's)
-DEFAULT_DAMPING_RATE = 5e7
+#: dynamic viscosity [Pa s] of the oil when neither oil_viscosity nor damping_rate is given: ISO 3448
+#: grade VG 32 (32 mm^2/s at 40 C) x a mineral-oil density of 870 kg/m^3 (surrogate.dem docstring)
+DEFAULT_OIL_VISCOSITY = 32e-6 * 870.0
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
 
@@ -73,21 +78,24 @@ class SlideConfig:
         with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
     damping_rate : float or None
         gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I), one rate for translation and rotation: an
-        expert override of ``oil_viscosity``. None with no oil_viscosity means 5e7
-        (:data:`DEFAULT_DAMPING_RATE`, the shipped table's: Stokes drag 16 mu a v of a 12 um disc in
-        an oil of 0.05 Pa s over its mass); giving both is an error.
+        expert override of ``oil_viscosity`` (campaigns before issue 17 used 5e7); giving both is an
+        error. None (default): the damping of ``oil_viscosity``.
     oil_viscosity : float or None
         Dynamic viscosity eta of the lubricant [Pa s] (>= 0): the flakes are damped by the Stokes drag
         of a thin disc, with separate translational and rotational rates
-        (:meth:`tribocosim.surrogate.dem.DampingRates.from_viscosity`; reference: ISO VG 32 at 40 C,
-        0.028 Pa s). None (default): ``damping_rate``.
+        (:meth:`tribocosim.surrogate.dem.DampingRates.from_viscosity`). None with no damping_rate
+        means :data:`DEFAULT_OIL_VISCOSITY` (ISO VG 32 at 40 C, 0.0278 Pa s).
     dt_safety : float
         Safety factor on the Verlet limit 2/omega_max.
     sample_spacing_px : float
         Spacing of the flake-face sample points in pixels.
     pinch_overlap_fraction : float
-        A flake into which both surfaces cut deeper than this fraction of h_p is blocked too
-        (see :mod:`tribocosim.surrogate.coupling`); 0 disables the rule (the paper's cluster rule only).
+        A flake into which the two surfaces (the tool over the coming pixel) cut by more than twice
+        this fraction of h_p in sum does not fit between them and is blocked too, load-bearing in
+        the contact solve (:func:`tribocosim.surrogate.coupling.pinched`). Default 0: touching
+        both. It is the staggered scheme's non-penetration condition: with a threshold > 0 the tool
+        may squeeze a flake the solve does not see, and on steep surfaces the DEM may then stop with
+        a crushed flake. A_p by the paper's cluster rule alone is recorded in every run.
     n_slide_steps : int or None
         Number of one-pixel sliding steps; default 2n (the tool slides 2L).
     snapshot_every : int
@@ -120,7 +128,7 @@ class SlideConfig:
     oil_viscosity: float | None = None
     dt_safety: float = 0.1
     sample_spacing_px: float = 1.0
-    pinch_overlap_fraction: float = 0.1
+    pinch_overlap_fraction: float = 0.0
     n_slide_steps: int | None = None
     snapshot_every: int = 0
     bem_tol: float = 1e-8
@@ -168,7 +176,7 @@ class SlideConfig:
                     f"is an expert override of the damping from the oil's viscosity; "
                     f"dataclasses.replace(config, oil_viscosity=..., damping_rate=None) switches)")
         elif self.damping_rate is None:
-            object.__setattr__(self, "damping_rate", DEFAULT_DAMPING_RATE)
+            object.__setattr__(self, "oil_viscosity", DEFAULT_OIL_VISCOSITY)
         if self.damping_rate is not None:
             _number("damping_rate", self.damping_rate, "1/s")
             check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")

@@ -90,11 +90,13 @@ def test_a_version_1_table_gives_its_mu_and_refuses_what_needs_the_areas():
 
 
 def test_closed_form_without_a_velocity_law_uses_alpha_b_and_its_cap():
-    p = StripDrawParameters(friction_model="closed_form")  # defaults: alpha = 63.64 at every velocity
+    p = StripDrawParameters(friction_model="closed_form")  # defaults: alpha = alpha_b at every velocity
     law = make_friction_law(p)
-    assert p.alpha_v_ref == 0 and law.alpha(0.08) == law.alpha(50.0) == p.alpha_b
-    assert law.beta_threshold == pytest.approx(2.0 / (63.64 * 0.34))
-    assert_allclose(law.mu(1e7, 0.08, 0.01)[0], 0.15 * (1 - 63.64 * 0.01 * 0.34 / 2.0))
+    a = p.alpha_b
+    assert p.alpha_v_ref == 0 and law.alpha(0.08) == law.alpha(50.0) == a
+    assert law.beta_threshold == pytest.approx(2.0 / (a * 0.34))
+    beta = 0.5 * law.beta_threshold  # below the cap: Eq. 9 itself
+    assert_allclose(law.mu(1e7, 0.08, beta)[0], 0.15 * (1 - a * beta * 0.34 / 2.0))
 
 
 def test_closed_form_default_alpha_is_the_shipped_campaigns_at_its_slowest_velocity():

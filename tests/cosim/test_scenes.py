@@ -153,7 +153,9 @@ def test_zeta_and_archard_k_lower_mu_bar_with_saturation_at_large_k(tmp_path):
     res = run_sweep(k, tmp_path / "k")
     mu = by(res.rows, "archard_k")
     assert mu[1e-5] > mu[1e-4] > mu[1e-2], mu
-    assert abs(mu[1e-1] - mu[1e-2]) < 0.02 * mu[1e-2], f"no saturation at large K: {mu}"
+    # saturated: the last decade of K moves mu by < 2 % of the drop from the smallest K (beta at its cap,
+    # where A_p nearly reaches A_c and mu itself is small)
+    assert abs(mu[1e-1] - mu[1e-2]) < 0.02 * (mu[1e-5] - mu[1e-2]), f"no saturation at large K: {mu}"
     beta = {r["archard_k"]: r["beta"] for r in res.rows}
     assert beta[1e-1] == pytest.approx(beta[1e-2], rel=0.02) and beta[1e-1] > 0.2, f"beta at the cap: {beta}"
 

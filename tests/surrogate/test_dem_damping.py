@@ -258,19 +258,20 @@ def test_bad_rates_are_refused():
 
 
 # ------------------------------------------------------------------------------------------
-# the default is unchanged
+# the default: the oil's viscosity (issue 17); gamma an expert override
 # ------------------------------------------------------------------------------------------
-def test_default_configuration_is_gamma_5e7_with_the_same_record_and_case_id():
-    default, explicit = SlideConfig(), SlideConfig(damping_rate=5e7)
-    assert default == explicit and default.damping_rate == 5e7 and default.oil_viscosity is None
-    assert default.to_dict() == explicit.to_dict()
-    assert not {"oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength"} & set(default.to_dict())
-    assert case_id(default) == case_id(explicit)
+def test_default_configuration_is_vg32_oil_and_gamma_an_override_with_its_own_case_id():
+    default, explicit = SlideConfig(), SlideConfig(oil_viscosity=ETA)
+    assert default == explicit and default.oil_viscosity == ETA and default.damping_rate is None
+    assert default.to_dict() == explicit.to_dict() and case_id(default) == case_id(explicit)
+    assert not {"damping_rate", "sheet_rolloff_wavelength", "tool_rolloff_wavelength"} & {
+        k for k, v in default.to_dict().items() if v is not None}
     assert SlideConfig.from_dict(default.to_dict()) == default
-    oily = dataclasses.replace(default, oil_viscosity=ETA, damping_rate=None)
-    assert SlideConfig.from_dict(oily.to_dict()) == oily and case_id(oily) != case_id(default)
-    assert oily.damping(SHAPE) == DampingRates.from_viscosity(SHAPE, ETA)
-    assert default.damping(SHAPE) == 5e7
+    gamma = dataclasses.replace(default, oil_viscosity=None, damping_rate=5e7)
+    assert "oil_viscosity" not in gamma.to_dict()
+    assert SlideConfig.from_dict(gamma.to_dict()) == gamma and case_id(gamma) != case_id(default)
+    assert default.damping(SHAPE) == DampingRates.from_viscosity(SHAPE, ETA)
+    assert gamma.damping(SHAPE) == 5e7
 
 
 def test_one_rate_as_float_and_as_uniform_rates_are_bit_identical():
@@ -290,15 +291,15 @@ def test_one_rate_as_float_and_as_uniform_rates_are_bit_identical():
     assert np.array_equal(out[0], out[1])
 
 
-def test_slide_default_equals_explicit_gamma_and_viscosity_changes_it():
+def test_slide_default_equals_explicit_viscosity_and_gamma_changes_it():
     base = dict(n=64, size=125e-6, wavelength_ratio=0.1, n_flakes=5, n_slide_steps=3, pressure=20e6,
                 v0=10.0)
     runs = {name: run_slide(SlideConfig(**base, **kw)) for name, kw in
-            (("default", {}), ("gamma", {"damping_rate": 5e7}), ("oil", {"oil_viscosity": ETA}))}
-    a, b, c = runs["default"], runs["gamma"], runs["oil"]
+            (("default", {}), ("oil", {"oil_viscosity": ETA}), ("gamma", {"damping_rate": 5e7}))}
+    a, b, c = runs["default"], runs["oil"], runs["gamma"]
     for name in ("contact_fraction", "particle_fraction", "tool_height"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert np.array_equal(a.snapshots[3]["pos"], b.snapshots[3]["pos"])
-    assert not np.array_equal(a.snapshots[3]["pos"], c.snapshots[3]["pos"]), "oil must change the DEM"
+    assert not np.array_equal(a.snapshots[3]["pos"], c.snapshots[3]["pos"]), "gamma must change the DEM"
     sim = SlideSimulation(SlideConfig(**base, oil_viscosity=ETA))
     assert sim.params.damping == DampingRates.from_viscosity(sim.shape, ETA)
