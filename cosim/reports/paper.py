@@ -373,7 +373,11 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
                      f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
                      f"{cal.stderr_ensemble:.3g}); drop reached {_pct(cal.drop)} in {cal.evaluations} strip-draw "
                      "tests.")
-    lines += ["", f"Friction table: `{table_path}`. Figures: " + ", ".join(f"[{f}]({f})" for f in files)
+    from tribocosim.components.paths import DEFAULT_TABLE
+
+    shipped = Path(table_path).resolve() == Path(DEFAULT_TABLE).resolve()
+    table_text = "`models/friction_table.npz` (the shipped one)" if shipped else f"`{table_path}`"
+    lines += ["", f"Friction table: {table_text}. Figures: " + ", ".join(f"[{f}]({f})" for f in files)
               + "; every test's mu_bar: [paper.csv](paper.csv), the numbers: [paper.json](paper.json).", ""]
     return "\n".join(lines)
 
