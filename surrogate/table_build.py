@@ -290,37 +290,102 @@ def low_velocity_policy(fits: FitReport) -> tuple[str, str]:
                          f"R^2 = {law.r2:.3f}")
 
 
+def _threshold_uncertainty(table: FrictionTable) -> float:
+    """Standard error of beta_thres = s_c E* / alpha_max (Eq. 24) from the recorded fit errors.
+
+    First-order propagation of the standard errors of s_c and of the alpha that set the threshold
+    (the largest per-velocity alpha, or the law's b when that is larger); 0 when the metadata hold no
+    fits or the threshold is the cap 1.
+    """
+    fits = table.metadata.get("fits")
+    thr = table.beta_threshold
+    if not fits or thr >= 1.0:
+        return 0.0
+    law = fits["alpha_law"]
+    cands = [(a["alpha"], a["alpha_stderr"]) for a in fits["alpha_per_velocity"] if a["alpha"] is not None]
+    if law.get("b") is not None:
+        cands.append((law["b"], law.get("b_err")))
+    alpha, alpha_err = max(cands, key=lambda c: c[0])
+    c = fits["contact_area"]
+    rel2 = (alpha_err / alpha) ** 2 if alpha_err else 0.0
+    rel2 += (c["slope_err"] / c["slope"]) ** 2 if c.get("slope_err") else 0.0
+    return thr * math.sqrt(rel2)
+
+
+def _measured_beta(table: FrictionTable) -> np.ndarray:
+    """The beta nodes of a table that are not extrapolated (0 and the campaign's debris levels)."""
+    top = table.metadata.get("axes", {}).get("beta", {}).get("measured_max")
+    if top is None:
+        return table.beta
+    return table.beta[table.beta <= top * (1.0 + 1e-9)]
+
+
+def _along_beta(table: FrictionTable, values: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """``values`` (nP, nv, nb) of ``table`` at other beta nodes, linear along beta in each cell.
+
+    The last cell's line continues past the axis' end: above the measured levels A_p is linear in beta
+    and A_c constant (module docstring), so nodes of a slightly larger threshold lie on that line.
+    """
+    k = np.clip(np.searchsorted(table.beta, beta, side="right") - 1, 0, table.beta.size - 2)
+    t = (beta - table.beta[k]) / (table.beta[k + 1] - table.beta[k])
+    return (1.0 - t) * values[..., k] + t * values[..., k + 1]
+
+
 def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:
-    """Differences of two tables on the same axes, against the uncertainty recorded with ``a``.
+    """Differences of two tables on ``a``'s nodes, against the uncertainty recorded with ``a``.
 
     The tolerance per node is the larger of the recorded ensemble std of mu and one contact
     pixel, tau0 / (P n^2) (a rebuild with the same seeds may differ in the last bits of the FFT
-    plans, which can flip one pixel). Returns max |mu_a - mu_b|, the largest ratio to the
-    tolerance, the number of nodes beyond it and ``within_uncertainty``.
+    plans, which can flip one pixel and move a flake's path). Returns max |mu_a - mu_b|, the largest
+    ratio to the tolerance, the number of nodes beyond it and ``within_uncertainty``.
+
+    The pressure, velocity and measured beta nodes (0 and the debris levels) must be the same. The
+    extrapolated beta nodes end at beta_thres (Eq. 24), which the fitted alpha sets, so a rebuild
+    puts them elsewhere by a fraction of its standard error: then the thresholds must agree within
+    the standard error recorded with ``a`` (:func:`_threshold_uncertainty`), and ``b`` is read at
+    ``a``'s extrapolated nodes along its own (linear) extension.
     """
-    for name in ("pressure", "velocity", "beta"):
+    for name in ("pressure", "velocity"):
         x, y = getattr(a, name), getattr(b, name)
         if x.shape != y.shape or not np.allclose(x, y, rtol=1e-9, atol=0.0):
             raise TableError(f"the tables have different {name} axes; they cannot be compared node by node")
-    d = np.abs(a.mu - b.mu)
+    arrays = ("mu",) + ((("contact_area", "particle_area")) if a.version == 2 and b.version == 2 else ())
+    out: dict = {}
+    if a.beta.shape == b.beta.shape and np.allclose(a.beta, b.beta, rtol=1e-9, atol=0.0):
+        on_a = {name: getattr(b, name) for name in arrays}
+        thr_ok = True
+    else:
+        ma, mb = _measured_beta(a), _measured_beta(b)
+        if ma.size == a.beta.size or mb.size == b.beta.size or ma.shape != mb.shape \
+                or not np.allclose(ma, mb, rtol=1e-9, atol=0.0):
+            raise TableError("the tables have different beta axes (measured debris levels "
+                             f"{list(ma)} and {list(mb)}); they cannot be compared node by node")
+        thr_tol = _threshold_uncertainty(a)
+        thr_diff = abs(a.beta_threshold - b.beta_threshold)
+        thr_ok = thr_diff <= thr_tol
+        out["beta_threshold"] = {"a": a.beta_threshold, "b": b.beta_threshold, "abs_diff": thr_diff,
+                                 "tolerance": thr_tol, "note": "extrapolated beta nodes differ: b is read at "
+                                 "a's nodes along its linear extension; tolerance = standard error of "
+                                 "beta_thres = s_c E*/alpha_max recorded with a"}
+        on_a = {name: _along_beta(b, getattr(b, name), a.beta) for name in arrays}
+    d = np.abs(a.mu - on_a["mu"])
     std = np.asarray(a.metadata.get("ensemble", {}).get("mu_std", np.zeros_like(a.mu)), float)
     # one contact pixel more or less (last-bit differences of FFT plans can flip one): tau0/(P n^2)
     tau0 = a.metadata.get("calibration", {}).get("tau0")
     n = a.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("n", 256)
     pixel = tau0 / (a.pressure[:, None, None] * n * n) if tau0 else np.zeros_like(a.mu)
     tol = np.maximum(np.maximum(std, pixel), 1e-12)
-    out = {"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
-           "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
-           "tolerance": "max(recorded ensemble std, one contact pixel: tau0/(P n^2) for mu, 1/n^2 for the areas)"}
-    ok = bool(np.all(d <= tol))
-    if a.version == 2 and b.version == 2:
-        for name in ("contact_area", "particle_area"):
-            da = np.abs(getattr(a, name) - getattr(b, name))
-            tol_a = np.maximum(np.maximum(getattr(a, name + "_std"), 1.0 / (n * n)), 1e-15)
-            out[f"{name}_max_abs_diff"] = float(da.max())
-            out[f"{name}_nodes_beyond_tolerance"] = int(np.count_nonzero(da > tol_a))
-            ok = ok and bool(np.all(da <= tol_a))
-    elif a.version != b.version:
+    out.update({"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
+                "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
+                "tolerance": "max(recorded ensemble std, one contact pixel: tau0/(P n^2) for mu, 1/n^2 for the areas)"})
+    ok = bool(np.all(d <= tol)) and thr_ok
+    for name in arrays[1:]:
+        da = np.abs(getattr(a, name) - on_a[name])
+        tol_a = np.maximum(np.maximum(getattr(a, name + "_std"), 1.0 / (n * n)), 1e-15)
+        out[f"{name}_max_abs_diff"] = float(da.max())
+        out[f"{name}_nodes_beyond_tolerance"] = int(np.count_nonzero(da > tol_a))
+        ok = ok and bool(np.all(da <= tol_a))
+    if a.version != b.version:
         out["note"] = f"format versions {a.version} and {b.version}: only mu is compared"
     out["within_uncertainty"] = ok
     return out

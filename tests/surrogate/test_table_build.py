@@ -247,6 +247,40 @@ def test_compare_tables_against_recorded_std(built):
     assert compare_tables(t, t)["within_uncertainty"]
 
 
+def test_compare_reads_a_rebuilds_extension_on_the_first_tables_nodes(built):
+    """The extrapolated beta nodes end at the fitted beta_thres, so a rebuild places them elsewhere:
+    a table with 5 extension nodes instead of 3, from the same (noise-free) campaign, lies on the same
+    lines A_p ~ beta, A_c constant, so compare finds no difference at the first table's nodes."""
+    import copy
+
+    manifest, records = campaign(noise=0.0)
+    stats = surface_statistics(manifest["sweep"]["slide"], manifest["sweep"]["surfaces"])
+    a, _ = build_table(records, manifest, surface_stats=stats)
+    m5 = copy.deepcopy(manifest)
+    m5["sweep"]["table"]["beta_extension"] = 5
+    b, _ = build_table(records, m5, surface_stats=stats)
+    assert b.beta.size == a.beta.size + 2
+    res = compare_tables(a, b)
+    assert res["within_uncertainty"] and res["max_abs_diff"] < 1e-15
+    assert res["particle_area_max_abs_diff"] < 1e-15 and res["beta_threshold"]["abs_diff"] == 0.0
+
+
+def test_compare_flags_a_threshold_outside_its_standard_error(built):
+    """alpha 1.5 x larger moves beta_thres = s_c E*/alpha to 2/3 of its value, far beyond the standard
+    error of a 3 % noise campaign: compare says so; different debris levels cannot be compared."""
+    manifest, records, a, _ = built
+    stats = surface_statistics(manifest["sweep"]["slide"], manifest["sweep"]["surfaces"])
+    m2, r2 = campaign(alpha=lambda v: 1.5 * alpha_law(v, B, VREF))
+    b, _ = build_table(r2, m2, surface_stats=stats)
+    assert b.beta_threshold == pytest.approx(a.beta_threshold / 1.5, rel=0.05)
+    res = compare_tables(a, b)
+    thr = res["beta_threshold"]
+    assert 0.0 < thr["tolerance"] < thr["abs_diff"] and not res["within_uncertainty"]
+    other = FrictionTable(a.pressure, a.velocity, np.r_[a.beta[0], 0.5 * a.beta[1:]], a.mu, a.metadata)
+    with pytest.raises(TableError, match="different beta axes"):
+        compare_tables(a, other)
+
+
 def test_out_of_range_queries_follow_the_recorded_policy(built):
     from tribocosim.components.errors import TableDomainError
 
