@@ -69,7 +69,7 @@ class StripDrawParameters:
     kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0, False)
     rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0, False)
     alpha_b: float = _p(
-        446.27, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
+        446.25, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
         "(Fig. 15): the shipped campaign's fitted alpha at its slowest velocity, 2 m/s (standard error 21)", 0.0, 1e6
     )
     alpha_v_ref: float = _p(

@@ -44,7 +44,7 @@ def table() -> FrictionTable:
 
 
 #: alpha of the closed-form comparisons: the shipped campaign's of format version 2 before issue 17. With
-#: today's default (446.27) the closed form's cap is 0.0132, the ramps below drive the pad to it, mu is ~0
+#: today's default (446.25) the closed form's cap is 0.0132, the ramps below drive the pad to it, mu is ~0
 #: there and the pull force passes near zero, where an element-wise relative comparison measures the
 #: rounding of ~0 (measured: 1.8e-10 N on a pull force of 0.0135 N, 5e-14 of the run's largest 3341 N).
 CLOSED_FORM_ALPHA_B = 63.64
