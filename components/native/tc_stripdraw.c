@@ -61,6 +61,7 @@
 
 #define LEAD_LENGTH 0.005 /* mesh.LEAD_LENGTH [m] */
 #define MAX_HALVINGS 12   /* model._MAX_HALVINGS */
+#define CHAIN_CACHE 4     /* model._CHAIN_CACHE */
 #ifndef TC_STRIPDRAW_NEWTON_MAX_ITER
 #define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* model._NEWTON_MAX_ITER; the tests build with fewer to exercise the halving */
 #endif
@@ -95,6 +96,9 @@ struct tc_stripdraw {
     double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *over, *awork;
     double *fwork;          /* explicit: nodal forces */
     double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
+    double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
+    double chain_h[CHAIN_CACHE];
+    int chain_used, chain_next;
     unsigned char *clamped; /* table lookups flagged as clamped */
     signed char *giwork;
     unsigned char *backup; /* the state before the current step */
@@ -205,149 +209,7 @@ void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, 
     *reaction = -f[N];
 }
 
-/* kernels._galpha_eval: tractions T, stick/slip state (0 off the pad, 1 stick, 2/3 slip +/-), nodal forces f,
- * residual r = dPi/du (free nodes) and the potential Pi; *rmax = max |r_i|. */
-static double galpha_eval(size_t n, const double *u, const double *u0, const double *upred, const double *A,
-                          const double *Upn, const double *fprev, const double *ov, const double *m, double ke,
-                          double ks, double wT, const double *tmax, double am, double af, double cm, double *T,
-                          signed char *state, double *f, double *r, double *rmax) {
-    const size_t N = n - 1;
-    double pot = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-        T[i] = 0.0;
-        state[i] = 0;
-        if (ov[i] > 0.0) {
-            const double x = u[i] - Upn[i];
-            const double t = ks * x;
-            double phi;
-            if (t > tmax[i]) {
-                T[i] = tmax[i];
-                state[i] = 2;
-                phi = tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks;
-            } else if (t < -tmax[i]) {
-                T[i] = -tmax[i];
-                state[i] = 3;
-                phi = -tmax[i] * x - 0.5 * tmax[i] * tmax[i] / ks;
-            } else {
-                T[i] = t;
-                state[i] = 1;
-                phi = 0.5 * ks * x * x;
-            }
-            if (i < N) pot += (1.0 - af) * wT * ov[i] * phi;
-        }
-        f[i] = T[i] * wT * ov[i];
-    }
-    for (size_t e = 0; e < N; ++e) {
-        const double d = u[e + 1] - u[e];
-        f[e] -= ke * d;
-        f[e + 1] += ke * d;
-        pot += (1.0 - af) * 0.5 * ke * d * d;
-    }
-    double rm = 0.0;
-    for (size_t i = 0; i < N; ++i) {
-        const double lin = am * m[i] * A[i] + af * fprev[i];
-        const double du = u[i] - upred[i];
-        r[i] = cm * m[i] * du + lin + (1.0 - af) * f[i];
-        pot += 0.5 * cm * m[i] * (du * du) + lin * (u[i] - u0[i]); /* (u - upred) ** 2 is du * du */
-        rm = py_max(rm, fabs(r[i]));
-    }
-    *rmax = rm;
-    return pot;
-}
-
-int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
-                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
-                 double rtol, double *fric, double *reaction, double *work, signed char *iwork) {
-    const size_t N = n - 1;
-    double *Upn = work, *upred = work + n, *u = work + 2 * n, *u0 = work + 3 * n, *T = work + 4 * n;
-    double *f = work + 5 * n, *ut = work + 6 * n, *r = work + 7 * n, *du = r + N, *sub = du + N, *dia = sub + N;
-    double *sup = dia + N, *rhs = sup + N, *tw = rhs + N; /* tw: 2 N for the Thomas solve */
-    signed char *state = iwork, *used = iwork + n;
-
-    /* the compiled loop form raises ZeroDivisionError (numba's Python error model) when dt^2 underflows */
-    if (beta * dt * dt == 0.0) return -2;
-    for (size_t i = 0; i < n; ++i) {
-        Upn[i] = Up[i];
-        if (ov[i] > 0.0 && contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
-    }
-    const double cm = (1.0 - am) / (beta * dt * dt);
-    const double cA = dt * dt * (0.5 - beta);
-    for (size_t i = 0; i < n; ++i) upred[i] = U[i] + dt * V[i] + cA * A[i]; /* Newmark predictor */
-    const double shift = dt * vg;
-    for (size_t i = 0; i < n; ++i) {
-        u[i] = U[i] + shift; /* initial guess: the strip follows the grip rigidly */
-        u0[i] = u[i];
-    }
-    double fscale = ke * fabs(dt * vg) + 1e-300;
-    for (size_t i = 0; i < n; ++i) fscale += tmax[i] * wT * ov[i];
-
-    double rmax, rmax_t;
-    double pot = galpha_eval(n, u, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r,
-                             &rmax);
-    int it = 0;
-    while (rmax > rtol * fscale) {
-        if (it >= max_iter) return -1;
-        double slope = 0.0;
-        for (size_t i = 0; i < N; ++i) {
-            const double kt = state[i] == 1 ? ks * wT * ov[i] : 0.0;
-            dia[i] = cm * m[i] + (1.0 - af) * ((i > 0 ? 2.0 * ke : ke) + kt);
-            sub[i] = -(1.0 - af) * ke;
-            sup[i] = -(1.0 - af) * ke;
-            rhs[i] = -r[i];
-        }
-        for (size_t i = 0; i < n; ++i) used[i] = state[i];
-        tc_thomas(N, sub, dia, sup, rhs, du, tw);
-        for (size_t i = 0; i < N; ++i) slope += r[i] * du[i];
-        double alpha = 1.0, pot_t;
-        for (;;) { /* backtracking (Armijo) line search on Pi */
-            for (size_t i = 0; i < N; ++i) ut[i] = u[i] + alpha * du[i];
-            ut[N] = u[N];
-            pot_t = galpha_eval(n, ut, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r,
-                                &rmax_t);
-            if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
-            alpha *= 0.5;
-        }
-        for (size_t i = 0; i < n; ++i) u[i] = ut[i];
-        pot = pot_t;
-        rmax = rmax_t;
-        it += 1;
-        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
-            int same = 1;
-            for (size_t i = 0; i < n; ++i)
-                if (state[i] != used[i]) {
-                    same = 0;
-                    break;
-                }
-            if (same) break;
-        }
-    }
-    /* accept: Newmark updates, plastic slip, contact flags */
-    for (size_t i = 0; i < N; ++i) {
-        const double anew = (u[i] - upred[i]) / (beta * dt * dt);
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
-        A[i] = anew;
-    }
-    V[N] = vg;
-    A[N] = 0.0;
-    double fr = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-        U[i] = u[i];
-        fprev[i] = f[i];
-        if (ov[i] > 0.0) {
-            contact[i] = 1;
-            Up[i] = Upn[i];
-            if (state[i] != 1) Up[i] = u[i] - T[i] / ks;
-            fr += T[i] * wT * ov[i];
-        } else {
-            contact[i] = 0;
-        }
-    }
-    *fric = fr;
-    *reaction = f[N];
-    return it;
-}
-
+/* transport._advect_loop */
 void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
                   double element_length, double *out, double *work) {
     memcpy(out, beta, n_all * sizeof *out);
@@ -516,12 +378,31 @@ static void weights(const tc_stripdraw *m, const double *U, double *w) {
 
 /* StripDrawModel._implicit: one generalized-alpha step of length h with the overlaps ov; when Newton fails,
  * two half steps, the second with the overlaps at the midpoint; at most MAX_HALVINGS levels. */
+/* StripDrawModel._chain: the elimination factors of the free bar for the step length h, kept for the last
+ * CHAIN_CACHE step lengths (first in, first out). */
+static const double *chain_for(tc_stripdraw *m, double h) {
+    const size_t size = TC_SD_CHAIN(m->n);
+    for (int k = 0; k < m->chain_used; ++k)
+        if (m->chain_h[k] == h) return m->chain + (size_t)k * size;
+    int k;
+    if (m->chain_used < CHAIN_CACHE) {
+        k = m->chain_used++;
+    } else {
+        k = m->chain_next;
+        m->chain_next = (k + 1) % CHAIN_CACHE;
+    }
+    m->chain_h[k] = h;
+    const double cm = (1.0 - m->am) / (m->beta_nm * h * h);
+    tc_sd_chain_factors(m->n, cm, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
+    return m->chain + (size_t)k * size;
+}
+
 static int implicit_step(tc_stripdraw *m, double h, const double *ov, double vg, int depth, double *fric,
                          double *reaction, tc_msg msg) {
     const size_t n = m->n;
     int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, m->mass, m->ke, m->ks, m->wT,
                           m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
-                          NEWTON_RTOL, fric, reaction, m->gwork, m->giwork);
+                          NEWTON_RTOL, chain_for(m, h), fric, reaction, m->gwork, m->giwork);
     if (it >= 0) return TC_OK;
     if (it == -2) { /* Python: ZeroDivisionError */
         char r[TC_REPR_SIZE];
@@ -864,8 +745,11 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
     const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
     /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, work 11, advection 5, then the
-     * explicit forces (1) or the generalized-alpha work (15) and the overlaps of each halving level (13) */
-    const size_t n_arrays = 3 + 7 + 1 + 11 + 5 + (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 : 1);
+     * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level (13) and the
+     * cached elimination factors */
+    const size_t n_arrays = 3 + 7 + 1 + 11 + 5 +
+                            (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
+                                      : 1);
     m->state_size = state_size(n);
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
     m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
@@ -884,6 +768,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     if (implicit) {
         m->gwork = q;
         m->ov = q + TC_SD_GALPHA_WORK(n);
+        m->chain = m->ov + (MAX_HALVINGS + 1) * n;
     } else {
         m->fwork = q;
     }

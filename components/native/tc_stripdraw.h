@@ -100,14 +100,20 @@ TC_API void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, doub
                            double wT, double half_le, double a_lo, double a_hi, const double *tmax, double vg,
                            double *fric, double *reaction, double *f_work);
 
-/* kernels._galpha_loop: returns the Newton iterations, -1 without convergence, or -2 when beta dt^2 is 0 (where
- * the numba-compiled loop form raises ZeroDivisionError); nothing is changed when it returns < 0. */
-#define TC_SD_GALPHA_WORK(n) (15 * (n))
+/* galpha.chain_factors: the elimination factors of the free bar for one step (cm = (1 - am) / (beta dt^2),
+ * c = (1 - af) k_e) into chain (TC_SD_CHAIN(n) doubles: rows et, qt, it, eg, qg, ig of n values each). */
+#define TC_SD_CHAIN(n) (6 * (n))
+TC_API void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain);
+
+/* galpha._galpha_loop (tc_galpha.c): returns the Newton iterations, -1 without convergence, or -2 when beta dt^2 is 0
+ * (where the numba-compiled loop form raises ZeroDivisionError); nothing is changed when it returns < 0. chain holds
+ * tc_sd_chain_factors of dt. */
+#define TC_SD_GALPHA_WORK(n) (18 * (n))
 #define TC_SD_GALPHA_IWORK(n) (2 * (n))
 TC_API int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
                         double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
                         const double *tmax, double vg, double am, double af, double beta, double gamma,
-                        int max_iter, double rtol, double *fric, double *reaction, double *work,
+                        int max_iter, double rtol, const double *chain, double *fric, double *reaction, double *work,
                         signed char *iwork);
 
 /* transport._advect_loop: out = beta advected implicitly (upwind) under the pad; work holds 5 n doubles. */

@@ -204,7 +204,7 @@ COMPONENT = Component(
     check=check,
     observer=observer,
     native=Native(prefix="tc_stripdraw",
-                  sources=("tc_stripdraw.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
+                  sources=("tc_stripdraw.c", "tc_galpha.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
                            "tc_sha256.c", "tc_json.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),

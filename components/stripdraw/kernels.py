@@ -1,4 +1,4 @@
-"""Hot loops of the strip-draw bar: explicit sub-cycling, generalized-alpha step, tridiagonal solve.
+"""Hot loops of the strip-draw bar: contact weights, the interface law, explicit sub-cycling, tridiagonal solve.
 
 Each kernel is written twice: a loop form (compiled by numba when it is importable) and a
 vectorised NumPy form that is the reference the loop form is tested against, and the fallback
@@ -24,7 +24,8 @@ am = (2 r - 1)/(r + 1), af = r/(r + 1), g = 1/2 - am + af, b = (1 - am + af)^2 /
 radius r = rho_inf. Second order, unconditionally stable for the linear part. The friction law is
 piecewise linear, so each step is solved by Newton's method on the stick/slip set (tangent
 k_s w_T ov_i on sticking nodes, 0 on slipping ones), globalised by a line search on the step's
-convex incremental potential (see the generalized-alpha section below).
+convex incremental potential; the step, with the bar outside the pad condensed onto it, is
+:mod:`tribocosim.components.stripdraw.galpha`.
 """
 
 from __future__ import annotations
@@ -179,227 +180,19 @@ def _thomas_loop(sub, diag, sup, rhs):
     return x
 
 
-# --------------------------------------------------------------------------------------------
-# generalized-alpha step: Newton on the stick/slip set, globalised by a line search
-# --------------------------------------------------------------------------------------------
-# The step's equations are the gradient of a convex incremental potential (C1, piecewise quadratic):
-#   Pi(u) = sum_i [ cm m_i / 2 (u_i - u~_i)^2 + (am m_i a_n,i + af f_n,i)(u_i - u0_i) ]
-#         + (1 - af) [ 1/2 u^T K u + sum_i w_T ov_i phi_i(u_i - Up_i) ],
-# with cm = (1 - am) / (b dt^2), the Newmark predictor u~ = u_n + dt v_n + dt^2 (1/2 - b) a_n,
-# u0 the initial guess (a constant shift that keeps Pi small and well rounded), and phi the
-# potential of the return-mapped interface spring: k_s x^2 / 2 while |k_s x| <= T_max, else
-# T_max |x| - T_max^2 / (2 k_s). Newton directions are descent directions (the tangent is
-# positive definite), and a backtracking (Armijo) line search on Pi makes the iteration converge
-# from any start: without it, a pad whose nodes all slip has no interface stiffness in the
-# tangent, and the iteration can flip the whole pad between slipping forwards and backwards.
-
-
-def _galpha_eval(u, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r):
-    """Tractions, stick/slip state, nodal forces f = K u + F, residual r = dPi/du, and Pi."""
-    n = u.size
-    N = n - 1
-    pot = 0.0
-    for i in range(n):
-        T[i] = 0.0
-        state[i] = 0
-        if ov[i] > 0.0:
-            x = u[i] - Upn[i]
-            t, slipping, phi = _interface_law_k(x, ks, tmax[i])
-            T[i] = t
-            state[i] = 1 if not slipping else (2 if x > 0 else 3)
-            if i < N:
-                pot += (1.0 - af) * wT * ov[i] * phi
-        f[i] = T[i] * wT * ov[i]
-    for e in range(N):
-        d = u[e + 1] - u[e]
-        f[e] -= ke * d
-        f[e + 1] += ke * d
-        pot += (1.0 - af) * 0.5 * ke * d * d
-    rmax = 0.0
-    for i in range(N):
-        lin = am * m[i] * A[i] + af * fprev[i]
-        r[i] = cm * m[i] * (u[i] - upred[i]) + lin + (1.0 - af) * f[i]
-        pot += 0.5 * cm * m[i] * (u[i] - upred[i]) ** 2 + lin * (u[i] - u0[i])
-        rmax = max(rmax, abs(r[i]))
-    return pot, rmax
-
-
-def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, am, af, beta, gamma, max_iter, rtol):
-    """One generalized-alpha step; ``ov`` are the contact weights of the step.
-
-    Converged when a full Newton step lands on the stick/slip set (with slip directions) it was
-    built from (the problem is linear on that set, so the step was exact), or when the residual
-    is below ``rtol`` times the force scale (friction capacity + grip pull). Returns
-    (iterations, friction force, grip reaction), or iterations = -1 when ``max_iter`` Newton
-    iterations did not converge; then nothing has been changed.
-    """
-    n = U.size
-    N = n - 1
-    Upn = Up.copy()
-    for i in range(n):
-        if ov[i] > 0.0 and contact[i] == 0:
-            Upn[i] = U[i]  # nodes entering the pad start stress-free
-    cm = (1.0 - am) / (beta * dt * dt)
-    upred = U + dt * V + dt * dt * (0.5 - beta) * A
-    u = U + dt * vg  # initial guess: the strip follows the grip rigidly
-    u0 = u.copy()
-    fscale = ke * abs(dt * vg) + 1e-300
-    for i in range(n):
-        fscale += tmax[i] * wT * ov[i]
-    T = np.zeros(n)
-    state = np.zeros(n, np.int8)
-    used = np.zeros(n, np.int8)
-    f = np.zeros(n)
-    r = np.zeros(N)
-    ut = np.zeros(n)
-    sub = np.zeros(N)
-    dia = np.zeros(N)
-    sup = np.zeros(N)
-    rhs = np.zeros(N)
-    pot, rmax = _galpha_eval_k(u, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r)
-    it = 0
-    while rmax > rtol * fscale:
-        if it >= max_iter:
-            return -1, 0.0, 0.0
-        slope = 0.0
-        for i in range(N):
-            kt = ks * wT * ov[i] if state[i] == 1 else 0.0
-            dia[i] = cm * m[i] + (1.0 - af) * ((2.0 * ke if i > 0 else ke) + kt)
-            sub[i] = -(1.0 - af) * ke
-            sup[i] = -(1.0 - af) * ke
-            rhs[i] = -r[i]
-        for i in range(n):
-            used[i] = state[i]
-        du = _thomas_k(sub, dia, sup, rhs)
-        for i in range(N):
-            slope += r[i] * du[i]
-        alpha = 1.0
-        while True:
-            for i in range(N):
-                ut[i] = u[i] + alpha * du[i]
-            ut[N] = u[N]
-            pot_t, rmax_t = _galpha_eval_k(ut, u0, upred, A, Upn, fprev, ov, m, ke, ks, wT, tmax, am, af, cm, T, state, f, r)
-            if pot_t <= pot + 1e-4 * alpha * slope or alpha < 1e-12:
-                break
-            alpha *= 0.5
-        for i in range(n):
-            u[i] = ut[i]
-        pot, rmax = pot_t, rmax_t
-        it += 1
-        if alpha == 1.0:
-            same = True
-            for i in range(n):
-                if state[i] != used[i]:
-                    same = False
-                    break
-            if same:
-                break
-    # accept: Newmark updates, plastic slip, contact flags
-    for i in range(N):
-        anew = (u[i] - upred[i]) / (beta * dt * dt)
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew)
-        A[i] = anew
-    V[N] = vg
-    A[N] = 0.0
-    fric = 0.0
-    for i in range(n):
-        U[i] = u[i]
-        fprev[i] = f[i]
-        if ov[i] > 0.0:
-            contact[i] = 1
-            Up[i] = Upn[i]
-            if state[i] != 1:
-                Up[i] = u[i] - T[i] / ks
-            fric += T[i] * wT * ov[i]
-        else:
-            contact[i] = 0
-    return it, fric, f[N]
-
-
 def thomas_numpy(sub, diag, sup, rhs):
     """Reference/fallback tridiagonal solve (plain Python loop over NumPy arrays)."""
     return _thomas_loop(np.asarray(sub, float), np.asarray(diag, float), np.asarray(sup, float), np.asarray(rhs, float))
 
 
-def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, am, af, beta, gamma, max_iter, rtol):
-    """Reference of the generalized-alpha kernel (and its fallback without numba): vectorised Pi,
-    residual and tangent, Thomas solve; the same Newton/line-search logic and convergence test."""
-    n = U.size
-    N = n - 1
-    Upn = Up.copy()
-    entering = (ov > 0) & (contact == 0)
-    Upn[entering] = U[entering]
-    cm = (1.0 - am) / (beta * dt * dt)
-    upred = U + dt * V + dt * dt * (0.5 - beta) * A
-    u = U + dt * vg
-    u0 = u.copy()
-    fscale = ke * abs(dt * vg) + 1e-300 + np.sum(tmax * wT * ov)
-    lin = am * m[:N] * A[:N] + af * fprev[:N]
-    inside = ov > 0
-
-    def evaluate(u):
-        x = u - Upn
-        T, slipping, phi = interface_law(x, ks, tmax)
-        T = T * inside
-        phi = phi * inside
-        state = np.where(inside, np.where(slipping, np.where(x > 0, 2, 3), 1), 0).astype(np.int8)
-        d = np.diff(u)
-        f = T * wT * ov
-        f[:-1] -= ke * d
-        f[1:] += ke * d
-        r = cm * m[:N] * (u[:N] - upred[:N]) + lin + (1 - af) * f[:N]
-        pot = (np.sum(0.5 * cm * m[:N] * (u[:N] - upred[:N]) ** 2 + lin * (u[:N] - u0[:N]))
-               + (1 - af) * (0.5 * ke * np.sum(d * d) + np.sum((wT * ov * phi)[:N])))
-        return pot, r, T, state, f
-
-    pot, r, T, state, f = evaluate(u)
-    it = 0
-    while np.abs(r).max() > rtol * fscale:
-        if it >= max_iter:
-            return -1, 0.0, 0.0
-        used = state
-        diag = cm * m[:N] + (1 - af) * (ke * np.where(np.arange(N) > 0, 2.0, 1.0) + ks * wT * ov[:N] * (state[:N] == 1))
-        off = np.full(N, -(1 - af) * ke)
-        du = thomas_numpy(off, diag, off, -r)
-        slope = float(r @ du)
-        alpha = 1.0
-        while True:
-            ut = u.copy()
-            ut[:N] += alpha * du
-            pot_t, r, T, state, f = evaluate(ut)
-            if pot_t <= pot + 1e-4 * alpha * slope or alpha < 1e-12:
-                break
-            alpha *= 0.5
-        u, pot = ut, pot_t
-        it += 1
-        if alpha == 1.0 and np.array_equal(state, used):
-            break
-    anew = (u[:N] - upred[:N]) / (beta * dt * dt)
-    V[:N] = V[:N] + dt * ((1 - gamma) * A[:N] + gamma * anew)
-    A[:N] = anew
-    V[N] = vg
-    A[N] = 0.0
-    U[:] = u
-    fprev[:] = f
-    Up[inside] = Upn[inside]
-    slip_in = inside & (state != 1)
-    Up[slip_in] = u[slip_in] - T[slip_in] / ks
-    contact[:] = inside
-    return it, float(np.sum(T * wT * ov)), float(f[N])
-
-
 _thomas_k = jit(_thomas_loop)
 _interface_law_k = jit(interface_law)
-_galpha_eval_k = jit(_galpha_eval)
 if USE_NUMBA:
     explicit_kernel = jit(_explicit_loop)
-    galpha_kernel = jit(_galpha_loop)
     thomas = _thomas_k
 else:  # pragma: no cover - numpy-only environment
     explicit_kernel = explicit_numpy
-    galpha_kernel = galpha_numpy
     thomas = thomas_numpy
 
 #: the loop forms, compiled or not, for tests that compare them with the NumPy references
 explicit_loop = jit(_explicit_loop)
-galpha_loop = jit(_galpha_loop)

@@ -16,7 +16,8 @@ Time integration. Two integrators for the bar, selected by ``integrator``:
     Resolves the elastic waves; ~1e7 steps for a 140 mm draw at 0.08 m/s.
 ``implicit``
     Generalized-alpha (Chung-Hulbert), unconditionally stable and second order, with a
-    semi-smooth Newton iteration on the stick/slip set (:mod:`.kernels`). Chosen over a purely
+    semi-smooth Newton iteration on the stick/slip set of the nodes under the pad, the bar outside the
+    pad condensed onto it (:mod:`.galpha`). Chosen over a purely
     quasi-static solve because it keeps inertia (the grip is driven by a machine model whose
     dynamics the co-simulation resolves, and velocity steps are legal inputs) while its
     numerical damping (``rho_inf`` < 1) removes the unresolved elastic waves, so that at
@@ -80,7 +81,7 @@ import math
 import numpy as np
 
 from tribocosim.components.errors import ConvergenceError, ParameterError, check_finite
-from tribocosim.components.stripdraw import kernels
+from tribocosim.components.stripdraw import galpha, kernels
 from tribocosim.components.stripdraw.mesh import BarMesh
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.transport import transport_step
@@ -103,6 +104,7 @@ _SCALARS = ("time", "n_steps", "friction_force", "reaction", "normal_force", "cl
 _MAX_HALVINGS = 12
 _NEWTON_MAX_ITER = 60
 _NEWTON_RTOL = 1e-10  # residual tolerance relative to the friction capacity + grip pull
+_CHAIN_CACHE = 4  # step lengths whose elimination factors are kept (model._chain)
 #: a step's end within this fraction of internal_step of a grid point is on the grid point (the model's time is
 #: the float sum of the requested steps, whose rounding is many orders below it over any practical run)
 GRID_TOLERANCE = 1e-6
@@ -204,6 +206,7 @@ class StripDrawModel:
         self._af = r / (r + 1.0)
         self._gamma = 0.5 - self._am + self._af
         self._beta_nm = 0.25 * (1.0 - self._am + self._af) ** 2
+        self._chains: dict[float, np.ndarray] = {}  # galpha.chain_factors per implicit step length
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
@@ -328,10 +331,10 @@ class StripDrawModel:
 
     def _implicit(self, h: float, ov: np.ndarray, tmax: np.ndarray, vg: float, depth: int):
         m, p = self.mesh, self.params
-        it, fric, reaction = kernels.galpha_kernel(
+        it, fric, reaction = galpha.galpha_kernel(
             h, self.U, self.V, self.A, self.Up, self.contact, self.fprev, ov, m.mass,
             m.element_stiffness, p.shear_stiffness, p.tool_width, tmax, vg,
-            self._am, self._af, self._beta_nm, self._gamma, _NEWTON_MAX_ITER, _NEWTON_RTOL,
+            self._am, self._af, self._beta_nm, self._gamma, _NEWTON_MAX_ITER, _NEWTON_RTOL, self._chain(h),
         )
         if it >= 0:
             return fric, reaction
@@ -343,6 +346,17 @@ class StripDrawModel:
         self._implicit(0.5 * h, ov, tmax, vg, depth + 1)
         ov_mid = kernels.overlap_numpy(m.X, self.U, 0.5 * m.element_length, m.window_lo, m.window_hi)
         return self._implicit(0.5 * h, ov_mid, tmax, vg, depth + 1)
+
+    def _chain(self, h: float) -> np.ndarray:
+        """The elimination factors of the free bar for the step length h (galpha.chain_factors), kept for
+        the last few step lengths (a run mostly repeats one; halvings and step doubling add a few)."""
+        chain = self._chains.get(h)
+        if chain is None:
+            if len(self._chains) >= _CHAIN_CACHE:
+                self._chains.pop(next(iter(self._chains)))
+            cm = (1.0 - self._am) / (self._beta_nm * h * h)
+            chain = self._chains[h] = galpha.chain_factors(cm, self.mesh.mass, (1.0 - self._af) * self.mesh.element_stiffness)
+        return chain
 
     def _weights(self, U: np.ndarray) -> np.ndarray:
         m = self.mesh

@@ -174,17 +174,19 @@ PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", m
                   zeta=0.2, particle_thickness=0.5e-6, beta_threshold=0.0, beta_initial=0.0)
 
 
-def test_internal_step_zero_is_bit_identical_to_before():
-    """Regression numbers derived from the model before internal_step existed (commit c950822): 60 steps of
-    1, 0.37 and 2.3 ms, closed form with slip-rate velocity, varying normal force, ramped grip."""
+def test_internal_step_zero_is_the_model_before_the_grid():
+    """Regression numbers of the model before internal_step existed (commit c950822): 60 steps of 1, 0.37 and
+    2.3 ms, closed form with slip-rate velocity, varying normal force, ramped grip. They were bit for bit until
+    the implicit step condensed the free bar onto the pad (issue 13): the same minimiser in other arithmetic,
+    measured 3.3e-12 relative on pull_force, so they are held to 1e-10 now."""
     m = _model(**PINNED_LAW)
     for k in range(60):
         dt = (1e-3, 3.7e-4, 2.3e-3)[k % 3]
         out = m.step(dt, {"normal_force": F_N * (1 + 0.2 * ((k % 7) / 7)), "grip_velocity": 0.08 * min(1, (k + 1) / 12)})
-    assert out["pull_force"] == 3424.2322477864595
-    assert out["friction_force"] == 1712.5117604633908
-    assert out["beta_max"] == 0.014484737859703082
-    assert float(m.beta.sum()) == 0.6333113201955827
+    assert out["pull_force"] == pytest.approx(3424.2322477864595, rel=1e-10)
+    assert out["friction_force"] == pytest.approx(1712.5117604633908, rel=1e-10)
+    assert out["beta_max"] == pytest.approx(0.014484737859703082, rel=1e-10)
+    assert float(m.beta.sum()) == pytest.approx(0.6333113201955827, rel=1e-10)
 
 
 def test_a_grid_never_crossed_is_no_grid():

@@ -18,7 +18,7 @@ import pytest
 
 from tribocosim.components.errors import ParameterError, TribocosimError
 from tribocosim.components.paths import DEFAULT_TABLE
-from tribocosim.components.stripdraw import kernels
+from tribocosim.components.stripdraw import galpha, kernels
 from tribocosim.components.stripdraw import model as sdmodel
 from tribocosim.components.stripdraw import transport
 from tribocosim.components.stripdraw.friction import closed_form_law, closed_form_table, make_friction_law
@@ -154,16 +154,24 @@ def test_explicit_kernel_is_bit_identical_to_the_loop_form(native_core, table):
         np.testing.assert_array_equal(c[k], py[k], err_msg=k)
 
 
+def _chain_native(core, m, dt):
+    n = m.mesh.n_nodes
+    chain = np.zeros((6, n))
+    cm = (1.0 - m._am) / (m._beta_nm * dt * dt)
+    core.lib.tc_sd_chain_factors(n, cm, ptr(m.mesh.mass), (1.0 - m._af) * m.mesh.element_stiffness, ptr(chain))
+    return chain
+
+
 def _galpha_native(core, m, dt, arrays, ov, tmax, vg, max_iter):
     n = m.mesh.n_nodes
     fric, reac = np.zeros(1), np.zeros(1)
-    work, iwork = np.zeros(15 * n), np.zeros(2 * n, dtype=np.int8)
+    work, iwork = np.zeros(18 * n), np.zeros(2 * n, dtype=np.int8)
     p, mesh = m.params, m.mesh
     it = core.lib.tc_sd_galpha(
         n, dt, ptr(arrays["U"]), ptr(arrays["V"]), ptr(arrays["A"]), ptr(arrays["Up"]),
         ptr(arrays["contact"], BYTE_P), ptr(arrays["fprev"]), ptr(ov), ptr(mesh.mass), mesh.element_stiffness,
         p.shear_stiffness, p.tool_width, ptr(tmax), vg, m._am, m._af, m._beta_nm, m._gamma, max_iter, 1e-10,
-        ptr(fric), ptr(reac), ptr(work), ptr(iwork, BYTE_P))
+        ptr(_chain_native(core, m, dt)), ptr(fric), ptr(reac), ptr(work), ptr(iwork, BYTE_P))
     return it, fric[0], reac[0]
 
 
@@ -183,9 +191,11 @@ def test_galpha_kernel_is_bit_identical_to_the_loop_form(native_core, table, see
     else:
         vg = 0.08
     dt = 1e-3 * seed if seed else 1e-3
-    res_py = kernels.galpha_loop(dt, py["U"], py["V"], py["A"], py["Up"], py["contact"], py["fprev"], ov, mesh.mass,
-                                 mesh.element_stiffness, p.shear_stiffness, p.tool_width, tmax, vg, m._am, m._af,
-                                 m._beta_nm, m._gamma, 60, 1e-10)
+    chain = m._chain(dt)
+    np.testing.assert_array_equal(_chain_native(native_core, m, dt), chain)
+    res_py = galpha.galpha_loop(dt, py["U"], py["V"], py["A"], py["Up"], py["contact"], py["fprev"], ov, mesh.mass,
+                                mesh.element_stiffness, p.shear_stiffness, p.tool_width, tmax, vg, m._am, m._af,
+                                m._beta_nm, m._gamma, 60, 1e-10, chain)
     res_c = _galpha_native(native_core, m, dt, c, ov, tmax, vg, 60)
     assert res_c == tuple(res_py) and res_c[0] >= 1
     for k in py:

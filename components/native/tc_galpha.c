@@ -1,0 +1,259 @@
+/* One generalized-alpha step of the bar, the free parts of the bar condensed onto the pad.
+ *
+ * Native twin of components/stripdraw/galpha.py (its docstring states the equations: the incremental
+ * potential, the static condensation of the tail and the grip side, the window Newton iteration and the
+ * elimination factors). The arithmetic follows the loop form there operation by operation, compiled without
+ * fused multiply-add, so the two round alike (tests/native/test_native_stripdraw.py).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "tc_stripdraw.h"
+
+static double py_max(double a, double b) { return b > a ? b : a; }
+
+/* kernels.interface_law for one node: traction, slipping flag, potential phi */
+static double interface_law(double x, double ks, double tmax, int *slipping, double *phi) {
+    const double trial = ks * x;
+    if (trial > tmax) {
+        *slipping = 1;
+        *phi = tmax * fabs(x) - 0.5 * tmax * tmax / ks;
+        return tmax;
+    }
+    if (trial < -tmax) {
+        *slipping = 1;
+        *phi = tmax * fabs(x) - 0.5 * tmax * tmax / ks;
+        return -tmax;
+    }
+    *slipping = 0;
+    *phi = 0.5 * ks * x * x;
+    return trial;
+}
+
+void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain) {
+    const size_t N = n - 1;
+    double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
+           *ig = chain + 5 * n;
+    memset(chain, 0, TC_SD_CHAIN(n) * sizeof *chain);
+    for (size_t i = 0; i + 1 < N; ++i) { /* the tail never reaches node N-1 */
+        const double e = i == 0 ? cm * m[i] : cm * m[i] + qt[i - 1] * et[i - 1];
+        et[i] = e;
+        it[i] = 1.0 / (c + e);
+        qt[i] = c * it[i];
+    }
+    for (size_t j = N - 1; j >= 1 && j < N; --j) { /* the grip side never reaches node 0 */
+        const double g = j == N - 1 ? cm * m[j] + c : cm * m[j] + qg[j + 1] * eg[j + 1];
+        eg[j] = g;
+        ig[j] = 1.0 / (c + g);
+        qg[j] = c * ig[j];
+    }
+}
+
+/* galpha._window */
+static void window(size_t n, const double *ov, size_t *lo_out, size_t *hi_out) {
+    const size_t N = n - 1;
+    size_t lo = n, hi = n;
+    for (size_t i = 0; i < n; ++i)
+        if (ov[i] > 0.0) {
+            if (lo == n) lo = i;
+            hi = i;
+        }
+    if (lo == n || lo > N - 1) {
+        *lo_out = *hi_out = N - 1;
+        return;
+    }
+    *lo_out = lo;
+    *hi_out = hi < N - 1 ? hi : N - 1;
+}
+
+/* the window's inputs and its boundary springs (galpha._window_eval's arguments) */
+typedef struct {
+    size_t lo, hi;
+    const double *x, *z, *dU, *lin, *ov, *m, *tmax;
+    double ke, ks, wT, af, cm, st, kt, sg, kg;
+} window_problem;
+
+/* galpha._window_eval */
+static double window_eval(const window_problem *w, const double *d, double *T, signed char *state, double *f,
+                          double *r, double *rmax) {
+    const size_t lo = w->lo, hi = w->hi;
+    const double af = w->af, ke = w->ke, cm = w->cm;
+    double pot = 0.0;
+    for (size_t i = lo; i <= hi; ++i) {
+        T[i] = 0.0;
+        state[i] = 0;
+        if (w->ov[i] > 0.0) {
+            const double xs = w->z[i] + d[i];
+            int slipping;
+            double phi;
+            T[i] = interface_law(xs, w->ks, w->tmax[i], &slipping, &phi);
+            state[i] = (signed char)(!slipping ? 1 : (xs > 0 ? 2 : 3));
+            pot += (1.0 - af) * w->wT * w->ov[i] * phi;
+        }
+        f[i] = T[i] * w->wT * w->ov[i];
+    }
+    for (size_t e = lo; e < hi; ++e) {
+        const double s = w->dU[e] + (d[e + 1] - d[e]);
+        f[e] -= ke * s;
+        f[e + 1] += ke * s;
+        pot += (1.0 - af) * 0.5 * ke * s * s;
+    }
+    for (size_t i = lo; i <= hi; ++i) {
+        const double y = w->x[i] + d[i];
+        r[i] = cm * w->m[i] * y + w->lin[i] + (1.0 - af) * f[i];
+        pot += 0.5 * cm * w->m[i] * y * y + w->lin[i] * d[i];
+    }
+    r[lo] += w->st + w->kt * d[lo];
+    pot += (w->st + 0.5 * w->kt * d[lo]) * d[lo];
+    r[hi] += w->sg + w->kg * d[hi];
+    pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
+    double rm = 0.0;
+    for (size_t i = lo; i <= hi; ++i) rm = py_max(rm, fabs(r[i]));
+    *rmax = rm;
+    return pot;
+}
+
+int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
+                 double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
+                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
+                 double rtol, const double *chain, double *fric, double *reaction, double *work,
+                 signed char *iwork) {
+    const size_t N = n - 1;
+    const double c = (1.0 - af) * ke;
+    const double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
+                 *ig = chain + 5 * n;
+    double *x = work, *lin = work + n, *dU = work + 2 * n, *z = work + 3 * n, *d = work + 4 * n;
+    double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
+    double *dtr = work + 10 * n, *sub = work + 11 * n, *dia = work + 12 * n, *sup = work + 13 * n;
+    double *rhs = work + 14 * n, *step = work + 15 * n, *tw = work + 16 * n; /* tw: 2 n for the Thomas solve */
+    signed char *state = iwork, *used = iwork + n;
+
+    /* the compiled loop form raises ZeroDivisionError (numba's Python error model) when dt^2 underflows */
+    if (beta * dt * dt == 0.0) return -2;
+    size_t lo, hi;
+    window(n, ov, &lo, &hi);
+    const double cm = (1.0 - am) / (beta * dt * dt);
+    const double cA = dt * dt * (0.5 - beta);
+    const double shift = dt * vg;
+    for (size_t i = 0; i < N; ++i) {
+        x[i] = shift - dt * V[i] - cA * A[i];
+        lin[i] = am * m[i] * A[i] + af * fprev[i];
+        dU[i] = U[i + 1] - U[i];
+    }
+    for (size_t i = lo; i < n; ++i) {
+        Upn[i] = Up[i];
+        d[i] = 0.0;
+        if (ov[i] > 0.0) {
+            if (contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
+            z[i] = (U[i] - Upn[i]) + shift;
+        }
+    }
+    /* eliminate the tail forwards and the grip side backwards: rho = -(residual at d = 0), reduced */
+    for (size_t i = 0; i < lo; ++i) {
+        const double fel = (i > 0 ? ke * dU[i - 1] : 0.0) - ke * dU[i];
+        rho[i] = -(cm * m[i] * x[i] + lin[i] + (1.0 - af) * fel);
+        if (i > 0) rho[i] += qt[i - 1] * rho[i - 1];
+    }
+    for (size_t j = N - 1; j > hi; --j) {
+        const double fel = ke * dU[j - 1] - ke * dU[j];
+        rho[j] = -(cm * m[j] * x[j] + lin[j] + (1.0 - af) * fel);
+        if (j < N - 1) rho[j] += qg[j + 1] * rho[j + 1];
+    }
+    window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
+    if (lo > 0) {
+        w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
+        w.kt = qt[lo - 1] * et[lo - 1];
+    }
+    if (hi < N - 1) {
+        w.sg = -c * dU[hi] - qg[hi + 1] * rho[hi + 1];
+        w.kg = qg[hi + 1] * eg[hi + 1];
+    } else { /* the element to the grip node, which does not move within the step */
+        w.sg = -c * dU[hi];
+        w.kg = c;
+    }
+    double fscale = ke * fabs(dt * vg) + 1e-300;
+    for (size_t i = lo; i < n; ++i) fscale += tmax[i] * wT * ov[i]; /* ov = 0 below the window */
+
+    const size_t nw = hi - lo + 1;
+    double rmax, rmax_t;
+    double pot = window_eval(&w, d, T, state, f, r, &rmax);
+    int iters = 0;
+    while (rmax > rtol * fscale) {
+        if (iters >= max_iter) return -1;
+        for (size_t i = lo; i <= hi; ++i) {
+            const double kt_i = state[i] == 1 ? ks * wT * ov[i] : 0.0;
+            const double springs = (i > lo ? 1.0 : 0.0) + (i < hi ? 1.0 : 0.0);
+            dia[i - lo] = cm * m[i] + (1.0 - af) * (springs * ke + kt_i);
+            sub[i - lo] = -(1.0 - af) * ke;
+            sup[i - lo] = -(1.0 - af) * ke;
+            rhs[i - lo] = -r[i];
+            used[i] = state[i];
+        }
+        dia[0] += w.kt;
+        dia[nw - 1] += w.kg;
+        tc_thomas(nw, sub, dia, sup, rhs, step, tw);
+        double slope = 0.0;
+        for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
+        double alpha = 1.0, pot_t;
+        for (;;) { /* backtracking (Armijo) line search on Pi_W */
+            for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
+            pot_t = window_eval(&w, dtr, T, state, f, r, &rmax_t);
+            if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
+            alpha *= 0.5;
+        }
+        for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
+        pot = pot_t;
+        rmax = rmax_t;
+        iters += 1;
+        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
+            int same = 1;
+            for (size_t i = lo; i <= hi; ++i)
+                if (state[i] != used[i]) {
+                    same = 0;
+                    break;
+                }
+            if (same) break;
+        }
+    }
+    /* back-substitute the chains, then the Newmark updates of every free node */
+    for (size_t i = lo; i-- > 0;) d[i] = (rho[i] + c * d[i + 1]) * it[i];
+    for (size_t j = hi + 1; j < N; ++j) d[j] = (rho[j] + c * d[j - 1]) * ig[j];
+    const double bdt2 = beta * dt * dt;
+    for (size_t i = 0; i < N; ++i) {
+        const double anew = (x[i] + d[i]) / bdt2;
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+        A[i] = anew;
+        U[i] = U[i] + (shift + d[i]);
+    }
+    U[N] = U[N] + shift;
+    V[N] = vg;
+    A[N] = 0.0;
+    /* forces at the new state: friction (the window's tractions, and the grip node's if it is under the pad) */
+    if (ov[N] > 0.0) {
+        int slipping;
+        double phi;
+        T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
+        state[N] = (signed char)(!slipping ? 1 : 2);
+    }
+    double fr = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        fprev[i] = 0.0;
+        if (ov[i] > 0.0) {
+            contact[i] = 1;
+            Up[i] = Upn[i];
+            if (state[i] != 1) Up[i] = U[i] - T[i] / ks;
+            fprev[i] = T[i] * wT * ov[i];
+            fr += T[i] * wT * ov[i];
+        } else {
+            contact[i] = 0;
+        }
+    }
+    for (size_t e = 0; e < N; ++e) {
+        const double s = U[e + 1] - U[e];
+        fprev[e] -= ke * s;
+        fprev[e + 1] += ke * s;
+    }
+    *fric = fr;
+    *reaction = fprev[N];
+    return iters;
+}
