@@ -135,12 +135,10 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const double cm = (1.0 - am) / (beta * dt * dt);
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;
-    for (size_t i = 0; i < N; ++i) {
+    for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
+    for (size_t i = lo; i <= hi; ++i) {
         x[i] = shift - dt * V[i] - cA * A[i];
         lin[i] = am * m[i] * A[i] + af * fprev[i];
-        dU[i] = U[i + 1] - U[i];
-    }
-    for (size_t i = lo; i < n; ++i) {
         Upn[i] = Up[i];
         d[i] = 0.0;
         if (ov[i] > 0.0) {
@@ -148,16 +146,29 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
             z[i] = (U[i] - Upn[i]) + shift;
         }
     }
-    /* eliminate the tail forwards and the grip side backwards: rho = -(residual at d = 0), reduced */
-    for (size_t i = 0; i < lo; ++i) {
-        const double fel = (i > 0 ? ke * dU[i - 1] : 0.0) - ke * dU[i];
-        rho[i] = -(cm * m[i] * x[i] + lin[i] + (1.0 - af) * fel);
-        if (i > 0) rho[i] += qt[i - 1] * rho[i - 1];
-    }
-    for (size_t j = N - 1; j > hi; --j) {
-        const double fel = ke * dU[j - 1] - ke * dU[j];
-        rho[j] = -(cm * m[j] * x[j] + lin[j] + (1.0 - af) * fel);
-        if (j < N - 1) rho[j] += qg[j + 1] * rho[j + 1];
+    Upn[N] = Up[N];
+    if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
+    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
+     * recurrences are independent, and each node's residual at d = 0 is computed on the way */
+    const size_t nt = lo, ng = N - 1 - hi, nk = nt > ng ? nt : ng;
+    double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
+    for (size_t k = 0; k < nk; ++k) {
+        if (k < nt) {
+            const size_t i = k;
+            x[i] = shift - dt * V[i] - cA * A[i];
+            const double fel = (i > 0 ? ke * dU[i - 1] : 0.0) - ke * dU[i];
+            double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);
+            if (i > 0) r0 += qt[i - 1] * rt;
+            rho[i] = rt = r0;
+        }
+        if (k < ng) {
+            const size_t j = N - 1 - k;
+            x[j] = shift - dt * V[j] - cA * A[j];
+            const double fel = ke * dU[j - 1] - ke * dU[j];
+            double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);
+            if (j < N - 1) r0 += qg[j + 1] * rg;
+            rho[j] = rg = r0;
+        }
     }
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
@@ -172,7 +183,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         w.kg = c;
     }
     double fscale = ke * fabs(dt * vg) + 1e-300;
-    for (size_t i = lo; i < n; ++i) fscale += tmax[i] * wT * ov[i]; /* ov = 0 below the window */
+    for (size_t i = lo; i <= hi; ++i) fscale += tmax[i] * wT * ov[i]; /* ov = 0 outside: those terms are +0 */
+    fscale += tmax[N] * wT * ov[N];
 
     const size_t nw = hi - lo + 1;
     double rmax, rmax_t;
@@ -215,11 +227,28 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
             if (same) break;
         }
     }
-    /* back-substitute the chains, then the Newmark updates of every free node */
-    for (size_t i = lo; i-- > 0;) d[i] = (rho[i] + c * d[i + 1]) * it[i];
-    for (size_t j = hi + 1; j < N; ++j) d[j] = (rho[j] + c * d[j - 1]) * ig[j];
+    /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
     const double bdt2 = beta * dt * dt;
-    for (size_t i = 0; i < N; ++i) {
+    double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
+    for (size_t k = 0; k < nk; ++k) {
+        if (k < nt) {
+            const size_t i = lo - 1 - k;
+            d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
+            const double anew = (x[i] + dt_t) / bdt2;
+            V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+            A[i] = anew;
+            U[i] = U[i] + (shift + dt_t);
+        }
+        if (k < ng) {
+            const size_t j = hi + 1 + k;
+            d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
+            const double anew = (x[j] + dt_g) / bdt2;
+            V[j] = V[j] + dt * ((1.0 - gamma) * A[j] + gamma * anew);
+            A[j] = anew;
+            U[j] = U[j] + (shift + dt_g);
+        }
+    }
+    for (size_t i = lo; i <= hi; ++i) {
         const double anew = (x[i] + d[i]) / bdt2;
         V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
         A[i] = anew;
@@ -235,23 +264,24 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
         state[N] = (signed char)(!slipping ? 1 : 2);
     }
+    /* the elements' forces at every node, then the friction of the nodes under the pad (window and grip node) */
+    fprev[0] = 0.0 - ke * (U[1] - U[0]);
+    for (size_t i = 1; i < N; ++i) fprev[i] = (0.0 + ke * (U[i] - U[i - 1])) - ke * (U[i + 1] - U[i]);
+    fprev[N] = 0.0 + ke * (U[N] - U[N - 1]);
+    memset(contact, 0, n);
     double fr = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-        fprev[i] = 0.0;
-        if (ov[i] > 0.0) {
-            contact[i] = 1;
-            Up[i] = Upn[i];
-            if (state[i] != 1) Up[i] = U[i] - T[i] / ks;
-            fprev[i] = T[i] * wT * ov[i];
-            fr += T[i] * wT * ov[i];
-        } else {
-            contact[i] = 0;
-        }
-    }
-    for (size_t e = 0; e < N; ++e) {
-        const double s = U[e + 1] - U[e];
-        fprev[e] -= ke * s;
-        fprev[e + 1] += ke * s;
+    for (size_t k = lo; k <= hi + 1; ++k) {
+        const size_t i = k <= hi ? k : N; /* the window, then the grip node (hi < N always) */
+        if (!(ov[i] > 0.0)) continue;
+        contact[i] = 1;
+        Up[i] = Upn[i];
+        if (state[i] != 1) Up[i] = U[i] - T[i] / ks;
+        const double fc = T[i] * wT * ov[i];
+        fr += fc;
+        double f_i = fc;
+        if (i > 0) f_i += ke * (U[i] - U[i - 1]);
+        if (i < N) f_i -= ke * (U[i + 1] - U[i]);
+        fprev[i] = f_i;
     }
     *fric = fr;
     *reaction = fprev[N];

@@ -90,8 +90,10 @@ struct tc_stripdraw {
     signed char *contact;
     double time, friction_force, reaction, normal_force, beta_removed;
     long long n_steps, clamp_count;
-    /* derived from U: contact weights (model._w) */
+    /* derived from U: contact weights (model._w), and the first and last node where they are not 0 (w_first >
+     * w_last: none) */
     double *w;
+    size_t w_first, w_last;
     /* work arrays */
     double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *over, *awork;
     double *fwork;          /* explicit: nodal forces */
@@ -139,15 +141,17 @@ void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, d
 void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
                double *work) {
     double *c = work, *d = work + n;
-    c[0] = sup[0] / diag[0];
-    d[0] = rhs[0] / diag[0];
+    double cp = sup[0] / diag[0], dp = rhs[0] / diag[0]; /* the recurrences' carries, kept in registers */
+    c[0] = cp;
+    d[0] = dp;
     for (size_t i = 1; i < n; ++i) {
-        const double m = diag[i] - sub[i] * c[i - 1];
-        c[i] = sup[i] / m;
-        d[i] = (rhs[i] - sub[i] * d[i - 1]) / m;
+        const double m = diag[i] - sub[i] * cp;
+        c[i] = cp = sup[i] / m;
+        d[i] = dp = (rhs[i] - sub[i] * dp) / m;
     }
-    x[n - 1] = d[n - 1];
-    for (size_t i = n - 1; i-- > 0;) x[i] = d[i] - c[i] * x[i + 1];
+    double xp = d[n - 1];
+    x[n - 1] = xp;
+    for (size_t i = n - 1; i-- > 0;) x[i] = xp = d[i] - c[i] * xp;
 }
 
 void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
@@ -241,7 +245,23 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
             }
         }
     }
-    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
+    /* every face carries debris backwards (c > 0: the strip drawn forwards), the matrix is upper bidiagonal:
+     * the forward sweep of tc_thomas reduces to independent divisions (m = diag - 0 c = diag, the same
+     * numbers), which need not wait for each other */
+    int lower = 0;
+    for (size_t k = 1; k < n && !lower; ++k) lower = sub[k] != 0.0;
+    if (lower) {
+        tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
+        return;
+    }
+    double *c = tw, *d = tw + n;
+    for (size_t k = 0; k < n; ++k) {
+        c[k] = sup[k] / diag[k];
+        d[k] = beta[(size_t)lo + k] / diag[k];
+    }
+    double xp = d[n - 1];
+    out[(size_t)lo + n - 1] = xp;
+    for (size_t k = n - 1; k-- > 0;) out[(size_t)lo + k] = xp = d[k] - c[k] * xp;
 }
 
 /* ---------------------------------------------------------------------------------------------------
@@ -352,11 +372,12 @@ static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t
         }
         if (!table_v2(p, m->table))
             return tc_table_mu(m->table, pressure, cnt, v, b, p->table_policy, m->mu, m->clamped, msg);
-        /* mu = mu0 (1 - s A_p / A_c), Eq. 7 with Eq. 6 */
-        int rc = tc_table_lookup(m->table, m->table->particle_area, pressure, cnt, v, b, p->table_policy, m->mu,
-                                 m->clamped, msg);
+        /* mu = mu0 (1 - s A_p / A_c), Eq. 7 with Eq. 6; A_c from the table (one lookup of both) or Eq. 8 */
+        const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
+        int rc = tc_table_lookup2(m->table, m->table->particle_area, eq8 ? NULL : m->table->contact_area, pressure,
+                                  cnt, v, b, p->table_policy, m->mu, m->ac, m->clamped, msg);
         if (rc != TC_OK) return rc;
-        contact_area(p, m->table, pressure, cnt, v, b, m->ac);
+        if (eq8) contact_area(p, m->table, pressure, cnt, v, b, m->ac);
         for (size_t k = 0; k < cnt; ++k) {
             const double share = m->ac[k] > 0 ? p->particle_area_scale * m->mu[k] / m->ac[k] : 0.0;
             const double rest = 1.0 - share;
@@ -371,13 +392,21 @@ static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t
  * the model (model.py)
  * ------------------------------------------------------------------------------------------------- */
 
-static void weights(const tc_stripdraw *m, const double *U, double *w) {
-    tc_sd_overlap(m->n, m->X, U, m->half_le, m->a_lo, m->a_hi, w);
-    for (size_t i = 0; i < m->n; ++i) w[i] = w[i] / m->le;
+/* model._weights into m->w (the overlap of each node's segment with the pad over l_e), and its nonzero range.
+ * An overlap of 0 gives a weight of +0 without the division (bit for bit what 0 / l_e gives). */
+static void update_weights(tc_stripdraw *m) {
+    double *w = m->w;
+    tc_sd_overlap(m->n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
+    m->w_first = 1;
+    m->w_last = 0;
+    for (size_t i = 0; i < m->n; ++i) {
+        if (w[i] == 0.0) continue;
+        w[i] = w[i] / m->le;
+        if (m->w_first > m->w_last) m->w_first = i;
+        m->w_last = i;
+    }
 }
 
-/* StripDrawModel._implicit: one generalized-alpha step of length h with the overlaps ov; when Newton fails,
- * two half steps, the second with the overlaps at the midpoint; at most MAX_HALVINGS levels. */
 /* StripDrawModel._chain: the elimination factors of the free bar for the step length h, kept for the last
  * CHAIN_CACHE step lengths (first in, first out). */
 static const double *chain_for(tc_stripdraw *m, double h) {
@@ -430,8 +459,8 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     if (pressure > 0) {
         /* only nodes that can be under the pad during this interval need mu: the pad slides at most
          * window_courant elements per interval */
-        long long first = -1, last = -1;
-        for (size_t i = 0; i < n; ++i)
+        long long first = -1, last = -1; /* the nodes with w > 0 lie in [w_first, w_last] */
+        for (size_t i = m->w_first; i <= m->w_last && i < n; ++i)
             if (m->w[i] > 0) {
                 if (first < 0) first = (long long)i;
                 last = (long long)i;
@@ -472,19 +501,25 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     double *w0 = m->w; /* the weights at the start of the interval */
     m->w = m->w0;
     m->w0 = w0;
-    weights(m, m->U, m->w);
+    update_weights(m);
     for (size_t i = 0; i < n; ++i) m->weight[i] = 0.5 * (w0[i] + m->w[i]);
     /* transport.transport_step: Archard source (Eq. 37), advection (Eq. 13-14), cap (Eq. 24) */
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
-    for (size_t i = 0; i < n; ++i) m->bsrc[i] = m->beta[i] + kp * fabs(m->dU[i]) * m->weight[i] / hh;
+    for (size_t i = 0; i < n; ++i) {
+        const double a = kp * fabs(m->dU[i]);
+        /* off the pad (weight 0, a finite) the source is 0 / hh = +0: the same sum without the division */
+        m->bsrc[i] = m->weight[i] == 0.0 && isfinite(a) ? m->beta[i] + 0.0 : m->beta[i] + a * m->weight[i] / hh;
+    }
     tc_sd_advect(n, m->bsrc, m->dU, m->weight, p->zeta, m->le, m->bnew, m->awork);
     const double cap = p->beta_threshold > 0 ? m->beta_cap : py_min(m->beta_cap, law_beta_cap(m, pressure, fabs(vg)));
+    int removed = 0;
     for (size_t i = 0; i < n; ++i) {
         const double d = m->bnew[i] - cap;
         m->over[i] = d < 0.0 ? 0.0 : d;                     /* np.maximum(new - cap, 0.0) */
         m->beta[i] = m->bnew[i] > cap ? cap : m->bnew[i]; /* np.minimum(new, cap) */
+        removed |= !(m->over[i] == 0.0);
     }
-    m->beta_removed += tc_pairwise_sum(m->over, n);
+    if (removed) m->beta_removed += tc_pairwise_sum(m->over, n); /* else the sum of zeros, which adds nothing */
     return TC_OK;
 }
 
@@ -647,7 +682,7 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     m->n_steps = (long long)counts[0];
     m->clamp_count = (long long)counts[1];
     memcpy(m->contact, b, n);
-    weights(m, m->U, m->w); /* derived, as set_state recomputes _w */
+    update_weights(m); /* derived, as set_state recomputes _w */
 }
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
@@ -815,7 +850,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
         m->reach = reach < 0 ? -(long long)n : (long long)n;
     /* state */
     for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? beta_field[i] : p->beta_initial;
-    weights(m, m->U, m->w);
+    update_weights(m);
     *out = m;
     return TC_OK;
 }
@@ -850,8 +885,10 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     write_state(m, m->backup);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
-        int finite = isfinite(m->reaction);
-        for (size_t i = 0; finite && i < m->n; ++i) finite = isfinite(m->U[i]);
+        double probe[4] = {0.0, 0.0, 0.0, 0.0}; /* 0 x U is NaN for an infinite or NaN U, else 0 */
+        for (size_t i = 0; i < m->n; i += 4)
+            for (size_t k = 0; k < 4 && i + k < m->n; ++k) probe[k] += 0.0 * m->U[i + k];
+        const int finite = isfinite(m->reaction) && isfinite(probe[0] + probe[1] + probe[2] + probe[3]);
         if (!finite) rc = tc_fail(msg, TC_DISCARD, "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
@@ -866,13 +903,24 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
 void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
     const size_t n = m->n;
     const double fn = m->normal_force;
-    const double wsum = tc_pairwise_sum(m->w, n);
-    double wu = 0.0, wb = 0.0, bmax = m->beta[0];
-    for (size_t i = 0; i < n; ++i) {
+    /* the contact-weighted means over the nodes with a weight (the others add 0; NumPy's w @ U rounds in its own
+     * order anyway: the module docstring of tests/native/test_native_stripdraw.py) */
+    double wsum = 0.0, wu = 0.0, wb = 0.0;
+    for (size_t i = m->w_first; i <= m->w_last && i < n; ++i) {
+        wsum += m->w[i];
         wu += m->w[i] * m->U[i];
         wb += m->w[i] * m->beta[i];
-        if (m->beta[i] > bmax || isnan(m->beta[i])) bmax = m->beta[i]; /* np.max propagates NaN */
     }
+    /* np.max: the largest value, NaN if there is one (four running maxima, so that the compares overlap) */
+    double mx[4] = {m->beta[0], m->beta[0], m->beta[0], m->beta[0]};
+    int nan = 0;
+    for (size_t i = 0; i < n; i += 4)
+        for (size_t k = 0; k < 4 && i + k < n; ++k) {
+            const double b = m->beta[i + k];
+            mx[k] = b > mx[k] ? b : mx[k];
+            nan |= b != b;
+        }
+    const double bmax = nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = m->friction_force;
     out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? m->friction_force / fn : 0.0;

@@ -61,4 +61,11 @@ TC_API int tc_table_lookup(const tc_table *table, const double *values, double p
                            const double *velocity, const double *beta, int policy, double *out,
                            unsigned char *clamped, tc_msg msg);
 
+/* Two arrays of the table at the same queries (A_p and A_c of the strip-draw law), each bit for bit as
+ * tc_table_lookup gives it: the axes are located once per query for both (and the velocity only when it
+ * differs from the query before). values_b and out_b may be NULL (one array). */
+TC_API int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure,
+                            size_t n, const double *velocity, const double *beta, int policy, double *out,
+                            double *out_b, unsigned char *clamped, tc_msg msg);
+
 #endif

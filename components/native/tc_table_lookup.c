@@ -59,8 +59,27 @@ static int domain_error(const char *name, const char *unit, double bad, const do
                    tc_repr_double(bad, r), unit, axis[0], axis[n - 1], unit);
 }
 
-int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n, const double *velocity,
-                    const double *beta, int policy, double *out, unsigned char *clamped, tc_msg msg) {
+/* The P-interpolated (v, beta) plane of one array at the four corners of a cell, then bilinear in (|v|, beta). */
+static double interpolate(const double *m0, const double *m1, double tp, size_t c00, size_t c01, size_t c10,
+                          size_t c11, double tv, double tb) {
+    double p00, p01, p10, p11;
+    if (m1 == NULL) {
+        p00 = m0[c00];
+        p01 = m0[c01];
+        p10 = m0[c10];
+        p11 = m0[c11];
+    } else {
+        p00 = (1.0 - tp) * m0[c00] + tp * m1[c00];
+        p01 = (1.0 - tp) * m0[c01] + tp * m1[c01];
+        p10 = (1.0 - tp) * m0[c10] + tp * m1[c10];
+        p11 = (1.0 - tp) * m0[c11] + tp * m1[c11];
+    }
+    return (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
+}
+
+int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure, size_t n,
+                     const double *velocity, const double *beta, int policy, double *out, double *out_b,
+                     unsigned char *clamped, tc_msg msg) {
     if (policy != TC_TABLE_CLAMP && policy != TC_TABLE_ERROR)
         return tc_fail(msg, TC_ERROR, "table policy = %d is not allowed; choose clamp (%d) or error (%d)", policy,
                        TC_TABLE_CLAMP, TC_TABLE_ERROR);
@@ -75,35 +94,35 @@ int tc_table_lookup(const tc_table *table, const double *values, double pressure
             if (outside(table->beta, nb, beta[k]))
                 return domain_error("beta", "1", beta[k], table->beta, nb, msg);
     }
-    size_t ip, iv, ib;
-    double tp, tv, tb;
+    size_t ip, iv = 0, ib;
+    double tp, tv = 0.0, tb;
     locate(table->pressure, nP, pressure, &ip, &tp);
     const size_t sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
-    const double *m0 = values + ip * nv * nb;                  /* values[ip] */
-    const double *m1 = nP > 1 ? values + (ip + 1) * nv * nb : NULL; /* values[ip + 1] */
+    const size_t plane = nv * nb;
+    const double *m0 = values + ip * plane, *m1 = nP > 1 ? values + (ip + 1) * plane : NULL;
+    const double *b0 = values_b != NULL ? values_b + ip * plane : NULL;
+    const double *b1 = values_b != NULL && nP > 1 ? values_b + (ip + 1) * plane : NULL;
+    int outv = 0;
     for (size_t k = 0; k < n; ++k) {
         const double v = fabs(velocity[k]), b = beta[k];
-        locate(table->velocity, nv, v, &iv, &tv);
+        /* the same velocity as the query before (every node's, under friction_velocity = grip): same cell */
+        if (k == 0 || !(v == fabs(velocity[k - 1]))) {
+            locate(table->velocity, nv, v, &iv, &tv);
+            outv = outside(table->velocity, nv, v);
+        }
         locate(table->beta, nb, b, &ib, &tb);
         const size_t c00 = iv * nb + ib, c01 = iv * nb + ib + sb, c10 = (iv + sv) * nb + ib,
                      c11 = (iv + sv) * nb + ib + sb;
-        double p00, p01, p10, p11; /* the P-interpolated plane at the four corners */
-        if (m1 == NULL) {
-            p00 = m0[c00];
-            p01 = m0[c01];
-            p10 = m0[c10];
-            p11 = m0[c11];
-        } else {
-            p00 = (1.0 - tp) * m0[c00] + tp * m1[c00];
-            p01 = (1.0 - tp) * m0[c01] + tp * m1[c01];
-            p10 = (1.0 - tp) * m0[c10] + tp * m1[c10];
-            p11 = (1.0 - tp) * m0[c11] + tp * m1[c11];
-        }
-        out[k] = (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
-        if (clamped != NULL)
-            clamped[k] = (unsigned char)(outp || outside(table->velocity, nv, v) || outside(table->beta, nb, b));
+        out[k] = interpolate(m0, m1, tp, c00, c01, c10, c11, tv, tb);
+        if (b0 != NULL) out_b[k] = interpolate(b0, b1, tp, c00, c01, c10, c11, tv, tb);
+        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outside(table->beta, nb, b));
     }
     return TC_OK;
+}
+
+int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n, const double *velocity,
+                    const double *beta, int policy, double *out, unsigned char *clamped, tc_msg msg) {
+    return tc_table_lookup2(table, values, NULL, pressure, n, velocity, beta, policy, out, NULL, clamped, msg);
 }
 
 int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity, const double *beta,

@@ -39,7 +39,10 @@ over c, the recurrences have no cancellation:
     grip side:  g_{N-1} = cm m_{N-1} + c,  g_j = cm m_j + q'_{j+1} g_{j+1}, q'_j = c / (c + g_j),
 
 and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
-element to the grip node itself).
+element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
+d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
+Both chains are swept side by side (they are independent), with each node's residual and Newmark update
+computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
 
 The cost of a step is one pass over the free nodes plus Newton on the window (~70 of the default 451
 nodes), where the monolithic solve (the whole bar in every Newton iteration) cost a pass over all nodes per
@@ -145,26 +148,36 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
     d = np.zeros(n)
     rho = np.zeros(n)
     for i in range(N):
-        x[i] = shift - dt * V[i] - cA * A[i]
-        lin[i] = am * m[i] * A[i] + af * fprev[i]
         dU[i] = U[i + 1] - U[i]
     Upn = Up.copy()
-    for i in range(lo, n):
+    for i in range(lo, hi + 1):
+        x[i] = shift - dt * V[i] - cA * A[i]
+        lin[i] = am * m[i] * A[i] + af * fprev[i]
         if ov[i] > 0.0:
             if contact[i] == 0:
                 Upn[i] = U[i]  # nodes entering the pad start stress-free
             z[i] = (U[i] - Upn[i]) + shift
-    # eliminate the tail forwards and the grip side backwards: rho = -(residual at d = 0), reduced
-    for i in range(lo):
-        fel = (ke * dU[i - 1] if i > 0 else 0.0) - ke * dU[i]
-        rho[i] = -(cm * m[i] * x[i] + lin[i] + (1.0 - af) * fel)
-        if i > 0:
-            rho[i] += qt[i - 1] * rho[i - 1]
-    for j in range(N - 1, hi, -1):
-        fel = ke * dU[j - 1] - ke * dU[j]
-        rho[j] = -(cm * m[j] * x[j] + lin[j] + (1.0 - af) * fel)
-        if j < N - 1:
-            rho[j] += qg[j + 1] * rho[j + 1]
+    if ov[N] > 0.0 and contact[N] == 0:
+        Upn[N] = U[N]
+    # eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
+    # recurrences are independent, and each node's residual at d = 0 is computed on the way
+    nt = lo
+    ng = N - 1 - hi
+    for k in range(max(nt, ng)):
+        if k < nt:
+            i = k
+            x[i] = shift - dt * V[i] - cA * A[i]
+            fel = (ke * dU[i - 1] if i > 0 else 0.0) - ke * dU[i]
+            rho[i] = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel)
+            if i > 0:
+                rho[i] += qt[i - 1] * rho[i - 1]
+        if k < ng:
+            j = N - 1 - k
+            x[j] = shift - dt * V[j] - cA * A[j]
+            fel = ke * dU[j - 1] - ke * dU[j]
+            rho[j] = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel)
+            if j < N - 1:
+                rho[j] += qg[j + 1] * rho[j + 1]
     st = 0.0
     kt = 0.0
     if lo > 0:
@@ -177,8 +190,9 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         sg = -c * dU[hi]
         kg = c
     fscale = ke * abs(dt * vg) + 1e-300
-    for i in range(lo, n):  # ov = 0 below the window: the terms left out are +0.0
+    for i in range(lo, hi + 1):  # ov = 0 outside the window and the grip node: those terms are +0.0
         fscale += tmax[i] * wT * ov[i]
+    fscale += tmax[N] * wT * ov[N]
     T = np.zeros(n)
     state = np.zeros(n, np.int8)
     used = np.zeros(n, np.int8)
@@ -231,13 +245,24 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
                     break
             if same:
                 break
-    # back-substitute the chains, then the Newmark updates of every free node
-    for i in range(lo - 1, -1, -1):
-        d[i] = (rho[i] + c * d[i + 1]) * it_[i]
-    for j in range(hi + 1, N):
-        d[j] = (rho[j] + c * d[j - 1]) * ig[j]
+    # back-substitute the chains (side by side, as above), each node's Newmark update on the way
     bdt2 = beta * dt * dt
-    for i in range(N):
+    for k in range(max(nt, ng)):
+        if k < nt:
+            i = lo - 1 - k
+            d[i] = rho[i] * it_[i] + qt[i] * d[i + 1]
+            anew = (x[i] + d[i]) / bdt2
+            V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew)
+            A[i] = anew
+            U[i] = U[i] + (shift + d[i])
+        if k < ng:
+            j = hi + 1 + k
+            d[j] = rho[j] * ig[j] + qg[j] * d[j - 1]
+            anew = (x[j] + d[j]) / bdt2
+            V[j] = V[j] + dt * ((1.0 - gamma) * A[j] + gamma * anew)
+            A[j] = anew
+            U[j] = U[j] + (shift + d[j])
+    for i in range(lo, hi + 1):
         anew = (x[i] + d[i]) / bdt2
         V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew)
         A[i] = anew
@@ -250,22 +275,29 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         t, slipping, _ = _interface_law_k(U[N] - Upn[N], ks, tmax[N])
         T[N] = t
         state[N] = 1 if not slipping else 2
+    # the elements' forces at every node, then the friction of the nodes under the pad (window and grip node)
+    fprev[0] = 0.0 - ke * (U[1] - U[0])
+    for i in range(1, N):
+        fprev[i] = (0.0 + ke * (U[i] - U[i - 1])) - ke * (U[i + 1] - U[i])
+    fprev[N] = 0.0 + ke * (U[N] - U[N - 1])
+    contact[:] = 0
     fric = 0.0
-    for i in range(n):
-        fprev[i] = 0.0
-        if ov[i] > 0.0:
-            contact[i] = 1
-            Up[i] = Upn[i]
-            if state[i] != 1:
-                Up[i] = U[i] - T[i] / ks
-            fprev[i] = T[i] * wT * ov[i]
-            fric += T[i] * wT * ov[i]
-        else:
-            contact[i] = 0
-    for e in range(N):
-        s = U[e + 1] - U[e]
-        fprev[e] -= ke * s
-        fprev[e + 1] += ke * s
+    for k in range(lo, hi + 2):
+        i = k if k <= hi else N  # the window, then the grip node (hi < N always)
+        if not ov[i] > 0.0:
+            continue
+        contact[i] = 1
+        Up[i] = Upn[i]
+        if state[i] != 1:
+            Up[i] = U[i] - T[i] / ks
+        fc = T[i] * wT * ov[i]
+        fric += fc
+        f_i = fc
+        if i > 0:
+            f_i += ke * (U[i] - U[i - 1])
+        if i < N:
+            f_i -= ke * (U[i + 1] - U[i])
+        fprev[i] = f_i
     return iters, fric, fprev[N]
 
 
@@ -356,9 +388,9 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
     d = np.zeros(n)
     d[W] = dw
     for i in range(lo - 1, -1, -1):
-        d[i] = (rho[i] + c * d[i + 1]) * it_[i]
+        d[i] = rho[i] * it_[i] + qt[i] * d[i + 1]
     for j in range(hi + 1, N):
-        d[j] = (rho[j] + c * d[j - 1]) * ig[j]
+        d[j] = rho[j] * ig[j] + qg[j] * d[j - 1]
     anew = (x + d[:N]) / (beta * dt * dt)
     V[:N] = V[:N] + dt * ((1.0 - gamma) * A[:N] + gamma * anew)
     A[:N] = anew
