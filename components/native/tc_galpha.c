@@ -52,13 +52,8 @@ void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double 
 /* galpha._window */
 static void window(size_t n, const double *ov, size_t *lo_out, size_t *hi_out) {
     const size_t N = n - 1;
-    size_t lo = n, hi = n;
-    for (size_t i = 0; i < n; ++i)
-        if (ov[i] > 0.0) {
-            if (lo == n) lo = i;
-            hi = i;
-        }
-    if (lo == n || lo > N - 1) {
+    size_t lo, hi;
+    if (!tc_sd_positive_range(n, ov, &lo, &hi) || lo > N - 1) {
         *lo_out = *hi_out = N - 1;
         return;
     }

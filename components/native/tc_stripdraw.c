@@ -138,6 +138,17 @@ void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, d
     }
 }
 
+int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last) {
+    size_t i = 0;
+    while (i < n && !(a[i] > 0.0)) ++i;
+    if (i == n) return 0;
+    size_t j = n - 1;
+    while (!(a[j] > 0.0)) --j;
+    *first = i;
+    *last = j;
+    return 1;
+}
+
 void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
                double *work) {
     double *c = work, *d = work + n;
@@ -217,14 +228,9 @@ void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, 
 void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
                   double element_length, double *out, double *work) {
     memcpy(out, beta, n_all * sizeof *out);
-    long long lo = -1, hi = -1; /* the pad covers one contiguous run of nodes */
-    for (size_t i = 0; i < n_all; ++i)
-        if (weight[i] > 0.0) {
-            if (lo < 0) lo = (long long)i;
-            hi = (long long)i + 1;
-        }
-    if (zeta == 0.0 || lo < 0 || hi - lo < 2) return;
-    const size_t n = (size_t)(hi - lo);
+    size_t lo, last; /* the pad covers one contiguous run of nodes */
+    if (zeta == 0.0 || !tc_sd_positive_range(n_all, weight, &lo, &last) || last - lo < 1) return;
+    const size_t n = last + 1 - lo;
     double *diag = work, *sub = work + n, *sup = work + 2 * n, *tw = work + 3 * n;
     for (size_t k = 0; k < n; ++k) {
         diag[k] = 1.0;
@@ -459,14 +465,11 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     if (pressure > 0) {
         /* only nodes that can be under the pad during this interval need mu: the pad slides at most
          * window_courant elements per interval */
-        long long first = -1, last = -1; /* the nodes with w > 0 lie in [w_first, w_last] */
-        for (size_t i = m->w_first; i <= m->w_last && i < n; ++i)
-            if (m->w[i] > 0) {
-                if (first < 0) first = (long long)i;
-                last = (long long)i;
-            }
+        size_t f, l; /* the nodes with w > 0, which lie in [w_first, w_last] */
         long long lo = 0, hi = (long long)n;
-        if (first >= 0) {
+        if (m->w_first <= m->w_last &&
+            tc_sd_positive_range(m->w_last + 1 - m->w_first, m->w + m->w_first, &f, &l)) {
+            const long long first = (long long)(m->w_first + f), last = (long long)(m->w_first + l);
             lo = first - m->reach > 0 ? first - m->reach : 0;
             hi = last + 1 + m->reach < (long long)n ? last + 1 + m->reach : (long long)n;
         }

@@ -90,6 +90,10 @@ TC_API double tc_stripdraw_explicit_time_step(const tc_stripdraw *m);
 TC_API void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                           double *ov);
 
+/* kernels.positive_range: the first and last index k < n with a[k] > 0 (the pad's nodes); returns 0 when there is
+ * none (then *first and *last are not written). */
+TC_API int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last);
+
 /* kernels._thomas_loop: tridiagonal solve; work holds 2 n doubles; x must not alias the inputs. */
 TC_API void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs,
                       double *x, double *work);

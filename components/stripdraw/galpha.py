@@ -48,14 +48,22 @@ The cost of a step is one pass over the free nodes plus Newton on the window (~7
 nodes), where the monolithic solve (the whole bar in every Newton iteration) cost a pass over all nodes per
 iteration and line-search trial. ``tests/components/test_stripdraw_galpha.py`` holds this step against a
 monolithic Newton solve of the same Pi (the same minimiser) and the loop form against the NumPy form; the
-native model (tc_stripdraw.c) follows the loop form operation by operation.
+native model (tc_galpha.c) follows the loop form operation by operation.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .kernels import USE_NUMBA, _interface_law_k, _thomas_k, interface_law, jit, thomas_numpy
+from tribocosim.components.stripdraw.kernels import (
+    USE_NUMBA,
+    _interface_law_k,
+    _positive_range_k,
+    _thomas_k,
+    interface_law,
+    jit,
+    thomas_numpy,
+)
 
 
 def _chain_factors(cm, m, c):
@@ -81,15 +89,8 @@ def _chain_factors(cm, m, c):
 def _window(ov):
     """First and last node of the window: the nodes with ov > 0 and the free nodes between them, free
     nodes only (<= N-1); node N-1 alone when no free node touches the pad."""
-    n = ov.size
-    N = n - 1
-    lo = -1
-    hi = -1
-    for i in range(n):
-        if ov[i] > 0.0:
-            if lo < 0:
-                lo = i
-            hi = i
+    N = ov.size - 1
+    lo, hi = _positive_range_k(ov)
     if lo < 0 or lo > N - 1:
         return N - 1, N - 1
     return lo, min(hi, N - 1)

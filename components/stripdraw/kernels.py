@@ -61,6 +61,18 @@ def overlap_numpy(X, U, half_le, a_lo, a_hi):
     return np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo))
 
 
+def positive_range(a):
+    """First and last index i with a[i] > 0 (loop form; (-1, -1) when there is none): the pad's nodes."""
+    first = -1
+    last = -1
+    for i in range(a.size):
+        if a[i] > 0.0:
+            if first < 0:
+                first = i
+            last = i
+    return first, last
+
+
 def interface_law(x, ks, tmax):
     """The interface law (Eq. 4-5), the one place it is written: elastic-perfectly-plastic Coulomb.
 
@@ -186,6 +198,7 @@ def thomas_numpy(sub, diag, sup, rhs):
 
 
 _thomas_k = jit(_thomas_loop)
+_positive_range_k = jit(positive_range)
 _interface_law_k = jit(interface_law)
 if USE_NUMBA:
     explicit_kernel = jit(_explicit_loop)

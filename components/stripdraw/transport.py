@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tribocosim.components.stripdraw.kernels import USE_NUMBA, jit, thomas
+from tribocosim.components.stripdraw.kernels import USE_NUMBA, _positive_range_k, jit, thomas
 
 
 def archard_source(dU, weight, pressure, archard_k, hardness, particle_thickness):
@@ -87,14 +87,8 @@ def advect_implicit_numpy(beta, dU, weight, zeta, element_length):
 def _advect_loop(beta, dU, weight, zeta, element_length):
     """Loop form of :func:`advect_implicit_numpy` (compiled with numba; same result)."""
     out = beta.copy()
-    n_all = beta.size
-    lo = -1
-    hi = -1
-    for i in range(n_all):
-        if weight[i] > 0.0:
-            if lo < 0:
-                lo = i
-            hi = i + 1
+    lo, last = _positive_range_k(weight)  # the pad covers one contiguous run of nodes
+    hi = last + 1
     if zeta == 0.0 or lo < 0 or hi - lo < 2:
         return out
     n = hi - lo

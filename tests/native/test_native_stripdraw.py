@@ -106,6 +106,22 @@ def _midrun_model(table, integrator="implicit", steps=30, **kw):
     return m
 
 
+def test_positive_range_is_the_loop_forms(native_core):
+    """tc_sd_positive_range against kernels.positive_range and against np.flatnonzero: none, one, a run with a
+    gap, NaN (not positive), the ends."""
+    rng = np.random.default_rng(5)
+    cases = [np.zeros(7), np.r_[0.0, 0.0, 2.0, 0.0], np.r_[1.0, 0.0, 3.0, 0.0, 4.0], np.r_[np.nan, 0.5, np.nan],
+             np.r_[-1.0, -0.0, 0.0]] + [np.where(rng.random(40) < 0.3, rng.random(40), 0.0) for _ in range(20)]
+    for a in cases:
+        first, last = ctypes.c_size_t(), ctypes.c_size_t()
+        found = native_core.lib.tc_sd_positive_range(a.size, ptr(a), ctypes.byref(first), ctypes.byref(last))
+        nz = np.flatnonzero(a > 0)
+        assert kernels.positive_range(a) == ((nz[0], nz[-1]) if nz.size else (-1, -1))
+        assert found == (nz.size > 0)
+        if nz.size:
+            assert (first.value, last.value) == (nz[0], nz[-1])
+
+
 def test_overlap_is_bit_identical_to_numpy(native_core):
     rng = np.random.default_rng(1)
     X = np.linspace(0.0, 0.1, 101)
