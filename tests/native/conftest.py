@@ -116,6 +116,8 @@ class Core:
             "tc_table_set_areas": (_int, [_vp, _dbl_p, _dbl_p, _dbl_p, _dbl_p, Msg]),
             "tc_table_free": (None, [_vp]),
             "tc_table_mu": (_int, [_vp, _dbl, _size, _dbl_p, _dbl_p, _int, _dbl_p, _ubyte_p, Msg]),
+            "tc_table_lookup2": (_int, [_vp, _dbl_p, _dbl_p, _dbl, _size, _dbl_p, _dbl_p, _int, _dbl_p, _dbl_p, _ubyte_p,
+                                        Msg]),
             "tc_stripdraw_create": (_int, [ctypes.POINTER(self.StripDrawParams), _vp, _dbl_p, _size,
                                            ctypes.POINTER(_vp), Msg]),
             "tc_stripdraw_free": (None, [_vp]),
@@ -222,6 +224,18 @@ class NativeTable:
         self.core.check(self.core.lib.tc_table_mu(self.handle, pressure, v.size, _ptr(v), _ptr(b), policy, _ptr(mu),
                                                   _ptr(clamped, _ubyte_p), self.core.msg()))
         return mu, clamped.astype(bool)
+
+    def lookup2(self, a, b_values, pressure: float, velocity, beta, policy: int):
+        """tc_table_lookup2 of two arrays laid out like mu -> (a, b, clamped); raises NativeError."""
+        a, b_values = (np.ascontiguousarray(x, dtype=float) for x in (a, b_values))
+        v = np.ascontiguousarray(velocity, dtype=float)
+        b = np.ascontiguousarray(beta, dtype=float)
+        out_a, out_b = np.zeros(v.size), np.zeros(v.size)
+        clamped = np.zeros(v.size, dtype=np.uint8)
+        self.core.check(self.core.lib.tc_table_lookup2(self.handle, _ptr(a), _ptr(b_values), pressure, v.size, _ptr(v),
+                                                       _ptr(b), policy, _ptr(out_a), _ptr(out_b),
+                                                       _ptr(clamped, _ubyte_p), self.core.msg()))
+        return out_a, out_b, clamped.astype(bool)
 
     def __del__(self):
         if getattr(self, "handle", None):

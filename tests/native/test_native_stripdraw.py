@@ -236,6 +236,10 @@ def test_advection_is_bit_identical_to_the_loop_form(native_core):
         weight[lo:hi + 1] = rng.uniform(0.2, 1.0, hi + 1 - lo)
         if case == 3:
             weight[lo + (hi - lo) // 2] = 0.0  # a gap: that face carries no flux
+        if case in (6, 7, 8):  # drawn forwards: every face carries debris backwards (upper bidiagonal system)
+            dU = np.abs(dU)
+        elif case == 9:
+            dU = -np.abs(dU)
         zeta = 0.0 if case == 5 else 0.2
         out, work = np.zeros(n), np.zeros(5 * n)
         native_core.lib.tc_sd_advect(n, ptr(beta), ptr(dU), ptr(weight), zeta, 5e-4, ptr(out), ptr(work))
@@ -268,6 +272,22 @@ def test_table_lookup_is_bit_identical_to_interpolate(native_core, table):
             mu, clamped = nt.mu(pressure, v, b, 0)
             np.testing.assert_array_equal(mu, mu_ref, err_msg=f"{label}, P = {pressure}")
             np.testing.assert_array_equal(clamped, clamped_ref, err_msg=f"{label}, P = {pressure}")
+
+
+def test_two_array_lookup_is_bit_identical_to_interpolate_array(native_core, table):
+    """tc_table_lookup2 (A_p and A_c at once, the axes located once, the velocity only when it changes) gives each
+    array as FrictionTable.interpolate_array does, with one velocity for all queries (friction_velocity = grip)
+    and with runs of equal and changing velocities (slip_rate), inside and outside the axes."""
+    rng = np.random.default_rng(8)
+    nt = native_core.table(table)
+    for pressure in (*table.pressure, 0.5e6, 1.7e6, 4e7, *rng.uniform(1e6, 3e7, 3)):
+        b = np.concatenate([table.beta, rng.uniform(-0.1, 1.2, 40)])
+        for v in (np.full(b.size, 0.08), np.full(b.size, -70.0), np.repeat(rng.uniform(-60, 60, b.size // 4 + 1), 4)[:b.size]):
+            ap, ac, clamped = nt.lookup2(table.particle_area, table.contact_area, pressure, v, b, 0)
+            for got, arr in ((ap, table.particle_area), (ac, table.contact_area)):
+                ref, clamped_ref = table.interpolate_array(arr, pressure, v, b, "clamp")
+                np.testing.assert_array_equal(got, ref, err_msg=f"P = {pressure}")
+                np.testing.assert_array_equal(clamped, clamped_ref, err_msg=f"P = {pressure}")
 
 
 def test_table_lookup_error_policy_refuses_like_python(native_core, table):
