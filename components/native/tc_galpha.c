@@ -259,10 +259,13 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
         state[N] = (signed char)(!slipping ? 1 : 2);
     }
-    /* the elements' forces at every node, then the friction of the nodes under the pad (window and grip node) */
-    fprev[0] = 0.0 - ke * (U[1] - U[0]);
-    for (size_t i = 1; i < N; ++i) fprev[i] = (0.0 + ke * (U[i] - U[i - 1])) - ke * (U[i + 1] - U[i]);
-    fprev[N] = 0.0 + ke * (U[N] - U[N - 1]);
+    /* the elements' extensions at the new state from the increments (galpha.py: not from the updated U), their
+     * forces at every node, then the friction of the nodes under the pad (window and grip node) */
+    d[N] = 0.0;
+    for (size_t e = 0; e < N; ++e) dU[e] = dU[e] + (d[e + 1] - d[e]);
+    fprev[0] = 0.0 - ke * dU[0];
+    for (size_t i = 1; i < N; ++i) fprev[i] = (0.0 + ke * dU[i - 1]) - ke * dU[i];
+    fprev[N] = 0.0 + ke * dU[N - 1];
     memset(contact, 0, n);
     double fr = 0.0;
     for (size_t k = lo; k <= hi + 1; ++k) {
@@ -274,8 +277,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         const double fc = T[i] * wT * ov[i];
         fr += fc;
         double f_i = fc;
-        if (i > 0) f_i += ke * (U[i] - U[i - 1]);
-        if (i < N) f_i -= ke * (U[i + 1] - U[i]);
+        if (i > 0) f_i += ke * dU[i - 1];
+        if (i < N) f_i -= ke * dU[i];
         fprev[i] = f_i;
     }
     *fric = fr;

@@ -276,11 +276,16 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         t, slipping, _ = _interface_law_k(U[N] - Upn[N], ks, tmax[N])
         T[N] = t
         state[N] = 1 if not slipping else 2
-    # the elements' forces at every node, then the friction of the nodes under the pad (window and grip node)
-    fprev[0] = 0.0 - ke * (U[1] - U[0])
+    # the elements' extensions at the new state from the increments (not from the updated U, whose rounding
+    # to draw-sized values would make the forces jump by ~k_e ulp(U) between nearby inputs), their forces at
+    # every node, then the friction of the nodes under the pad (window and grip node)
+    d[N] = 0.0
+    for e in range(N):
+        dU[e] = dU[e] + (d[e + 1] - d[e])
+    fprev[0] = 0.0 - ke * dU[0]
     for i in range(1, N):
-        fprev[i] = (0.0 + ke * (U[i] - U[i - 1])) - ke * (U[i + 1] - U[i])
-    fprev[N] = 0.0 + ke * (U[N] - U[N - 1])
+        fprev[i] = (0.0 + ke * dU[i - 1]) - ke * dU[i]
+    fprev[N] = 0.0 + ke * dU[N - 1]
     contact[:] = 0
     fric = 0.0
     for k in range(lo, hi + 2):
@@ -295,9 +300,9 @@ def _galpha_loop(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
         fric += fc
         f_i = fc
         if i > 0:
-            f_i += ke * (U[i] - U[i - 1])
+            f_i += ke * dU[i - 1]
         if i < N:
-            f_i -= ke * (U[i + 1] - U[i])
+            f_i -= ke * dU[i]
         fprev[i] = f_i
     return iters, fric, fprev[N]
 
@@ -411,7 +416,7 @@ def galpha_numpy(dt, U, V, A, Up, contact, fprev, ov, m, ke, ks, wT, tmax, vg, a
     slip_in = inside & ~stick
     Up[slip_in] = U[slip_in] - Tall[slip_in] / ks
     contact[:] = inside
-    s = np.diff(U)
+    s = dU + np.diff(d)  # the extensions from the increments (d_N = 0), as the loop form
     fprev[:] = F
     fprev[:-1] -= ke * s
     fprev[1:] += ke * s

@@ -218,3 +218,26 @@ def test_a_whole_draw_matches_the_monolithic_solver():
             sdmodel.galpha.galpha_kernel = kernel
     assert_allclose(out_a, out_b, rtol=1e-9)
     assert_allclose(a.U, b.U, rtol=0, atol=1e-15)
+
+
+def test_pull_force_is_smooth_in_the_inputs_at_the_rounding_level():
+    """Late in a draw (U ~ 0.1 m) and without friction, the pull force is a small difference of element
+    forces; computed from the updated displacements it would jump by ~k_e ulp(U) ~ 1e-7 N between inputs one
+    ulp apart, which stalls a co-simulation master's fixed point at 1e-8 relative tolerance (measured on the
+    stability report's 0.99 p_crit row before the extensions were taken from the increments). Stepping the same
+    state with grip velocities whose grip displacements are a few ulps of U apart, the pull force must follow a straight line to 1e-11 N."""
+    p = StripDrawParameters(friction_model="constant", mu_const=0.0, draw_length=0.12, n_elements=120)
+    model = StripDrawModel(p, make_friction_law(p))
+    fn = 1e7 * 0.035**2
+    for k in range(13):
+        model.step(0.1, {"normal_force": fn, "grip_velocity": 0.08 * min(1.0, (k + 1) / 3)})
+    assert model.U[-1] > 0.09
+    saved = model.get_state()
+    dv = np.arange(-8, 9) * 1e-14  # the grip moves by dt dv: up to ~6 ulps of U
+    pulls = []
+    for d in dv:
+        model.set_state(saved)
+        pulls.append(model.step(1e-3, {"normal_force": fn, "grip_velocity": 0.08 + d})["pull_force"])
+    pulls = np.array(pulls)
+    line = np.polyval(np.polyfit(dv, pulls, 1), dv)
+    assert np.abs(pulls - line).max() < 1e-10, np.abs(pulls - line).max()
