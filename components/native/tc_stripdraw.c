@@ -101,6 +101,8 @@ struct tc_stripdraw {
     double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
     double chain_h[CHAIN_CACHE];
     int chain_used, chain_next;
+    double cap_pressure, cap_speed, cap_value; /* law_beta_cap of the last (P, |V0|), when cap_known */
+    int cap_known;
     unsigned char *clamped; /* table lookups flagged as clamped */
     signed char *giwork;
     unsigned char *backup; /* the state before the current step */
@@ -342,9 +344,17 @@ static double law_beta_threshold(const tc_stripdraw_params *p, const tc_table *t
 
 /* law.beta_cap(P, |V0|): a version 2 table's crossing at the interval's pressure and speed (the threshold
  * without pressure); every other law's threshold. */
-static double law_beta_cap(const tc_stripdraw *m, double pressure, double speed) {
-    if (m->table != NULL && table_v2(&m->p, m->table) && pressure > 0)
-        return crossing(&m->p, m->table, pressure, speed);
+static double law_beta_cap(tc_stripdraw *m, double pressure, double speed) {
+    if (m->table != NULL && table_v2(&m->p, m->table) && pressure > 0) {
+        /* a function of (P, |V0|) alone: kept for the last pair (a draw repeats it interval after interval) */
+        if (!(m->cap_known && pressure == m->cap_pressure && speed == m->cap_speed)) {
+            m->cap_value = crossing(&m->p, m->table, pressure, speed);
+            m->cap_pressure = pressure;
+            m->cap_speed = speed;
+            m->cap_known = 1;
+        }
+        return m->cap_value;
+    }
     return m->law_threshold;
 }
 
