@@ -154,13 +154,24 @@ int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last)
 void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
                double *work) {
     double *c = work, *d = work + n;
-    double cp = sup[0] / diag[0], dp = rhs[0] / diag[0]; /* the recurrences' carries, kept in registers */
-    c[0] = cp;
-    d[0] = dp;
-    for (size_t i = 1; i < n; ++i) {
-        const double m = diag[i] - sub[i] * cp;
-        c[i] = cp = sup[i] / m;
-        d[i] = dp = (rhs[i] - sub[i] * dp) / m;
+    /* with no subdiagonal (the advection of debris on a strip drawn forwards) m = diag - 0 c = diag, the same
+     * numbers: the forward sweep reduces to divisions that need not wait for each other */
+    int lower = 0;
+    for (size_t i = 1; i < n && !lower; ++i) lower = sub[i] != 0.0;
+    if (!lower) {
+        for (size_t i = 0; i < n; ++i) {
+            c[i] = sup[i] / diag[i];
+            d[i] = rhs[i] / diag[i];
+        }
+    } else {
+        double cp = sup[0] / diag[0], dp = rhs[0] / diag[0]; /* the recurrences' carries, kept in registers */
+        c[0] = cp;
+        d[0] = dp;
+        for (size_t i = 1; i < n; ++i) {
+            const double m = diag[i] - sub[i] * cp;
+            c[i] = cp = sup[i] / m;
+            d[i] = dp = (rhs[i] - sub[i] * dp) / m;
+        }
     }
     double xp = d[n - 1];
     x[n - 1] = xp;
@@ -253,23 +264,7 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
             }
         }
     }
-    /* every face carries debris backwards (c > 0: the strip drawn forwards), the matrix is upper bidiagonal:
-     * the forward sweep of tc_thomas reduces to independent divisions (m = diag - 0 c = diag, the same
-     * numbers), which need not wait for each other */
-    int lower = 0;
-    for (size_t k = 1; k < n && !lower; ++k) lower = sub[k] != 0.0;
-    if (lower) {
-        tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
-        return;
-    }
-    double *c = tw, *d = tw + n;
-    for (size_t k = 0; k < n; ++k) {
-        c[k] = sup[k] / diag[k];
-        d[k] = beta[(size_t)lo + k] / diag[k];
-    }
-    double xp = d[n - 1];
-    out[(size_t)lo + n - 1] = xp;
-    for (size_t k = n - 1; k-- > 0;) out[(size_t)lo + k] = xp = d[k] - c[k] * xp;
+    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
 }
 
 /* ---------------------------------------------------------------------------------------------------
