@@ -132,3 +132,16 @@ double tc_pairwise_sum(const double *a, size_t n) {
     n2 -= n2 % 8;
     return tc_pairwise_sum(a, n2) + tc_pairwise_sum(a + n2, n - n2);
 }
+
+static double pairwise_in(const double *a, size_t n, long long lo, long long hi) {
+    if (hi < 0 || lo >= (long long)n) return 0.0; /* only +0 terms here */
+    if (n <= 128) return tc_pairwise_sum(a, n);
+    size_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return pairwise_in(a, n2, lo, hi) + pairwise_in(a + n2, n - n2, lo - (long long)n2, hi - (long long)n2);
+}
+
+double tc_pairwise_sum_range(const double *a, size_t n, size_t lo, size_t hi) {
+    if (lo > hi) return 0.0;
+    return pairwise_in(a, n, (long long)lo, (long long)hi);
+}

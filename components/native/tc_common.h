@@ -43,7 +43,12 @@ int tc_fail(tc_msg msg, int status, const char *fmt, ...)
     ;
 
 /* NumPy's pairwise summation of a contiguous float64 array, as np.sum reduces it (sums match bit for bit). */
-double tc_pairwise_sum(const double *a, size_t n);
+TC_API double tc_pairwise_sum(const double *a, size_t n);
+
+/* tc_pairwise_sum of an array that is +0 outside [lo, hi] and holds no -0: the blocks of the summation that lie
+ * wholly outside sum to +0 and adding +0 changes no partial sum, so they are skipped (the same value, bit for
+ * bit, in O(hi - lo + log n)). */
+TC_API double tc_pairwise_sum_range(const double *a, size_t n, size_t lo, size_t hi);
 
 /* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
 #define TC_REPR_SIZE 32

@@ -94,6 +94,13 @@ struct tc_stripdraw {
      * w_last: none) */
     double *w;
     size_t w_first, w_last;
+    /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates; model._interval divides
+     * at every interval, and the rates are read only by the slip-rate friction law and the state image) */
+    double slip_h, backup_slip_h;
+    /* every beta <= beta_hi and none is -0 (NaN: not known), so a cap >= beta_hi changes no node away from the
+     * pad (interval); over may be nonzero only in [over_lo, over_hi] */
+    double beta_hi;
+    size_t over_lo, over_hi;
     /* work arrays */
     double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *over, *awork;
     double *fwork;          /* explicit: nodal forces */
@@ -128,16 +135,20 @@ static double py_min(double a, double b) { return b < a ? b : a; }
 
 void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                    double *ov) {
-    for (size_t i = 0; i < n; ++i) {
+    /* np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo)) of the segment [lo, hi]; NaN propagates as
+     * in NumPy */
+#define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
+    if (n == 0) return;
+    for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
         const double x = X[i] + U[i];
-        const double lo = i == 0 ? x : x - half_le;
-        const double hi = i == n - 1 ? x : x + half_le;
-        /* np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo)); NaN propagates as in NumPy */
-        const double top = hi > a_hi ? a_hi : hi;
-        const double bottom = lo < a_lo ? a_lo : lo;
-        const double d = top - bottom;
+        const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
         ov[i] = d < 0.0 ? 0.0 : d;
     }
+    const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
+    const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
+    ov[0] = d0 < 0.0 ? 0.0 : d0;
+    if (n > 1) ov[n - 1] = dn < 0.0 ? 0.0 : dn;
+#undef TC_SD_OVERLAP
 }
 
 int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last) {
@@ -353,12 +364,20 @@ static double law_beta_cap(tc_stripdraw *m, double pressure, double speed) {
     return m->law_threshold;
 }
 
+/* the slip rates of the last interval, |dU| / h (model._interval), into slip_rate if they are not there */
+static void form_slip_rates(tc_stripdraw *m) {
+    if (!(m->slip_h > 0)) return;
+    for (size_t i = 0; i < m->n; ++i) m->slip_rate[i] = fabs(m->dU[i]) / m->slip_h;
+    m->slip_h = 0.0;
+}
+
 /* mu of the nodes lo..lo+cnt-1 at pressure P (law.mu with the velocity model.py passes), flags of clamped
  * table lookups into m->clamped. */
 static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t cnt, tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
     const int grip = p->friction_velocity == TC_STRIPDRAW_FRICTION_VELOCITY_GRIP;
     const double *b = m->beta + lo;
+    if (!grip) form_slip_rates(m);
     switch (p->friction_model) {
     case TC_STRIPDRAW_FRICTION_MODEL_CONSTANT:
         for (size_t k = 0; k < cnt; ++k) {
@@ -407,15 +426,15 @@ static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t
  * An overlap of 0 gives a weight of +0 without the division (bit for bit what 0 / l_e gives). */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
-    tc_sd_overlap(m->n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
-    m->w_first = 1;
-    m->w_last = 0;
-    for (size_t i = 0; i < m->n; ++i) {
-        if (w[i] == 0.0) continue;
-        w[i] = w[i] / m->le;
-        if (m->w_first > m->w_last) m->w_first = i;
-        m->w_last = i;
-    }
+    const size_t n = m->n;
+    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
+    size_t first = 0, last = n;
+    while (first < n && w[first] == 0.0) ++first;
+    while (last > first && w[last - 1] == 0.0) --last;
+    m->w_first = first < n ? first : 1;
+    m->w_last = first < n ? last - 1 : 0;
+    for (size_t i = first; i < last; ++i)
+        if (w[i] != 0.0) w[i] = w[i] / m->le;
 }
 
 /* StripDrawModel._chain: the elimination factors of the free bar for the step length h, kept for the last
@@ -502,32 +521,62 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     }
     m->friction_force = fric;
     m->reaction = reaction;
-    for (size_t i = 0; i < n; ++i) {
-        m->dU[i] = m->U[i] - m->U0[i];
-        m->slip_rate[i] = fabs(m->dU[i]) / h;
-    }
+    /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
+    double mx[4] = {0.0, 0.0, 0.0, 0.0}; /* the largest |dU| (four running maxima, so that the compares overlap) */
+    int nan = 0;
+    for (size_t i = 0; i < n; i += 4)
+        for (size_t k = 0; k < 4 && i + k < n; ++k) {
+            const double d = m->U[i + k] - m->U0[i + k];
+            m->dU[i + k] = d;
+            mx[k] = fabs(d) > mx[k] ? fabs(d) : mx[k];
+            nan |= d != d;
+        }
+    const double du_max = nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
+    m->slip_h = h;
     double *w0 = m->w; /* the weights at the start of the interval */
+    const size_t w0_first = m->w_first, w0_last = m->w_last;
     m->w = m->w0;
     m->w0 = w0;
     update_weights(m);
-    for (size_t i = 0; i < n; ++i) m->weight[i] = 0.5 * (w0[i] + m->w[i]);
-    /* transport.transport_step: Archard source (Eq. 37), advection (Eq. 13-14), cap (Eq. 24) */
+    /* transport.transport_step: Archard source (Eq. 37), advection (Eq. 13-14), cap (Eq. 24). The weight
+     * 0.5 (w0 + w) is 0 outside the nodes where w0 or w is not, and there the source adds +0 (a finite) and the
+     * advection leaves the node alone: new = beta + 0, which is beta (no beta is -0 while beta_hi is known).
+     * So the source and the advection run over [t0, t1] only, unless a source term could be inf (0 x inf). */
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
-    for (size_t i = 0; i < n; ++i) {
-        const double a = kp * fabs(m->dU[i]);
-        /* off the pad (weight 0, a finite) the source is 0 / hh = +0: the same sum without the division */
-        m->bsrc[i] = m->weight[i] == 0.0 && isfinite(a) ? m->beta[i] + 0.0 : m->beta[i] + a * m->weight[i] / hh;
-    }
-    tc_sd_advect(n, m->bsrc, m->dU, m->weight, p->zeta, m->le, m->bnew, m->awork);
+    size_t t0 = w0_first < m->w_first ? w0_first : m->w_first, t1 = w0_last > m->w_last ? w0_last : m->w_last;
+    if (w0_first > w0_last) t0 = m->w_first, t1 = m->w_last;
+    if (m->w_first > m->w_last) t0 = w0_first, t1 = w0_last;
+    const int windowed = isfinite(kp * du_max) && m->beta_hi == m->beta_hi;
+    if (!windowed) t0 = 0, t1 = n - 1;
     const double cap = p->beta_threshold > 0 ? m->beta_cap : py_min(m->beta_cap, law_beta_cap(m, pressure, fabs(vg)));
-    int removed = 0;
-    for (size_t i = 0; i < n; ++i) {
-        const double d = m->bnew[i] - cap;
-        m->over[i] = d < 0.0 ? 0.0 : d;                     /* np.maximum(new - cap, 0.0) */
-        m->beta[i] = m->bnew[i] > cap ? cap : m->bnew[i]; /* np.minimum(new, cap) */
-        removed |= !(m->over[i] == 0.0);
+    if (t0 <= t1) {
+        for (size_t i = t0; i <= t1; ++i) {
+            m->weight[i] = 0.5 * (w0[i] + m->w[i]);
+            const double a = kp * fabs(m->dU[i]);
+            /* off the pad (weight 0, a finite) the source is 0 / hh = +0: the same sum without the division */
+            m->bsrc[i] = m->weight[i] == 0.0 && isfinite(a) ? m->beta[i] + 0.0 : m->beta[i] + a * m->weight[i] / hh;
+        }
+        tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
     }
-    if (removed) m->beta_removed += tc_pairwise_sum(m->over, n); /* else the sum of zeros, which adds nothing */
+    /* the cap: over every node unless it is >= every beta away from [t0, t1] */
+    size_t c0 = t0, c1 = t1;
+    if (!(windowed && cap >= m->beta_hi)) c0 = 0, c1 = n - 1;
+    for (size_t i = m->over_lo; i <= m->over_hi && i < n; ++i) m->over[i] = 0.0; /* the last interval's */
+    int removed = 0, unknown = 0;
+    for (size_t i = c0; i <= c1 && i < n; ++i) {
+        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i] + 0.0; /* beta + 0: see above */
+        const double d = b - cap;
+        m->over[i] = d < 0.0 ? 0.0 : d; /* np.maximum(new - cap, 0.0) */
+        const double r = b > cap ? cap : b; /* np.minimum(new, cap) */
+        m->beta[i] = r;
+        removed |= !(m->over[i] == 0.0);
+        unknown |= r != r || (r == 0.0 && signbit(r)); /* NaN, or a -0 that Python's next + 0 would make +0 */
+    }
+    m->over_lo = c0;
+    m->over_hi = c1;
+    m->beta_hi = unknown ? NAN : cap;
+    /* the sum of over; the nodes outside [c0, c1] add +0 (the sum of zeros when nothing was removed) */
+    if (removed) m->beta_removed += tc_pairwise_sum_range(m->over, n, c0, c1);
     return TC_OK;
 }
 
@@ -652,15 +701,25 @@ static size_t state_size(size_t n) {
            n;
 }
 
-static void write_state(const tc_stripdraw *m, unsigned char *b) {
+/* the state image; its slip rates from slip, as they stand (h = 0) or as |slip[i]| / h */
+static void write_image(const tc_stripdraw *m, unsigned char *b, const double *slip, double h) {
     const size_t n = m->n, nb = n * sizeof(double);
     const uint32_t head[2] = {STATE_MAGIC, STATE_VERSION};
     const uint64_t nn = (uint64_t)n;
     memcpy(b, head, sizeof head);
     memcpy(b + 8, &nn, sizeof nn);
     b += STATE_HEADER;
-    const double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, m->slip_rate, m->fprev};
-    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) memcpy(b, arrays[k], nb);
+    const double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, slip, m->fprev};
+    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) {
+        if (arrays[k] != slip || !(h > 0)) {
+            memcpy(b, arrays[k], nb);
+            continue;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const double rate = fabs(slip[i]) / h;
+            memcpy(b + i * sizeof rate, &rate, sizeof rate);
+        }
+    }
     const double scalars[N_STATE_DOUBLES] = {m->time, m->friction_force, m->reaction, m->normal_force,
                                              m->beta_removed};
     memcpy(b, scalars, sizeof scalars);
@@ -671,6 +730,11 @@ static void write_state(const tc_stripdraw *m, unsigned char *b) {
     memcpy(b, m->contact, n);
 }
 
+static void write_state(const tc_stripdraw *m, unsigned char *b) {
+    write_image(m, b, m->slip_h > 0 ? m->dU : m->slip_rate, m->slip_h);
+}
+
+/* the state image of a user's set_state, or of the backup (the slip rates as the backup held them) */
 static void read_state(tc_stripdraw *m, const unsigned char *b) {
     const size_t n = m->n, nb = n * sizeof(double);
     b += STATE_HEADER;
@@ -690,7 +754,24 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     m->n_steps = (long long)counts[0];
     m->clamp_count = (long long)counts[1];
     memcpy(m->contact, b, n);
+    m->slip_h = 0.0;
+    m->beta_hi = NAN;
     update_weights(m); /* derived, as set_state recomputes _w */
+}
+
+/* The state before a step (restore_state brings it back if the step is refused): the state image with the
+ * slip rates as they are held (unformed: dU, and slip_h). */
+static void backup_state(tc_stripdraw *m) {
+    write_image(m, m->backup, m->slip_h > 0 ? m->dU : m->slip_rate, 0.0);
+    m->backup_slip_h = m->slip_h;
+}
+
+static void restore_state(tc_stripdraw *m) {
+    read_state(m, m->backup); /* bit-identical: arrays, scalars, and the weights recomputed from U */
+    if (m->backup_slip_h > 0) { /* the image holds dU */
+        memcpy(m->dU, m->slip_rate, m->n * sizeof *m->dU);
+        m->slip_h = m->backup_slip_h;
+    }
 }
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
@@ -858,6 +939,9 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
         m->reach = reach < 0 ? -(long long)n : (long long)n;
     /* state */
     for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? beta_field[i] : p->beta_initial;
+    m->beta_hi = NAN; /* the first interval caps every node */
+    m->over_lo = 0;
+    m->over_hi = n - 1;
     update_weights(m);
     *out = m;
     return TC_OK;
@@ -890,7 +974,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
             return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
                            tc_repr_double(d[k], r1));
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
-    write_state(m, m->backup);
+    backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
         double probe[4] = {0.0, 0.0, 0.0, 0.0}; /* 0 x U is NaN for an infinite or NaN U, else 0 */
@@ -900,7 +984,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
         if (!finite) rc = tc_fail(msg, TC_DISCARD, "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
-        read_state(m, m->backup); /* bit-identical: arrays, scalars, and the weights recomputed from U */
+        restore_state(m);
         return rc;
     }
     m->time = m->time + dt;

@@ -134,6 +134,7 @@ class Core:
             "tc_stripdraw_beta_cap": (_dbl, [_vp]),
             "tc_stripdraw_explicit_time_step": (_dbl, [_vp]),
             "tc_sd_positive_range": (_int, [_size, _dbl_p, ctypes.POINTER(_size), ctypes.POINTER(_size)]),
+            "tc_pairwise_sum_range": (_dbl, [_dbl_p, _size, _size, _size]),
             "tc_sd_overlap": (None, [_size, _dbl_p, _dbl_p, _dbl, _dbl, _dbl, _dbl_p]),
             "tc_thomas": (None, [_size, _dbl_p, _dbl_p, _dbl_p, _dbl_p, _dbl_p, _dbl_p]),
             "tc_sd_explicit": (None, [_size, ctypes.c_longlong, _dbl, _dbl_p, _dbl_p, _dbl_p, _dbl_p, _byte_p,

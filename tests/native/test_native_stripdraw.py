@@ -122,6 +122,22 @@ def test_positive_range_is_the_loop_forms(native_core):
             assert (first.value, last.value) == (nz[0], nz[-1])
 
 
+def test_pairwise_sum_of_a_sparse_array_is_numpys_sum(native_core):
+    """tc_pairwise_sum_range skips the blocks of NumPy's pairwise summation that lie outside the nonzero
+    range [lo, hi]: the same sum as np.sum of the whole array, bit for bit, for every length and range tried
+    (blocks of 8, 128 and the halving above; values of very different size, so that the order shows)."""
+    rng = np.random.default_rng(7)
+    f = native_core.lib.tc_pairwise_sum_range
+    for n in (1, 7, 8, 9, 127, 128, 129, 300, 451, 1000, 4097):
+        for _ in range(20):
+            lo = int(rng.integers(0, n))
+            hi = int(rng.integers(lo, min(n, lo + 200)))
+            a = np.zeros(n)
+            a[lo:hi + 1] = rng.random(hi + 1 - lo) * 10.0 ** rng.integers(-8, 8, hi + 1 - lo)
+            assert f(ptr(a), n, lo, hi) == np.sum(a), (n, lo, hi)
+    assert f(ptr(np.zeros(5)), 5, 3, 2) == 0.0  # an empty range
+
+
 def test_overlap_is_bit_identical_to_numpy(native_core):
     rng = np.random.default_rng(1)
     X = np.linspace(0.0, 0.1, 101)
@@ -683,6 +699,53 @@ def test_version2_table_law_and_speed_dependent_cap_match_python(native_core, co
     _assert_agree(a, b, py, nat, f"version 2 table, {contact_area}, s = {scale}, {velocity}")
     assert py.beta_removed > 0, "the run never reached the cap"
     assert 0 < py.law.beta_threshold < 1
+
+
+def _image_arrays(image: bytes, n: int) -> dict:
+    """The arrays and beta_removed of a native state image (tc_stripdraw.c: 16-byte header, then U, V, A, Up,
+    beta, slip_rate, fprev, then time, friction_force, reaction, normal_force, beta_removed)."""
+    values = np.frombuffer(image, dtype="<f8", count=7 * n + 5, offset=16)
+    names = ("U", "V", "A", "Up", "beta", "slip_rate", "fprev")
+    out = {k: values[j * n:(j + 1) * n] for j, k in enumerate(names)}
+    out["beta_removed"] = values[7 * n + 4]
+    return out
+
+
+@pytest.mark.parametrize("velocity", ["grip", "slip_rate"])
+def test_debris_bookkeeping_is_pythons_to_the_bit(native_core, velocity):
+    """The native interval transports and caps debris only near the pad while the cap stays above every other
+    node's beta, sums the removed debris over those nodes only, and forms the slip rates only when read: the
+    beta field, the removed total and the slip rates of the state image equal Python's bit for bit, through
+    caps that move with the pressure and the grip speed and a reversing grip. Under the grip law (the table's
+    error policy, grip speeds kept on the table's axis) a step refused inside (a pressure above the table)
+    leaves the state as it was, slip rates included."""
+    v2 = _areas_table()
+    grip = velocity == "grip"
+    p = StripDrawParameters(friction_model="table", friction_velocity=velocity, draw_length=0.03, n_elements=150,
+                            archard_k=0.05, table_policy="error" if grip else "clamp")
+    py, nat = _pair(native_core, p, v2)
+    schedule = [(dt, fn, math.copysign(max(abs(vg), 0.035), vg))
+                for dt, fn, vg in _pressure_ramp_reversing(160, 1e-3, 0.1)]
+    n = p.n_elements + 1
+    for k, (dt, fn, vg) in enumerate(schedule):
+        if grip and k == 80:
+            # a 50 ms step over several intervals whose normal force ramps out of the table: the first
+            # interval is taken (U, dU, beta change), a later one is refused
+            top = v2.pressure[-1] * p.tool_length * p.tool_width
+            before = nat.get_state()
+            with pytest.raises(native_core.NativeError, match="outside the table") as refused:
+                nat.step(0.05, {"normal_force": fn, "grip_velocity": vg},
+                         {"normal_force": ((3.0 * top - fn) / 0.05, 0.0)})
+            assert refused.value.status == 1  # TC_DISCARD
+            assert nat.get_state() == before
+        py.step(dt, {"normal_force": fn, "grip_velocity": vg})
+        nat.step(dt, {"normal_force": fn, "grip_velocity": vg})
+        if k % 20 == 19:
+            img = _image_arrays(nat.get_state(), n)
+            assert np.array_equal(img["beta"], py.beta), f"beta differs after step {k}"
+            assert np.array_equal(img["slip_rate"], py.slip_rate), f"slip_rate differs after step {k}"
+            assert img["beta_removed"] == py.beta_removed, f"beta_removed differs after step {k}"
+    assert py.beta_removed > 0, "the run never reached the cap"
 
 
 @pytest.mark.parametrize("contact_area,scale", [("mesoscale", 1.0), ("eq8", 2.5), ("mesoscale", 0.8)])
