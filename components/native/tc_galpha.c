@@ -145,26 +145,37 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
     /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
      * recurrences are independent, and each node's residual at d = 0 is computed on the way */
-    const size_t nt = lo, ng = N - 1 - hi, nk = nt > ng ? nt : ng;
+    const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
     double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
-    for (size_t k = 0; k < nk; ++k) {
-        if (k < nt) {
-            const size_t i = k;
-            x[i] = shift - dt * V[i] - cA * A[i];
-            const double fel = (i > 0 ? ke * dU[i - 1] : 0.0) - ke * dU[i];
-            double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);
-            if (i > 0) r0 += qt[i - 1] * rt;
-            rho[i] = rt = r0;
-        }
-        if (k < ng) {
-            const size_t j = N - 1 - k;
-            x[j] = shift - dt * V[j] - cA * A[j];
-            const double fel = ke * dU[j - 1] - ke * dU[j];
-            double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);
-            if (j < N - 1) r0 += qg[j + 1] * rg;
-            rho[j] = rg = r0;
-        }
+    /* node k of the tail and node N-1-k of the grip side; the first of each has no carry (and node 0 no element
+     * on its left) */
+#define TAIL_NODE(i, carry)                                                                                     \
+    do {                                                                                                       \
+        x[i] = shift - dt * V[i] - cA * A[i];                                                                  \
+        const double fel = ((i) > 0 ? ke * dU[(i) - 1] : 0.0) - ke * dU[i];                                    \
+        double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);              \
+        if (carry) r0 += qt[(i) - 1] * rt;                                                                     \
+        rho[i] = rt = r0;                                                                                      \
+    } while (0)
+#define GRIP_NODE(j, carry)                                                                                     \
+    do {                                                                                                       \
+        x[j] = shift - dt * V[j] - cA * A[j];                                                                  \
+        const double fel = ke * dU[(j) - 1] - ke * dU[j];                                                      \
+        double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);              \
+        if (carry) r0 += qg[(j) + 1] * rg;                                                                     \
+        rho[j] = rg = r0;                                                                                      \
+    } while (0)
+    if (nt > 0) TAIL_NODE(0, 0);
+    if (ng > 0) GRIP_NODE(N - 1, 0);
+    size_t k = 1;
+    for (; k < both; ++k) { /* side by side, without tests in the loop */
+        TAIL_NODE(k, 1);
+        GRIP_NODE(N - 1 - k, 1);
     }
+    for (size_t kt = k; kt < nt; ++kt) TAIL_NODE(kt, 1);
+    for (size_t kg = k; kg < ng; ++kg) GRIP_NODE(N - 1 - kg, 1);
+#undef TAIL_NODE
+#undef GRIP_NODE
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -225,24 +236,32 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
     const double bdt2 = beta * dt * dt;
     double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
-    for (size_t k = 0; k < nk; ++k) {
-        if (k < nt) {
-            const size_t i = lo - 1 - k;
-            d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
-            const double anew = (x[i] + dt_t) / bdt2;
-            V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
-            A[i] = anew;
-            U[i] = U[i] + (shift + dt_t);
-        }
-        if (k < ng) {
-            const size_t j = hi + 1 + k;
-            d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-            const double anew = (x[j] + dt_g) / bdt2;
-            V[j] = V[j] + dt * ((1.0 - gamma) * A[j] + gamma * anew);
-            A[j] = anew;
-            U[j] = U[j] + (shift + dt_g);
-        }
+#define NEWMARK(i, di)                                                                                          \
+    do {                                                                                                       \
+        const double anew = (x[i] + (di)) / bdt2;                                                              \
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);                                              \
+        A[i] = anew;                                                                                           \
+        U[i] = U[i] + (shift + (di));                                                                          \
+    } while (0)
+    size_t kb = 0;
+    for (; kb < both; ++kb) { /* side by side, without tests in the loop */
+        const size_t i = lo - 1 - kb, j = hi + 1 + kb;
+        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
+        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
+        NEWMARK(i, dt_t);
+        NEWMARK(j, dt_g);
     }
+    for (size_t kt = kb; kt < nt; ++kt) {
+        const size_t i = lo - 1 - kt;
+        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
+        NEWMARK(i, dt_t);
+    }
+    for (size_t kg = kb; kg < ng; ++kg) {
+        const size_t j = hi + 1 + kg;
+        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
+        NEWMARK(j, dt_g);
+    }
+#undef NEWMARK
     for (size_t i = lo; i <= hi; ++i) {
         const double anew = (x[i] + d[i]) / bdt2;
         V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
@@ -262,14 +281,20 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     /* the elements' extensions at the new state from the increments (galpha.py: not from the updated U), their
      * forces at every node, then the friction of the nodes under the pad (window and grip node) */
     d[N] = 0.0;
-    for (size_t e = 0; e < N; ++e) dU[e] = dU[e] + (d[e + 1] - d[e]);
-    fprev[0] = 0.0 - ke * dU[0];
-    for (size_t i = 1; i < N; ++i) fprev[i] = (0.0 + ke * dU[i - 1]) - ke * dU[i];
-    fprev[N] = 0.0 + ke * dU[N - 1];
+    double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
+    dU[0] = left;
+    fprev[0] = 0.0 - ke * left;
+    for (size_t i = 1; i < N; ++i) {
+        const double right = dU[i] + (d[i + 1] - d[i]);
+        dU[i] = right;
+        fprev[i] = (0.0 + ke * left) - ke * right;
+        left = right;
+    }
+    fprev[N] = 0.0 + ke * left;
     memset(contact, 0, n);
     double fr = 0.0;
-    for (size_t k = lo; k <= hi + 1; ++k) {
-        const size_t i = k <= hi ? k : N; /* the window, then the grip node (hi < N always) */
+    for (size_t kw = lo; kw <= hi + 1; ++kw) {
+        const size_t i = kw <= hi ? kw : N; /* the window, then the grip node (hi < N always) */
         if (!(ov[i] > 0.0)) continue;
         contact[i] = 1;
         Up[i] = Upn[i];
