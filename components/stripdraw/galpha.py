@@ -44,7 +44,7 @@ d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i 
 Both chains are swept side by side (they are independent), with each node's residual and Newmark update
 computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
 
-The cost of a step is one pass over the free nodes plus Newton on the window (~70 of the default 451
+The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
 nodes), where the monolithic solve (the whole bar in every Newton iteration) cost a pass over all nodes per
 iteration and line-search trial. ``tests/components/test_stripdraw_galpha.py`` holds this step against a
 monolithic Newton solve of the same Pi (the same minimiser) and the loop form against the NumPy form; the

@@ -45,7 +45,7 @@ class StripDrawParameters:
     sheet_width: float = _p(0.1, "m", "sheet width", 1e-4, 2.0, False)
     draw_length: float = _p(0.14, "m", "longest draw the bar is built for", 0.0, 5.0, False)
     free_length: float = _p(0.05, "m", "free strip length between the pad's exit edge and the grip", 1e-4, 5.0, False)
-    n_elements: int = _p(450, "1", "number of linear bar elements", 4, 200000, integer=True)
+    n_elements: int = _p(150, "1", "number of linear bar elements", 4, 200000, integer=True)
     # --- strip material -------------------------------------------------------------------
     youngs_modulus: float = _p(70e9, "Pa", "Young's modulus of the strip", 1e6, 1e13, False)
     density: float = _p(2660.0, "kg/m3", "density of the strip", 1.0, 1e5, False)

@@ -35,6 +35,13 @@ STRIP_OUTPUTS = ("pull_force", "mu_mean", "beta_max", "friction_force", "beta_me
 FIELDS = ("beta", "U", "contact")
 
 
+def _default_nodes() -> int:
+    """Nodes of the default bar (n_elements + 1), the length of every field array."""
+    from tribocosim.components.stripdraw.parameters import StripDrawParameters
+
+    return StripDrawParameters().n_elements + 1
+
+
 def _fmi3_functions() -> set[str]:
     """Every function of the FMI 3.0 standard, from its header (the names fmi3Functions.h maps through
     fmi3FullName)."""
@@ -194,9 +201,9 @@ def test_model_descriptions_have_the_fmi2_variables_plus_time_and_the_nodal_arra
             continue
         size, *arrays = extra[1:]
         assert (size.name, size.type, size.causality, int(size.start)) == ("n_nodes", "UInt64", "structuralParameter",
-                                                                          451)
+                                                                          _default_nodes())
         assert [(v.name, v.unit, v.shape, v.dimensions[0].valueReference) for v in arrays] == \
-               [(f, u, (451,), size.valueReference) for f, u in zip(FIELDS, ("1", "m", "1"))]
+               [(f, u, (_default_nodes(),), size.valueReference) for f, u in zip(FIELDS, ("1", "m", "1"))]
         assert {u.variable.name for u in three.outputs} >= set(FIELDS)
 
 
@@ -289,7 +296,7 @@ def test_c_hosts_give_the_same_outputs_to_the_bit_and_replay_a_serialized_state(
             from tribocosim.components.stripdraw.fields import read_fields
 
             recorded = read_fields(field)
-            arrays = got3[:, 1 + len(outputs):].reshape(len(steps), 3, 451)
+            arrays = got3[:, 1 + len(outputs):].reshape(len(steps), 3, _default_nodes())
             for k, f in enumerate(FIELDS):
                 assert_array_equal(arrays[:, k], recorded[f][1:], err_msg=f)
 
@@ -308,7 +315,7 @@ def test_simulate_fmu_runs_the_fmi3_fmu_as_the_fmi2_one(built):
         assert_array_equal(three[name], two[name], err_msg=name)
     two, three = run(2, output=["pull_force", "beta_max"]), run(3, output=["pull_force", "beta"])
     assert_array_equal(three["pull_force"], two["pull_force"])
-    assert three["beta"].shape == (len(two), 451)
+    assert three["beta"].shape == (len(two), _default_nodes())
     assert_array_equal(three["beta"].max(axis=1)[1:], two["beta_max"][1:])
     press = [simulate_fmu(str(built[v]["Press"]), stop_time=0.3, output_interval=2e-3, output=["normal_force"])
              for v in (2, 3)]
@@ -442,7 +449,7 @@ def test_what_does_not_apply_is_fmi3_error_naming_the_function(unzipped, md):
         assert exc.value.status == 3, exc.value
         assert any(all(w in text for w in words) for status, text in messages if status == 3), (words, messages)
 
-    refused(lambda: s.getFloat64([vr["beta"]], nValues=451), "fmi3GetFloat64", "beta", "fmi3ExitInitializationMode")
+    refused(lambda: s.getFloat64([vr["beta"]], nValues=_default_nodes()), "fmi3GetFloat64", "beta", "fmi3ExitInitializationMode")
     s.enterInitializationMode(startTime=0.0)
     refused(lambda: s.setUInt64([vr["n_nodes"]], [41]), "fmi3SetUInt64", "n_nodes", "structural parameter")
     refused(lambda: s.setInt32([vr["n_elements"]], [40]), "fmi3SetInt32", "n_elements", "structural parameter")
@@ -454,7 +461,7 @@ def test_what_does_not_apply_is_fmi3_error_naming_the_function(unzipped, md):
     refused(lambda: s.getDirectionalDerivative([vr["pull_force"]], [vr["normal_force"]], [1.0]),
             "fmi3GetDirectionalDerivative")
     refused(lambda: s.getBoolean([vr["pull_force"]]), "fmi3GetBoolean", "no Boolean variables")
-    refused(lambda: s.getFloat64([vr["beta"]], nValues=3), "fmi3GetFloat64", "nValues = 3", "451 values")
+    refused(lambda: s.getFloat64([vr["beta"]], nValues=3), "fmi3GetFloat64", "nValues = 3", f"{_default_nodes()} values")
     refused(lambda: s.setFloat64([vr["tool_length"]], [0.02]), "fmi3SetFloat64", "tool_length", "fixed")
     refused(lambda: s.setFloat64([vr["time"]], [1.0]), "fmi3SetFloat64", "time", "independent")
     refused(lambda: s.getFloat64([10_000]), "fmi3GetFloat64", "value reference 10000")
