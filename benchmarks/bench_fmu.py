@@ -1,11 +1,12 @@
 """Cost of the StripDraw FMUs (native C and pythonfmu) against calling the strip-draw model directly.
 
-Measures, for the default parameters (table friction, implicit integrator, 450 elements):
+Measures, for the default parameters (table friction, implicit integrator, 150 elements):
 
 0. the native FMU (issue 13): per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
    pythonfmu FMU through the same loop (target: native at least 10x faster), and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
-   loop, per-step cost and real-time factor (target >= 500);
+   loop, per-step cost and real-time factor (target >= 500), and the same draw on other meshes (MESHES:
+   the step's cost grows with the bar's nodes);
 
 1. overhead per doStep: ``setReal(inputs) + doStep + getReal(outputs)`` through fmpy's
    ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
@@ -160,6 +161,10 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
     return t_model, t_fmu, t_warm_cache
 
 
+#: n_elements of the C host's mesh-scaling line (the default's is the main figure)
+MESHES = (100, 450, 900)
+
+
 def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     """The native FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
@@ -182,16 +187,24 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     cmd = [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
            "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
            "--no-print"]
-    loops = []
-    for _ in range(repeat):
-        proc = subprocess.run(cmd, capture_output=True, text=True, check=True, env={"PATH": "/usr/bin:/bin"})
-        line = [ln for ln in proc.stderr.splitlines() if " steps in " in ln][-1]
-        loops.append(float(line.split()[-2]))
+
+    def host_loop(extra=()):
+        best = float("inf")
+        for _ in range(repeat):
+            proc = subprocess.run(cmd + list(extra), capture_output=True, text=True, check=True,
+                                  env={"PATH": "/usr/bin:/bin"})
+            line = [ln for ln in proc.stderr.splitlines() if " steps in " in ln][-1]
+            best = min(best, float(line.split()[-2]))
+        return best
+
+    loops = [host_loop()]
+    # the same draw on other meshes: the step's cost per node
+    meshes = {n: host_loop(["--set", f"i:{vr['n_elements']}={n}"]) for n in MESHES}
     t0 = time.perf_counter()
     from fmpy import simulate_fmu
 
     simulate_fmu(unzipped, model_description=md, stop_time=N_DRAW * DT, output_interval=DT)
-    return {"fmpy_native": t_native, "fmpy_python": t_python, "host_loop": min(loops),
+    return {"fmpy_native": t_native, "fmpy_python": t_python, "host_loop": min(loops), "host_meshes": meshes,
             "simulate_fmu_native": time.perf_counter() - t0}
 
 
@@ -227,6 +240,9 @@ def main(argv=None) -> int:
         print(f"native FMU   140 mm draw at 1 ms in the C host (no Python): {nat['host_loop'] * 1e3:8.2f} ms, "
               f"{nat['host_loop'] / N_DRAW * 1e6:6.2f} us/step, real-time factor {rtf:.0f} "
               f"({'meets' if rtf >= 500 else 'MISSES'} the 500 target); fmpy.simulate_fmu {nat['simulate_fmu_native']:.3f} s")
+        print("             the same draw in the C host on other meshes: " + ", ".join(
+            f"{n} elements {t / N_DRAW * 1e6:.2f} us/step (real-time factor {N_DRAW * DT / t:.0f})"
+            for n, t in nat["host_meshes"].items()))
         tm, tf = per_step(unzipped, md, n_warm=200, n=args.steps, repeat=args.repeat)
         print(f"per step     model.step {tm * 1e6:8.1f} us   FMU set+doStep+get {tf * 1e6:8.1f} us   "
               f"overhead {(tf - tm) * 1e6:6.1f} us ({tf / tm:.2f}x)")  # fmt: skip
