@@ -261,13 +261,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
         NEWMARK(j, dt_g);
     }
+    for (size_t i = lo; i <= hi; ++i) NEWMARK(i, d[i]);
 #undef NEWMARK
-    for (size_t i = lo; i <= hi; ++i) {
-        const double anew = (x[i] + d[i]) / bdt2;
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
-        A[i] = anew;
-        U[i] = U[i] + (shift + d[i]);
-    }
     U[N] = U[N] + shift;
     V[N] = vg;
     A[N] = 0.0;

@@ -129,6 +129,21 @@ struct tc_stripdraw {
 static double py_max(double a, double b) { return b > a ? b : a; }
 static double py_min(double a, double b) { return b < a ? b : a; }
 
+/* np.max of a[0..n-1] (n >= 1), or of |a| when magnitude is set: the largest value, NaN if there is one (four
+ * running maxima, so that the compares overlap) */
+static double largest(const double *a, size_t n, int magnitude) {
+    const double a0 = magnitude ? fabs(a[0]) : a[0];
+    double mx[4] = {a0, a0, a0, a0};
+    int nan = 0;
+    for (size_t i = 0; i < n; i += 4)
+        for (size_t k = 0; k < 4 && i + k < n; ++k) {
+            const double v = magnitude ? fabs(a[i + k]) : a[i + k];
+            mx[k] = v > mx[k] ? v : mx[k];
+            nan |= v != v;
+        }
+    return nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
+}
+
 /* ---------------------------------------------------------------------------------------------------
  * kernels (kernels.py, transport.py)
  * ------------------------------------------------------------------------------------------------- */
@@ -522,16 +537,8 @@ static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_ms
     m->friction_force = fric;
     m->reaction = reaction;
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    double mx[4] = {0.0, 0.0, 0.0, 0.0}; /* the largest |dU| (four running maxima, so that the compares overlap) */
-    int nan = 0;
-    for (size_t i = 0; i < n; i += 4)
-        for (size_t k = 0; k < 4 && i + k < n; ++k) {
-            const double d = m->U[i + k] - m->U0[i + k];
-            m->dU[i + k] = d;
-            mx[k] = fabs(d) > mx[k] ? fabs(d) : mx[k];
-            nan |= d != d;
-        }
-    const double du_max = nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
+    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
+    const double du_max = largest(m->dU, n, 1);
     m->slip_h = h;
     double *w0 = m->w; /* the weights at the start of the interval */
     const size_t w0_first = m->w_first, w0_last = m->w_last;
@@ -1003,16 +1010,7 @@ void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPU
         wu += m->w[i] * m->U[i];
         wb += m->w[i] * m->beta[i];
     }
-    /* np.max: the largest value, NaN if there is one (four running maxima, so that the compares overlap) */
-    double mx[4] = {m->beta[0], m->beta[0], m->beta[0], m->beta[0]};
-    int nan = 0;
-    for (size_t i = 0; i < n; i += 4)
-        for (size_t k = 0; k < 4 && i + k < n; ++k) {
-            const double b = m->beta[i + k];
-            mx[k] = b > mx[k] ? b : mx[k];
-            nan |= b != b;
-        }
-    const double bmax = nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
+    const double bmax = largest(m->beta, n, 0);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = m->friction_force;
     out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? m->friction_force / fn : 0.0;
