@@ -10,7 +10,7 @@ with the Python model for several ``n_elements`` and compared with the finest me
   material coordinate.
 
 It prints one row per mesh with the wall time of the Python model (the native step's cost per node is in
-bench_fmu.py). Run time on the 2-core machine: about 3 s per mesh, 15 s for the reference.
+bench_fmu.py). Measured on the 2-core machine: 0.32-0.39 s per mesh, 0.44 s for the reference.
 
 Usage: python benchmarks/bench_mesh.py [--meshes 1800 900 450 300 225 150 100]
 """
