@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
@@ -119,7 +119,7 @@ def classify(fps: list[Footprint], h_top) -> tuple[np.ndarray, np.ndarray]:
     return counts >= MIN_CLUSTERS_BLOCKED, counts
 
 
-def attach_to_tool(fp: Footprint, h_top) -> tuple[Footprint, float]:
+def attach_to_tool(fp: Footprint, h_top, drop: float | None = None) -> tuple[Footprint, float]:
     """The footprint of a blocked flake as the contact solve sees it, and its drop [m].
 
     Pixel-consistent rasterisation: the DEM reads the surfaces by bilinear interpolation, so a
@@ -127,33 +127,101 @@ def attach_to_tool(fp: Footprint, h_top) -> tuple[Footprint, float]:
     steep rim by up to ~c). The flake's lower face is therefore replaced by its 3 x 3 pixel
     minimum (grey erosion; the footprint grows by one pixel ring) and its upper face by its
     3 x 3 maximum. The flake is dropped by the depth that dilated upper face cuts into the tool
-    (if positive), lower face included.
+    (if positive), lower face included, or by ``drop`` when given (the drop of the stack it belongs
+    to, :func:`stack_groups`).
     """
     z_lo = ndimage.minimum_filter(np.nan_to_num(fp.z_lo, nan=np.inf), size=3, mode="constant",
                                   cval=np.inf)
     z_hi = ndimage.maximum_filter(np.nan_to_num(fp.z_hi, nan=-np.inf), size=3, mode="constant",
                                   cval=-np.inf)
-    drop = max(0.0, float(np.max(z_hi - h_top[np.ix_(fp.ix, fp.iy)])))
+    if drop is None:
+        drop = max(0.0, float(np.max(z_hi - h_top[np.ix_(fp.ix, fp.iy)])))
     z_lo = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
     z_hi = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
     return Footprint(fp.ix, fp.iy, z_lo, z_hi), drop
 
 
-def pinched(fps: list[Footprint], h_top, h_low, limit: float) -> np.ndarray:
+def stack_groups(fps: list[Footprint], n: int) -> np.ndarray:
+    """Label of the stack each flake belongs to: flakes whose footprints share a pixel (one lies on
+    the other there) are in one stack, transitively; a flake alone is a stack of one.
+
+    A stack meets the surfaces as one rigid body in :func:`pinched` and :func:`attach_stacks`: a
+    flake resting on another is pressed into the sheet through it, so the pinch test reads the
+    stack's top against the tool and its bottom against the sheet, and a blocked flake makes its
+    whole stack load-bearing."""
+    parent = np.arange(len(fps))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner = np.full(n * n, -1, dtype=np.int64)
+    for i, fp in enumerate(fps):
+        flat = (fp.ix[:, None] * n + fp.iy[None, :])[fp.inside]
+        for j in np.unique(owner[flat]):
+            if j >= 0:
+                parent[root(int(j))] = root(i)
+        owner[flat] = i
+    return np.array([root(i) for i in range(len(fps))], dtype=np.int64)
+
+
+def _per_stack_max(values: np.ndarray, groups: np.ndarray | None) -> np.ndarray:
+    """Each flake's ``values`` replaced by the largest over its stack (``groups`` None: unchanged)."""
+    if groups is None or values.size == 0:
+        return values
+    top = np.full(int(groups.max()) + 1, -np.inf)
+    np.maximum.at(top, groups, values)
+    return top[groups]
+
+
+def spread_to_stacks(flags: np.ndarray, groups: np.ndarray | None) -> np.ndarray:
+    """Flags set for every flake of a stack in which one flake is flagged."""
+    if groups is None or flags.size == 0:
+        return flags
+    return _per_stack_max(flags.astype(float), groups) > 0.0
+
+
+def pinched(fps: list[Footprint], h_top, h_low, limit: float, groups=None) -> np.ndarray:
     """Flakes that do not fit between the tool and the sheet: the depths by which the tool and the
     sheet cut into the flake (maxima over its footprint, grid) add up to more than 2 ``limit`` [m].
     A flake touching only one surface with a gap to the other larger than the cut fits (the DEM moves
     it into the gap); one touching both, or cut by one deeper than its clearance to the other, does
-    not."""
+    not. With ``groups`` (:func:`stack_groups`) the test is that of each stack as one rigid body: the
+    largest cut of the tool into any of its flakes plus the largest cut of the sheet."""
     if not fps:
         return np.zeros(0, dtype=bool)
     if len({fp.z_lo.shape for fp in fps}) != 1:
-        return np.concatenate([pinched([fp], h_top, h_low, limit) for fp in fps])
-    z_lo, z_hi, inside, top_win = _stacked(fps, h_top)
-    low_win = _stacked(fps, h_low)[3]
-    top = np.where(inside, z_hi - top_win, -np.inf).max(axis=(1, 2))
-    low = np.where(inside, low_win - z_lo, -np.inf).max(axis=(1, 2))
-    return top + low > 2.0 * limit
+        top, low = np.array([_cuts(fp, h_top, h_low) for fp in fps]).T
+    else:
+        z_lo, z_hi, inside, top_win = _stacked(fps, h_top)
+        low_win = _stacked(fps, h_low)[3]
+        top = np.where(inside, z_hi - top_win, -np.inf).max(axis=(1, 2))
+        low = np.where(inside, low_win - z_lo, -np.inf).max(axis=(1, 2))
+    return _per_stack_max(top, groups) + _per_stack_max(low, groups) > 2.0 * limit
+
+
+def _cuts(fp: Footprint, h_top, h_low) -> tuple[float, float]:
+    """The depths by which the tool and the sheet cut into one flake (maxima over its footprint)."""
+    ins = fp.inside
+    top = np.max((fp.z_hi - h_top[np.ix_(fp.ix, fp.iy)])[ins])
+    low = np.max((h_low[np.ix_(fp.ix, fp.iy)] - fp.z_lo)[ins])
+    return float(top), float(low)
+
+
+def attach_stacks(fps: list[Footprint], blocked, h_top, groups=None) -> list[Footprint]:
+    """The footprints as the contact solve sees them: every blocked flake attached to the tool
+    (:func:`attach_to_tool`), dropped by the largest drop in its stack so that the stack moves as one
+    body; the others unchanged."""
+    idx = np.flatnonzero(blocked)
+    drops = np.zeros(len(fps))
+    drops[idx] = [attach_to_tool(fps[j], h_top)[1] for j in idx]
+    drops = _per_stack_max(np.where(blocked, drops, -np.inf), groups)
+    out = list(fps)
+    for j in idx:
+        out[j] = attach_to_tool(fps[j], h_top, drop=float(drops[j]))[0]
+    return out
 
 
 def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:
@@ -239,13 +307,14 @@ class SlideSimulation:
                                    max_iter=c.bem_max_iter, threads=c.threads)
         self.solver = solver
         self.shape = dem.FlakeShape(c.flake_diameter, c.flake_thickness, c.flake_density)
-        damping = c.damping(self.shape)
+        damping = c.run_damping(self.shape)  # scaled when the DEM runs faster than v0 (SlideConfig)
         params = dem.DemParams.build(self.shape, c.size, c.dx, c.e_star, c.penalty_velocity,
                                      damping,
-                                     spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety)
-        self.n_sub = max(1, math.ceil(c.dx / (c.v0 * params.dt)))
-        self.params = dem.DemParams(params.shape, c.size, c.dx, params.k_area, damping,
-                                    c.dx / (c.v0 * self.n_sub), params.samples, params.weights)
+                                     spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety,
+                                     pair_spacing=None if c.pair_spacing_px is None else c.pair_spacing_px * c.dx)
+        v_run = c.run_velocity
+        self.n_sub = max(1, math.ceil(c.dx / (v_run * params.dt)))
+        self.params = replace(params, dt=c.dx / (v_run * self.n_sub))
         self.k = 0  # pixels slid so far
         self.u_p = np.zeros_like(self.h_def0)
         self.z_top = 0.0
@@ -254,11 +323,13 @@ class SlideSimulation:
         self.resolves = 0  # contact solves repeated because a flake the solve did not see was pinched
         self.timings = {"dem": 0.0, "bem": 0.0, "classify": 0.0}
         t0 = time.perf_counter()
-        self.traction = self._contact(self.h_tool0 + self.z_top)
+        # the flakes are laid into the gap of the particle-free contact at the placement pressure; the
+        # first contact solve presses to c.pressure, and the DEM phase after it moves both surfaces there
+        self.traction = self._contact(self.h_tool0 + self.z_top, c.start_pressure)
         self.z_prev, self.h_low_prev = self.z_top, self.h_low
         self.timings["bem"] += time.perf_counter() - t0
         pos = random_placement(c.n_flakes, self.shape, c.size, self.h_low, self.tool_grid(),
-                               c.flake_seed)
+                               c.flake_seed, stacked=c.placement == "deposition")
         self.state = dem.DemState.at_rest(pos)
         self.blocked_prev = np.zeros(len(pos), dtype=bool)
 
@@ -270,10 +341,12 @@ class SlideSimulation:
         """The tool on the grid at the current integer shift, lab frame [m]."""
         return np.roll(self.h_tool0, self.k, axis=0) + self.z_top
 
-    def _contact(self, h_star) -> np.ndarray:
-        """Step 4: solve on g* = h* - h_def0, update u_p, h_low and z_top."""
+    def _contact(self, h_star, pressure: float | None = None) -> np.ndarray:
+        """Step 4: solve on g* = h* - h_def0 at ``pressure`` (default the slide's), update u_p, h_low
+        and z_top."""
+        pressure = self.cfg.pressure if pressure is None else pressure
         try:
-            res = self.solver.solve(h_star - self.h_def0, self.cfg.pressure, u_plastic=self.u_p,
+            res = self.solver.solve(h_star - self.h_def0, pressure, u_plastic=self.u_p,
                                     warm_start=self._last)
         except ConvergenceError as exc:
             raise ConvergenceError(f"contact solve at sliding step {self.k}: {exc}") from exc
@@ -320,25 +393,25 @@ class SlideSimulation:
         h_top = self.tool_grid()
         h_env = self.tool_envelope(h_top)
         fps = footprints(self.state.pos, self.state.quat, self.shape, c.n, c.size)
+        groups = stack_groups(fps, c.n)
         by_clusters, counts = classify(fps, h_top)
         blocked = by_clusters.copy()
         # load-bearing: pinched between the sheet and the tool of the coming pixel (module docstring)
         limit = c.pinch_overlap_fraction * c.flake_thickness
-        blocked |= pinched(fps, h_env, self.h_low, limit)
-        blocked |= self.blocked_prev & (counts >= 1)  # held until the tool lets go
-        attached = list(fps)
-        for j in np.flatnonzero(blocked):  # the solve sees it attached to the tool's underside
-            attached[j] = attach_to_tool(fps[j], h_env)[0]
+        blocked |= pinched(fps, h_env, self.h_low, limit, groups)
+        held = self.blocked_prev & spread_to_stacks(counts >= 1, groups)
+        blocked = spread_to_stacks(blocked | held, groups)  # held until the tool lets go of its stack
+        attached = attach_stacks(fps, blocked, h_env, groups)  # attached to the tool's underside
         t2 = time.perf_counter()
         before = (self.u_p, self.h_low, self.z_top)
         while True:  # until the solve's tool and sheet pinch no flake it did not see (docstring, 4)
             self.traction = self._contact(modified_tool(h_top, attached, blocked))
-            missed = ~blocked & pinched(fps, self.tool_envelope(self.tool_grid()), self.h_low, limit)
+            missed = ~blocked & pinched(fps, self.tool_envelope(self.tool_grid()), self.h_low, limit,
+                                        groups)
             if not missed.any():
                 break
-            blocked |= missed
-            for j in np.flatnonzero(missed):
-                attached[j] = attach_to_tool(fps[j], h_env)[0]
+            blocked = spread_to_stacks(blocked | missed, groups)
+            attached = attach_stacks(fps, blocked, h_env, groups)
             self.u_p, self.h_low, self.z_top = before
             self.resolves += 1
         self.blocked_prev = blocked

@@ -332,6 +332,9 @@ class DemParams:
         Face sample points (ns, 2) [m], from :func:`face_samples`.
     weights : ndarray
         Their areas (ns,) [m^2], from :func:`face_samples`.
+    pair_samples, pair_weights : ndarray or None
+        The points and areas of a flake's disc in flake-flake contact (None: ``samples`` and
+        ``weights``), from :func:`face_samples` at a coarser spacing when given.
     """
 
     shape: FlakeShape
@@ -342,16 +345,27 @@ class DemParams:
     dt: float
     samples: np.ndarray
     weights: np.ndarray
+    pair_samples: np.ndarray | None = None
+    pair_weights: np.ndarray | None = None
 
     @classmethod
     def build(cls, shape: FlakeShape, size: float, dx: float, e_star: float, v_ref: float,
               damping: float | DampingRates, dt: float | None = None, spacing: float | None = None,
-              dt_safety: float = DT_SAFETY) -> "DemParams":
-        """Parameters from the documented rules: Hertz penalty, stable dt, one-pixel sampling."""
+              dt_safety: float = DT_SAFETY, pair_spacing: float | None = None) -> "DemParams":
+        """Parameters from the documented rules: Hertz penalty, stable dt, one-pixel sampling (of the
+        flake-flake contact too unless ``pair_spacing`` is given)."""
         k = penalty_stiffness(shape, e_star, v_ref)
         dt = stable_time_step(shape, k, dt_safety) if dt is None else dt
         pts, wts = face_samples(shape, dx if spacing is None else spacing)
-        return cls(shape, size, dx, k, damping, dt, pts, wts)
+        pair = (None, None) if pair_spacing is None else face_samples(shape, pair_spacing)
+        return cls(shape, size, dx, k, damping, dt, pts, wts, *pair)
+
+    @property
+    def pair_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """The points and areas of the flake-flake contact (module docstring)."""
+        if self.pair_samples is None:
+            return self.samples, self.weights
+        return self.pair_samples, self.pair_weights
 
     def __post_init__(self):
         check_range("domain size L", self.size, 0.0, None, low_inclusive=False, unit="m")
@@ -466,7 +480,7 @@ def compute_forces(state: DemState, params: DemParams, h_low, h_top, top_shift=0
                         force, torque, overlap, np.empty((nf, 3, 3)), np.empty((0, 2, _k._RECORD)),
                         np.empty((0, 2, len(params.samples))), np.empty((0, 2, 3)),
                         np.empty((0, 2, 1), dtype=np.int64), np.empty((nf, 2), dtype=np.int64),
-                        np.zeros((nf, 2)), _k.REACH_PX, pairs, len(pairs))
+                        np.zeros((nf, 2)), _k.REACH_PX, pairs, len(pairs), *params.pair_points)
     return force, torque, overlap, float(energy)
 
 
@@ -504,7 +518,7 @@ def advance(state: DemState, params: DemParams, h_low, h_top, n_steps: int, shif
         0.0 if dh_low is None else 1.0, h_top, float(shift0), float(dshift), float(top_offset),
         float(dtop), params.dx, params.size, sh.a, sh.c,
         params.samples, params.weights, params.k_area, sh.mass, i1, i3, *params.rates.as_tuple(),
-        params.dt, int(n_steps), limit, force, torque, overlap, bool(clearance))
+        params.dt, int(n_steps), limit, force, torque, overlap, bool(clearance), *params.pair_points)
     if status == 0:
         return
     where = f"at DEM step {step_offset + step} (step {step} of this call), flake {flake}"

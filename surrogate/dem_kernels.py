@@ -275,7 +275,7 @@ def _face_heights(samples, a, c):
 @_jit
 def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offset, dx, size, a, c,
             samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, near,
-            mode, approach, reach_px, pairs, n_pairs):
+            mode, approach, reach_px, pairs, n_pairs, pair_samples, pair_weights):
     """Penalty forces/torques (space frame) on every flake; returns the penalty energy.
 
     ``samples`` (ns, 2) are body-frame in-plane points of the face, ``weights`` (ns,) their
@@ -297,7 +297,10 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
     ``reach_px``: the displacement (in pixels) a record allows.
 
     ``pairs[:n_pairs]`` (i < j, in the order of i then j): the flake pairs tested for contact; every
-    pair closer than 2a must be among them (:func:`_pair_candidates`).
+    pair closer than 2a must be among them (:func:`_pair_candidates`). ``pair_samples`` (np, 2) and
+    ``pair_weights`` (np,) are the points and areas of a flake's mid-plane disc in flake-flake contact
+    (the face's own, or a coarser set: flakes pressed on one another are in contact over most of their
+    area at every step, and their points dominate the cost of a dense deposit).
     """
     nf = pos.shape[0]
     ns = samples.shape[0]
@@ -435,6 +438,7 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
     scale = ac / a
     k_pair = 0.5 * k_area * scale * scale
     reach = 2.0 * a
+    nps = pair_samples.shape[0]
     for m in range(n_pairs):
         i = pairs[m, 0]
         j = pairs[m, 1]
@@ -455,9 +459,9 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                 P, Q = j, i
                 ox, oy, oz = -dxij, -dyij, -dzij
             nx, ny, nz = rot[Q, 0, 2], rot[Q, 1, 2], rot[Q, 2, 2]
-            for k in range(ns):
-                xb = samples[k, 0] * scale
-                yb = samples[k, 1] * scale
+            for k in range(nps):
+                xb = pair_samples[k, 0] * scale
+                yb = pair_samples[k, 1] * scale
                 rx = rot[P, 0, 0] * xb + rot[P, 0, 1] * yb  # point relative to centre of P
                 ry = rot[P, 1, 0] * xb + rot[P, 1, 1] * yb
                 rz = rot[P, 2, 0] * xb + rot[P, 2, 1] * yb
@@ -479,7 +483,7 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                 else:
                     sgn = 1.0 if vn >= 0.0 else -1.0
                     ux, uy, uz = sgn * nx, sgn * ny, sgn * nz
-                kw = k_pair * weights[k]
+                kw = k_pair * pair_weights[k]
                 f = kw * d
                 fx, fy, fz = f * ux, f * uy, f * uz
                 force[P, 0] += fx
@@ -556,7 +560,7 @@ def _damp_axes(quat, vel, angmom, i, dec_vp, dec_va, dec_lp, dec_la):
 def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
              top_offset, dtop, dx, size, a, c,
              samples, weights, k_area, mass, i1, i3, gamma_vp, gamma_va, gamma_lp, gamma_la, dt,
-             n_steps, max_overlap, force, torque, overlap, use_clearance):
+             n_steps, max_overlap, force, torque, overlap, use_clearance, pair_samples, pair_weights):
     """``n_steps`` integrator steps; at step s the tool is shifted by ``shift0 + s*dshift`` and
     sits at the height ``top_offset + s*dtop``, and the lower surface is
     ``h_low + ramp (s/n_steps) dh_low`` (ramp = 0 or 1).
@@ -602,7 +606,7 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
                 return 1, 0, i
     _forces(pos, quat, h_low, dh_low, 0.0, ramp, h_top, shift0, top_offset, dx, size, a, c,
             samples, zface, weights, k_area, force, torque, overlap, rot, clear, gaps, slopes, near,
-            mode, approach, REACH_PX, pairs, n_pairs)
+            mode, approach, REACH_PX, pairs, n_pairs, pair_samples, pair_weights)
     for i in range(nf):
         if overlap[i] > max_overlap:
             return 2, 0, i
@@ -636,7 +640,7 @@ def _advance(pos, quat, vel, angmom, h_low, dh_low, ramp, h_top, shift0, dshift,
         _forces(pos, quat, h_low, dh_low, ramp * s / n_steps, ramp, h_top, shift0 + s * dshift,
                 top_offset + s * dtop, dx, size, a, c, samples, zface, weights, k_area, force,
                 torque, overlap, rot, clear, gaps, slopes, near, mode, approach, REACH_PX,
-                pairs, n_pairs)
+                pairs, n_pairs, pair_samples, pair_weights)
         for i in range(nf):
             if rest[i] and (force[i, 0] == 0.0 and force[i, 1] == 0.0 and force[i, 2] == 0.0
                             and torque[i, 0] == 0.0 and torque[i, 1] == 0.0

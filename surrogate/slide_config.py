@@ -32,7 +32,10 @@ from tribocosim.components.errors import ParameterError, check_range
 #: grade VG 32 (32 mm^2/s at 40 C) x a mineral-oil density of 870 kg/m^3 (surrogate.dem docstring)
 DEFAULT_OIL_VISCOSITY = 32e-6 * 870.0
 #: keys left out of to_dict() while None (see the module docstring)
-OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
+OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
+                 "placement_pressure", "placement", "pair_spacing_px")
+#: how the flakes are laid into the gap at the start of a slide (:func:`tribocosim.surrogate.flakes.random_placement`)
+PLACEMENTS = ("monolayer", "deposition")
 
 
 @dataclass(frozen=True)
@@ -73,7 +76,7 @@ class SlideConfig:
         [kg/m^3] (Al: 2700).
     penalty_velocity : float
         Impact speed [m/s] of the Hertz rule that sets the flake penalty stiffness (and so the DEM
-        time step); must be >= v0. It is one value for every run that is to be compared (default
+        time step); must be >= the speed the DEM runs at (v0, or ``dem_velocity`` when v0 is below it). It is one value for every run that is to be compared (default
         50 m/s, the paper's highest sliding speed): were it v0, the contact law itself would change
         with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
     damping_rate : float or None
@@ -85,10 +88,34 @@ class SlideConfig:
         of a thin disc, with separate translational and rotational rates
         (:meth:`tribocosim.surrogate.dem.DampingRates.from_viscosity`). None with no damping_rate
         means :data:`DEFAULT_OIL_VISCOSITY` (ISO VG 32 at 40 C, 0.0278 Pa s).
+    dem_velocity : float or None
+        Speed [m/s] at which the DEM slides when v0 is below it (None: always at v0). The flakes are then
+        run at dem_velocity with every damping rate multiplied by dem_velocity / v0, which keeps the
+        damping per pixel of sliding, Lambda = gamma dx / v0, the physical one: a flake's free motion
+        written per unit sliding distance s, x'' + (gamma / v0) x' = F / (m v0^2), depends on the speed
+        only through Lambda wherever the contact force F is not acting, and the contacts are stiff
+        enough that their overlaps stay far below the pinch and crush thresholds at either speed
+        (docs/physics/table_domain.md validates this similarity against direct runs at the slow speed).
+        The DEM cost per pixel is that of dem_velocity, whatever v0: the slide's number of DEM steps
+        grows as 1/v0 otherwise.
+    placement_pressure : float or None
+        Pressure [Pa] of the particle-free contact in whose gap the flakes are placed at the start (the
+        tool then presses to ``pressure`` in the first contact solve, the flakes it meets becoming
+        load-bearing); None: ``pressure``. Clipped to ``pressure`` when larger.
+    placement : {"monolayer", "deposition"} or None
+        ``monolayer`` (None): flakes lie flat side by side, centres at least d_p apart, which cannot
+        exceed beta ~ 0.45 (random sequential adsorption of discs jams at 0.547); ``deposition``: each
+        flake falls at a uniformly random (x, y) onto the sheet or onto the flakes already there
+        (stacked flat, mid-planes h_p apart), so that beta = N a_p / A0 (Eq. 10) may approach and exceed
+        the covered fraction (1 - exp(-beta) for independent positions).
     dt_safety : float
         Safety factor on the Verlet limit 2/omega_max.
     sample_spacing_px : float
         Spacing of the flake-face sample points in pixels.
+    pair_spacing_px : float or None
+        Spacing in pixels of the points of the flake-flake contact (None: ``sample_spacing_px``). In
+        a deposit of stacked flakes each flake presses on its neighbours over most of its area at
+        every DEM step; a coarser set there costs less and changes no rule that reads the surfaces.
     pinch_overlap_fraction : float
         A flake into which the two surfaces (the tool over the coming pixel) cut by more than twice
         this fraction of h_p in sum does not fit between them and is blocked too, load-bearing in
@@ -124,10 +151,14 @@ class SlideConfig:
     flake_thickness: float = 0.5e-6
     flake_density: float = 2700.0
     penalty_velocity: float = 50.0
+    dem_velocity: float | None = None
+    placement_pressure: float | None = None
+    placement: str | None = None
     damping_rate: float | None = None
     oil_viscosity: float | None = None
     dt_safety: float = 0.1
     sample_spacing_px: float = 1.0
+    pair_spacing_px: float | None = None
     pinch_overlap_fraction: float = 0.0
     n_slide_steps: int | None = None
     snapshot_every: int = 0
@@ -165,7 +196,16 @@ class SlideConfig:
         check_range("flake_thickness", self.flake_thickness, high=self.flake_diameter,
                     high_inclusive=False, unit="m", **pos)
         check_range("flake_density", self.flake_density, unit="kg/m^3", **pos)
-        check_range("penalty_velocity", self.penalty_velocity, low=self.v0, unit="m/s")
+        if self.dem_velocity is not None:
+            _number("dem_velocity", self.dem_velocity, "m/s")
+            check_range("dem_velocity", self.dem_velocity, unit="m/s", **pos)
+        check_range("penalty_velocity", self.penalty_velocity, low=self.run_velocity, unit="m/s")
+        if self.placement_pressure is not None:
+            _number("placement_pressure", self.placement_pressure, "Pa")
+            check_range("placement_pressure", self.placement_pressure, unit="Pa", **pos)
+        if self.placement is not None and self.placement not in PLACEMENTS:
+            raise ParameterError(f"placement = {self.placement!r} is not known; allowed: "
+                                 f"{', '.join(PLACEMENTS)}")
         if self.oil_viscosity is not None:
             _number("oil_viscosity", self.oil_viscosity, "Pa s")
             check_range("oil_viscosity", self.oil_viscosity, 0.0, unit="Pa s")
@@ -182,6 +222,9 @@ class SlideConfig:
             check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
         check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)
+        if self.pair_spacing_px is not None:
+            _number("pair_spacing_px", self.pair_spacing_px, "pixels")
+            check_range("pair_spacing_px", self.pair_spacing_px, 0.0, 4.0, low_inclusive=False)
         check_range("pinch_overlap_fraction", self.pinch_overlap_fraction, 0.0, 0.5)
         if self.n_slide_steps is not None:
             _int("n_slide_steps", self.n_slide_steps, 1)
@@ -201,6 +244,26 @@ class SlideConfig:
         return 2 * self.n if self.n_slide_steps is None else self.n_slide_steps
 
     @property
+    def run_velocity(self) -> float:
+        """Speed [m/s] the DEM slides at: v0, or ``dem_velocity`` when v0 is below it."""
+        if self.dem_velocity is not None and self.v0 < self.dem_velocity:
+            return self.dem_velocity
+        return self.v0
+
+    @property
+    def damping_scale(self) -> float:
+        """Factor on the flakes' damping rates that keeps Lambda = gamma dx / v0 at run_velocity."""
+        return self.run_velocity / self.v0
+
+    @property
+    def start_pressure(self) -> float:
+        """Pressure [Pa] of the contact the flakes are placed in (``placement_pressure``, at most
+        ``pressure``)."""
+        if self.placement_pressure is None:
+            return self.pressure
+        return min(self.placement_pressure, self.pressure)
+
+    @property
     def beta(self) -> float:
         """Flake area fraction beta = N_p pi (d_p/2)^2 / L^2 (Eq. 10)."""
         return self.n_flakes * 3.141592653589793 * (0.5 * self.flake_diameter) ** 2 / self.size**2
@@ -213,6 +276,16 @@ class SlideConfig:
         if self.oil_viscosity is not None:
             return DampingRates.from_viscosity(shape, self.oil_viscosity)
         return self.damping_rate
+
+    def run_damping(self, shape):
+        """:meth:`damping` scaled by :attr:`damping_scale` (the rates the DEM runs with)."""
+        from .dem import DampingRates
+
+        rates = self.damping(shape)
+        k = self.damping_scale
+        if isinstance(rates, DampingRates):
+            return DampingRates(*(k * r for r in rates.as_tuple()))
+        return k * rates
 
     def to_dict(self) -> dict:
         """Plain dict of the fields (for metadata); the :data:`OPTIONAL_KEYS` that are None are left

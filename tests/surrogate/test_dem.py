@@ -423,7 +423,7 @@ def tracked_forces(state, p, h_low, dh, lam, lam_end, h_top, shift, offset, work
                         kernels._face_heights(p.samples, p.shape.a, p.shape.c), p.weights,
                         p.k_area, F, T, ov, np.empty((nf, 3, 3)), work["clear"], work["gaps"],
                         work["slopes"], work["near"], work["mode"], work["approach"],
-                        kernels.REACH_PX, pairs, len(pairs))
+                        kernels.REACH_PX, pairs, len(pairs), *p.pair_points)
     return (F, T, ov, e), work
 
 
