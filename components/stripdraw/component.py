@@ -84,8 +84,10 @@ class StripDrawFiles:
 
 
 INPUTS = (
-    Port("normal_force", "N", "normal force F_N on one pad (>= 0)", DEFAULT_NORMAL_FORCE),
-    Port("grip_velocity", "m/s", "velocity of the grip pulling the strip", DEFAULT_GRIP_VELOCITY),
+    Port("normal_force", "N", "normal force F_N on one pad (>= 0)", DEFAULT_NORMAL_FORCE, low=0.0,
+         why="the pads press on the strip"),
+    Port("grip_velocity", "m/s", "velocity of the grip pulling the strip", DEFAULT_GRIP_VELOCITY, low=0.0,
+         why="the grip pulls the strip through the pad; a grip moving back pushes the strip out of it"),
 )
 #: the model's OUTPUT_NAMES, in its order
 OUTPUTS = (
