@@ -36,7 +36,8 @@ from tribocosim.components import registry
 from tribocosim.components.description import Component
 from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
 from tribocosim.components.fmus import modeldescription3
-from tribocosim.components.fmus.modeldescription import describe, unit_definitions
+from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
+                                                         unit_definitions)
 from tribocosim.components.native import declarations, toolchain
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
@@ -177,13 +178,14 @@ def model_description(comp: Component, fmu_guid: str) -> str:
             attrs["variability"] = "continuous"
         else:
             attrs["variability"] = "discrete" if v["kind"] == "integer" else "continuous"
-            attrs["initial"] = "exact"
+            attrs["initial"] = "calculated"
             outputs.append(vr + 1)
         sv = SubElement(mv, "ScalarVariable", attrs)
         if v["kind"] == "string":
             SubElement(sv, "String", {"start": str(v["start"])})
             continue
-        typed = {"start": str(int(v["start"])) if v["kind"] == "integer" else _number(v["start"])}
+        typed = {} if v["causality"] == "output" else {  # calculated: no start value (FMI 2.0 section 2.2.7)
+            "start": str(int(v["start"])) if v["kind"] == "integer" else _number(v["start"])}
         if v["kind"] == "real":
             typed["unit"] = unit
         if v["low"] is not None:
@@ -195,7 +197,10 @@ def model_description(comp: Component, fmu_guid: str) -> str:
     if outputs:
         out = SubElement(structure, "Outputs")
         for index in outputs:
-            SubElement(out, "Unknown", {"index": str(index)})
+            SubElement(out, "Unknown", {"index": str(index), "dependencies": OUTPUT_DEPENDENCIES})
+        initial = SubElement(structure, "InitialUnknowns")
+        for index in outputs:
+            SubElement(initial, "Unknown", {"index": str(index), "dependencies": INITIAL_DEPENDENCIES})
     indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 
