@@ -24,6 +24,13 @@
 
 #include "fmi3Functions.h"
 
+/* the FMI 3.0 platform tuple of the binary this host loads: its own architecture's */
+#if defined(__aarch64__)
+#define PLATFORM_TUPLE "aarch64-linux"
+#else
+#define PLATFORM_TUPLE "x86_64-linux"
+#endif
+
 static const char *const ALL_FUNCTIONS[] = {
     "fmi3GetVersion", "fmi3SetDebugLogging", "fmi3InstantiateModelExchange", "fmi3InstantiateCoSimulation",
     "fmi3InstantiateScheduledExecution", "fmi3FreeInstance", "fmi3EnterInitializationMode",
@@ -205,7 +212,7 @@ int main(int argc, char **argv) {
     if (argc < 4) die("usage: fmi3_host UNZIPPED_DIR MODEL_IDENTIFIER INSTANTIATION_TOKEN [options]");
     const char *dir = argv[1], *id = argv[2], *guid = argv[3];
     char path[4096], resources[4200];
-    snprintf(path, sizeof path, "%s/binaries/x86_64-linux/%s.so", dir, id);
+    snprintf(path, sizeof path, "%s/binaries/%s/%s.so", dir, PLATFORM_TUPLE, id);
     void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (lib == NULL) {
         fprintf(stderr, "fmi3_host: dlopen %s: %s\n", path, dlerror());
