@@ -419,6 +419,22 @@ def test_no_output_has_direct_feedthrough_and_the_model_description_says_so(unzi
     s.freeInstance()
 
 
+def test_outputs_after_initialization_are_the_model_s_values(unzipped, descriptions):
+    """Outputs are initial="calculated" (FMI 2.0 section 2.2.7): what a host reads at t = 0, after
+    fmi2ExitInitializationMode, is the model's value there, not a declared start. A later pass that starts from
+    a debris field (beta_initial = 0.01) has beta_mean = beta_max = 0.01 at t = 0 (a declared start of 0, as
+    initial="exact" had it, would be stale)."""
+    md = descriptions["StripDraw"]
+    vr = {v.name: v for v in md.modelVariables}
+    assert vr["beta_max"].initial == "calculated" and vr["beta_max"].start is None
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40, "beta_initial": 0.01}, msgs)
+    s.exitInitializationMode()
+    assert s.getReal([vr["beta_max"].valueReference, vr["beta_mean"].valueReference]) == [0.01, 0.01]
+    s.terminate()
+    s.freeInstance()
+
+
 def test_the_demo_scene_has_no_algebraic_loop_for_an_importer_that_reads_the_dependencies():
     from tribocosim.cosim.validate import load_scene
 
