@@ -44,6 +44,12 @@ class Port:
 
     ``key`` is the model's name of the quantity when the FMU variable is named differently (e.g.
     because a parameter has the model's name); ``integer`` declares an output as an FMI Integer.
+
+    ``low`` and ``high`` bound the values the model is built for, each a number or the name of a
+    parameter whose value is the bound (``high="draw_length"``), and ``why`` says what lies outside.
+    They are not the FMU's ``min``/``max`` (a host may pass through them: the model still computes):
+    a set-point (:class:`SetPoint`) connected to an input outside them is a scene error, and an output
+    outside them after a step is a warning of the native FMU (logged; the step returns Warning).
     """
 
     name: str
@@ -52,6 +58,9 @@ class Port:
     start: float = 0.0
     key: str | None = None
     integer: bool = False
+    low: float | str | None = None
+    high: float | str | None = None
+    why: str = ""
 
     @property
     def model_key(self) -> str:
@@ -190,3 +199,17 @@ class Component:
     def output(self, name: str) -> Port:
         """The output port ``name``."""
         return next(p for p in self.outputs if p.name == name)
+
+    def bounds(self, port: Port, values: dict[str, Any]) -> tuple[float | None, float | None]:
+        """``(low, high)`` of a port for parameter ``values`` (``{name: value}``; missing names take their
+        defaults): a bound that names a parameter is that parameter's value."""
+        defaults = self.defaults
+
+        def value(bound):
+            if bound is None or not isinstance(bound, str):
+                return bound
+            if bound not in defaults:
+                raise ParameterError(f"component {self.name}: the bound {bound!r} of {port.name} is not a parameter")
+            return float(values.get(bound, defaults[bound]))
+
+        return value(port.low), value(port.high)

@@ -15,10 +15,17 @@ from tribocosim.components.errors import ParameterError, check_range
 def param(default, unit: str, description: str, low=None, high=None, low_inclusive=True, **extra):
     """A dataclass field with its unit, description and allowed range ``[low, high]`` in the metadata.
 
+    Both bounds are inclusive, as an FMU's ``min`` and ``max`` (FMI 2.0 section 2.2.7: min <= value <= max),
+    which they become: a host offers them as valid values. A quantity that must be positive gets a small
+    positive ``low`` that the model accepts.
+
     Extra metadata: ``integer=True`` for integer fields, ``choices=(...)`` for string fields with a
     fixed set of values, ``text=True`` for free-form string fields.
     """
-    meta = {"unit": unit, "description": description, "low": low, "high": high, "low_inclusive": low_inclusive}
+    if not low_inclusive:
+        raise ParameterError(f"{description!r}: low = {low!r} declared exclusive (low_inclusive=False); an FMU's min is "
+                             "inclusive (min <= value): declare the least value the model accepts as low")
+    meta = {"unit": unit, "description": description, "low": low, "high": high}
     meta.update(extra)
     return field(default=default, metadata=meta)
 
@@ -53,6 +60,5 @@ def validate_fields(obj) -> None:
             value,
             meta["low"],
             meta["high"],
-            low_inclusive=meta["low_inclusive"],
             unit=meta["unit"] if meta["unit"] not in ("", "1") else "",
         )

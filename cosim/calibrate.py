@@ -2,6 +2,7 @@
 
     tribocosim calibrate --measured DATA.csv --out TABLE.npz [--table T] [--contact-area mesoscale|eq8]
                          [--fit particle_area_scale [zeta]] [--set NAME=VALUE ...] [--workers N]
+                         [--max-iterations N] [--keep-unconverged]
 
 DATA.csv: a header, then one row per measurement; columns ``pressure`` [Pa], ``tool_length`` [m],
 ``passes`` (1, 2, 3...: a later pass starts from the debris the previous one left), ``mu_bar`` (the
@@ -16,6 +17,12 @@ the fraction of debris carried by the tool. Every point is simulated with the pu
 Gauss-Newton least squares with a finite-difference Jacobian, within their ranges (s >= 0,
 0 <= zeta <= 1). Standard errors: sqrt(diag((J^T J)^-1)), scaled by the residual variance
 chi^2 / (N - n) when the data give no mu_bar_std.
+
+Convergence: an iteration that changes every fitted parameter by at most 1e-6 of its value (of 1e-3 for
+values below 1e-3), or by at most 1 % of its standard error (changes that small are far inside what the
+data determine), ends the fit. A fit that reaches ``--max-iterations`` (20) without it is not converged:
+the command then says so, with the last changes, writes nothing and exits with 1, unless
+``--keep-unconverged`` asks for the last iterate; that table's metadata then say ``"converged": false``.
 
 The output is the input table with A_p (and its member spread) times s, and mu recomputed, so that
 the model with ``particle_area_scale = 1`` and the same ``contact_area`` is the calibrated one; its
@@ -40,6 +47,11 @@ from tribocosim.components.errors import ParameterError, TribocosimError
 COLUMNS = ("pressure", "tool_length", "passes", "mu_bar")
 FITTABLE = ("particle_area_scale", "zeta")
 BOUNDS = {"particle_area_scale": (0.0, np.inf), "zeta": (0.0, 1.0)}
+#: convergence: every parameter's change in an iteration within RTOL of its value (of ATOL_SCALE below it) ...
+RTOL, ATOL_SCALE = 1e-6, 1e-3
+#: ... or within this fraction of its standard error
+STDERR_FRACTION = 0.01
+MAX_ITERATIONS = 20
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,13 +122,15 @@ class Fit:
     residuals: np.ndarray  # model - measured
     iterations: int
     evaluations: int
+    converged: bool = True
+    last_change: np.ndarray | None = None  # the last iteration's change of every parameter
 
     def as_dict(self) -> dict:
         return {n: {"value": float(v), "stderr": float(e)} for n, v, e in zip(self.names, self.values, self.stderr)}
 
 
 def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = ("particle_area_scale",),
-              workers: int | None = None, log=None) -> Fit:
+              workers: int | None = None, log=None, max_iterations: int = MAX_ITERATIONS) -> Fit:
     """Least-squares fit of the ``fit`` parameters of the strip-draw model to ``data``.
 
     Parameters
@@ -126,6 +140,9 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
         The strip-draw component's parameters (``table_file``, ``contact_area``...), fixed.
     fit : tuple of str
         Names among :data:`FITTABLE`; their start values are those of ``parameters`` (or the defaults).
+    max_iterations : int
+        Gauss-Newton iterations at most; ``Fit.converged`` says whether the convergence test (module
+        docstring) passed before.
     """
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.cosim.stripdraw_test import Point, run_points
@@ -133,6 +150,8 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
     unknown = [f for f in fit if f not in FITTABLE]
     if unknown or not fit:
         raise ParameterError(f"--fit {' '.join(fit)}: fit one or both of {', '.join(FITTABLE)}")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) or max_iterations < 1:
+        raise ParameterError(f"max_iterations = {max_iterations!r} is not allowed; an integer >= 1 is required")
     theta = np.array([float(parameters.get(n, COMPONENT.defaults[n])) for n in fit])
     if "particle_area_scale" in fit and theta[0] == 0:
         theta[0] = 1.0
@@ -152,8 +171,8 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
     lo = np.array([BOUNDS[n][0] for n in fit])
     hi = np.array([BOUNDS[n][1] for n in fit])
     current = model([theta])[0]
-    it = 0
-    for it in range(1, 21):
+    it, converged, change = 0, False, np.zeros_like(theta)
+    for it in range(1, max_iterations + 1):
         steps = np.maximum(1e-3 * np.abs(theta), 1e-4)
         probes = []
         for j in range(len(fit)):
@@ -173,7 +192,10 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
                 trial = model([new])[0]
                 if np.sum(((trial - measured) / sigma) ** 2) <= np.sum(r ** 2):
                     break
-        converged = np.all(np.abs(new - theta) <= 1e-6 * np.maximum(np.abs(theta), 1e-3))
+        change = new - theta
+        stderr = _stderr(J, sigma, (trial - measured) / sigma, weighted, len(data))
+        converged = bool(np.all((np.abs(change) <= RTOL * np.maximum(np.abs(theta), ATOL_SCALE))
+                                | (np.abs(change) <= STDERR_FRACTION * stderr)))
         theta, current = new, trial
         if log:
             log(f"  iteration {it}: " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(fit, theta))
@@ -181,11 +203,18 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
         if converged:
             break
     r = (current - measured) / sigma
-    dof = max(1, len(data) - len(fit))
-    cov = np.linalg.pinv((J / sigma[:, None]).T @ (J / sigma[:, None]))
+    return Fit(tuple(fit), theta, _stderr(J, sigma, r, weighted, len(data)), current, current - measured, it,
+               evaluations, converged, change)
+
+
+def _stderr(J: np.ndarray, sigma: np.ndarray, r: np.ndarray, weighted: bool, n: int) -> np.ndarray:
+    """Standard errors sqrt(diag((J^T J)^-1)) of the weighted problem, scaled by chi^2 / (N - n) unless the data
+    give their standard deviations."""
+    Jw = J / sigma[:, None]
+    cov = np.linalg.pinv(Jw.T @ Jw)
     if not weighted:
-        cov = cov * float(np.sum(r ** 2)) / dof
-    return Fit(tuple(fit), theta, np.sqrt(np.maximum(np.diag(cov), 0.0)), current, current - measured, it, evaluations)
+        cov = cov * float(np.sum(r ** 2)) / max(1, n - J.shape[1])
+    return np.sqrt(np.maximum(np.diag(cov), 0.0))
 
 
 def scaled_table(table, scale: float, contact_area: str, mu0: float, metadata: dict):
@@ -217,6 +246,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a strip-draw parameter for every simulation (e.g. zeta=0.2, n_elements=200)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: one per CPU)")
+    p.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS, metavar="N",
+                   help=f"Gauss-Newton iterations at most (default: {MAX_ITERATIONS})")
+    p.add_argument("--keep-unconverged", action="store_true",
+                   help="write the table from the last iterate (metadata: converged = false) and exit 0 when the fit "
+                        "has not converged within --max-iterations; without it, that is exit code 1 and no table")
     return p
 
 
@@ -247,10 +281,22 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         print(f"calibrating {', '.join(args.fit)} on {len(data)} point(s) of {args.measured} "
               f"(contact_area = {args.contact_area}, table {table_path.name})", file=sys.stderr)
-        fit = calibrate(data, parameters, tuple(args.fit), args.workers, log=lambda s: print(s, file=sys.stderr))
+        fit = calibrate(data, parameters, tuple(args.fit), args.workers, log=lambda s: print(s, file=sys.stderr),
+                        max_iterations=args.max_iterations)
     except TribocosimError as exc:
         print(f"tribocosim calibrate: {exc}", file=sys.stderr)
         return 2
+    if not fit.converged:
+        moved = ", ".join(f"{n} = {v:.6g} changed by {d:+.3g} (standard error {e:.2g})"
+                          for n, v, d, e in zip(fit.names, fit.values, fit.last_change, fit.stderr))
+        print(f"tribocosim calibrate: the fit has not converged in {fit.iterations} iterations ({fit.evaluations} "
+              f"simulations): in the last one {moved}; converged means every change within {RTOL:g} of the value "
+              f"or {STDERR_FRACTION:.0%} of the standard error. "
+              + (f"Writing the last iterate to {args.out} as asked (--keep-unconverged)." if args.keep_unconverged
+                 else f"Nothing written; allow more iterations (--max-iterations) or write the last iterate with "
+                      f"--keep-unconverged."), file=sys.stderr)
+        if not args.keep_unconverged:
+            return 1
     values = dict(zip(fit.names, fit.values))
     scale = float(values.get("particle_area_scale", parameters.get("particle_area_scale", 1.0)))
     mu0 = float(parameters.get("mu0", COMPONENT.defaults["mu0"]))
@@ -267,7 +313,8 @@ def main(argv: list[str] | None = None) -> int:
         "note": "particle_area holds the table's A_p times the fitted particle_area_scale: use this table with "
                 f"particle_area_scale = 1 and contact_area = {args.contact_area}"
                 + (f" and zeta = {values['zeta']:.6g}" if "zeta" in values else ""),
-        "iterations": fit.iterations, "simulations": fit.evaluations,
+        "iterations": fit.iterations, "simulations": fit.evaluations, "converged": fit.converged,
+        "last_change": {n: float(d) for n, d in zip(fit.names, fit.last_change)},
     }
     digest = write_table(args.out, scaled_table(table, scale, args.contact_area, mu0, meta))
     print(f"{'row':>4} {'P [MPa]':>8} {'L_T [mm]':>8} {'passes':>6} {'measured':>9} {'model':>9} {'residual':>9}")
@@ -275,7 +322,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{p['row']:>4} {p['pressure'] / 1e6:8.3g} {p['tool_length'] * 1e3:8.3g} {p['passes']:>6} "
               f"{p['measured']:9.4f} {p['model']:9.4f} {p['residual']:+9.4f}")
     for name, v, e in zip(fit.names, fit.values, fit.stderr):
-        print(f"{name} = {v:.6g} +- {e:.2g} (standard error)")
+        print(f"{name} = {v:.6g} +- {e:.2g} (standard error){'' if fit.converged else ', NOT CONVERGED'}")
     print(f"wrote {args.out} (sha256 {digest[:16]}...; contact_area = {args.contact_area}; "
           f"{fit.evaluations} simulations in {time.perf_counter() - t0:.1f} s)")
     return 0

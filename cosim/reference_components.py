@@ -10,7 +10,9 @@ A scene FMU given as ``component = "<name>"`` is the FMU of a component of
   nothing that spans instances. Each parameter is checked against its dataclass, then the
   component's own ``check`` runs (e.g. the strip's table and field file, the cap of beta), and
   every connection from an output with known set-points (``setpoints``: the press's force, the
-  drive's speed) to an input with limits (from ``check``: the strip's table axes) is matched;
+  drive's velocity) to an input is matched against the range the input's port declares (``low``,
+  ``high``: the strip is pulled, grip_velocity >= 0) and the limits of ``check`` (the strip's table
+  axes);
 - build the monolithic reference (:func:`reference_for_scene`): each component instance becomes
   its pure model (``Component.make``, the same function the FMU calls) with the scene's
   parameters, connected as the scene connects the FMUs, unconnected inputs held at their scene
@@ -91,14 +93,50 @@ def component_problems(scene) -> list[Problem]:
                 problems.add(f"{key}.{pname}" if pname else key, message)
         if comp.setpoints is not None:
             setpoints[name] = comp.setpoints(params)
-    for link in scene.connections:  # set-points of one instance against the input limits of another
+    for name, comp in found.items():  # inputs held at a scene value
+        given = scene.fmus[name].parameters
+        for port in comp.inputs:
+            value = given.get(port.name)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                label = f"{port.name} = {value:g}{_unit(port)}"
+                message = _outside_port(comp, given, port, float(value), label, f"{name}.{port.name}")
+                if message:
+                    problems.add(f"fmus.{name}.parameters.{port.name}", message)
+    for link in scene.connections:  # set-points of one instance against the inputs of another
         src, dst = link.source, link.target
+        comp = found.get(dst.instance)
+        port = next((p for p in comp.inputs if p.name == dst.variable), None) if comp is not None else None
         limit = limits.get(dst.instance, {}).get(dst.variable)
-        for sp in setpoints.get(src.instance, {}).get(src.variable, []) if limit else []:
-            message = limit(sp.value, sp.label, dst.instance)
-            if message:
-                problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
+        for sp in setpoints.get(src.instance, {}).get(src.variable, []):
+            messages = (_outside_port(comp, scene.fmus[dst.instance].parameters, port, sp.value, sp.label, str(dst))
+                        if port is not None else None, limit(sp.value, sp.label, dst.instance) if limit else None)
+            for message in messages:
+                if message:
+                    problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
     return problems.items
+
+
+def _unit(port) -> str:
+    return f" {port.unit}" if port.unit not in ("", "1") else ""
+
+
+def _outside_port(comp, values: dict, port, value: float, label: str, where: str) -> str | None:
+    """Why ``value`` (``label``: how to name it) lies outside the range input ``port`` of component ``comp``
+    declares (:class:`~tribocosim.components.description.Port` ``low``/``high``, bounds that name a parameter
+    taken from ``values``), or None. ``where``: the input, ``instance.variable``."""
+    try:
+        low, high = comp.bounds(port, values)
+    except (ParameterError, TypeError, ValueError):  # a bad bound parameter is reported as that parameter
+        return None
+    instance = where.split(".")[0]
+    for bound, named, side, least, outside in ((low, port.low, "below", "least", low is not None and value < low),
+                                               (high, port.high, "above", "largest",
+                                                high is not None and value > high)):
+        if outside:
+            of = f" ({named} of '{instance}')" if isinstance(named, str) else ""
+            return (f"{label} is {side} {bound:g}{_unit(port)}{of}, the {least} {where} the model is built for"
+                    + (f" ({port.why})" if port.why else ""))
+    return None
 
 
 def load_component_scene(path, overrides: dict | None = None):

@@ -8,9 +8,10 @@ parameter sets (``.ssv``). :mod:`tribocosim.cosim.ssp_export` writes a scene as 
 
 The fixed master step is not part of SSP 1.0: it travels in the Open Simulation Platform's
 annotation of ``ssd:DefaultExperiment`` (``osp:FixedStepAlgorithm baseStepSize``), which libcosim
-reads. Our master's settings and the recorded outputs (the scene's ``[master]``, ``[[power_bonds]]``
-and ``[output]`` tables, as TOML text) travel in a ``org.tribocosim.scene`` annotation of the
-SSD, which other tools ignore.
+reads, and in OMSimulator's annotation of the ``ssd:System`` (``oms:FixedStepMaster stepSize``), which
+OMSimulator needs to make the system at all. Our master's settings and the recorded outputs (the
+scene's ``[master]``, ``[[power_bonds]]`` and ``[output]`` tables, as TOML text) travel in a
+``org.tribocosim.scene`` annotation of the ``ssd:System``, which other tools ignore.
 
 This module holds the namespaces, the small TOML writer both directions use, and ``main`` of
 ``tribocosim ssp export SCENE -o RIG.ssp``.
@@ -33,12 +34,14 @@ NS = {
     "ssm": "http://ssp-standard.org/SSP1/SystemStructureParameterMapping",
     "ssb": "http://ssp-standard.org/SSP1/SystemStructureSignalDictionary",
     "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
     "tc": "https://tribocosim.org/SSP/SceneAnnotation",
 }
 SSD_NAME = "SystemStructure.ssd"
 FMU_TYPE = "application/x-fmu-sharedlibrary"
 PARAMETER_SET_TYPE = "application/x-ssp-parameter-set"
 OSP_ANNOTATION = "com.opensimulationplatform"
+OMS_ANNOTATION = "org.openmodelica"
 SCENE_ANNOTATION = "org.tribocosim.scene"
 #: scene tables carried in the ``org.tribocosim.scene`` annotation (the rest is in the SSD proper)
 SCENE_TABLES = ("master", "power_bonds", "output")
@@ -56,6 +59,25 @@ def prefixed(tag: str) -> str:
         if tag.startswith(f"{{{uri}}}"):
             return f"{prefix}:{tag[len(uri) + 2:]}"
     return tag
+
+
+def fmpy_parameter_set(path: str | Path):
+    """The parameter bindings of an SSP package's components as one fmpy ``ParameterSet`` with
+    ``component.variable`` names, the form fmpy's ``simulate_ssp(..., parameter_set=...)`` applies
+    (fmpy 0.3 reads the bindings but applies only the set it is given)::
+
+        simulate_ssp("rig.ssp", stop_time=1.76, step_size=1e-3, parameter_set=fmpy_parameter_set("rig.ssp"))
+    """
+    from fmpy.ssp.ssd import ParameterSet, find_components, read_ssd
+
+    merged = ParameterSet(name=Path(path).stem)
+    for comp in find_components(read_ssd(str(path)).system):
+        for binding in comp.parameterBindings:
+            for pset in binding.parameterValues:
+                for p in pset.parameters:
+                    p.name = f"{comp.name}.{p.name}"
+                    merged.parameters.append(p)
+    return merged
 
 
 # ------------------------------------------------------------------ TOML text

@@ -10,17 +10,25 @@ The zip holds
     Unconnected inputs get no connector: they keep their start value or the parameter set's value
     (fmpy 0.3's ``simulate_ssp`` drives every declared input connector, with 0 when unconnected);
   - its scene parameters as an ``ssd:ParameterBinding`` to ``resources/<instance>.ssv`` (names as in
-    the FMU, values with the FMU's units): libcosim applies component bindings (only those); fmpy
-    0.3's ``read_ssd`` reads them but ``simulate_ssp`` applies only the one ``parameter_set`` it is
-    given, with ``component.variable`` names;
+    the FMU, values with the FMU's units). Every ``ssv:ParameterSet`` has the same name, the system's
+    (the scene file's stem, e.g. ``demo``), so that one named set holds all of them: ecos applies the
+    sets of the one name it is given (``EcosSimulation.init(parameter_set="demo")``); libcosim and
+    OMSimulator apply the component bindings as they are; fmpy 0.3's ``simulate_ssp`` applies only
+    the one ``parameter_set`` it is given, with ``component.variable`` names
+    (:func:`tribocosim.cosim.ssp.fmpy_parameter_set` gathers the bindings into one);
   - the connections, in scene order;
+  - ``ssd:Annotations``, last: first OMSimulator's (``org.openmodelica``: ``oms:SimulationInformation``
+    with an ``oms:FixedStepMaster`` of the scene's step; OMSimulator reads the first annotation only,
+    and without it cannot make the system), then the ``org.tribocosim.scene`` annotation: the scene's
+    ``[master]``, ``[[power_bonds]]`` and ``[output]`` tables as TOML, for ``tribocosim run RIG.ssp``;
 
 - ``ssd:DefaultExperiment``: start and stop time, and the master step as the OSP annotation
   ``osp:FixedStepAlgorithm baseStepSize`` (libcosim reads it; SSP 1.0 has no element for it); for an
   adaptive scene that is the initial step;
-- the ``org.tribocosim.scene`` annotation: the scene's ``[master]``, ``[[power_bonds]]`` and
-  ``[output]`` tables as TOML, for ``tribocosim run RIG.ssp``;
 - ``resources/``: each distinct FMU file once, and the ``.ssv`` parameter sets.
+
+No annotation at the top level of the SSD: OMSimulator's reader takes only ``ssd:System``,
+``ssd:Units``, ``ssd:Enumerations`` and ``ssd:DefaultExperiment`` there ("wrong xml schema detected").
 
 Members are written in a fixed order with a fixed timestamp, so the same scene and FMUs give the
 same bytes. The FMUs are copied as they are: a native FMU from the cache carries this machine's binary
@@ -44,8 +52,8 @@ from pathlib import Path
 
 from tribocosim.components.errors import TribocosimError
 from tribocosim.cosim.scene import apply_overrides
-from tribocosim.cosim.ssp import (FMU_TYPE, NS, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES,
-                                  SSD_NAME, q, toml_text)
+from tribocosim.cosim.ssp import (FMU_TYPE, NS, OMS_ANNOTATION, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION,
+                                  SCENE_TABLES, SSD_NAME, q, toml_text)
 from tribocosim.cosim.validate import unit_of
 
 _CONNECTOR_TYPES = ("Real", "Integer", "Boolean", "Enumeration")
@@ -102,7 +110,7 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
     plan = load_component_scene(scene, overrides)
     sc = plan.scene
     doc = apply_overrides(tomllib.loads(sc.path.read_text(encoding="utf-8")), dict(overrides or {}))
-    for prefix in ("ssd", "ssc", "ssv", "osp", "tc"):
+    for prefix in ("ssd", "ssc", "ssv", "osp", "oms", "tc"):
         ET.register_namespace(prefix, NS[prefix])
 
     fmu_member, fmu_files = _fmu_members(plan)
@@ -128,7 +136,7 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
         params = sc.fmus[name].parameters
         if params:
             member = _unique(f"resources/{_safe(name)}", ".ssv", set(ssv_files) | set(fmu_files))
-            ssv_files[member] = _parameter_set(name, model, params)
+            ssv_files[member] = _parameter_set(sc.path.stem, model, params)
             n_parameters += len(params)
             bindings = ET.SubElement(comp, q("ssd:ParameterBindings"))
             ET.SubElement(bindings, q("ssd:ParameterBinding"), {"type": PARAMETER_SET_TYPE, "source": member})
@@ -138,6 +146,15 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
             ET.SubElement(conns, q("ssd:Connection"), {
                 "startElement": l.source.instance, "startConnector": l.source.variable,
                 "endElement": l.target.instance, "endConnector": l.target.variable})
+    ex = sc.experiment
+    notes = ET.SubElement(system, q("ssd:Annotations"))
+    oms = ET.SubElement(ET.SubElement(notes, q("ssc:Annotation"), {"type": OMS_ANNOTATION}), q("oms:Annotations"))
+    ET.SubElement(ET.SubElement(oms, q("oms:SimulationInformation")), q("oms:FixedStepMaster"),
+                  {"description": "oms-ma", "stepSize": repr(ex.step)})
+    tables = {k: doc[k] for k in SCENE_TABLES if k in doc}
+    if tables:
+        note = ET.SubElement(notes, q("ssc:Annotation"), {"type": SCENE_ANNOTATION})
+        ET.SubElement(note, q("tc:Scene"), {"format": "toml"}).text = "\n" + toml_text(tables)
     if enums:
         block = ET.SubElement(root, q("ssd:Enumerations"))
         for ename, items in enums.items():
@@ -146,14 +163,9 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
                 ET.SubElement(e, q("ssc:Item"), {"name": item.name, "value": str(int(item.value))})
     if units.used:
         units.write(ET.SubElement(root, q("ssd:Units")))
-    ex = sc.experiment
     default = ET.SubElement(root, q("ssd:DefaultExperiment"), {"startTime": repr(ex.start), "stopTime": repr(ex.stop)})
     osp = ET.SubElement(ET.SubElement(default, q("ssd:Annotations")), q("ssc:Annotation"), {"type": OSP_ANNOTATION})
     ET.SubElement(ET.SubElement(osp, q("osp:Algorithm")), q("osp:FixedStepAlgorithm"), {"baseStepSize": repr(ex.step)})
-    tables = {k: doc[k] for k in SCENE_TABLES if k in doc}
-    if tables:
-        note = ET.SubElement(ET.SubElement(root, q("ssd:Annotations")), q("ssc:Annotation"), {"type": SCENE_ANNOTATION})
-        ET.SubElement(note, q("tc:Scene"), {"format": "toml"}).text = "\n" + toml_text(tables)
 
     members = {SSD_NAME: _xml_bytes(root)}
     members.update({m: Path(p).read_bytes() for m, p in fmu_files.items()})
@@ -204,7 +216,7 @@ def _type_element(connector: ET.Element, var, model, units: _Units, enums: dict)
 
 
 def _parameter_set(name: str, model, params: dict) -> bytes:
-    """The ``.ssv`` file of one instance's scene parameters."""
+    """The ``.ssv`` file of one instance's scene parameters, a parameter set called ``name``."""
     root = ET.Element(q("ssv:ParameterSet"), {"version": "1.0", "name": name, "generationTool": _tool()})
     values = ET.SubElement(root, q("ssv:Parameters"))
     units = _Units()

@@ -20,7 +20,8 @@ What is read:
 - ``ssd:DefaultExperiment`` start and stop, and the step from the OSP annotation
   ``osp:FixedStepAlgorithm baseStepSize`` (else ``--set experiment.step=...``);
 - the ``org.tribocosim.scene`` annotation written by :mod:`tribocosim.cosim.ssp_export` (master
-  settings, power bonds, recorded outputs). Without it: the default master (Jacobi, no
+  settings, power bonds, recorded outputs), on the ``ssd:System`` or at the top level of the SSD (the
+  system's wins). Without it: the default master (Jacobi, no
   extrapolation) and every output connector recorded, in document order, to ``<name>.csv``.
 
 Refused, each problem naming the element (all of them in one SceneError): signal dictionaries
@@ -172,6 +173,7 @@ class _Reader:
         self.add = self.problems.add
         self.components: dict[str, _Component] = {}
         self.ignored: list[str] = []
+        self.system_tables: dict = {}
 
     # --- the document
     def read(self) -> dict:
@@ -200,6 +202,7 @@ class _Reader:
                 self.add(tag, "unknown element of ssd:SystemStructureDescription")
         if root.find(q("ssd:System")) is None:
             self.add("ssd:SystemStructureDescription", "no ssd:System")
+        tables = self.system_tables or tables
         self._apply_bindings(system_bindings, None)
         for key, what in (("stop", "stopTime"), ("step", "step size (osp:FixedStepAlgorithm baseStepSize)")):
             if key not in experiment and f"experiment.{key}" not in self.overrides:
@@ -248,6 +251,8 @@ class _Reader:
                 self.add(w, "system connectors (an interface to an enclosing system) are not supported")
             elif tag == "ssd:SignalDictionaries":
                 self.add(w, "signal dictionaries are not supported; connect the components directly")
+            elif tag == "ssd:Annotations":
+                self.system_tables = self._scene_annotation(child)
             elif tag not in _IGNORED:
                 self.add(w, "unknown element of ssd:System")
         return bindings, connections

@@ -1,7 +1,8 @@
 """``tribocosim fmu``: build the project's FMUs.
 
     tribocosim fmu build [--out DIR] [--only NAME ...] [--python] [--platform P ...] [--fmi {2,3}]
-        native FMUs (C; binaries for linux64, win64 and darwin64) by default, into build/fmus;
+        native FMUs (C; binaries for linux64, win64, darwin64 (universal: Intel and Apple Silicon); with --fmi 3
+        also aarch64-linux and aarch64-darwin) by default, into build/fmus;
         --python: the pythonfmu variants (the physics in Python; the host needs Python and numpy);
         --fmi 3: FMI 3.0 co-simulation variants of the native FMUs, same file names (StripDraw.fmu...),
         into build/fmus/fmi3 unless --out is given
@@ -27,8 +28,10 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
     build.add_argument("--python", action="store_true",
                        help="build the pythonfmu variants (change the physics in Python; need Python and numpy in the host)")
-    build.add_argument("--platform", nargs="+", choices=("linux64", "win64", "darwin64"),
-                       help="native: the platforms to compile for (default: all three)")
+    build.add_argument("--platform", nargs="+", choices=("linux64", "win64", "darwin64", "aarch64-linux",
+                                                         "aarch64-darwin"),
+                       help="native: the platforms to compile for (default: all; FMI 2.0 has no ARM Linux folder "
+                            "and runs Apple Silicon from the universal darwin64 binary)")
     build.add_argument("--fmi", type=int, choices=(2, 3), default=2,
                        help="native: the FMI version (default: 2). 3: FMI 3.0 co-simulation FMUs with the same "
                             f"names (StripDraw.fmu...) into {DEFAULT_OUT_FMI3} unless --out is given; StripDraw "

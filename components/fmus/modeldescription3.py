@@ -8,8 +8,9 @@ variable ``time`` and, for a component with array outputs (the strip's nodal fie
 ``contact``), the UInt64 structural parameter of their length (``n_nodes``) and the arrays, each with a
 ``<Dimension valueReference=...>`` on it. The integer parameter the length derives from
 (``n_elements``) is a structural parameter here (in FMI 2.0 a plain parameter): it fixes the mesh.
-The arrays have ``initial = calculated`` (they are computed at the end of initialization) and are
-initial unknowns.
+Outputs, the arrays too, have ``initial = calculated`` (computed at the end of initialization) and are
+initial unknowns; no output depends directly on an input (:data:`~tribocosim.components.fmus.modeldescription.
+OUTPUT_DEPENDENCIES`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from __future__ import annotations
 from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from tribocosim.components.description import Component
-from tribocosim.components.fmus.modeldescription import describe, unit_definitions
+from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
+                                                         unit_definitions)
 from tribocosim.components.native import declarations
 
 #: FMI 2.0 variable kinds -> FMI 3.0 element names
@@ -47,9 +49,9 @@ def _variable(parent: Element, v: dict, vr: int, structural: set[str]) -> None:
     else:
         attrs["variability"] = "discrete"
     if causality == "output":
-        attrs["initial"] = "calculated" if "dimension" in v else "exact"
+        attrs["initial"] = "calculated"
     number = _integer if kind in ("integer", "uint64") else _number
-    if not text and causality != "independent" and "dimension" not in v:
+    if not text and causality not in ("independent", "output"):
         attrs["start"] = number(v["start"])
     if kind == "real":
         attrs["unit"] = unit
@@ -101,9 +103,9 @@ def model_description(comp: Component, token: str) -> str:
     structure = SubElement(root, "ModelStructure")
     for vr, v in numbered:
         if v["causality"] == "output":
-            SubElement(structure, "Output", {"valueReference": str(vr)})
+            SubElement(structure, "Output", {"valueReference": str(vr), "dependencies": OUTPUT_DEPENDENCIES})
     for vr, v in numbered:
-        if "dimension" in v:
-            SubElement(structure, "InitialUnknown", {"valueReference": str(vr)})
+        if v["causality"] == "output":
+            SubElement(structure, "InitialUnknown", {"valueReference": str(vr), "dependencies": INITIAL_DEPENDENCIES})
     indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"

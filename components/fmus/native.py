@@ -11,7 +11,9 @@ For each component with a native implementation (``Component.native``) the build
    of the FMI version (``tc_fmi2.c`` or ``tc_fmi3.c``, against the standard's headers that fmpy
    ships) with the C compiler of the ``ziglang`` package
    (:mod:`tribocosim.components.native.toolchain`) into ``binaries/{linux64,win64,darwin64}``
-   (FMI 2.0) or ``binaries/{x86_64-linux,x86_64-windows,x86_64-darwin}`` (FMI 3.0);
+   (FMI 2.0; darwin64 a universal binary, x86_64 and arm64, for Intel and Apple Silicon Macs; FMI 2.0 has no
+   folder for ARM Linux) or ``binaries/{x86_64-linux,x86_64-windows,x86_64-darwin,aarch64-linux,
+   aarch64-darwin}`` (FMI 3.0 platform tuples);
 3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table)
    into ``<ModelIdentifier>.fmu`` (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
    it into place atomically, next to a JSON record of its source digest.
@@ -36,17 +38,23 @@ from tribocosim.components import registry
 from tribocosim.components.description import Component
 from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
 from tribocosim.components.fmus import modeldescription3
-from tribocosim.components.fmus.modeldescription import describe, unit_definitions
+from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
+                                                         unit_definitions)
 from tribocosim.components.native import declarations, toolchain
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
 #: version-independent FMI core and the version's wrapper
 SHARED_SOURCES = {2: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi2.c"),
                   3: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi3.c")}
-PLATFORMS = tuple(toolchain.PLATFORMS)
+#: the platforms a native FMU is built for (by default all): the machines it runs on
+PLATFORMS = ("linux64", "win64", "darwin64", "aarch64-linux", "aarch64-darwin")
 FMI_VERSIONS = (2, 3)
+#: the FMI 2.0 binaries folder of each platform that has one: Apple Silicon (aarch64-darwin) runs the universal
+#: darwin64 binary, and FMI 2.0 names no folder for ARM Linux
+FMI2_FOLDERS = {"linux64": "linux64", "win64": "win64", "darwin64": "darwin64", "aarch64-darwin": "darwin64"}
 #: the FMI 3.0 binaries folder (platform tuple) of each platform
-FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "darwin64": "x86_64-darwin"}
+FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "darwin64": "x86_64-darwin",
+                  "aarch64-linux": "aarch64-linux", "aarch64-darwin": "aarch64-darwin"}
 
 
 def fmus() -> dict[str, Component]:
@@ -92,9 +100,30 @@ def sources(comp: Component, fmi_version: int = 2) -> list[Path]:
 
 
 def binary_path(name: str, platform: str, fmi_version: int = 2) -> str:
-    """Where FMU ``name``'s library for ``platform`` (linux64, win64, darwin64) is inside the FMU."""
-    folder = platform if _check_version(fmi_version) == 2 else FMI3_PLATFORMS[platform]
-    return f"binaries/{folder}/{name}{toolchain.PLATFORMS[platform][1]}"
+    """Where FMU ``name``'s library for ``platform`` (one of :data:`PLATFORMS`) is inside the FMU."""
+    folders = FMI2_FOLDERS if _check_version(fmi_version) == 2 else FMI3_PLATFORMS
+    if platform not in folders:
+        raise FmuBuildError(f"platform {platform!r} has no FMI {fmi_version}.0 binaries folder; "
+                            f"FMI {fmi_version}.0 has {', '.join(sorted(set(folders.values())))}")
+    return f"binaries/{folders[platform]}/{name}{toolchain.PLATFORMS[platform][1]}"
+
+
+def _targets(platforms, fmi_version: int) -> dict[str, str]:
+    """``{binary path's platform: toolchain platform}`` for the platforms an FMI version has folders for, each
+    folder once: FMI 2.0 darwin64 is the universal binary (toolchain ``darwin64``), FMI 3.0 x86_64-darwin the
+    x86_64 one; ARM Linux has no FMI 2.0 folder and is left out of an FMI 2.0 FMU."""
+    out, seen = {}, set()
+    for p in platforms:
+        if p not in PLATFORMS:
+            raise FmuBuildError(f"platform = {p!r} is not one of {', '.join(PLATFORMS)}")
+        if fmi_version == 2:
+            if p not in FMI2_FOLDERS or FMI2_FOLDERS[p] in seen:
+                continue
+            seen.add(FMI2_FOLDERS[p])
+            out[FMI2_FOLDERS[p]] = FMI2_FOLDERS[p]
+        else:
+            out[p] = "x86_64-darwin" if p == "darwin64" else p
+    return out
 
 
 def description(comp: Component, fmu_guid: str, fmi_version: int = 2) -> str:
@@ -177,13 +206,14 @@ def model_description(comp: Component, fmu_guid: str) -> str:
             attrs["variability"] = "continuous"
         else:
             attrs["variability"] = "discrete" if v["kind"] == "integer" else "continuous"
-            attrs["initial"] = "exact"
+            attrs["initial"] = "calculated"
             outputs.append(vr + 1)
         sv = SubElement(mv, "ScalarVariable", attrs)
         if v["kind"] == "string":
             SubElement(sv, "String", {"start": str(v["start"])})
             continue
-        typed = {"start": str(int(v["start"])) if v["kind"] == "integer" else _number(v["start"])}
+        typed = {} if v["causality"] == "output" else {  # calculated: no start value (FMI 2.0 section 2.2.7)
+            "start": str(int(v["start"])) if v["kind"] == "integer" else _number(v["start"])}
         if v["kind"] == "real":
             typed["unit"] = unit
         if v["low"] is not None:
@@ -195,7 +225,10 @@ def model_description(comp: Component, fmu_guid: str) -> str:
     if outputs:
         out = SubElement(structure, "Outputs")
         for index in outputs:
-            SubElement(out, "Unknown", {"index": str(index)})
+            SubElement(out, "Unknown", {"index": str(index), "dependencies": OUTPUT_DEPENDENCIES})
+        initial = SubElement(structure, "InitialUnknowns")
+        for index in outputs:
+            SubElement(initial, "Unknown", {"index": str(index), "dependencies": INITIAL_DEPENDENCIES})
     indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 
@@ -216,10 +249,10 @@ def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, 
     else:  # fmi3FunctionTypes.h declares callbacks without prototypes: system headers, exempt from -Werror
         headers = {"include_dirs": [include], "extra_flags": ["-isystem", str(fmi3_headers())]}
     built = {}
-    for platform in platforms:
+    for platform, target in _targets(platforms, fmi_version).items():
         out = folder / binary_path(name, platform, fmi_version)
         try:
-            built[platform] = toolchain.compile_shared(sources(comp, fmi_version), out, platform, **headers)
+            built[platform] = toolchain.compile_shared(sources(comp, fmi_version), out, target, **headers)
         except toolchain.CompileError as exc:
             raise FmuBuildError(f"FMU {name}: {exc}") from exc
     return built
@@ -257,7 +290,7 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", description(comp, guid(digest), fmi_version))
-            for platform in platforms:
+            for platform in _targets(platforms, fmi_version):
                 inside = binary_path(name, platform, fmi_version)
                 z.write(stage / inside, inside)
             for path in comp.resource_files:

@@ -30,9 +30,9 @@ def build(params: MachineParameters, files, resources: Path) -> Built:
 
 
 def setpoints(params: MachineParameters) -> dict[str, list[SetPoint]]:
-    """The speed ``grip_velocity`` will follow."""
-    v = abs(params.velocity_setpoint)
-    return {"grip_velocity": [SetPoint(v, f"|velocity_setpoint| = {v:g} m/s", "velocity_setpoint")]}
+    """The velocity ``grip_velocity`` will follow, with its sign (negative: the grip moves back)."""
+    v = params.velocity_setpoint
+    return {"grip_velocity": [SetPoint(v, f"velocity_setpoint = {v:g} m/s", "velocity_setpoint")]}
 
 
 COMPONENT = Component(

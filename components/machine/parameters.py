@@ -18,14 +18,14 @@ class MachineParameters:
 
     velocity_setpoint: float = param(0.08, "m/s", "drawing velocity to hold", -10.0, 10.0)
     ramp_time: float = param(0.02, "s", "time to ramp the velocity set-point from 0", 0.0, 1e4)
-    motor_inertia: float = param(1e-3, "kg m2", "rotor inertia of the servo motor", 1e-9, 10.0, False)
-    screw_lead: float = param(0.01, "m", "ball-screw lead (travel per motor revolution)", 1e-5, 1.0, False)
-    carriage_mass: float = param(200.0, "kg", "mass of grip carriage and grip", 1e-3, 1e5, False)
-    drive_stiffness: float = param(5e7, "N/m", "drivetrain stiffness between motor side and grip", 1.0, 1e13, False)
+    motor_inertia: float = param(1e-3, "kg m2", "rotor inertia of the servo motor", 1e-9, 10.0)
+    screw_lead: float = param(0.01, "m", "ball-screw lead (travel per motor revolution)", 1e-5, 1.0)
+    carriage_mass: float = param(200.0, "kg", "mass of grip carriage and grip", 1e-3, 1e5)
+    drive_stiffness: float = param(5e7, "N/m", "drivetrain stiffness between motor side and grip", 1.0, 1e13)
     drive_damping: float = param(2e4, "N s/m", "drivetrain damping between motor side and grip", 0.0, 1e10)
     speed_kp: float = param(4e5, "N s/m", "proportional gain of the speed controller", 0.0, 1e12)
     speed_ki: float = param(2e7, "N/m", "integral gain of the speed controller", 0.0, 1e14)
-    current_time_constant: float = param(5e-4, "s", "lag of the motor force behind its command", 1e-7, 10.0, False)
+    current_time_constant: float = param(5e-4, "s", "lag of the motor force behind its command", 1e-7, 10.0)
 
     def __post_init__(self) -> None:
         validate_fields(self)

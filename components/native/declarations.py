@@ -12,7 +12,8 @@ Two headers, written into a build folder next to the sources:
     the parameters, then the inputs, then the outputs, in the order and with the names, units,
     start values, ranges and choices of the model description), ``TC_P_<name>`` indices of the
     parameters, and ``<prefix>_fill_params(values, p)`` that fills the model's struct from the
-    FMU's parameter values; for FMI 3.0 the value references of the variables only it has
+    FMU's parameter values; ``TC_BOUNDS``, the ranges the outputs are built for (:func:`output_bounds`);
+    for FMI 3.0 the value references of the variables only it has
     (:func:`fmi3_variables`: ``TC_VR_TIME``, and with array outputs ``TC_N_ARRAYS``, ``TC_ARRAYS``,
     ``TC_A_<name>``, ``TC_VR_ARRAY_SIZE``, ``TC_VR_ARRAYS``). The generic FMI wrappers
     (``tc_fmi2.c``, ``tc_fmi3.c``, their core ``tc_fmu_instance.c``) and the component's glue
@@ -90,17 +91,37 @@ def variables(comp: Component) -> list[dict]:
             "name": f.name, "kind": kind, "causality": "parameter", "index": k,
             "unit": "" if kind == "string" else (meta.get("unit") or "1"),
             "start": f.default, "low": meta.get("low"), "high": meta.get("high"),
-            "low_inclusive": meta.get("low_inclusive", True), "choices": tuple(meta.get("choices", ())),
+            "choices": tuple(meta.get("choices", ())),
             "description": meta["description"],
         })
     for k, port in enumerate(comp.inputs):
         out.append({"name": port.name, "kind": "real", "causality": "input", "index": k, "unit": port.unit or "1",
-                    "start": port.start, "low": None, "high": None, "low_inclusive": True, "choices": (),
+                    "start": port.start, "low": None, "high": None, "choices": (),
                     "description": port.description})
     for k, port in enumerate(comp.outputs):
         out.append({"name": port.name, "kind": "integer" if port.integer else "real", "causality": "output",
                     "index": k, "unit": port.unit or "1", "start": port.start, "low": None, "high": None,
-                    "low_inclusive": True, "choices": (), "description": port.description})
+                    "choices": (), "description": port.description})
+    return out
+
+
+def output_bounds(comp: Component) -> list[dict]:
+    """The ranges the component's outputs are built for (``Port.low``/``high``): per bound the output's index,
+    the side (-1 low, +1 high), the value or the index of the parameter that holds it (-1: the value), and why.
+    The native FMU warns when an output leaves one after a step (tc_fmu_instance.c)."""
+    index = {v["name"]: v["index"] for v in variables(comp) if v["causality"] == "parameter"}
+    out = []
+    for k, port in enumerate(comp.outputs):
+        for side, bound in ((-1, port.low), (+1, port.high)):
+            if bound is None:
+                continue
+            if isinstance(bound, str) and bound not in index:
+                raise TribocosimError(f"component {comp.name}: the bound {bound!r} of {port.name} is not a parameter")
+            out.append({"output": k, "name": port.name, "side": side,
+                        "value": 0.0 if isinstance(bound, str) else float(bound),
+                        "parameter": index[bound] if isinstance(bound, str) else -1,
+                        "bound": bound if isinstance(bound, str) else repr(float(bound)),
+                        "why": port.why or port.description})
     return out
 
 
@@ -198,8 +219,16 @@ def model_header(comp: Component, guid: str) -> str:
         lines.append(
             f"    {{{_c_string(v['name'])}, {kinds[v['kind']]}, {causes[v['causality']]}, {v['index']}, "
             f"{_c_string(v['unit'] if not text else '')}, {start}, {start_text}, {int(low is not None)}, "
-            f"{int(high is not None)}, {int(bool(v['low_inclusive']))}, {_c_double(low if low is not None else 0)}, "
+            f"{int(high is not None)}, {_c_double(low if low is not None else 0)}, "
             f"{_c_double(high if high is not None else 0)}, {choices[0]}, {choices[1]}}},")
+    lines += ["};", ""]
+    bounds = output_bounds(comp)
+    lines += ["/* the ranges the outputs are built for (output index, side -1 low / +1 high, value, parameter index or",
+              " * -1 for the value, why): an output outside one after a step is a warning */",
+              f"#define TC_N_BOUNDS {len(bounds)}",
+              "static const tc_bound TC_BOUNDS[TC_N_BOUNDS > 0 ? TC_N_BOUNDS : 1] = {"]
+    lines += [f"    {{{b['output']}, {b['side']}, {_c_double(b['value'])}, {b['parameter']}, {_c_string(b['bound'])}, "
+              f"{_c_string(b['why'])}}}," for b in bounds] or ["    {0, 0, 0.0, -1, \"\", \"\"},"]
     lines += ["};", ""]
     lines += _fmi3_lines(comp)
     lines += [f"/* {comp.parameters.__name__} from the FMU's parameter values (choices by index) */",

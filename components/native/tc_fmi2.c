@@ -12,7 +12,12 @@
  *     then unusable (every later call that needs the model returns fmi2Error);
  *   - fmi2DoStep with a bad input or a step the model cannot take returns fmi2Discard with the state
  *     unchanged and a message naming the cause, the inputs and the time: the importer may shorten the step,
- *     change the input or restore a state, and retry;
+ *     change the input or restore a state, and retry. When a much shorter step is discarded too (the inputs
+ *     are at fault), fmi2GetBooleanStatus(fmi2Terminated) is fmi2True until the next accepted step: the FMU
+ *     asks the importer to stop, as FMI 2.0.4 section 4.2.3 lets a slave do after fmi2Discard (fmpy then ends
+ *     the simulation at fmi2LastSuccessfulTime instead of retrying the step);
+ *   - fmi2DoStep returns fmi2Warning, with a message, when an output has just left a range the model is built
+ *     for (the strip drawn past draw_length, a nominal pressure above the hardness);
  *   - the FMU state (get/set, serialize/deserialize) holds the parameters, inputs, outputs, time and the
  *     component's state image, so that a restored state replays bit-identically, also in another instance;
  *     deserializing bytes that are not such a state is fmi2Error, never a crash;
@@ -377,8 +382,8 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2
 fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean *value) {
     tc_instance *c = checked(comp, "fmi2GetBooleanStatus");
     if (c == NULL || value == NULL) return fmi2Error;
-    if (s == fmi2Terminated) {
-        *value = fmi2False; /* the FMU never asks to end the simulation */
+    if (s == fmi2Terminated) { /* FMI 2.0.4 section 4.2.3: after fmi2Discard, whether the slave wants to stop */
+        *value = c->terminate_requested ? fmi2True : fmi2False;
         return fmi2OK;
     }
     tc_inst_logf(c, TC_LOG_DISCARD, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);

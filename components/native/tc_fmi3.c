@@ -10,8 +10,11 @@
  *     is fmi3Error with a message naming the parameter, its value and what is allowed; the instance is then
  *     unusable. Setting a parameter after initialization is fmi3Error (they are fixed), the value unchanged;
  *   - fmi3DoStep with a bad input or a step the model cannot take returns fmi3Discard with the state unchanged
- *     (lastSuccessfulTime = the current time) and a message naming the cause, the inputs and the time; it never
- *     asks for event handling, never returns early and never asks to terminate (unless the instance failed);
+ *     (lastSuccessfulTime = the current time) and a message naming the cause, the inputs and the time; when a much
+ *     shorter step is discarded too (the inputs are at fault) it sets terminateSimulation = fmi3True, "the FMU
+ *     requests to stop the simulation" (FMI 3.0 section 4.2.1, fmi3DoStep), as it does when the instance failed.
+ *     It returns fmi3Warning, with a message, when an output has just left a range the model is built for. It
+ *     never asks for event handling and never returns early;
  *   - FMU states (get/set, serialize/deserialize) replay bit-identically, also in another instance;
  *   - messages go to the importer's logMessage (errors and discards always, the rest when logging is on);
  *   - no global mutable state; the C library's memory, all of it freed by fmi3FreeInstance.
@@ -21,8 +24,9 @@
  * (n_nodes), which equals the Integer parameter it derives from plus TC_ARRAY_SIZE_OFFSET (n_elements + 1).
  * Both are structural parameters, set in Configuration Mode or, as importers that set every start value
  * before initialization do, in the instantiated state; setting either sets both (n_nodes is stored as
- * n_elements, whose range is checked at fmi3ExitInitializationMode). The arrays are computed from
- * fmi3ExitInitializationMode on; before, getting them is fmi3Error.
+ * n_elements). fmi3ExitInitializationMode checks a set n_nodes against its own range and, when both were set,
+ * that they agree (n_nodes = n_elements + 1): either is fmi3Error naming the values. The arrays are computed
+ * from fmi3ExitInitializationMode on; before, getting them is fmi3Error.
  *
  * Not provided, each fmi3Error with a message naming the function: model exchange and scheduled execution,
  * event mode, clocks, intermediate update, Reconfiguration Mode, directional and adjoint derivatives, output
@@ -48,6 +52,8 @@ typedef struct instance {
     fmi3LogMessageCallback logger;
     fmi3InstanceEnvironment environment;
     int configuring; /* in Configuration Mode (entered from, and left back to, the instantiated state) */
+    int nodes_set, elements_set; /* the array length (n_nodes) and its parameter (n_elements) set by the importer */
+    double nodes, elements;      /* their last values set */
 } instance;
 
 static const char *const KIND_NAMES[3] = {"Float64", "Int32", "String"};
@@ -215,6 +221,32 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance inst, fmi3Boolean toleranceD
     return fmi3OK;
 }
 
+/* n_nodes in its own range, and n_nodes = n_elements + offset when the importer set both; 0 with the instance
+ * failed (a message naming both) if not */
+static int array_size_agrees(instance *c) {
+#if TC_N_ARRAYS > 0
+    char text[512];
+    const tc_variable *p = &TC_VARIABLES[TC_ARRAY_SIZE_PARAMETER];
+    double lo = p->low + TC_ARRAY_SIZE_OFFSET, hi = p->high + TC_ARRAY_SIZE_OFFSET;
+    if (c->nodes_set && (c->nodes < lo || c->nodes > hi)) {
+        snprintf(text, sizeof text, "initialization failed: %s = %.0f is out of range; allowed: [%.0f, %.0f] (%s + %d)",
+                 TC_ARRAY_SIZE_NAME, c->nodes, lo, hi, p->name, TC_ARRAY_SIZE_OFFSET);
+        tc_inst_fail(&c->core, text);
+        return 0;
+    }
+    if (c->nodes_set && c->elements_set && c->nodes != c->elements + TC_ARRAY_SIZE_OFFSET) {
+        snprintf(text, sizeof text, "initialization failed: %s = %.0f and %s = %.0f were both set and disagree; %s must "
+                 "be %s + %d: set one of them", TC_ARRAY_SIZE_NAME, c->nodes, p->name, c->elements,
+                 TC_ARRAY_SIZE_NAME, p->name, TC_ARRAY_SIZE_OFFSET);
+        tc_inst_fail(&c->core, text);
+        return 0;
+    }
+#else
+    (void)c;
+#endif
+    return 1;
+}
+
 fmi3Status fmi3ExitInitializationMode(fmi3Instance inst) {
     instance *c = checked(inst);
     if (c == NULL) return fmi3Error;
@@ -222,6 +254,8 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance inst) {
         tc_inst_logf(&c->core, TC_LOG_ERROR, "fmi3ExitInitializationMode is allowed only in initialization mode");
         return fmi3Error;
     }
+    if (!array_size_agrees(c)) return fmi3Error;
+    c->nodes_set = c->elements_set = 0; /* from here on one value, n_elements, holds both */
     return (fmi3Status)tc_inst_exit_initialization(&c->core);
 }
 
@@ -240,6 +274,7 @@ fmi3Status fmi3Reset(fmi3Instance inst) {
     instance *c = checked(inst);
     if (c == NULL) return fmi3Error;
     c->configuring = 0;
+    c->nodes_set = c->elements_set = 0;
     return tc_inst_reset(&c->core) ? fmi3OK : fmi3Fatal;
 }
 
@@ -504,6 +539,10 @@ fmi3Status fmi3SetInt32(fmi3Instance inst, const fmi3ValueReference valueReferen
         }
         if (!settable(c, v->name, is_structural(v), "fmi3SetInt32")) return fmi3Error;
         c->core.values[v->index].number = (double)values[k];
+        if (is_structural(v)) {
+            c->elements_set = 1;
+            c->elements = (double)values[k];
+        }
     }
     return fmi3OK;
 }
@@ -527,6 +566,8 @@ fmi3Status fmi3SetUInt64(fmi3Instance inst, const fmi3ValueReference valueRefere
             return fmi3Error;
         }
         c->core.values[TC_ARRAY_SIZE_PARAMETER].number = (double)values[k] - TC_ARRAY_SIZE_OFFSET;
+        c->nodes_set = 1;
+        c->nodes = (double)values[k];
     }
 #endif
     return fmi3OK;
@@ -565,8 +606,8 @@ fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance inst, fmi3ValueRefer
                                                size_t *nDependencies) {
     (void)valueReference;
     (void)nDependencies;
-    return not_provided(inst, "fmi3GetNumberOfVariableDependencies", "the model description's ModelStructure lists "
-                        "the outputs as depending on every input");
+    return not_provided(inst, "fmi3GetNumberOfVariableDependencies", "the model description's ModelStructure gives "
+                        "every output's dependencies: none");
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance inst, fmi3ValueReference dependent,
@@ -579,8 +620,8 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance inst, fmi3ValueReference dep
     (void)elementIndicesOfIndependents;
     (void)dependencyKinds;
     (void)nDependencies;
-    return not_provided(inst, "fmi3GetVariableDependencies", "the model description's ModelStructure lists the "
-                        "outputs as depending on every input");
+    return not_provided(inst, "fmi3GetVariableDependencies", "the model description's ModelStructure gives every "
+                        "output's dependencies: none");
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance inst, const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -635,6 +676,7 @@ fmi3Status fmi3SetFMUState(fmi3Instance inst, fmi3FMUState FMUState) {
     instance *c = checked(inst);
     if (c == NULL || FMUState == NULL) return fmi3Error;
     c->configuring = 0;
+    c->nodes_set = c->elements_set = 0; /* the state's parameters hold the array length */
     return (fmi3Status)tc_inst_set_state(&c->core, FMUState);
 }
 
@@ -862,7 +904,7 @@ fmi3Status fmi3DoStep(fmi3Instance inst, fmi3Float64 currentCommunicationPoint, 
     int status = tc_inst_do_step(&c->core, currentCommunicationPoint, communicationStepSize);
     *eventHandlingNeeded = fmi3False;
     *earlyReturn = fmi3False;
-    *terminateSimulation = c->core.phase == TC_PHASE_FAILED ? fmi3True : fmi3False;
+    *terminateSimulation = c->core.phase == TC_PHASE_FAILED || c->core.terminate_requested ? fmi3True : fmi3False;
     *lastSuccessfulTime = c->core.time; /* the end of the step, or the unchanged time of a discarded one */
     return (fmi3Status)status;
 }

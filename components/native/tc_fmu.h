@@ -30,11 +30,22 @@ typedef struct tc_variable {
     const char *unit;            /* "" for dimensionless and text */
     double start;                /* Real and Integer start value */
     const char *start_text;      /* String start value */
-    int has_low, has_high, low_inclusive;
-    double low, high;            /* allowed range of a Real or Integer parameter */
+    int has_low, has_high;
+    double low, high;            /* allowed range of a Real or Integer parameter: low <= value <= high (FMI's
+                                  * min and max are inclusive: FMI 2.0 section 2.2.7, FMI 3.0 section 2.4.7) */
     const char *const *choices;  /* String parameters with a fixed set of values, else NULL */
     int n_choices;
 } tc_variable;
+
+/* A range an output is built for (the component's Port low/high): outside it after a step, the FMU warns. */
+typedef struct tc_bound {
+    int output;          /* index among the outputs */
+    int side;            /* -1: the output must be >= the bound, +1: <= */
+    double value;        /* the bound, when parameter < 0 */
+    int parameter;       /* index of the parameter whose value is the bound, or -1 */
+    const char *bound;   /* the bound as declared: the parameter's name or the number */
+    const char *why;     /* what lies outside */
+} tc_bound;
 
 /* The value of one parameter: Real and Integer in `number`, String in `text` (owned by the instance) and,
  * for a parameter with choices, the index of its value in `choice`. */

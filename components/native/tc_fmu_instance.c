@@ -122,6 +122,8 @@ void tc_inst_release(tc_instance *c) {
 int tc_inst_reset(tc_instance *c) {
     free_component(c);
     c->failure[0] = '\0';
+    c->terminate_requested = 0;
+    memset(c->outside, 0, sizeof c->outside);
     if (!set_defaults(c)) return 0;
     c->phase = TC_PHASE_INSTANTIATED;
     return 1;
@@ -161,7 +163,7 @@ static int check_parameter(tc_instance *c, const tc_variable *v, tc_param_value 
                  tc_repr_double(p->number, a));
         return 0;
     }
-    int ok_lo = !v->has_low || (v->low_inclusive ? p->number >= v->low : p->number > v->low);
+    int ok_lo = !v->has_low || p->number >= v->low; /* min and max inclusive, as the model description says */
     int ok_hi = !v->has_high || p->number <= v->high;
     if (ok_lo && ok_hi) return 1;
     snprintf(lo, sizeof lo, "%g", v->low);
@@ -169,7 +171,7 @@ static int check_parameter(tc_instance *c, const tc_variable *v, tc_param_value 
     if (v->kind == TC_KIND_INTEGER) snprintf(a, sizeof a, "%.0f", p->number);
     else tc_repr_double(p->number, a);
     snprintf(c->message, sizeof c->message, "%s = %s%s%s is out of range; allowed: %s%s, %s%s%s%s", v->name, a, sp,
-             unit, (v->has_low && v->low_inclusive) ? "[" : "(", v->has_low ? lo : "-inf", v->has_high ? hi : "inf",
+             unit, v->has_low ? "[" : "(", v->has_low ? lo : "-inf", v->has_high ? hi : "inf",
              v->has_high ? "]" : ")", sp, unit);
     return 0;
 }
@@ -190,6 +192,8 @@ int tc_inst_make_component(tc_instance *c) {
     }
     tc_component_outputs(c->component, c->outputs);
     if (tc_component_note(c->component)[0]) tc_inst_logf(c, TC_LOG_OK, "%s", tc_component_note(c->component));
+    memset(c->outside, 0, sizeof c->outside); /* outputs outside a range from the start are warned at the first step */
+    c->terminate_requested = 0;
     return TC_LOG_OK;
 }
 
@@ -216,6 +220,63 @@ int tc_inst_terminate(tc_instance *c) {
     return TC_LOG_OK;
 }
 
+/* The value of bound b for the instance's parameters. */
+static double bound_value(const tc_instance *c, const tc_bound *b) {
+    return b->parameter >= 0 ? c->values[b->parameter].number : b->value;
+}
+
+static int is_outside(const tc_instance *c, int k) {
+    const tc_bound *b = &TC_BOUNDS[k];
+    double y = c->outputs[b->output], limit = bound_value(c, b);
+    return b->side < 0 ? y < limit : y > limit;
+}
+
+/* Which outputs are outside their bounds now (after a restored state: no warning for what it already held). */
+static void note_outside(tc_instance *c) {
+    for (int k = 0; k < TC_N_BOUNDS; ++k) c->outside[k] = (unsigned char)is_outside(c, k);
+}
+
+/* After an accepted step that ends at c->time: TC_LOG_WARNING, logged, for each output that has just left a range
+ * it is built for; TC_LOG_OK otherwise. */
+static int check_bounds(tc_instance *c) {
+    char a[TC_REPR_SIZE], b[TC_REPR_SIZE], t[TC_REPR_SIZE];
+    int status = TC_LOG_OK;
+    for (int k = 0; k < TC_N_BOUNDS; ++k) {
+        int out = is_outside(c, k);
+        if (out && !c->outside[k]) {
+            const tc_bound *bd = &TC_BOUNDS[k];
+            const tc_variable *v = &TC_VARIABLES[TC_N_PARAMETERS + TC_N_INPUTS + bd->output];
+            const char *unit = strcmp(v->unit, "1") != 0 ? v->unit : "";
+            tc_inst_logf(c, TC_LOG_WARNING, "at t = %s s %s = %s%s%s is %s %s = %s%s%s, the %s %s the model is built "
+                         "for (%s); the results from here on are outside what it describes",
+                         tc_repr_double(c->time, t), v->name, tc_repr_double(c->outputs[bd->output], a),
+                         unit[0] ? " " : "", unit, bd->side < 0 ? "below" : "above", bd->bound,
+                         tc_repr_double(bound_value(c, bd), b), unit[0] ? " " : "", unit,
+                         bd->side < 0 ? "least" : "largest", v->name, bd->why);
+            status = TC_LOG_WARNING;
+        }
+        c->outside[k] = (unsigned char)out;
+    }
+    return status;
+}
+
+/* Whether a step 2^-20 as long as dt from the same state and inputs is discarded too (then the inputs, not the
+ * step size, are at fault). The probe's state is undone; 0 if it cannot be tried (no memory). */
+static int discarded_at_any_step(tc_instance *c, double dt) {
+    static const double PROBE = 0x1p-20;
+    char text[1024];
+    tc_msg m = {text, sizeof text};
+    double zero[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)] = {0};
+    size_t size = tc_component_state_size(c->component);
+    unsigned char *saved = malloc(size ? size : 1);
+    if (saved == NULL) return 0;
+    tc_component_get_state(c->component, saved);
+    int rc = tc_component_step(c->component, dt * PROBE, c->inputs, zero, m);
+    if (rc != TC_DISCARD && tc_component_set_state(c->component, saved, size, m) != TC_OK) rc = TC_ERROR;
+    free(saved);
+    return rc == TC_DISCARD;
+}
+
 int tc_inst_do_step(tc_instance *c, double t, double dt) {
     char a[TC_REPR_SIZE], b[TC_REPR_SIZE], shown[1024] = "", text[4096];
     if (c->phase == TC_PHASE_FAILED) {
@@ -228,6 +289,7 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
     }
     int rc = tc_component_step(c->component, dt, c->inputs, c->input_derivatives, msg_of(c));
     memset(c->input_derivatives, 0, sizeof c->input_derivatives); /* they were for this step */
+    c->terminate_requested = 0;
     if (rc != TC_OK) {
         for (int k = 0; k < TC_N_VARIABLES; ++k) {
             const tc_variable *v = &TC_VARIABLES[k];
@@ -237,9 +299,13 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
                      tc_repr_double(c->inputs[v->index], a), v->unit[0] ? v->unit : "1");
             strncat(shown, one, sizeof shown - strlen(shown) - 1);
         }
-        snprintf(text, sizeof text, "doStep from t = %s s by %s s rejected: %s %s%s%sthe FMU state is unchanged",
+        if (rc == TC_DISCARD && dt > 0.0 && discarded_at_any_step(c, dt)) c->terminate_requested = 1;
+        snprintf(text, sizeof text, "doStep from t = %s s by %s s rejected: %s %s%s%sthe FMU state is unchanged%s",
                  tc_repr_double(t, a), tc_repr_double(dt, b), c->message, shown[0] ? "(inputs " : "", shown,
-                 shown[0] ? "); " : "; ");
+                 shown[0] ? "); " : "; ",
+                 c->terminate_requested ? "; a step 2^-20 as long is rejected too, so the inputs are at fault: the "
+                                          "FMU asks to end the simulation (fmi2Terminated, terminateSimulation)"
+                                        : "");
         tc_inst_logf(c, rc == TC_DISCARD ? TC_LOG_DISCARD : TC_LOG_ERROR, "%s", text);
         if (rc == TC_DISCARD) return TC_LOG_DISCARD;
         return tc_inst_fail(c, text);
@@ -250,7 +316,7 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         snprintf(text, sizeof text, "after the step to t = %s s: %s", tc_repr_double(c->time, a), c->message);
         return tc_inst_fail(c, text);
     }
-    return TC_LOG_OK;
+    return check_bounds(c);
 }
 
 void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value) {
@@ -371,6 +437,8 @@ int tc_inst_set_state(tc_instance *c, const void *state) {
     memcpy(c->input_derivatives, s->input_derivatives, sizeof c->input_derivatives);
     memcpy(c->outputs, s->outputs, sizeof c->outputs);
     memcpy(c->failure, s->failure, sizeof c->failure);
+    c->terminate_requested = 0;
+    if (s->has_component) note_outside(c);
     return TC_LOG_OK;
 }
 

@@ -9,7 +9,12 @@
  *     component; a bad parameter or file fails the instance (TC_LOG_ERROR, a message naming the parameter, its
  *     value and what is allowed), after which every call that needs the model is an error;
  *   - tc_inst_do_step with a bad input or a step the model cannot take is TC_LOG_DISCARD with the state
- *     unchanged and a message naming the cause, the inputs and the time;
+ *     unchanged and a message naming the cause, the inputs and the time. When a step 2^-20 as long is
+ *     discarded too (tried, then the state restored), no smaller step can help: the inputs are invalid, and
+ *     terminate_requested tells the host to stop (FMI 2.0 fmi2Terminated, FMI 3.0 terminateSimulation);
+ *   - an accepted step after which an output has left a range it is built for (TC_BOUNDS: the strip drawn past
+ *     draw_length, a nominal pressure above the hardness) is TC_LOG_WARNING with a message naming the output,
+ *     its value, the bound and the time, once each time the output leaves the range;
  *   - an FMU state (tc_inst_get_state...) holds the parameters, inputs, outputs, time and the component's
  *     state image, so that a restored state replays bit-identically, also in another instance; deserializing
  *     bytes that are not such a state is an error, never a crash;
@@ -47,6 +52,8 @@ struct tc_instance {
     double input_derivatives[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)]; /* per input: 1st, 2nd; for the next step */
     double outputs[TC_N_OUTPUTS];
     tc_component *component;
+    int terminate_requested; /* the last doStep was discarded for its inputs: no smaller step can help */
+    unsigned char outside[TC_N_BOUNDS > 0 ? TC_N_BOUNDS : 1]; /* the output is outside bound k (TC_BOUNDS) */
     char message[2048];
     char failure[2048]; /* why the instance is unusable */
 };
@@ -77,7 +84,8 @@ int tc_inst_make_component(tc_instance *c);
 int tc_inst_exit_initialization(tc_instance *c);
 /* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */
 int tc_inst_terminate(tc_instance *c);
-/* Advance by dt from t (the contract above); the input derivatives apply to this step only (zero after it). */
+/* Advance by dt from t (the contract above); the input derivatives apply to this step only (zero after it).
+ * TC_LOG_OK, TC_LOG_WARNING (accepted; an output left a range it is built for), TC_LOG_DISCARD or TC_LOG_ERROR. */
 int tc_inst_do_step(tc_instance *c, double t, double dt);
 /* Set input variable v (causality input) to value; its derivatives (if any were set) are zero again. */
 void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value);

@@ -23,10 +23,10 @@ class PressParameters:
     setpoint_table: str = param("", "", "optional set-point table 't0 F0; t1 F1; ...' [s N], overrides the ramp", text=True)
     kp: float = param(0.5, "1", "proportional gain of the force controller", 0.0, 1e3)
     ki: float = param(200.0, "1/s", "integral gain of the force controller", 0.0, 1e6)
-    actuator_time_constant: float = param(5e-3, "s", "first-order lag of the hydraulic actuator", 1e-6, 10.0, False)
-    frame_stiffness: float = param(5e8, "N/m", "stiffness of frame, tools and pad stack", 1.0, 1e13, False)
+    actuator_time_constant: float = param(5e-3, "s", "first-order lag of the hydraulic actuator", 1e-6, 10.0)
+    frame_stiffness: float = param(5e8, "N/m", "stiffness of frame, tools and pad stack", 1.0, 1e13)
     frame_damping: float = param(2e5, "N s/m", "damping of the frame/pad stack", 0.0, 1e10)
-    piston_mass: float = param(20.0, "kg", "moving mass of piston and tool", 1e-3, 1e5, False)
+    piston_mass: float = param(20.0, "kg", "moving mass of piston and tool", 1e-3, 1e5)
 
     def __post_init__(self) -> None:
         validate_fields(self)

@@ -84,8 +84,10 @@ class StripDrawFiles:
 
 
 INPUTS = (
-    Port("normal_force", "N", "normal force F_N on one pad (>= 0)", DEFAULT_NORMAL_FORCE),
-    Port("grip_velocity", "m/s", "velocity of the grip pulling the strip", DEFAULT_GRIP_VELOCITY),
+    Port("normal_force", "N", "normal force F_N on one pad (>= 0)", DEFAULT_NORMAL_FORCE, low=0.0,
+         why="the pads press on the strip"),
+    Port("grip_velocity", "m/s", "velocity of the grip pulling the strip", DEFAULT_GRIP_VELOCITY, low=0.0,
+         why="the grip pulls the strip through the pad; a grip moving back pushes the strip out of it"),
 )
 #: the model's OUTPUT_NAMES, in its order
 OUTPUTS = (
@@ -95,8 +97,10 @@ OUTPUTS = (
     Port("sliding_distance", "m", "contact-weighted mean displacement of the strip under the pad"),
     Port("beta_mean", "1", "contact-weighted mean debris area fraction under the pad"),
     Port("beta_max", "1", "largest debris area fraction on the strip"),
-    Port("contact_pressure", "Pa", "nominal contact pressure P = F_N / (tool_length tool_width)"),
-    Port("grip_position", "m", "displacement of the grip"),
+    Port("contact_pressure", "Pa", "nominal contact pressure P = F_N / (tool_length tool_width)", high="hardness",
+         why="a nominal pressure above the strip's hardness flattens every asperity: no strip-draw contact"),
+    Port("grip_position", "m", "displacement of the grip", high="draw_length",
+         why="the bar is built for draw_length; beyond it the strip's tail runs into the pad and out of it"),
     Port("table_clamp_count", "1", "cumulative number of nodal table lookups outside the table (clamped)",
          integer=True),
 )

@@ -39,25 +39,25 @@ class StripDrawParameters:
     """
 
     # --- geometry -------------------------------------------------------------------------
-    tool_length: float = _p(0.035, "m", "pad length L_T in the draw direction", 1e-4, 1.0, False)
-    tool_width: float = _p(0.035, "m", "pad width w_T", 1e-4, 1.0, False)
-    sheet_thickness: float = _p(1.5e-3, "m", "sheet thickness (the half model carries half of it)", 1e-5, 0.05, False)
-    sheet_width: float = _p(0.1, "m", "sheet width", 1e-4, 2.0, False)
-    draw_length: float = _p(0.14, "m", "longest draw the bar is built for", 0.0, 5.0, False)
-    free_length: float = _p(0.05, "m", "free strip length between the pad's exit edge and the grip", 1e-4, 5.0, False)
+    tool_length: float = _p(0.035, "m", "pad length L_T in the draw direction", 1e-4, 1.0)
+    tool_width: float = _p(0.035, "m", "pad width w_T", 1e-4, 1.0)
+    sheet_thickness: float = _p(1.5e-3, "m", "sheet thickness (the half model carries half of it)", 1e-5, 0.05)
+    sheet_width: float = _p(0.1, "m", "sheet width", 1e-4, 2.0)
+    draw_length: float = _p(0.14, "m", "longest draw the bar is built for", 0.0, 5.0)
+    free_length: float = _p(0.05, "m", "free strip length between the pad's exit edge and the grip", 1e-4, 5.0)
     n_elements: int = _p(150, "1", "number of linear bar elements", 4, 200000, integer=True)
     # --- strip material -------------------------------------------------------------------
-    youngs_modulus: float = _p(70e9, "Pa", "Young's modulus of the strip", 1e6, 1e13, False)
-    density: float = _p(2660.0, "kg/m3", "density of the strip", 1.0, 1e5, False)
+    youngs_modulus: float = _p(70e9, "Pa", "Young's modulus of the strip", 1e6, 1e13)
+    density: float = _p(2660.0, "kg/m3", "density of the strip", 1.0, 1e5)
     # --- interface ------------------------------------------------------------------------
     shear_stiffness_factor: float = _p(
-        1.0, "1", "interface penalty k_s in units of E/h_B (Eq. 4: k_s ~ E/h_B)", 1e-6, 1e9, False
+        1.0, "1", "interface penalty k_s in units of E/h_B (Eq. 4: k_s ~ E/h_B)", 1e-6, 1e9
     )
     # --- debris (Eq. 12-14, 37) -----------------------------------------------------------
     archard_k: float = _p(1e-4, "1", "Archard wear coefficient K", 0.0, 1.0)
-    hardness: float = _p(0.8e9, "Pa", "hardness H of the strip (HV 84 of AA5182-O)", 1e6, 1e12, False)
+    hardness: float = _p(0.8e9, "Pa", "hardness H of the strip (HV 84 of AA5182-O)", 1e6, 1e12)
     zeta: float = _p(0.2, "1", "fraction of debris that sticks to the tool", 0.0, 1.0)
-    particle_thickness: float = _p(0.5e-6, "m", "debris flake thickness h_p", 1e-9, 1e-3, False)
+    particle_thickness: float = _p(0.5e-6, "m", "debris flake thickness h_p", 1e-9, 1e-3)
     beta_initial: float = _p(0.0, "1", "initial debris area fraction on the strip (multi-pass runs)", 0.0, 1.0)
     beta_threshold: float = _p(
         0.0, "1", "cap of beta (Eq. 24); 0 takes it from the friction law", 0.0, 1.0
@@ -66,8 +66,8 @@ class StripDrawParameters:
     friction_model: str = _p("table", "", "friction law: table | closed_form | constant", choices=FRICTION_MODELS)
     mu0: float = _p(0.15, "1", "particle-free friction coefficient (calibration)", 0.0, 5.0)
     mu_const: float = _p(0.15, "1", "friction coefficient of the constant law", 0.0, 5.0)
-    kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0, False)
-    rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0, False)
+    kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0)
+    rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0)
     alpha_b: float = _p(
         446.25, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
         "(Fig. 15): the shipped campaign's fitted alpha at its slowest velocity, 2 m/s (standard error 21)", 0.0, 1e6
@@ -80,7 +80,7 @@ class StripDrawParameters:
         "mesoscale", "", "real contact area A_c in mu = mu0 (1 - A_p / A_c): mesoscale (from the friction table) | "
         "eq8 (the paper's Eq. 8, kappa P / (rms_slope e_star))", choices=CONTACT_AREAS
     )
-    e_star: float = _p(55e9, "Pa", "effective modulus E* of Eq. 8 (eq8 contact area)", 1e6, 1e13, False)
+    e_star: float = _p(55e9, "Pa", "effective modulus E* of Eq. 8 (eq8 contact area)", 1e6, 1e13)
     particle_area_scale: float = _p(
         1.0, "1", "factor on the particle-borne area A_p (1: as the mesoscale campaign measured it; "
         "fitted by tribocosim calibrate)", 0.0, 1e6
@@ -94,10 +94,10 @@ class StripDrawParameters:
     )
     # --- numerics -------------------------------------------------------------------------
     integrator: str = _p("implicit", "", "bar integrator: explicit | implicit", choices=INTEGRATORS)
-    cfl_safety: float = _p(0.9, "1", "explicit step as a fraction of the CFL limit", 1e-3, 1.0, False)
+    cfl_safety: float = _p(0.9, "1", "explicit step as a fraction of the CFL limit", 1e-3, 1.0)
     rho_inf: float = _p(0.5, "1", "spectral radius at infinity of the generalized-alpha scheme", 0.0, 1.0)
     window_courant: float = _p(
-        2.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0, False
+        2.0, "1", "largest slide per coupling step, in elements (sets the debris/friction update step)", 1e-3, 100.0
     )
     internal_step: float = _p(
         0.0, "s", "fixed internal time grid k * internal_step: every requested step is cut at the grid points "

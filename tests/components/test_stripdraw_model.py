@@ -165,7 +165,7 @@ def test_bad_inputs_are_rejected_and_leave_the_state_unchanged(inputs, name):
 
 
 def test_bad_parameters_name_the_parameter_and_the_range():
-    with pytest.raises(ParameterError, match=r"density = -5.0 .* allowed: \(1, 100000\]"):
+    with pytest.raises(ParameterError, match=r"density = -5.0 .* allowed: \[1, 100000\]"):
         StripDrawParameters(density=-5.0)
     with pytest.raises(ParameterError, match="zeta = nan"):
         StripDrawParameters(zeta=float("nan"))

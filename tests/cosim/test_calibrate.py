@@ -41,6 +41,7 @@ def test_calibration_recovers_a_known_factor_within_its_standard_error(tmp_path,
             "--workers", "1", *(x for k, v in FAST.items() if k != "contact_area" for x in ("--set", f"{k}={v}"))]
     assert main(args) == 0
     cal = read_table(out).metadata["strip_draw_calibration"]
+    assert cal["converged"] is True and cal["iterations"] < 20
     fitted = cal["fitted"]["particle_area_scale"]
     print(f"\nfitted particle_area_scale {fitted['value']:.5f} +- {fitted['stderr']:.2g} (true {true_scale})")
     assert abs(fitted["value"] - true_scale) <= 3 * fitted["stderr"], fitted
@@ -66,3 +67,26 @@ def test_bad_data_are_named_by_row_and_column(tmp_path, rows, header, message):
     with pytest.raises(ParameterError) as exc:
         read_measurements(path)
     assert message in str(exc.value) and str(path) in str(exc.value)
+
+
+def test_an_unconverged_fit_says_so_exits_1_and_writes_nothing_unless_asked(tmp_path, eq23_table, capsys):
+    """One Gauss-Newton iteration from s = 1 cannot reach s = 0.6: the command names the fit as unconverged, exits
+    with 1 and writes no table; --keep-unconverged writes the last iterate, marked as such, and exits with 0."""
+    points = [(5e6, 0.035, 1), (20e6, 0.035, 1)]
+    params = {**FAST, "table_file": str(eq23_table), "particle_area_scale": 0.6}
+    clean = [m[-1] for m in run_points([Point(p, L, n, params) for p, L, n in points], workers=1)]
+    data = _write(tmp_path / "data.csv", [(p, L, n, m, 1e-4) for (p, L, n), m in zip(points, clean)])
+    out = tmp_path / "calibrated.npz"
+    args = ["--measured", str(data), "--out", str(out), "--table", str(eq23_table), "--contact-area", "eq8",
+            "--workers", "1", "--max-iterations", "1",
+            *(x for k, v in FAST.items() if k != "contact_area" for x in ("--set", f"{k}={v}"))]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert "the fit has not converged in 1 iterations" in err and "particle_area_scale = " in err, err
+    assert "Nothing written" in err and not out.exists()
+    assert main([*args, "--keep-unconverged"]) == 0
+    captured = capsys.readouterr()
+    assert "as asked (--keep-unconverged)" in captured.err and "NOT CONVERGED" in captured.out
+    cal = read_table(out).metadata["strip_draw_calibration"]
+    assert cal["converged"] is False and cal["iterations"] == 1
+    assert abs(cal["last_change"]["particle_area_scale"]) > 1e-3, cal["last_change"]

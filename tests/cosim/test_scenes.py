@@ -224,10 +224,36 @@ def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
     small = tmp_path / "small.npz"
     write_table(small, closed_form_table(StripDrawParameters(), velocity=np.linspace(0.0, 1.0, 5)))
     over = {"fmus.strip.parameters.table_file": str(small), "fmus.drive.parameters.velocity_setpoint": 2.0}
-    with pytest.raises(SceneError, match=r"fmus.drive.parameters.velocity_setpoint: \|velocity_setpoint\| = 2 m/s is "
+    with pytest.raises(SceneError, match=r"fmus.drive.parameters.velocity_setpoint: velocity_setpoint = 2 m/s is "
                                          r"above the friction table's velocity axis \(up to 1 m/s\)"):
         load_component_scene(DEMO, over)
     load_component_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("fmus.drive.parameters.velocity_setpoint", -5.0, "velocity_setpoint = -5 m/s is below 0 m/s, the least "
+     "strip.grip_velocity the model is built for (the grip pulls the strip"),
+    ("fmus.drive.parameters.velocity_setpoint", -0.08, "velocity_setpoint = -0.08 m/s is below 0 m/s"),
+])
+def test_a_set_point_outside_the_range_the_input_is_built_for_is_named(key, value, message):
+    """The drive runs either way (its declared range is [-10, 10] m/s), but the strip it is connected to is pulled:
+    the scene check matches the drive's set-point, with its sign, against the range the strip's input port
+    declares (Port.low), and names the set-point's parameter."""
+    with pytest.raises(SceneError) as exc:
+        load_component_scene(DEMO, {key: value})
+    assert [p.key for p in exc.value.problems] == [key], exc.value
+    assert message in exc.value.problems[0].message, exc.value
+    load_component_scene(DEMO, {key: 0.5})
+
+
+def test_every_declared_port_bound_is_a_number_or_a_parameter():
+    from tribocosim.components import registry
+
+    for comp in registry.components().values():
+        for port in (*comp.inputs, *comp.outputs):
+            low, high = comp.bounds(port, {})
+            assert low is None or high is None or low < high, (comp.name, port.name)
+            assert (low, high) == (None, None) or port.why, f"{comp.name}.{port.name}: say why the range"
 
 
 def test_sweep_file_problems_are_reported_at_once(tmp_path):

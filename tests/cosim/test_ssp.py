@@ -1,14 +1,20 @@
 """Tests of SSP 1.0 packages: export (cosim.ssp_export), import (cosim.ssp_import), the TOML writer (cosim.ssp).
 
 The rig is the demo scene (press + strip draw + drawing machine, component FMUs from the cache) cut to
-400 steps of 1 ms, with a press force (9800 N, 8 MPa) and a drive ramp (30 ms) that are not the
-FMUs' defaults, so that a tool that dropped the parameter sets would be seen. fmpy's
-``simulate_ssp`` and libcosim both step all FMUs from the outputs read right after the last doStep:
+400 steps of 1 ms, with a press force (9800 N), a pad width (30 mm) and a drive ramp (30 ms) that are
+not the FMUs' defaults, so that a tool that dropped a parameter set would be seen. fmpy's
+``simulate_ssp``, libcosim and ecos all step all FMUs from the outputs read right after the last doStep:
 that is our Jacobi (no FMU of the rig has direct feedthrough, so ``output_update`` does not matter).
+OMSimulator cannot be installed here (its pip package downloads a binary when it is built): the package
+is checked against what its SSP reader requires, from its source.
 """
 
 import json
 import math
+import os
+import subprocess
+import sys
+import textwrap
 import tomllib
 import zipfile
 from pathlib import Path
@@ -23,7 +29,8 @@ from tribocosim.cosim.ssp import toml_text
 from tribocosim.cosim.ssp_import import load_ssp, run_ssp
 
 #: the short demo rig: scene keys set on models/scenes/demo.toml
-RIG = {"experiment.stop": 0.4, "fmus.press.parameters.force_setpoint": 9800.0, "fmus.drive.parameters.ramp_time": 0.03}
+RIG = {"experiment.stop": 0.4, "fmus.press.parameters.force_setpoint": 9800.0, "fmus.strip.parameters.tool_width": 0.03,
+       "fmus.drive.parameters.ramp_time": 0.03}
 STEPS = 400
 
 
@@ -118,6 +125,7 @@ def test_package_holds_the_rig_and_validates_against_the_ssp_schema(rig, tmp_pat
     assert (default.get("startTime"), default.get("stopTime")) == ("0.0", "0.4")
     assert default.find(".//osp:FixedStepAlgorithm", ns).get("baseStepSize") == "0.001"
     assert 'name="force_setpoint"' in press_ssv and '<ssv:Real value="9800.0" unit="N" />' in press_ssv
+    assert root.find("ssd:Annotations", ns) is None, "nothing but System, Units, Enumerations, DefaultExperiment on top"
     # the same scene gives the same bytes
     again = tmp_path / "again.ssp"
     assert tribocosim(["ssp", "export", "demo", "-o", str(again), *_sets(RIG)]) == 0
@@ -134,18 +142,13 @@ def test_export_of_a_scene_with_problems_exits_2(tmp_path, capsys):
 # ------------------------------------------------------------------ other tools
 def test_fmpy_simulate_ssp_gives_our_jacobi_pull_force(rig, scene_run):
     from fmpy.ssp.simulation import simulate_ssp
-    from fmpy.ssp.ssd import ParameterSet, find_components, read_ssd
+
+    from tribocosim.cosim.ssp import fmpy_parameter_set
 
     # fmpy 0.3's simulate_ssp applies one parameter set of "component.variable" names, not the SSD's
-    # bindings: gather the components' bindings into one
-    merged = ParameterSet(name="bindings")
-    for comp in find_components(read_ssd(str(rig)).system):
-        for binding in comp.parameterBindings:
-            for pset in binding.parameterValues:
-                for p in pset.parameters:
-                    p.name = f"{comp.name}.{p.name}"
-                    merged.parameters.append(p)
-    assert len(merged.parameters) == 7
+    # bindings: fmpy_parameter_set gathers the components' bindings into one
+    merged = fmpy_parameter_set(rig)
+    assert len(merged.parameters) == 7 and "strip.tool_width" in {p.name for p in merged.parameters}
     res = simulate_ssp(str(rig), stop_time=0.4, step_size=1e-3, parameter_set=merged)
     ours = scene_run["strip.pull_force"][1:]  # fmpy's row k holds the outputs after the step from t_k
     got = res["strip.pull_force"][:STEPS]
@@ -181,6 +184,88 @@ def test_libcosim_runs_the_package_with_its_step_and_parameters(rig, scene_run):
     print(f"libcosim vs tribocosim run (Jacobi, 1 ms, {STEPS} steps): max |d pull_force| = {diff!r} N")
     assert diff <= 1e-9 * np.max(np.abs(ours)), diff
     assert rows[-1, 1] == 9800.0, "the press's parameter set"
+
+
+_ECOS = textwrap.dedent("""
+    import json, sys
+    from ecospy import EcosLib, EcosSimulation
+
+    EcosLib().set_log_level("warn")
+    rig, name, steps = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    rows = []
+    with EcosSimulation(ssp_path=rig, step_size=1e-3) as sim:
+        sim.init(parameter_set=name)  # ecos applies the parameter sets of this one name, nothing else
+        for _ in range(steps):
+            sim.step(1)
+            rows.append([sim.get_real("strip::pull_force"), sim.get_real("press::force_reference"),
+                         sim.get_real("strip::tool_width")])
+        sim.terminate()
+    print(json.dumps(rows))
+""")
+
+
+def _tbb_library_dirs() -> list[str]:
+    """The folders of the tbb package's libtbb.so.* (ecospy's library needs them on LD_LIBRARY_PATH)."""
+    from importlib.metadata import files
+
+    return sorted({str(Path(f.locate()).resolve().parent) for f in files("tbb") or () if f.name.startswith("libtbb.so")})
+
+
+def test_ecos_runs_the_package_with_one_named_parameter_set(rig, scene_run, tmp_path):
+    """ecos (ecospy) applies the parameter sets of the one name given to init; every .ssv of the package is
+    called after the system, so that one name sets all of them (a rig run on FMU defaults would differ:
+    12250 N press force, 35 mm pad)."""
+    libs = _tbb_library_dirs()
+    assert libs, "the tbb package (ecospy's libtbb.so.12) is part of the test extra"
+    script = tmp_path / "run_ecos.py"
+    script.write_text(_ECOS)
+    env = {**os.environ, "LD_LIBRARY_PATH": os.pathsep.join([*libs, os.environ.get("LD_LIBRARY_PATH", "")])}
+    proc = subprocess.run([sys.executable, str(script), str(rig), "demo", str(STEPS)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, f"ecos failed (exit {proc.returncode}):\n{proc.stdout}\n{proc.stderr}"
+    rows = np.array(json.loads(proc.stdout.strip().splitlines()[-1]))
+    ours = scene_run["strip.pull_force"][1:]
+    diff = np.max(np.abs(rows[:, 0] - ours))
+    print(f"ecos vs tribocosim run (Jacobi, 1 ms, {STEPS} steps): max |d pull_force| = {diff!r} N "
+          f"of max {np.max(np.abs(ours)):.6g} N")
+    assert rows[-1, 1] == 9800.0 and rows[-1, 2] == 0.03, "the press's and the strip's parameter sets"
+    assert diff <= 1e-9 * np.max(np.abs(ours)), diff
+
+
+def test_the_package_is_what_omsimulator_s_ssp_reader_requires(rig):
+    """OMSimulator (OpenModelica/OMSimulator, src/OMSimulatorLib) reads the SSD with pugixml, by prefixed names:
+
+    - Model::importFromSnapshot takes only ssd:System, ssd:Units, ssd:Enumerations and ssd:DefaultExperiment at
+      the top ("wrong xml schema detected" for anything else, e.g. an ssd:Annotations);
+    - Model::getSystemType makes the system from the first ssc:Annotation of the system's ssd:Annotations, of
+      type org.openmodelica, holding oms:Annotations/oms:SimulationInformation with an oms:FixedStepMaster (or
+      oms:VariableStepMaster) that has a description: without it the type is oms_system_none and
+      System::NewSystem fails ("[NewSystem] internal error");
+    - SystemWC::setSolverMethod accepts the descriptions oms-ma, oms-mav and oms-mav2; importFromSSD_
+      SimulationInformation reads the fixed step from stepSize;
+    - System::importFromSnapshot takes ssd:ElementGeometry, ssd:ParameterBindings, ssd:Connections,
+      ssd:Connectors, ssd:Elements (ssd:Component, ssd:System) and ssd:Annotations, nothing else."""
+    import xml.etree.ElementTree as ET
+
+    from tribocosim.cosim.ssp import NS, prefixed
+
+    with zipfile.ZipFile(rig) as zf:
+        root = ET.fromstring(zf.read("SystemStructure.ssd"))
+    assert {prefixed(c.tag) for c in root} <= {"ssd:System", "ssd:Units", "ssd:Enumerations", "ssd:DefaultExperiment"}
+    assert root.get("version") == "1.0"
+    system = root.find("ssd:System", NS)
+    assert {prefixed(c.tag) for c in system} <= {"ssd:ElementGeometry", "ssd:ParameterBindings", "ssd:Connections",
+                                                 "ssd:Connectors", "ssd:Elements", "ssd:Annotations"}
+    first = system.find("ssd:Annotations/ssc:Annotation", NS)
+    assert first is not None and first.get("type") == "org.openmodelica", "OMSimulator reads the first one only"
+    master = first.find("oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster", NS)
+    assert master is not None and master.get("description") == "oms-ma"
+    assert float(master.get("stepSize")) == 1e-3
+    assert all(prefixed(e.tag) == "ssd:Component" and e.get("type") == "application/x-fmu-sharedlibrary"
+               for e in system.find("ssd:Elements", NS))
+    # the prefixes are the ones OMSimulator compares literally
+    text = zipfile.ZipFile(rig).read("SystemStructure.ssd").decode()
+    assert "<oms:FixedStepMaster " in text and "<ssd:System " in text and "<ssc:Annotation " in text
 
 
 # ------------------------------------------------------------------ import

@@ -1,7 +1,9 @@
-"""The exported function names of a shared library, read from its file: ELF (.so), PE (.dll), Mach-O (.dylib).
+"""The exported function names and the CPU architectures of a shared library, read from its file: ELF (.so), PE
+(.dll), Mach-O (.dylib), universal Mach-O (a fat header, then one Mach-O per architecture).
 
-Test helper, standard library only: the win64 and darwin64 binaries of a native FMU cannot be loaded here,
-so their symbol tables are read to check that they export the fmi2 functions.
+Test helper, standard library only: the win64, darwin and aarch64 binaries of a native FMU cannot be loaded here,
+so their headers and symbol tables are read to check what they are built for and that they export the FMI
+functions.
 """
 
 from __future__ import annotations
@@ -45,7 +47,49 @@ def _pe_exports(data: bytes) -> set[str]:
     return names
 
 
+#: ELF e_machine, Mach-O cputype, PE machine -> architecture
+ELF_MACHINES = {62: "x86_64", 183: "aarch64"}
+MACHO_CPUS = {0x01000007: "x86_64", 0x0100000C: "arm64"}
+PE_MACHINES = {0x8664: "x86_64", 0xAA64: "arm64"}
+
+
+def fat_slices(data: bytes) -> list[tuple[int, bytes]]:
+    """The (cputype, bytes) of every slice of a universal Mach-O file (<mach-o/fat.h>: big-endian fat_header
+    {0xcafebabe, nfat_arch}, then fat_arch {cputype, cpusubtype, offset, size, align} per slice); each slice's
+    offset a multiple of 2**align, its own header's cputype the fat_arch's."""
+    magic, n = struct.unpack_from(">II", data, 0)
+    if magic != 0xCAFEBABE:
+        raise ValueError("not a universal Mach-O file")
+    out = []
+    for k in range(n):
+        cputype, _, offset, size, align = struct.unpack_from(">iiIII", data, 8 + 20 * k)
+        if offset % (1 << align) or offset + size > len(data):
+            raise ValueError(f"slice {k}: offset {offset} not aligned to 2**{align} or past the end")
+        part = data[offset:offset + size]
+        if struct.unpack_from("<I", part, 0)[0] != 0xFEEDFACF or struct.unpack_from("<i", part, 4)[0] != cputype:
+            raise ValueError(f"slice {k} is not the 64-bit Mach-O of cputype {cputype:#x} its fat_arch says")
+        out.append((cputype, part))
+    return out
+
+
+def architectures(path: str | Path) -> list[str]:
+    """The CPU architectures a library is built for (a universal Mach-O: one per slice, in order)."""
+    data = Path(path).read_bytes()
+    if data[:4] == b"\x7fELF":
+        if data[4] != 2 or data[5] != 1:
+            raise ValueError("not a 64-bit little-endian ELF file")
+        return [ELF_MACHINES.get(struct.unpack_from("<H", data, 18)[0], "?")]
+    if data[:2] == b"MZ":
+        pe = struct.unpack_from("<I", data, 0x3C)[0]
+        return [PE_MACHINES.get(struct.unpack_from("<H", data, pe + 4)[0], "?")]
+    if struct.unpack_from(">I", data, 0)[0] == 0xCAFEBABE:
+        return [MACHO_CPUS.get(cpu, "?") for cpu, _ in fat_slices(data)]
+    return [MACHO_CPUS.get(struct.unpack_from("<i", data, 4)[0], "?")]
+
+
 def _macho_exports(data: bytes) -> set[str]:
+    if struct.unpack_from(">I", data, 0)[0] == 0xCAFEBABE:  # every slice must export them: the common names
+        return set.intersection(*(_macho_exports(part) for _, part in fat_slices(data)))
     magic = struct.unpack_from("<I", data, 0)[0]
     if magic != 0xFEEDFACF:
         raise ValueError("not a 64-bit little-endian Mach-O file")

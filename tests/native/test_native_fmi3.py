@@ -370,10 +370,14 @@ def test_fmu_state_get_set_and_serialize_replay_bit_identically(unzipped, md):
 
 
 BAD_PARAMETERS = [
-    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: (0.0001, 1] m"),
+    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: [0.0001, 1] m"),
     ("StripDraw", {"friction_model": "tabel"}, "friction_model = 'tabel' is not allowed; choose one of table, "
                                                "closed_form, constant"),
-    ("StripDraw", {"n_nodes": 3}, "n_elements = 2 is out of range; allowed: [4, 200000]"),
+    ("StripDraw", {"n_nodes": 3}, "n_nodes = 3 is out of range; allowed: [5, 200001] (n_elements + 1)"),
+    ("StripDraw", {"n_nodes": 0}, "n_nodes = 0 is out of range; allowed: [5, 200001] (n_elements + 1)"),
+    ("StripDraw", {"n_elements": 60, "n_nodes": 100}, "n_nodes = 100 and n_elements = 60 were both set and "
+                                                      "disagree; n_nodes must be n_elements + 1"),
+    ("StripDraw", {"n_nodes": 100, "n_elements": 60}, "n_nodes = 100 and n_elements = 60 were both set and disagree"),
     ("Press", {"setpoint_table": "0 0; 0.1"}, "setpoint_table = '0 0; 0.1' is malformed"),
     ("DrawingMachine", {"screw_lead": 0.0}, "screw_lead = 0.0 m is out of range"),
 ]
@@ -398,6 +402,117 @@ def test_a_bad_parameter_is_fmi3_error_at_initialization_naming_it(unzipped, md,
     with pytest.raises(FMICallException):
         s.doStep(0.0, 1e-3)
     s.freeInstance()
+
+
+def _initialized(unzipped, md, name: str, parameters: dict, messages: list):
+    """An FMU3Slave with ``parameters`` set (in their order) and initialization left: the slave, or the
+    FMICallException of fmi3ExitInitializationMode."""
+    from fmpy.fmi1 import FMICallException
+
+    s = _slave(unzipped[3, name], md[3, name], name, messages)
+    variables = {v.name: v for v in md[3, name].modelVariables}
+    for key, value in parameters.items():
+        v = variables[key]
+        getattr(s, f"set{v.type}")([v.valueReference], [value])
+    s.enterInitializationMode(startTime=0.0)
+    try:
+        s.exitInitializationMode()
+    except FMICallException as exc:
+        s.freeInstance()
+        return exc
+    return s
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_parameter_is_accepted_at_its_declared_min_and_at_its_max(unzipped, md, name):
+    """FMI 3.0 section 2.4.7 (Float64, Int32, UInt64 attributes): min <= value <= max. Each parameter alone at
+    each declared bound, n_nodes too, initializes without a message above OK. (The bounds are read from the XML:
+    fmpy 0.3 does not read them for UInt64.)"""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(unzipped[3, name] / "modelDescription.xml").getroot()
+    checked = []
+    for v in root.find("ModelVariables"):
+        if v.get("causality") not in ("parameter", "structuralParameter") or v.tag == "String":
+            continue
+        for bound in (v.get("min"), v.get("max")):
+            if bound is None:
+                continue
+            value = float(bound) if v.tag == "Float64" else int(bound)
+            messages = []
+            s = _initialized(unzipped, md, name, {v.get("name"): value}, messages)
+            assert not isinstance(s, Exception), (v.get("name"), value, messages)
+            assert not [m for m in messages if m[0] >= 2], (v.get("name"), value, messages)
+            s.freeInstance()
+            checked.append(v.get("name"))
+    assert len(checked) >= 10 and (name != "StripDraw" or {"n_nodes", "n_elements"} <= set(checked)), checked
+
+
+def test_n_nodes_and_n_elements_set_together_must_agree(unzipped, md):
+    """Setting either structural parameter sets both; set both, they must agree (or initialization is fmi3Error
+    naming both, see BAD_PARAMETERS); n_nodes is checked against its own range [5, 200001]."""
+    vr = {v.name: v.valueReference for v in md[3, "StripDraw"].modelVariables}
+    for parameters in ({"n_elements": 60, "n_nodes": 61}, {"n_nodes": 61, "n_elements": 60}, {"n_nodes": 61},
+                       {"n_elements": 60}):
+        messages = []
+        s = _initialized(unzipped, md, "StripDraw", parameters, messages)
+        assert not isinstance(s, Exception), (parameters, messages)
+        assert s.getUInt64([vr["n_nodes"]]) == [61] and s.getInt32([vr["n_elements"]]) == [60]
+        assert len(s.getFloat64([vr["beta"]], nValues=61)) == 61
+        s.freeInstance()
+
+
+def test_model_structure_declares_no_output_dependencies_and_every_output_calculated(md):
+    """FMI 3.0 section 2.4.8: an Output without dependencies depends on every input; dependencies="" on none.
+    No output has direct feedthrough (tests/native/test_native_fmus.py measures it on the same core); outputs
+    are the model's values after initialization (initial = calculated, InitialUnknown)."""
+    for name in NAMES:
+        m = md[3, name]
+        outputs = [v for v in m.modelVariables if v.causality == "output"]
+        assert [(u.variable.name, u.dependencies) for u in m.outputs] == [(v.name, []) for v in outputs]
+        assert [(u.variable.name, u.dependencies) for u in m.initialUnknowns] == [(v.name, []) for v in outputs]
+        assert all(v.initial == "calculated" and v.start is None for v in outputs), name
+
+
+def test_a_discard_for_invalid_inputs_sets_terminate_simulation(unzipped, md):
+    """FMI 3.0 section 4.2.1 (fmi3DoStep): terminateSimulation = fmi3True, "the FMU requests to stop the
+    simulation". A negative normal force is refused at any step size: fmi3Discard with terminateSimulation
+    true and lastSuccessfulTime the step's start; a zero step (the host's to fix) leaves it false."""
+    import ctypes
+
+    m3 = md[3, "StripDraw"]
+    vr = {v.name: v.valueReference for v in m3.modelVariables}
+    messages = []
+    s = _initialized(unzipped, md, "StripDraw", {"n_elements": 40}, messages)
+    lib = ctypes.CDLL(str(unzipped[3, "StripDraw"] / "binaries" / "x86_64-linux" / "StripDraw.so"))
+    do_step = lib.fmi3DoStep
+    do_step.restype = ctypes.c_int
+    flags = [ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool()]
+    last = ctypes.c_double()
+
+    def step(t, dt):
+        status = do_step(ctypes.c_void_p(s.component), ctypes.c_double(t), ctypes.c_double(dt), ctypes.c_bool(True),
+                         *(ctypes.byref(f) for f in flags), ctypes.byref(last))
+        return status, [f.value for f in flags], last.value
+
+    assert step(0.0, 1e-3) == (0, [False, False, False], 1e-3)
+    assert step(1e-3, 0.0) == (2, [False, False, False], 1e-3), "a zero step: not the inputs' fault"
+    s.setFloat64([vr["normal_force"]], [-5.0])
+    assert step(1e-3, 1e-3) == (2, [False, True, False], 1e-3)
+    assert any(st == 2 and "normal_force = -5.0 N" in m and "the inputs are at fault" in m for st, m in messages)
+    s.setFloat64([vr["normal_force"]], [12250.0])
+    assert step(1e-3, 1e-3) == (0, [False, False, False], 2e-3)
+    s.terminate()
+    s.freeInstance()
+
+
+def test_fmpy_simulate_fmu_of_the_fmi3_fmu_with_a_negative_normal_force_ends_with_an_error(built):
+    from fmpy import simulate_fmu
+    from fmpy.fmi1 import FMICallException
+
+    with pytest.raises(FMICallException) as exc:
+        simulate_fmu(str(built[3]["StripDraw"]), stop_time=0.01, step_size=1e-3, start_values={"normal_force": -5.0})
+    assert exc.value.status == 2
 
 
 def test_a_negative_normal_force_is_discarded_with_the_state_unchanged(unzipped, md):

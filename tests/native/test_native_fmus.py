@@ -125,8 +125,10 @@ def test_model_descriptions_are_the_python_variants(descriptions, tmp_path_facto
     for name in NAMES:
         mine, theirs = descriptions[name], read_model_description(str(python[name]))
         key = lambda v: (v.name, v.valueReference, v.causality, v.variability, v.type, v.unit,  # noqa: E731
-                         v.description, None if v.start is None else str(v.start))
+                         v.description, None if v.start is None or v.causality == "output" else str(v.start))
         assert [key(v) for v in mine.modelVariables] == [key(v) for v in theirs.modelVariables], name
+        outputs = [v for v in mine.modelVariables if v.causality == "output"]
+        assert all(v.initial == "calculated" and v.start is None for v in outputs), "the model's values after init"
         for a, b in zip(mine.modelVariables, theirs.modelVariables):
             if a.type == "Real":
                 num = lambda x: None if x is None else float(x)  # noqa: E731
@@ -304,7 +306,7 @@ def _fmpy_instance(unzipped, md, parameters: dict, messages: list):
 
 
 BAD_PARAMETERS = [
-    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: (0.0001, 1] m"),
+    ("StripDraw", {"tool_length": -1.0}, "tool_length = -1.0 m is out of range; allowed: [0.0001, 1] m"),
     ("StripDraw", {"friction_model": "tabel"}, "friction_model = 'tabel' is not allowed; choose one of table, "
                                                "closed_form, constant"),
     ("StripDraw", {"table_file": "/nowhere/t.npz"}, "friction table file not found: /nowhere/t.npz"),
@@ -327,6 +329,201 @@ def test_a_bad_parameter_is_an_error_at_initialization_naming_it(unzipped, descr
     assert any(status == 3 and message in text for status, text in msgs), msgs
     with pytest.raises(FMICallException):
         s.doStep(0.0, 1e-3)
+    s.freeInstance()
+
+
+def _bounds(md):
+    """(name, value) of every Real and Integer parameter at its declared min and at its declared max."""
+    for v in md.modelVariables:
+        if v.causality == "parameter" and v.type in ("Real", "Integer"):
+            for bound in (v.min, v.max):
+                if bound is not None:
+                    yield v.name, (int(bound) if v.type == "Integer" else float(bound))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_parameter_is_accepted_at_its_declared_min_and_at_its_max(unzipped, descriptions, name):
+    """FMI 2.0 (section 2.2.7, Real and Integer attributes): min and max bound the value inclusively
+    (min <= value <= max); a host's parameter dialog offers them as valid. Each parameter alone at each bound
+    (the others at their start values) initializes without a message above OK."""
+    from fmpy.fmi1 import FMICallException
+
+    checked = []
+    for pname, value in _bounds(descriptions[name]):
+        msgs = []
+        s = _fmpy_instance(unzipped[name], descriptions[name], {pname: value}, msgs)
+        try:
+            s.exitInitializationMode()
+        except FMICallException:
+            pytest.fail(f"{name}.{pname} = {value!r} (a declared bound) refused: {msgs}")
+        finally:
+            s.freeInstance()
+        assert not [m for m in msgs if m[0] >= 2], (pname, value, msgs)
+        checked.append(pname)
+    assert len(checked) >= 10, checked
+
+
+def _raw(unzipped, md, function: str, restype, argtypes):
+    """An FMI function of an FMU's linux64 library without fmpy's status check (its status is the result)."""
+    import ctypes
+
+    lib = ctypes.CDLL(str(Path(unzipped) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"))
+    f = getattr(lib, function)
+    f.restype, f.argtypes = restype, argtypes
+    return f
+
+
+def _strip_stepped(unzipped, md, parameters: dict, steps: int, messages: list, normal_force=12250.0,
+                   grip_velocity=0.08):
+    """A StripDraw instance (fmpy) after ``steps`` steps of 1 ms with the given inputs; (slave, time, vr)."""
+    s = _fmpy_instance(unzipped, md, parameters, messages)
+    s.exitInitializationMode()
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s.setReal([vr["normal_force"], vr["grip_velocity"]], [normal_force, grip_velocity])
+    t = 0.0
+    for _ in range(steps):
+        s.doStep(t, 1e-3)
+        t += 1e-3
+    return s, t, vr
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_no_output_has_direct_feedthrough_and_the_model_description_says_so(unzipped, descriptions, name):
+    """FMI 2.0 section 2.2.8: an output listed without dependencies depends on every input; dependencies=""
+    says it depends on none. Measured: after steps, setting every input to another value changes no output until
+    the next doStep (bit for bit). An importer that reads the ModelStructure (our validation) then sees no
+    dependency and so no algebraic loop (OMSimulator reported 'Alg. loop (size 2/4) strip, drive' without it)."""
+
+    md = descriptions[name]
+    outputs = [v for v in md.modelVariables if v.causality == "output"]
+    inputs = [v for v in md.modelVariables if v.causality == "input"]
+    assert [(u.variable.name, u.dependencies) for u in md.outputs] == [(v.name, []) for v in outputs]
+    assert [(u.variable.name, u.dependencies) for u in md.initialUnknowns] == [(v.name, []) for v in outputs]
+    msgs = []
+    s = _fmpy_instance(unzipped[name], md, {}, msgs)
+    s.exitInitializationMode()
+    reals = [v.valueReference for v in outputs if v.type == "Real"]
+    ints = [v.valueReference for v in outputs if v.type == "Integer"]
+    t = 0.0
+    for _ in range(20):
+        s.doStep(t, 1e-3)
+        t += 1e-3
+    before = (s.getReal(reals), s.getInteger(ints))
+    for v in inputs:
+        s.setReal([v.valueReference], [0.5 * float(v.start or 1.0) + 1000.0])
+        assert (s.getReal(reals), s.getInteger(ints)) == before, f"{name}.{v.name} feeds an output through"
+    s.doStep(t, 1e-3)
+    if inputs:
+        assert (s.getReal(reals), s.getInteger(ints)) != before, "the inputs reach the outputs in the next step"
+    s.terminate()
+    s.freeInstance()
+
+
+def test_outputs_after_initialization_are_the_model_s_values(unzipped, descriptions):
+    """Outputs are initial="calculated" (FMI 2.0 section 2.2.7): what a host reads at t = 0, after
+    fmi2ExitInitializationMode, is the model's value there, not a declared start. A later pass that starts from
+    a debris field (beta_initial = 0.01) has beta_mean = beta_max = 0.01 at t = 0 (a declared start of 0, as
+    initial="exact" had it, would be stale)."""
+    md = descriptions["StripDraw"]
+    vr = {v.name: v for v in md.modelVariables}
+    assert vr["beta_max"].initial == "calculated" and vr["beta_max"].start is None
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40, "beta_initial": 0.01}, msgs)
+    s.exitInitializationMode()
+    assert s.getReal([vr["beta_max"].valueReference, vr["beta_mean"].valueReference]) == [0.01, 0.01]
+    s.terminate()
+    s.freeInstance()
+
+
+def test_the_demo_scene_has_no_algebraic_loop_for_an_importer_that_reads_the_dependencies():
+    from tribocosim.cosim.validate import load_scene
+
+    plan = load_scene(Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml")
+    for name, model in plan.fmus.items():
+        assert all(d == set() for d in model.dependencies.values()), (name, model.dependencies)
+
+
+def test_a_discard_for_invalid_inputs_asks_the_host_to_stop(unzipped, descriptions):
+    """FMI 2.0.4 section 4.2.3: after fmi2Discard a slave tells through fmi2GetBooleanStatus(fmi2Terminated)
+    whether it wants to end the simulation. A negative normal force is refused at any step size: Terminated is
+    true (and fmi2LastSuccessfulTime the step's start); a zero step, which a host can fix, leaves it false; an
+    accepted step clears it."""
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+
+    md = descriptions["StripDraw"]
+    msgs = []
+    s, t, vr = _strip_stepped(unzipped["StripDraw"], md, {"n_elements": 40}, 5, msgs)
+    assert s.getBooleanStatus(fmi2Terminated) is False
+    with pytest.raises(FMICallException) as exc:
+        s.doStep(t, 0.0)
+    assert exc.value.status == 2 and s.getBooleanStatus(fmi2Terminated) is False, "a zero step: fix the step"
+    s.setReal([vr["normal_force"]], [-5.0])
+    with pytest.raises(FMICallException) as exc:
+        s.doStep(t, 1e-3)
+    assert exc.value.status == 2
+    assert s.getBooleanStatus(fmi2Terminated) is True and s.getRealStatus(fmi2LastSuccessfulTime) == t
+    assert any(st == 2 and "normal_force = -5.0 N" in m and "the inputs are at fault" in m for st, m in msgs), msgs
+    s.setReal([vr["normal_force"]], [12250.0])
+    s.doStep(t, 1e-3)
+    assert s.getBooleanStatus(fmi2Terminated) is False
+    s.terminate()
+    s.freeInstance()
+
+
+_SIMULATE_NEGATIVE = """
+import sys
+from fmpy import simulate_fmu
+result = simulate_fmu(sys.argv[1], stop_time=0.01, step_size=1e-3, start_values={"normal_force": -5.0})
+print("rows", len(result), "last time", result["time"][-1])
+"""
+
+
+def test_fmpy_simulate_fmu_with_a_negative_normal_force_ends_and_says_why(native_fmus, tmp_path):
+    """fmpy's simulate_fmu retries a discarded step until the slave says it is terminated: it ran forever (killed
+    after 120 s, hundreds of MB of log). Now it ends at once, at t = 0, with the reason in the log."""
+    script = tmp_path / "negative.py"
+    script.write_text(_SIMULATE_NEGATIVE)
+    proc = subprocess.run([sys.executable, str(script), str(native_fmus["StripDraw"])], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "last time 0.0" in proc.stdout, proc.stdout
+    out = proc.stdout + proc.stderr
+    assert out.count("normal_force = -5.0 N must be >= 0") == 1 and "the inputs are at fault" in out, out[-2000:]
+
+
+@pytest.mark.parametrize("inputs, parameters, message", [
+    ({"grip_velocity": 1e6}, {}, "m is above draw_length = 0.14 m, the largest grip_position"),
+    ({"normal_force": 1e30}, {}, "contact_pressure = 8.163265306122448e+32 Pa is above hardness = 800000000.0 Pa"),
+    ({"grip_velocity": 0.08}, {"draw_length": 0.002}, "m is above draw_length = 0.002 m, the largest grip_position"),
+])
+def test_absurd_but_finite_inputs_give_a_warning_status_and_message(unzipped, descriptions, inputs, parameters,
+                                                                   message):
+    """The strip's ports declare the ranges its outputs are built for (grip_position <= draw_length: the bar's
+    length; contact_pressure <= hardness). The step after which an output leaves one returns fmi2Warning (the
+    status a host can test) with a message naming the output, its value, the bound and the time; the steps after
+    it, while the output stays outside, return fmi2OK; the results are still computed."""
+    import ctypes
+
+    md = descriptions["StripDraw"]
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40, **parameters}, msgs)
+    s.exitInitializationMode()
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    for k, x in inputs.items():
+        s.setReal([vr[k]], [x])
+    do_step = _raw(unzipped["StripDraw"], md, "fmi2DoStep", ctypes.c_int,
+                   [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int])
+    statuses, ends = [], []
+    for k in range(60):
+        statuses.append(do_step(s.component, k * 1e-3, 1e-3, 1))
+        ends.append(k * 1e-3 + 1e-3)
+    warned = [i for i, st in enumerate(statuses) if st == 1]
+    assert len(warned) == 1 and set(statuses) <= {0, 1}, statuses
+    text = [m for st, m in msgs if st == 1]
+    assert len(text) == 1 and message in text[0] and "the model is built for" in text[0], msgs
+    assert text[0].startswith(f"at t = {ends[warned[0]]!r} s"), (warned, text)
+    s.terminate()
     s.freeInstance()
 
 

@@ -14,7 +14,7 @@ class LagParameters:
     """Gain and time constant of the lag."""
 
     gain: float = param(2.0, "1", "static gain k", -1e6, 1e6)
-    time_constant: float = param(0.01, "s", "time constant tau", 1e-9, 1e6, False)
+    time_constant: float = param(0.01, "s", "time constant tau", 1e-9, 1e6)
     nan_from: float = param(0.0, "s", "from this time on y is NaN (to test how a master handles a non-finite "
                             "output); 0: never", 0.0, 1e6)
 
