@@ -110,33 +110,74 @@ class Case:
         return {"case_id": self.case_id, "config": self.config.to_dict()}
 
 
+def make_case(sweep: Sweep, surface: int, pressure: float, velocity: float, count: int = 0,
+              diameter: float | None = None, seed: int | None = None) -> Case:
+    """The case of one member: a surface pair (index into ``sweep.surfaces``), a grid point and a
+    debris level with a placement seed (count 0: particle-free, no seed). Labels: pressure, velocity,
+    beta, n_flakes, flake_diameter, seed (None for particle-free cases) and surface."""
+    kw = {**sweep.slide, **sweep.surfaces[surface], "pressure": pressure, "v0": velocity, "n_flakes": count,
+          "flake_seed": 0 if seed is None else seed}
+    if diameter is not None:
+        kw["flake_diameter"] = diameter
+    cfg = SlideConfig(**kw)
+    labels = {"pressure": pressure, "velocity": velocity, "beta": cfg.beta, "n_flakes": count,
+              "flake_diameter": cfg.flake_diameter if count else None, "seed": seed, "surface": surface}
+    return Case(cfg, labels)
+
+
 def expand_cases(sweep: Sweep) -> list[Case]:
-    """Every case of ``sweep``: P x v x (flake levels x seeds [+ particle-free]) x surfaces.
+    """Every case of ``sweep``: P x v x (flake levels x seeds [+ particle-free]) x surfaces, each level
+    at the grid points it names (``FlakeLevel.at``) with its own seeds when it gives them.
 
     Particle-free cases (n_flakes = 0, beta = 0) do not depend on the placement seed: one per
-    (P, v, surface). Labels: pressure, velocity, beta, n_flakes, flake_diameter, seed (None for
-    particle-free cases) and surface (index into ``sweep.surfaces``).
+    (P, v, surface).
     """
-    base = sweep.slide
     cases: dict[str, Case] = {}
-    for s_idx, surf in enumerate(sweep.surfaces):
+    for s_idx in range(len(sweep.surfaces)):
         for p in sweep.pressures:
             for v in sweep.velocities:
-                levels = [(count, d, seed) for count, d in sweep.flakes for seed in sweep.seeds]
+                levels = [(fl.count, fl.diameter, seed) for fl in sweep.flakes if fl.at(p, v)
+                          for seed in (fl.seeds if fl.seeds is not None else sweep.seeds)]
                 if sweep.particle_free:
                     levels.insert(0, (0, None, None))
                 for count, d, seed in levels:
-                    kw = {**base, **surf, "pressure": p, "v0": v, "n_flakes": count,
-                          "flake_seed": 0 if seed is None else seed}
-                    if d is not None:
-                        kw["flake_diameter"] = d
-                    cfg = SlideConfig(**kw)
-                    labels = {"pressure": p, "velocity": v, "beta": cfg.beta, "n_flakes": count,
-                              "flake_diameter": cfg.flake_diameter if count else None,
-                              "seed": seed, "surface": s_idx}
-                    case = Case(cfg, labels)
+                    case = make_case(sweep, s_idx, p, v, count, d, seed)
                     cases.setdefault(case.case_id, case)
     return list(cases.values())
+
+
+def relative_standard_error(values) -> float:
+    """Standard error of the mean of ``values`` over their mean (inf with fewer than 2 values or a
+    zero mean)."""
+    x = np.asarray(values, dtype=float)
+    if x.size < 2 or not np.mean(x) > 0:
+        return math.inf
+    return float(np.std(x, ddof=1) / math.sqrt(x.size) / np.mean(x))
+
+
+def adaptive_cases(sweep: Sweep, records: list[dict]) -> list[Case]:
+    """The next placements of the sweep's ``[adaptive]`` rule: at every node with flakes whose finished
+    members' <A_p>/A0 has a relative standard error above the target (or a zero mean), the first extra
+    seed the node has not used yet, on every surface pair. Empty when every node meets the target or
+    has used every extra seed (or the sweep has no rule)."""
+    if sweep.adaptive is None:
+        return []
+    nodes: dict = {}
+    for r in records:
+        lab = r["labels"]
+        if lab["n_flakes"]:
+            key = (lab["pressure"], lab["velocity"], lab["n_flakes"], lab["flake_diameter"])
+            nodes.setdefault(key, []).append(r)
+    out = []
+    for (p, v, count, d), recs in sorted(nodes.items()):
+        values = [r["summary"]["mean_particle_fraction"] for r in recs]
+        if relative_standard_error(values) <= sweep.adaptive.target_relative_se:
+            continue
+        used = {r["labels"]["seed"] for r in recs}
+        seed = next((x for x in sweep.adaptive.extra_seeds if x not in used), None)
+        if seed is not None:
+            out.extend(make_case(sweep, s, p, v, count, d, seed) for s in range(len(sweep.surfaces)))
+    return out
 
 
 def run_case(payload: dict) -> dict:
@@ -373,6 +414,27 @@ def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep |
                             executor.describe())
     store.log("end", None, computed=len(computed), failed=len(failed), wall_s=report.wall_s)
     return report
+
+
+def run_sweep(sweep: Sweep, out: str | Path, executor, **kwargs) -> CampaignReport:
+    """Run every case of ``sweep`` (:func:`run_campaign`), then, while its ``[adaptive]`` rule asks for
+    more (:func:`adaptive_cases` of the finished records), the added cases; returns the report of all
+    rounds. Deterministic in the finished results, so an interrupted run resumes: every round skips
+    the cases already on disk and the rule adds the same cases again."""
+    cases = expand_cases(sweep)
+    reports = []
+    while True:
+        reports.append(run_campaign(cases, out, executor, sweep=sweep, **kwargs))
+        ids = {c.case_id for c in cases}
+        done = load_records(out)[1]
+        more = [c for c in adaptive_cases(sweep, done) if c.case_id not in ids]
+        if not more:
+            break
+        cases = cases + more
+    last = reports[-1]
+    return CampaignReport(last.total, last.skipped[:len(reports[0].skipped)],
+                          [c for r in reports for c in r.computed], last.failed,
+                          sum(r.wall_s for r in reports), last.executor)
 
 
 def load_records(out: str | Path) -> tuple[dict, list[dict], list[dict]]:

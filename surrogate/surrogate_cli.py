@@ -73,13 +73,12 @@ def _build(argv: list[str]) -> int:
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
 
-    from .campaign import expand_cases, run_campaign
+    from .campaign import run_sweep
     from .executors import make_executor
     from .sweep import load_preset, load_sweep
 
     try:
         sweep = load_preset(args.preset) if args.preset else load_sweep(args.sweep)
-        cases = expand_cases(sweep)
         executor = make_executor(args.workers, args.scheduler)
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
@@ -87,8 +86,8 @@ def _build(argv: list[str]) -> int:
     out = Path(args.out)
     t0 = time.perf_counter()
     try:
-        report = run_campaign(cases, out, executor, sweep=sweep, retry_failed=not args.no_retry_failed,
-                              progress=not args.quiet)
+        report = run_sweep(sweep, out, executor, retry_failed=not args.no_retry_failed,
+                           progress=not args.quiet)
     finally:
         executor.close()
     print(report.summary(), file=sys.stderr)

@@ -15,6 +15,9 @@ by every slide. Example (SI units everywhere)::
     [[flakes]]                     # one debris level each: beta = count pi (d/2)^2 / L^2 (Eq. 10)
     count = 5
     diameter = 12e-6
+    # optional: min_pressure = 10e6   only at grid pressures >= this [Pa]
+    #           velocities = [0.08]   only at these grid velocities [m/s]
+    #           seeds = [11]          placements of this level (default: the grid's)
 
     [[surfaces]]                   # surface pairs; the ensemble runs over surfaces x seeds
     sheet_seed = 1
@@ -28,6 +31,11 @@ by every slide. Example (SI units everywhere)::
     mu0 = 0.15                     # particle-free friction coefficient (calibration, Eq. 6)
     low_velocities = [0.0, 0.02, 0.08, 0.3]  # table rows below the grid, from the alpha(v) fit
     beta_extension = 4             # table nodes above the largest campaign beta (Eq. 23); 0: none
+    quasi_static_row = false       # a v = 0 row: the slowest grid velocity's values (the plateau)
+
+    [adaptive]                     # optional: more placements where the ensemble is noisy
+    target_relative_se = 0.10      # standard error of <A_p> / <A_p> at a node
+    extra_seeds = [14, 15, 16]     # added one at a time (on every surface pair) while above target
 
 The keys that the grid sweeps (``pressure``, ``v0``, ``n_flakes``, ``flake_diameter``,
 ``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
@@ -56,11 +64,13 @@ SWEPT_KEYS = ("pressure", "v0", "n_flakes", "flake_diameter", "flake_seed", "she
 #: SlideConfig keys a [[surfaces]] entry may set besides the two seeds
 SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_rms_height",
                 "tool_rms_height", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
-_TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table")
+_TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table", "adaptive")
 _GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
-_FLAKE_KEYS = ("count", "diameter")
-_TABLE_KEYS = ("mu0", "low_velocities", "beta_extension")
-MIN_SEEDS = 3
+_FLAKE_KEYS = ("count", "diameter", "min_pressure", "velocities", "seeds")
+_TABLE_KEYS = ("mu0", "low_velocities", "beta_extension", "quasi_static_row")
+_ADAPTIVE_KEYS = ("target_relative_se", "extra_seeds")
+#: members (placements x surface pairs) a debris level needs at every grid point
+MIN_MEMBERS = 2
 
 
 @dataclass(frozen=True)
@@ -82,6 +92,52 @@ class TableSettings:
     mu0: float = 0.15
     low_velocities: tuple = (0.0, 0.02, 0.08, 0.3)
     beta_extension: int = 4
+    quasi_static_row: bool = False
+
+
+@dataclass(frozen=True)
+class FlakeLevel:
+    """One debris level of a sweep and where it is simulated.
+
+    Attributes
+    ----------
+    count : int
+        Flakes per slide.
+    diameter : float
+        d_p [m].
+    min_pressure : float
+        Simulated only at grid pressures >= this [Pa] (0: every pressure).
+    velocities : tuple of float or None
+        Simulated only at these grid velocities [m/s] (None: every one).
+    seeds : tuple of int or None
+        Placement seeds of this level (None: the grid's).
+    """
+
+    count: int
+    diameter: float
+    min_pressure: float = 0.0
+    velocities: tuple | None = None
+    seeds: tuple | None = None
+
+    def at(self, pressure: float, velocity: float) -> bool:
+        """True when this level is simulated at (pressure, velocity)."""
+        return pressure >= self.min_pressure and (self.velocities is None or velocity in self.velocities)
+
+
+@dataclass(frozen=True)
+class AdaptiveSettings:
+    """More placements where a node's ensemble is noisy (:func:`tribocosim.surrogate.campaign.adaptive_cases`).
+
+    Attributes
+    ----------
+    target_relative_se : float
+        The standard error of the member mean of <A_p>/A0 over that mean, at every node with flakes.
+    extra_seeds : tuple of int
+        Placement seeds added one at a time, on every surface pair, to the nodes above the target.
+    """
+
+    target_relative_se: float = 0.10
+    extra_seeds: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -93,11 +149,12 @@ class Sweep:
     pressures: tuple
     velocities: tuple
     seeds: tuple
-    flakes: tuple  # ((count, diameter), ...)
+    flakes: tuple  # (FlakeLevel, ...)
     surfaces: tuple  # (dict of SURFACE_KEYS, ...)
     slide: dict
     particle_free: bool = True
     table: TableSettings = TableSettings()
+    adaptive: AdaptiveSettings | None = None
     source: str = ""
 
     def base_config(self) -> SlideConfig:
@@ -112,8 +169,7 @@ class Sweep:
     def to_dict(self) -> dict:
         """Plain dict (JSON-serialisable) of the whole definition, for the table metadata."""
         d = asdict(self)
-        d["flakes"] = [{"count": c, "diameter": dm, "beta": self.flake_beta(c, dm)}
-                       for c, dm in self.flakes]
+        d["flakes"] = [{**asdict(fl), "beta": self.flake_beta(fl.count, fl.diameter)} for fl in self.flakes]
         return d
 
 
@@ -197,19 +253,19 @@ class _Checker:
             self.fail(section, bad[0], f"unknown key {bad[0]!r}; allowed: {sorted(allowed)}", index)
 
     def numbers(self, section, key, value, *, positive=True, allow_zero=False, integer=False,
-                min_len=1, unique=True) -> tuple:
+                min_len=1, unique=True, index=0) -> tuple:
         kind = "integers" if integer else "numbers"
         if not isinstance(value, list) or len(value) < min_len:
-            self.fail(section, key, f"= {value!r}; a list of at least {min_len} {kind} is required")
+            self.fail(section, key, f"= {value!r}; a list of at least {min_len} {kind} is required", index)
         for x in value:
             ok_type = (isinstance(x, int) and not isinstance(x, bool)) if integer else (
                 isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x))
             if not ok_type or (positive and (x < 0 or (x == 0 and not allow_zero))):
                 need = ">= 0" if allow_zero else "> 0"
                 self.fail(section, key, f"has the value {x!r}; every entry must be one of the "
-                          f"finite {kind} {need}" if positive else f"has the value {x!r}")
+                          f"finite {kind} {need}" if positive else f"has the value {x!r}", index)
         if unique and len(set(value)) != len(value):
-            self.fail(section, key, f"= {value!r} has repeated values; each value once")
+            self.fail(section, key, f"= {value!r} has repeated values; each value once", index)
         return tuple(sorted(value)) if not integer else tuple(value)
 
 
@@ -255,7 +311,7 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
             chk.fail("grid", "pressure", f"has the value {p!r} Pa; pressures in (0, p_crit = "
                      f"{base.p_crit:g}] Pa are allowed")
     velocities = chk.numbers("grid", "velocity", grid["velocity"])
-    seeds = chk.numbers("grid", "seeds", grid["seeds"], integer=True, allow_zero=True, min_len=MIN_SEEDS)
+    seeds = chk.numbers("grid", "seeds", grid["seeds"], integer=True, allow_zero=True)
     particle_free = grid.get("particle_free", True)
     if not isinstance(particle_free, bool):
         chk.fail("grid", "particle_free", f"= {particle_free!r}; true or false is required")
@@ -266,7 +322,7 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     flakes = []
     for i, fl in enumerate(flakes_raw):
         chk.unknown("flakes", fl, _FLAKE_KEYS, i)
-        for key in _FLAKE_KEYS:
+        for key in ("count", "diameter"):
             if key not in fl:
                 chk.fail("flakes", None, f"key {key!r} is missing", i)
         c, d = fl["count"], fl["diameter"]
@@ -275,9 +331,26 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         if isinstance(d, bool) or not isinstance(d, (int, float)) or not (0 < d < 0.5 * base.size):
             chk.fail("flakes", "diameter", f"= {d!r} m; a diameter in (0, size/2 = "
                      f"{0.5 * base.size:g}) m is required", i)
-        if (c, float(d)) in flakes:
+        if any((c, float(d)) == (f.count, f.diameter) for f in flakes):
             chk.fail("flakes", "count", f"entry (count {c}, diameter {d!r}) is repeated", i)
-        flakes.append((c, float(d)))
+        min_p = fl.get("min_pressure", 0.0)
+        if isinstance(min_p, bool) or not isinstance(min_p, (int, float)) or not min_p >= 0:
+            chk.fail("flakes", "min_pressure", f"= {min_p!r} Pa; a pressure >= 0 is required", i)
+        level_v = None
+        if "velocities" in fl:
+            level_v = chk.numbers("flakes", "velocities", fl["velocities"], index=i)
+            for v in level_v:
+                if v not in velocities:
+                    chk.fail("flakes", "velocities", f"has the value {v!r} m/s; grid velocities "
+                             f"{list(velocities)} are allowed", i)
+        level_seeds = None
+        if "seeds" in fl:
+            level_seeds = tuple(chk.numbers("flakes", "seeds", fl["seeds"], integer=True, allow_zero=True,
+                                            index=i))
+        level = FlakeLevel(c, float(d), float(min_p), None if level_v is None else tuple(level_v), level_seeds)
+        if not any(level.at(p, v) for p in pressures for v in velocities):
+            chk.fail("flakes", "min_pressure", "selects no grid point", i)
+        flakes.append(level)
 
     surfaces_raw = data.get("surfaces", [{"sheet_seed": base.sheet_seed, "tool_seed": base.tool_seed}])
     if not isinstance(surfaces_raw, list) or not surfaces_raw:
@@ -313,6 +386,36 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     ext = tbl.get("beta_extension", TableSettings.beta_extension)
     if isinstance(ext, bool) or not isinstance(ext, int) or not (0 <= ext <= 100):
         chk.fail("table", "beta_extension", f"= {ext!r}; an integer in [0, 100] is required")
+    qs_row = tbl.get("quasi_static_row", False)
+    if not isinstance(qs_row, bool):
+        chk.fail("table", "quasi_static_row", f"= {qs_row!r}; true or false is required")
+    if qs_row and low:
+        chk.fail("table", "quasi_static_row", "and low_velocities exclude each other (both set rows below "
+                 "the grid); give one")
+
+    adaptive = None
+    if "adaptive" in data:
+        ad = data["adaptive"]
+        if not isinstance(ad, dict):
+            chk.fail("", "adaptive", "must be a table [adaptive]")
+        chk.unknown("adaptive", ad, _ADAPTIVE_KEYS)
+        target = ad.get("target_relative_se", AdaptiveSettings.target_relative_se)
+        if isinstance(target, bool) or not isinstance(target, (int, float)) or not (0 < target < 1):
+            chk.fail("adaptive", "target_relative_se", f"= {target!r}; a number in (0, 1) is required")
+        extra = chk.numbers("adaptive", "extra_seeds", ad.get("extra_seeds", []), integer=True,
+                            allow_zero=True, min_len=0)
+        adaptive = AdaptiveSettings(float(target), tuple(int(x) for x in extra))
+
+    for i, fl in enumerate(flakes):
+        used = fl.seeds if fl.seeds is not None else seeds
+        extra = adaptive.extra_seeds if adaptive else ()
+        if set(used) & set(extra):
+            chk.fail("adaptive", "extra_seeds", f"repeats a seed of [[flakes]] entry {i + 1}: {sorted(set(used) & set(extra))}")
+        if len(used) * len(surfaces) < MIN_MEMBERS:
+            chk.fail("flakes" if fl.seeds is not None else "grid", "seeds",
+                     f"give {len(used)} placement(s) x {len(surfaces)} surface pair(s) = "
+                     f"{len(used) * len(surfaces)} member(s) per grid point; at least {MIN_MEMBERS} are "
+                     "required (an ensemble spread)", i)
 
     return Sweep(
         name=data.get("name", Path(source).stem),
@@ -324,6 +427,7 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         surfaces=tuple(surfaces),
         slide=slide,
         particle_free=particle_free,
-        table=TableSettings(float(mu0), tuple(float(v) for v in low), int(ext)),
+        table=TableSettings(float(mu0), tuple(float(v) for v in low), int(ext), qs_row),
+        adaptive=adaptive,
         source=source,
     )
