@@ -14,6 +14,13 @@
 - Eq. 8: <A_c>/A0 = s_c P through the origin (s_c [1/Pa], R^2). With the composite RMS slope
   h'_rms of the gap, kappa = s_c E* h'_rms (Eq. 8 read backwards). In the plastic regime of
   docs/model.md section 4 s_c ~ 1/p_crit.
+- A_p(beta) at one (P, v) (:func:`fit_beta_forms`): the debris levels' ensemble means y_k with their
+  standard errors sigma_k, fitted by weighted least squares with each form of :data:`BETA_FORMS`:
+  ``linear`` y = a beta (Eq. 23 at one P and v) and ``langmuir`` y = a beta / (1 + c beta) (saturating;
+  beta_s = 1/c is the level at which A_p is half its linear value, c = 0 is the linear form). Each fit
+  gives chi^2 = sum ((y_k - f(beta_k)) / sigma_k)^2, Akaike's AIC = chi^2 + 2 k (k parameters, Gaussian
+  errors of known sigma), the parameters' covariance (absolute sigma) and the standard error of the
+  fitted value at any beta (first-order propagation).
 
 Everything here is plain arithmetic on the case records: no I/O.
 """
@@ -42,7 +49,14 @@ class EnsemblePoint:
     ap_std: float
     ac_mean: float
     ac_std: float
-    members: tuple  # ((member key, ap, ac), ...)
+    members: tuple  # ((member key, ap, ac, ap by the cluster rule alone), ...)
+    apc_mean: float = 0.0
+    apc_std: float = 0.0
+
+    @property
+    def ap_se(self) -> float:
+        """Standard error of ap_mean (member std / sqrt(n))."""
+        return self.ap_std / math.sqrt(self.n) if self.n > 1 else math.inf
 
 
 def _key(x: float) -> float:
@@ -61,14 +75,14 @@ def ensemble(records: list[dict]) -> dict:
         lab, s = r["labels"], r["summary"]
         k = (_key(lab["pressure"]), _key(lab["velocity"]), _key(lab["beta"]))
         groups.setdefault(k, []).append((member_key(lab), float(s["mean_particle_fraction"]),
-                                         float(s["mean_contact_fraction"])))
+                                         float(s["mean_contact_fraction"]),
+                                         float(s.get("mean_particle_fraction_clusters", 0.0))))
     out = {}
     for k, mem in sorted(groups.items()):
-        ap = np.array([m[1] for m in mem])
-        ac = np.array([m[2] for m in mem])
+        ap, ac, apc = (np.array([m[i] for m in mem]) for i in (1, 2, 3))
         sd = (lambda a: float(np.std(a, ddof=1)) if a.size > 1 else 0.0)
         out[k] = EnsemblePoint(k[0], k[1], k[2], len(mem), float(ap.mean()), sd(ap),
-                               float(ac.mean()), sd(ac), tuple(sorted(mem)))
+                               float(ac.mean()), sd(ac), tuple(sorted(mem)), float(apc.mean()), sd(apc))
     return out
 
 
@@ -118,7 +132,7 @@ def fit_alpha(ens: dict, e_star: float) -> list[AlphaFit]:
         a, se, r2 = fit_through_origin(x, y)
         per_member: dict = {}
         for p in pts:
-            for mk, ap, _ in p.members:
+            for mk, ap, *_ in p.members:
                 per_member.setdefault(mk, ([], []))
                 per_member[mk][0].append(p.beta * p.pressure / e_star)
                 per_member[mk][1].append(ap)
@@ -224,6 +238,85 @@ def fit_contact(ens: dict, e_star: float, rms_slope: float) -> ContactFit:
     pts, source = (free, "particle-free cases (beta = 0)") if free else (list(ens.values()), "all cases")
     s, se, r2 = fit_through_origin([p.pressure for p in pts], [p.ac_mean for p in pts])
     return ContactFit(s, se, r2, s * e_star * rms_slope, rms_slope, source, len(pts))
+
+
+#: the forms of A_p(beta) at one (P, v) that the table build compares (module docstring)
+BETA_FORMS = ("linear", "langmuir")
+
+
+def beta_form(name: str, beta, params) -> np.ndarray:
+    """The form ``name`` at ``beta`` with ``params`` ((a,) or (a, c))."""
+    b = np.asarray(beta, float)
+    if name == "linear":
+        return params[0] * b
+    return params[0] * b / (1.0 + params[1] * b)
+
+
+def _beta_form_gradient(name: str, beta, params) -> np.ndarray:
+    """d(form)/d(params) at ``beta``, shape (len(params), len(beta))."""
+    b = np.atleast_1d(np.asarray(beta, float))
+    if name == "linear":
+        return b[None, :]
+    den = 1.0 + params[1] * b
+    return np.stack([b / den, -params[0] * b * b / den**2])
+
+
+@dataclass(frozen=True)
+class BetaFit:
+    """One form of A_p(beta) fitted at one (P, v) (module docstring)."""
+
+    form: str
+    params: tuple
+    covariance: tuple  # row-major k x k
+    chi2: float
+    aic: float
+    n_points: int
+
+    def __call__(self, beta) -> np.ndarray:
+        return beta_form(self.form, beta, self.params)
+
+    def stderr(self, beta) -> np.ndarray:
+        """Standard error of the fitted value at ``beta`` (first-order propagation of the covariance)."""
+        g = _beta_form_gradient(self.form, beta, self.params)
+        cov = np.asarray(self.covariance, float).reshape(len(self.params), len(self.params))
+        return np.sqrt(np.maximum(np.einsum("ik,ij,jk->k", g, cov, g), 0.0))
+
+    def to_dict(self) -> dict:
+        return {"form": self.form, "params": list(self.params), "covariance": list(self.covariance),
+                "chi2": self.chi2, "aic": self.aic, "n_points": self.n_points}
+
+
+def fit_beta_forms(beta, y, sigma) -> dict:
+    """Every form of :data:`BETA_FORMS` fitted to the level means ``y`` at ``beta`` (> 0) with standard
+    errors ``sigma`` (> 0): ``{form: BetaFit}`` (module docstring)."""
+    b, yv, sg = (np.asarray(x, float) for x in (beta, y, sigma))
+    if b.size < 1 or np.any(b <= 0) or np.any(~(sg > 0)):
+        raise ParameterError("a fit of A_p(beta) needs levels beta > 0 with standard errors > 0")
+    w = 1.0 / sg**2
+    out = {}
+    a = float(np.sum(w * b * yv) / np.sum(w * b * b))
+    var = 1.0 / float(np.sum(w * b * b))
+    chi2 = float(np.sum(w * (yv - a * b) ** 2))
+    out["linear"] = BetaFit("linear", (a,), (var,), chi2, chi2 + 2.0, int(b.size))
+    best = None
+    if b.size >= 2 and a > 0:
+        for c0 in (0.0, 1.0 / b.max(), 10.0 / b.max()):
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    popt, pcov = curve_fit(lambda x, a_, c_: a_ * x / (1.0 + c_ * x), b, yv, p0=(a * (1 + c0 * b.mean()), c0),
+                                           sigma=sg, absolute_sigma=True, bounds=([0.0, 0.0], [np.inf, 1e6]),
+                                           maxfev=20000)
+            except (RuntimeError, ValueError):
+                continue
+            c2 = float(np.sum(w * (yv - beta_form("langmuir", b, popt)) ** 2))
+            if best is None or c2 < best[0]:
+                best = (c2, popt, pcov)
+    if best is not None and np.all(np.isfinite(best[2])):
+        c2, popt, pcov = best
+        out["langmuir"] = BetaFit("langmuir", (float(popt[0]), float(popt[1])),
+                                  tuple(float(x) for x in np.asarray(pcov).ravel()), c2, c2 + 4.0, int(b.size))
+    return out
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ Subcommands::
                                [--scheduler tcp://HOST:PORT] [--table PATH] [--no-retry-failed] [--quiet]
     tribocosim surrogate table --out DIR [--table PATH]   # fits + table from the finished cases only
     tribocosim surrogate show TABLE [--plot PNG | --no-plot]
-    tribocosim surrogate compare TABLE_A TABLE_B          # node by node, against A's ensemble std
+    tribocosim surrogate compare TABLE_A TABLE_B          # node by node, against their standard errors
+    tribocosim surrogate verify TABLE [--budget-s S] [--workers N]   # rerun a sample of its recorded cases
     tribocosim surrogate presets                          # list the presets
 
 ``build`` runs every unfinished case (a rerun resumes an interrupted campaign and retries failed
@@ -29,11 +30,12 @@ PROG = "tribocosim surrogate"
 
 
 def _usage() -> str:
-    return (f"usage: {PROG} {{build,table,show,compare,presets}} [ARGS...]\n\n"
+    return (f"usage: {PROG} {{build,table,show,compare,verify,presets}} [ARGS...]\n\n"
             "  build    run a campaign (sweep file or preset), fit, write the friction table\n"
             "  table    fit and write the table from the finished cases of a campaign folder\n"
             "  show     print a table's summary and plot mu vs P per beta\n"
-            "  compare  compare two tables node by node against the recorded ensemble std\n"
+            "  compare  compare two tables node by node against their recorded uncertainty\n"
+            "  verify   rerun a sample of a table's recorded cases and compare with the recorded results\n"
             "  presets  list the sweep presets\n")
 
 
@@ -48,7 +50,7 @@ def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None =
     path = table_path or out / "friction_table.npz"
     path.parent.mkdir(parents=True, exist_ok=True)
     digest = write_table(path, table)
-    write_json(out / "fits.json", json_clean({"table": str(path), "content_hash": digest, **fits.to_dict()}))
+    write_json(out / "fits.json", json_clean({"table": str(path), "content_hash": digest, **fits}))
 
     print(describe(read_table(path)))
     print(f"wrote {path} (sha256 {digest[:16]}...)")
@@ -159,6 +161,50 @@ def _compare(argv: list[str]) -> int:
     return 0 if res["within_uncertainty"] else 1
 
 
+def _verify(argv: list[str]) -> int:
+    ap = argparse.ArgumentParser(prog=f"{PROG} verify",
+                                 description="rerun a sample of a table's recorded cases and compare")
+    ap.add_argument("table", help="friction table (.npz) with its campaign in the metadata")
+    ap.add_argument("--budget-s", type=float, default=300.0,
+                    help="recorded wall seconds the sample may add up to (default 300)")
+    ap.add_argument("--workers", type=int, default=None, help="local worker processes (default: CPUs)")
+    ap.add_argument("--json", default=None, help="write the per-case results here")
+    args = ap.parse_args(argv)
+    from tribocosim.components.stripdraw.table import read_table
+
+    from .campaign import write_json
+    from .executors import make_executor
+    from .table_build import json_clean
+    from .verify import recorded_cases, sample_cases, verify_cases
+
+    t0 = time.perf_counter()
+    try:
+        table = read_table(args.table)
+        sample = sample_cases(recorded_cases(table), args.budget_s)
+        n = table.metadata["campaign"]["sweep"]["slide"].get("n", 256)
+        executor = make_executor(args.workers)
+        try:
+            results = verify_cases(sample, executor, 1.0 / (n * n))
+        finally:
+            executor.close()
+    except TribocosimError as exc:
+        print(f"{PROG} verify: error: {exc}", file=sys.stderr)
+        return 1
+    for r in results:
+        lab = r["labels"]
+        diff = " ".join(f"{k} {v:.2e}/{r['tolerance'][k]:.2e}" for k, v in r.get("abs_diff", {}).items())
+        print(f"{r['verdict']:<13} P = {lab['pressure'] / 1e6:g} MPa, v = {lab['velocity']:g} m/s, beta = "
+              f"{lab['beta']:.4g}, surface {lab['surface']}, seed {lab['seed']}: |diff|/tolerance {diff}"
+              + (f" error: {r['error']}" if "error" in r else ""))
+    bad = [r for r in results if r["verdict"] == "differs"]
+    print(f"{PROG} verify: {len(results)} recorded cases rerun in {time.perf_counter() - t0:.1f} s: "
+          f"{sum(r['verdict'] == 'identical' for r in results)} identical, "
+          f"{sum(r['verdict'] == 'within_spread' for r in results)} within the ensemble spread, {len(bad)} differ")
+    if args.json:
+        write_json(Path(args.json), json_clean(results))
+    return 1 if bad else 0
+
+
 def _presets(argv: list[str]) -> int:
     from .campaign import expand_cases
     from .sweep import PRESET_DIR, load_sweep
@@ -170,7 +216,8 @@ def _presets(argv: list[str]) -> int:
     return 0
 
 
-COMMANDS = {"build": _build, "table": _table, "show": _show, "compare": _compare, "presets": _presets}
+COMMANDS = {"build": _build, "table": _table, "show": _show, "compare": _compare, "verify": _verify,
+            "presets": _presets}
 
 
 def main(argv: list[str] | None = None) -> int:

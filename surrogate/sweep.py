@@ -29,8 +29,6 @@ by every slide. Example (SI units everywhere)::
 
     [table]
     mu0 = 0.15                     # particle-free friction coefficient (calibration, Eq. 6)
-    low_velocities = [0.0, 0.02, 0.08, 0.3]  # table rows below the grid, from the alpha(v) fit
-    beta_extension = 4             # table nodes above the largest campaign beta (Eq. 23); 0: none
     quasi_static_row = false       # a v = 0 row: the slowest grid velocity's values (the plateau)
 
     [adaptive]                     # optional: more placements where the ensemble is noisy
@@ -67,7 +65,7 @@ SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_r
 _TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table", "adaptive")
 _GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
 _FLAKE_KEYS = ("count", "diameter", "min_pressure", "velocities", "seeds")
-_TABLE_KEYS = ("mu0", "low_velocities", "beta_extension", "quasi_static_row")
+_TABLE_KEYS = ("mu0", "quasi_static_row")
 _ADAPTIVE_KEYS = ("target_relative_se", "extra_seeds")
 #: members (placements x surface pairs) a debris level needs at every grid point
 MIN_MEMBERS = 2
@@ -81,17 +79,12 @@ class TableSettings:
     ----------
     mu0 : float
         Particle-free friction coefficient, the calibration of tau0 (Eq. 6, docs/model.md section 4).
-    low_velocities : tuple of float
-        Velocity nodes [m/s] below the campaign's smallest velocity; their A_p comes from the
-        fitted alpha(v) law (Fig. 15), because the meso runs are too slow at the macro velocity.
-    beta_extension : int
-        Number of beta nodes added above the largest campaign beta, up to beta_thres (Eq. 24),
-        with A_p linear in beta (Eq. 23); 0 adds none (lookups above are clamped).
+    quasi_static_row : bool
+        Add a v = 0 row holding the slowest grid velocity's values: the quasi-static limit, where A_p has
+        reached its plateau (the sweep must show it: docs/physics/table_domain.md).
     """
 
     mu0: float = 0.15
-    low_velocities: tuple = (0.0, 0.02, 0.08, 0.3)
-    beta_extension: int = 4
     quasi_static_row: bool = False
 
 
@@ -171,6 +164,28 @@ class Sweep:
         d = asdict(self)
         d["flakes"] = [{**asdict(fl), "beta": self.flake_beta(fl.count, fl.diameter)} for fl in self.flakes]
         return d
+
+
+def parse_sweep_dict(data: dict) -> Sweep:
+    """The :class:`Sweep` of its :meth:`Sweep.to_dict` (as recorded in a table's metadata)."""
+    try:
+        flakes = tuple(FlakeLevel(int(f["count"]), float(f["diameter"]), float(f.get("min_pressure", 0.0)),
+                                  None if f.get("velocities") is None else tuple(f["velocities"]),
+                                  None if f.get("seeds") is None else tuple(f["seeds"]))
+                       for f in data["flakes"])
+        tset = data.get("table") or {}
+        ad = data.get("adaptive")
+        return Sweep(name=data["name"], description=data.get("description", ""),
+                     pressures=tuple(data["pressures"]), velocities=tuple(data["velocities"]),
+                     seeds=tuple(data["seeds"]), flakes=flakes, surfaces=tuple(dict(x) for x in data["surfaces"]),
+                     slide=dict(data["slide"]), particle_free=bool(data.get("particle_free", True)),
+                     table=TableSettings(float(tset.get("mu0", TableSettings.mu0)),
+                                         bool(tset.get("quasi_static_row", False))),
+                     adaptive=None if ad is None else AdaptiveSettings(float(ad["target_relative_se"]),
+                                                                       tuple(ad["extra_seeds"])),
+                     source=data.get("source", ""))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ParameterError(f"recorded sweep is incomplete ({exc!r}); it cannot be rebuilt") from None
 
 
 def preset_path(name: str) -> Path:
@@ -377,21 +392,9 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     mu0 = tbl.get("mu0", TableSettings.mu0)
     if isinstance(mu0, bool) or not isinstance(mu0, (int, float)) or not (0 < mu0 <= 5):
         chk.fail("table", "mu0", f"= {mu0!r}; a friction coefficient in (0, 5] is required")
-    low = tbl.get("low_velocities", list(TableSettings.low_velocities))
-    low = chk.numbers("table", "low_velocities", low, allow_zero=True, min_len=0) if low else ()
-    for v in low:
-        if v >= velocities[0]:
-            chk.fail("table", "low_velocities", f"has the value {v!r} m/s; values below the "
-                     f"smallest grid velocity {velocities[0]!r} m/s are allowed")
-    ext = tbl.get("beta_extension", TableSettings.beta_extension)
-    if isinstance(ext, bool) or not isinstance(ext, int) or not (0 <= ext <= 100):
-        chk.fail("table", "beta_extension", f"= {ext!r}; an integer in [0, 100] is required")
     qs_row = tbl.get("quasi_static_row", False)
     if not isinstance(qs_row, bool):
         chk.fail("table", "quasi_static_row", f"= {qs_row!r}; true or false is required")
-    if qs_row and low:
-        chk.fail("table", "quasi_static_row", "and low_velocities exclude each other (both set rows below "
-                 "the grid); give one")
 
     adaptive = None
     if "adaptive" in data:
@@ -427,7 +430,7 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         surfaces=tuple(surfaces),
         slide=slide,
         particle_free=particle_free,
-        table=TableSettings(float(mu0), tuple(float(v) for v in low), int(ext), qs_row),
+        table=TableSettings(float(mu0), qs_row),
         adaptive=adaptive,
         source=source,
     )

@@ -1,50 +1,44 @@
 """The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; docs/model.md section 4).
 
-The table (format version 2) holds, at every node (P, v, beta), the ensemble means of <A_c>/A0 and
-<A_p>/A0 over the members (placement seeds x surfaces) of the grid point and their member standard
-deviations, and mu = mu0 (1 - <A_p> / <A_c>) (Eq. 7 with tau0 set by the particle-free mu0, Eq. 6),
-so that mu at beta = 0 is mu0 at every pressure whatever the grid resolves of A_c; the metadata
-hold the members' spread of mu (``ensemble.mu_std``) and their count. The strip-draw model computes
-mu from the areas, with A_c from the table (``contact_area = "mesoscale"``) or from Eq. 8
-(``"eq8"``); the table does not fix that choice.
+The table (format version 3, :mod:`tribocosim.components.stripdraw.table`) holds, at every node (P, v, beta),
+A_c/A0 and A_p/A0 with their standard errors, where the node was simulated, A_p of the paper's cluster rule
+alone, and mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by the particle-free mu0, Eq. 6), so that mu at
+beta = 0 is mu0 at every pressure. The strip-draw model computes mu from the areas, with A_c from the table
+(``contact_area = "mesoscale"``) or from Eq. 8 (``"eq8"``).
 
-For reference the metadata also give tau0 = mu0 / s_c, with s_c the through-origin slope of
-<A_c>/A0 against P (:func:`tribocosim.surrogate.fit.fit_contact`; particle-free cases when the
-sweep has them): the shear strength a single-tau0 law would need.
+Axes: the campaign's pressures; its velocities, below them a v = 0 row when the sweep asks for the quasi-static
+row (``[table] quasi_static_row``: the values of the slowest velocity, the plateau where the damping per pixel
+of sliding is large; docs/physics/table_domain.md measures it); beta = 0 and every debris level of the sweep.
+No node lies above the largest simulated level.
 
-Axes.
+Values. At each (P, v) the simulated levels' ensemble means of <A_p>/A0 (Eq. 22), with their standard errors
+(member std / sqrt(members)), are fitted with each form of :data:`tribocosim.surrogate.fit.BETA_FORMS`
+(Eq. 23's line through the origin and the saturating a beta / (1 + c beta)); the form with the smaller total
+Akaike criterion over every (P, v) is the table's (both forms' chi^2 and AIC per (P, v) and in total are in the
+metadata, ``fits.beta_forms``). The tabulated A_p is that fit at every beta node, its standard error the
+fit's; A_p of the cluster rule alone is fitted with the same form. A_c is the ensemble mean where the node
+was simulated (particle-free cases at beta = 0) and a weighted line in beta through the row's simulated nodes
+elsewhere. ``simulated`` marks the nodes with slides; the others come from the fit of their (P, v) row and a
+strip draw that reads them counts the lookup (docs/model.md section 4).
 
-- P: the campaign pressures.
-- v: the campaign velocities, and below them ``table.low_velocities`` (e.g. the macro test's
-  0.08 m/s, far below the meso runs at m/s to tens of m/s): there A_c = A_c(v_min) (the contact
-  is quasi-static) and A_p(v) = A_p(v_min) alpha(v) / alpha(v_min) with the fitted
-  alpha(v) = b (1 - exp(-v/v_ref)) (Fig. 15) when that law describes the campaign, else
-  A_p(v_min) (held; :func:`low_velocity_policy` says when and the metadata say which), so the
-  rows meet the measured row at v_min continuously.
-- beta: 0 (particle-free cases, or A_p = 0 with the members' A_c when the sweep has none), the
-  campaign's debris levels, and ``table.beta_extension`` nodes above the largest level up to
-  beta_thres, with A_p linear in beta (Eq. 23; per member the through-origin slope over the
-  levels) and A_c the members' mean over the levels. Such nodes are extrapolated, and the
-  metadata say where measurement stops (``axes.beta.measured_max``).
-
-beta_thres (Eq. 24) = kappa / (alpha h'_rms) = s_c E* / alpha with the largest alpha (b, or the
-largest per-velocity alpha if that is larger), so that A_p <= A_c at every velocity; limited to 1.
-It does not depend on which h'_rms is used, as long as kappa is measured with the same one.
-
-Out-of-range lookups follow the table module's policy (``clamp`` by default, or ``error``).
+For reference the metadata also give tau0 = mu0 / s_c, with s_c the through-origin slope of <A_c>/A0 against
+P of the particle-free cases (:func:`tribocosim.surrogate.fit.fit_contact`), the cap of beta at s = 1 at every
+(P, v) (Eq. 24: where the fitted A_p reaches A_c, or none inside the axis), and alpha = <A_p>/A0 / (beta P / E*)
+per node.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import asdict
 
 import numpy as np
 
 from tribocosim.components.errors import TableError
 from tribocosim.components.stripdraw.table import UNITS, FrictionTable
 
-from .fit import FitReport, _key, ensemble, fit_all
+from .fit import BETA_FORMS, BetaFit, _key, ensemble, fit_alpha, fit_beta_forms, fit_contact
 from .slide_config import SlideConfig
 
 
@@ -70,45 +64,86 @@ def surface_statistics(slide: dict, surfaces: list[dict]) -> dict:
                                     "kappa uses the gap's"}
 
 
-def _members(ens: dict, p: float, v: float, beta: float) -> dict:
-    pt = ens.get((_key(p), _key(v), _key(beta)))
-    if pt is None:
-        return {}
-    return {mk: (ap, ac) for mk, ap, ac in pt.members}
+def _sigma(point, n_pixels: int) -> float:
+    """Standard error of a node's <A_p>/A0 for the fit: member std / sqrt(n), at least one contact pixel
+    per member (1 / (n_pixels sqrt(n))), so that a node whose members agree exactly (or are all 0) does not
+    get an infinite weight."""
+    floor = 1.0 / (n_pixels * math.sqrt(point.n))
+    return max(point.ap_std / math.sqrt(point.n) if point.n > 1 else 0.0, floor)
 
 
-class _Row:
-    """Member values (A_p/A0, A_c/A0) of every beta node at one (P, campaign v)."""
+class _RowFit:
+    """The fits of one (P, v) row: A_p and A_p by the cluster rule in beta, A_c linear in beta."""
 
-    def __init__(self, ens: dict, p: float, v: float, levels: list, particle_free: bool):
-        self.levels = {b: _members(ens, p, v, b) for b in levels}
-        for b, m in self.levels.items():
-            if not m:
-                raise TableError(f"no finished case at P = {p:g} Pa, v = {v:g} m/s, beta = {b:.6g}: "
-                                 "rerun the campaign (failed cases are retried) before building the table")
-        keys = sorted(set().union(*[set(m) for m in self.levels.values()]))
-        self.keys = keys
-        self.slope, self.ac = {}, {}
-        for mk in keys:
-            bs = [b for b in levels if mk in self.levels[b]]
-            aps = [self.levels[b][mk][0] for b in bs]
-            self.slope[mk] = float(np.dot(bs, aps) / np.dot(bs, bs))
-            self.ac[mk] = float(np.mean([self.levels[b][mk][1] for b in bs]))
-        self.free = _members(ens, p, v, 0.0) if particle_free else {}
-        if particle_free and not self.free:
+    def __init__(self, ens: dict, p: float, v: float, levels: list, n_pixels: int):
+        self.p, self.v = p, v
+        self.points = {b: ens.get((_key(p), _key(v), _key(b))) for b in [0.0, *levels]}
+        self.simulated = [b for b in levels if self.points[b] is not None]
+        if not self.simulated:
+            raise TableError(f"no finished case with flakes at P = {p:g} Pa, v = {v:g} m/s: rerun the campaign "
+                             "(failed cases are retried) before building the table")
+        if self.points[0.0] is None:
             raise TableError(f"no finished particle-free case at P = {p:g} Pa, v = {v:g} m/s")
+        pts = [self.points[b] for b in self.simulated]
+        sig = [_sigma(q, n_pixels) for q in pts]
+        self.forms = fit_beta_forms(self.simulated, [q.ap_mean for q in pts], sig)
+        sig_c = [max(q.apc_std / math.sqrt(q.n) if q.n > 1 else 0.0, 1.0 / (n_pixels * math.sqrt(q.n))) for q in pts]
+        self.forms_clusters = fit_beta_forms(self.simulated, [q.apc_mean for q in pts], sig_c)
+        # A_c: a weighted line in beta through the particle-free node and the simulated levels
+        bs = np.array([0.0, *self.simulated])
+        acs = np.array([self.points[b].ac_mean for b in bs])
+        w = np.array([1.0 / max(self.points[b].ac_std / math.sqrt(self.points[b].n) if self.points[b].n > 1
+                                else 0.0, 1.0 / n_pixels) ** 2 for b in bs])
+        design = np.stack([np.ones_like(bs), bs], axis=1)
+        cov = np.linalg.pinv(design.T @ (w[:, None] * design))
+        self.ac_line = cov @ (design.T @ (w * acs))
+        self.ac_cov = cov
 
-    def at(self, beta: float) -> dict:
-        if beta == 0.0:
-            return self.free or {mk: (0.0, ac) for mk, ac in self.ac.items()}
-        if beta in self.levels:
-            return self.levels[beta]
-        return {mk: (beta * self.slope[mk], self.ac[mk]) for mk in self.keys}
+    def contact(self, beta: float) -> tuple[float, float]:
+        """A_c/A0 and its standard error at ``beta``: the node's mean where simulated, else the line."""
+        q = self.points.get(beta)
+        if q is not None and (beta == 0.0 or beta in self.simulated):
+            return q.ac_mean, (q.ac_std / math.sqrt(q.n) if q.n > 1 else 0.0)
+        g = np.array([1.0, beta])
+        return float(g @ self.ac_line), float(math.sqrt(max(g @ self.ac_cov @ g, 0.0)))
+
+
+def _choose_form(rows: list[_RowFit]) -> tuple[str, dict]:
+    """The form of A_p(beta) with the smaller total AIC over the rows where every form was fitted, and the
+    evidence (per-row and total chi^2 and AIC of every form)."""
+    both = [r for r in rows if all(f in r.forms for f in BETA_FORMS)]
+    total = {f: float(sum(r.forms[f].aic for r in both)) for f in BETA_FORMS}
+    chi2 = {f: float(sum(r.forms[f].chi2 for r in both)) for f in BETA_FORMS}
+    points = int(sum(r.forms["linear"].n_points for r in both))
+    form = min(BETA_FORMS, key=lambda f: total[f]) if both else "linear"
+    evidence = {
+        "chosen": form,
+        "criterion": "Akaike AIC = chi^2 + 2 k summed over the (P, v) rows with at least two simulated levels "
+                     "(k parameters per row, chi^2 with the ensemble standard errors)",
+        "total_aic": total, "total_chi2": chi2, "rows_compared": len(both), "points": points,
+        "parameters_per_row": {"linear": 1, "langmuir": 2},
+        "rows": [{"pressure": r.p, "velocity": r.v, "levels": r.simulated,
+                  **{f: r.forms[f].to_dict() for f in BETA_FORMS if f in r.forms}} for r in rows],
+    }
+    return form, evidence
+
+
+def _fit_of(forms: dict, form: str) -> BetaFit:
+    return forms.get(form) or forms["linear"]
+
+
+def _cap(row: _RowFit, fit: BetaFit, top: float) -> float | None:
+    """The smallest beta in (0, top] where the fitted A_p reaches A_c (s = 1), or None."""
+    grid = np.linspace(0.0, top, 2001)[1:]
+    d = fit(grid) - np.array([row.contact(float(b))[0] if b in row.points else float(np.array([1.0, b]) @ row.ac_line)
+                              for b in grid])
+    hit = np.flatnonzero(d >= 0.0)
+    return float(grid[hit[0]]) if hit.size else None
 
 
 def build_table(records: list[dict], manifest: dict, *, failed: list | None = None,
-                campaign_info: dict | None = None, surface_stats: dict | None = None) -> tuple[FrictionTable, FitReport]:
-    """The friction table and the fits from the finished case ``records`` of a campaign.
+                campaign_info: dict | None = None, surface_stats: dict | None = None) -> tuple[FrictionTable, dict]:
+    """The friction table and its fits from the finished case ``records`` of a campaign.
 
     Parameters
     ----------
@@ -123,18 +158,26 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     surface_stats : dict, optional
         :func:`surface_statistics` (computed if not given).
 
+    Returns
+    -------
+    (FrictionTable, dict)
+        The table and its fits (as in the metadata's ``fits``).
+
     Raises
     ------
     TableError
-        If a grid point has no finished case.
+        If a (P, v) row has no finished case with flakes or no particle-free case.
     """
     from .campaign import case_cpu_seconds, code_version, source_digest
 
     sweep = manifest["sweep"]
     if not records:
         raise TableError("the campaign has no finished case; nothing to build a table from")
+    if not sweep.get("particle_free", True):
+        raise TableError("the sweep has no particle-free cases (particle_free = false); A_c at beta = 0 and tau0 "
+                         "need them")
     base = SlideConfig(**sweep["slide"])
-    e_star, p_crit = base.e_star, base.p_crit
+    e_star, p_crit, n_pixels = base.e_star, base.p_crit, base.n * base.n
     tset = sweep["table"]
     mu0 = float(tset["mu0"])
     if surface_stats is None:
@@ -142,98 +185,107 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     h_rms_slope = surface_stats["gap_rms_slope_mean"]
 
     ens = ensemble(records)
-    fits = fit_all(ens, e_star, h_rms_slope)
-    s_c = fits.contact.slope
-    if not s_c > 0:
-        raise TableError(f"the A_c/A0-vs-P slope is {s_c!r}; a positive slope is needed for tau0")
-    tau0 = mu0 / s_c
+    contact = fit_contact(ens, e_star, h_rms_slope)
+    if not contact.slope > 0:
+        raise TableError(f"the A_c/A0-vs-P slope is {contact.slope!r}; a positive slope is needed for tau0")
+    tau0 = mu0 / contact.slope
 
     pressures = sorted(float(p) for p in sweep["pressures"])
-    v_camp = sorted(float(v) for v in sweep["velocities"])
-    v_low = sorted(float(v) for v in tset["low_velocities"])
-    levels = sorted({_key(f["beta"]) for f in sweep["flakes"]})
-    alpha_max = max([fits.law.b] + [a.alpha for a in fits.alpha])
-    beta_thres = 1.0 if alpha_max <= 0 else min(1.0, s_c * e_star / alpha_max)
-    ext = []
-    if tset["beta_extension"] > 0 and beta_thres > levels[-1] * (1 + 1e-9):
-        ext = list(np.linspace(levels[-1], beta_thres, tset["beta_extension"] + 1)[1:])
-    beta_axis = [0.0] + levels + ext
-    vel_axis = v_low + v_camp
+    v_grid = sorted(float(v) for v in sweep["velocities"])
+    qs_row = bool(tset.get("quasi_static_row", False))
+    vel_axis = ([0.0] if qs_row else []) + v_grid
+    flakes = sweep["flakes"]
+    levels = sorted({_key(f["beta"]) for f in flakes})
+    beta_axis = [0.0] + levels
 
-    law = fits.law
-    policy, policy_reason = low_velocity_policy(fits)
-    if policy == "alpha_law":
-        a_min = float(law(v_camp[0]))
-        ratio = {v: float(law(v)) / a_min for v in v_low}
-    else:
-        ratio = {v: 1.0 for v in v_low}
+    def level_at(f, p, v):
+        return p >= f.get("min_pressure", 0.0) and (f.get("velocities") is None or v in f["velocities"])
+
+    rows = {(p, v): _RowFit(ens, p, v, sorted({_key(f["beta"]) for f in flakes if level_at(f, p, v)}), n_pixels)
+            for p in pressures for v in v_grid}
+    form, evidence = _choose_form(list(rows.values()))
 
     shape = (len(pressures), len(vel_axis), len(beta_axis))
-    mu, mu_std = np.zeros(shape), np.zeros(shape)
-    ac_mean, ap_mean, ac_std, ap_std = (np.zeros(shape) for _ in range(4))
-    n_mem = np.zeros(shape, dtype=int)
-
-    def std(x):
-        return float(np.std(x, ddof=1)) if x.size > 1 else 0.0
-
+    arr = {name: np.zeros(shape) for name in ("mu", "ap", "ap_se", "ap_std", "ac", "ac_se", "ac_std", "apc",
+                                              "apc_se", "simulated", "n")}
+    caps, nodes = [], []
     for i, p in enumerate(pressures):
-        rows = {v: _Row(ens, p, v, levels, sweep["particle_free"]) for v in v_camp}
         for j, v in enumerate(vel_axis):
-            row, scale = (rows[v], 1.0) if v in rows else (rows[v_camp[0]], ratio[v])
+            v_row = v if v > 0 or not qs_row else v_grid[0]
+            row = rows[(p, v_row)]
+            fit = _fit_of(row.forms, form)
+            fit_c = _fit_of(row.forms_clusters, form)
             for k, b in enumerate(beta_axis):
-                mem = row.at(b)
-                ap = np.array([scale * a for a, _ in mem.values()])
-                ac = np.array([c for _, c in mem.values()])
-                ap_mean[i, j, k], ac_mean[i, j, k] = float(ap.mean()), float(ac.mean())
-                ap_std[i, j, k], ac_std[i, j, k] = std(ap), std(ac)
-                mu[i, j, k] = mu0 * max(0.0, 1.0 - ap_mean[i, j, k] / ac_mean[i, j, k])
-                mu_std[i, j, k] = std(mu0 * (1.0 - ap / ac))
-                n_mem[i, j, k] = ap.size
+                simulated = b == 0.0 or b in row.simulated
+                q = row.points.get(b) if simulated else None
+                ac, ac_se = row.contact(b)
+                if b == 0.0:
+                    ap = ap_se = apc = apc_se = 0.0
+                else:
+                    ap, ap_se = float(fit(b)), float(fit.stderr(b)[0])
+                    apc, apc_se = max(0.0, float(fit_c(b))), float(fit_c.stderr(b)[0])
+                arr["ap"][i, j, k], arr["ap_se"][i, j, k] = max(ap, 0.0), ap_se
+                arr["apc"][i, j, k], arr["apc_se"][i, j, k] = apc, apc_se
+                arr["ac"][i, j, k], arr["ac_se"][i, j, k] = max(ac, 0.0), ac_se
+                arr["ap_std"][i, j, k] = q.ap_std if q is not None else ap_se
+                arr["ac_std"][i, j, k] = q.ac_std if q is not None else ac_se
+                arr["simulated"][i, j, k] = 1.0 if simulated else 0.0
+                arr["n"][i, j, k] = q.n if q is not None else 0
+                arr["mu"][i, j, k] = mu0 * max(0.0, 1.0 - arr["ap"][i, j, k] / arr["ac"][i, j, k]) \
+                    if arr["ac"][i, j, k] > 0 else mu0
+                if q is not None and b > 0:
+                    x = b * p / e_star
+                    nodes.append({"pressure": p, "velocity": v, "beta": b, "members": q.n,
+                                  "a_p": q.ap_mean, "a_p_se": q.ap_se if q.n > 1 else None,
+                                  "a_p_fit": ap, "a_p_fit_se": ap_se, "a_c": q.ac_mean,
+                                  "a_p_clusters": q.apc_mean, "alpha": q.ap_mean / x,
+                                  "relative_se": (q.ap_se / q.ap_mean) if q.n > 1 and q.ap_mean > 0 else None})
+            caps.append({"pressure": p, "velocity": v, "beta_cap_s1": _cap(row, fit, beta_axis[-1]),
+                         "simulated_max_beta": max(row.simulated)})
+    cap_values = [c["beta_cap_s1"] for c in caps if c["beta_cap_s1"] is not None]
+    beta_thres = min(1.0, max(cap_values)) if cap_values and len(cap_values) == len(caps) else 1.0
 
-    flakes = sweep["flakes"]
-    seeds = sweep["seeds"]
+    alpha_diag = [{"velocity": a.velocity, "alpha": a.alpha, "alpha_stderr": a.alpha_stderr,
+                   "alpha_member_std": a.alpha_member_std, "r2": a.r2, "n_points": a.n_points}
+                  for a in fit_alpha(ens, e_star)]
+    fits = {"beta_forms": evidence, "contact_area": asdict(contact),
+            "alpha_eq23_per_velocity": alpha_diag,
+            "caps": caps}
     meta = {
         "provenance": "mesoscale",
         "title": f"friction table from the mesoscale campaign '{sweep['name']}'",
-        "law": "mu = mu0 (1 - <A_p> / <A_c>) (Eq. 7 with tau0 set by mu0, Eq. 6) with ensemble-averaged "
-               "<A_c>/A0 and <A_p>/A0 (Eq. 22) of BEM-DEM slides (Sec. 5-6), both tabulated (format version 2) "
-               "so that the model can take A_c from Eq. 8 instead; see surrogate.table_build",
-        "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under "
-                          "every blocked flake (the cluster rule of Fig. 8 and the pinch rule of "
-                          "tribocosim.surrogate.coupling); A_c from 'mean_contact_fraction'",
+        "law": "mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by mu0, Eq. 6); A_p(beta) at every (P, v) the fitted "
+               f"form '{form}' of the simulated levels' ensemble means of <A_p>/A0 (Eq. 22), A_c the ensemble "
+               "mean where simulated; see surrogate.table_build",
+        "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under every "
+                          "load-bearing flake (the cluster rule of Fig. 8, the pinch and hold rules of "
+                          "tribocosim.surrogate.coupling); particle_area_clusters: the cluster rule alone "
+                          "('mean_particle_fraction_clusters'); A_c from 'mean_contact_fraction'",
+        "a_p_form": form,
         "beta_threshold": beta_thres,
-        "beta_threshold_note": "Eq. 24: beta_thres = kappa / (alpha h'_rms) = s_c E* / alpha with the "
-                               f"largest alpha ({alpha_max:.6g}), limited to 1",
+        "beta_threshold_note": "the largest cap of beta at s = 1 over the (P, v) nodes (Eq. 24: where the fitted "
+                               "A_p reaches A_c), 1 when some (P, v) has none inside the axis; the strip-draw "
+                               "model finds the cap at each (P, v) from the tabulated areas",
         "calibration": {"mu0": mu0, "tau0": tau0, "tau0_unit": "Pa",
                         "tau0_source": "for reference: tau0 = mu0 / s_c, s_c the through-origin slope of "
-                                       f"<A_c>/A0 vs P of the {fits.contact.source}; mu uses mu0 and the areas"},
+                                       f"<A_c>/A0 vs P of the {contact.source}; mu uses mu0 and the areas"},
         "e_star": e_star, "p_crit": p_crit,
         "axes": {
             "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
-            "velocity": {"unit": UNITS["velocity"], "campaign": v_camp, "below_campaign": v_low,
-                         "below_campaign_policy": policy, "below_campaign_policy_reason": policy_reason,
-                         "note": f"The mesoscale runs slide at {v_camp[0]:g} to {v_camp[-1]:g} m/s; the "
-                                 "macro strip-draw test runs at 0.08 m/s. Rows below "
-                                 f"{v_camp[0]:g} m/s are NOT simulated: A_c there is the measured "
-                                 f"A_c at {v_camp[0]:g} m/s and A_p "
-                                 + (f"the measured A_p at {v_camp[0]:g} m/s times alpha(v)/alpha("
-                                    f"{v_camp[0]:g}) of the fitted alpha(v) = b (1 - exp(-v/v_ref)) "
-                                    "(Fig. 15)." if policy == "alpha_law" else
-                                    f"the measured A_p at {v_camp[0]:g} m/s (held: {policy_reason}).")},
-            "beta": {"unit": UNITS["beta"], "measured": levels, "measured_max": levels[-1],
-                     "extrapolated": ext,
-                     "note": "beta = N pi (d/2)^2 / L^2 (Eq. 10). beta = 0: "
-                             + ("particle-free cases" if sweep["particle_free"] else
-                                "A_p = 0 with the members' A_c (no particle-free cases)")
-                             + "; nodes above measured_max are extrapolated with A_p linear in "
-                               "beta (Eq. 23) up to beta_threshold"},
+            "velocity": {"unit": UNITS["velocity"], "campaign": v_grid, "quasi_static_row": qs_row,
+                         "note": (f"v = 0: the quasi-static limit, the values of the {v_grid[0]:g} m/s row (the "
+                                  "plateau of A_p where the damping per pixel of sliding is large; "
+                                  "docs/physics/table_domain.md). " if qs_row else "")
+                                 + "Slides slower than the sweep's dem_velocity run the DEM at that speed with the "
+                                   "damping per pixel of the physical one (surrogate.slide_config)."},
+            "beta": {"unit": UNITS["beta"], "levels": levels, "simulated_max": levels[-1],
+                     "note": "beta = N pi (d/2)^2 / L^2 (Eq. 10); 0: particle-free cases. Nodes a (P, v) row did "
+                             "not simulate hold its fit (simulated = 0)."},
             "order": ["pressure", "velocity", "beta"],
         },
-        "fits": fits.to_dict(),
+        "fits": fits,
         "campaign": {
             "sweep": sweep,
-            "seeds": seeds,
-            "flake_levels": flakes,
             "cases_total": len(manifest["cases"]),
             "cases_finished": len(records),
             "cases_failed": [{"case_id": f.get("case_id"), "labels": f.get("labels"),
@@ -243,150 +295,71 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
             **(campaign_info or {}),
         },
         "surfaces": surface_stats,
-        "ensemble": {"mu_std": mu_std.tolist(), "n_members": n_mem.tolist(),
-                     "note": "standard deviation (ddof 1) of the member values of mu at each node, "
-                             "same (pressure, velocity, beta) order as mu"},
+        "ensemble": {"n_members": arr["n"].astype(int).tolist(), "nodes": nodes,
+                     "note": "members per node (0: not simulated) and, per simulated node with flakes, the "
+                             "ensemble mean of <A_p>/A0, its standard error and the fitted value"},
         "cases": [{"case_id": r["case_id"], "labels": r["labels"],
                    "a_p": r["summary"]["mean_particle_fraction"],
-                   "a_c": r["summary"]["mean_contact_fraction"]}
+                   "a_p_clusters": r["summary"].get("mean_particle_fraction_clusters"),
+                   "a_c": r["summary"]["mean_contact_fraction"], "wall_s": r.get("wall_s")}
                   for r in sorted(records, key=lambda r: r["case_id"])],
-        "cases_note": "every finished case behind the table: its labels and <A_p>/A0, <A_c>/A0, so "
-                      "that any case can be rerun (surrogate.campaign.expand_cases) and checked",
-        "out_of_range_policy": "clamp (default: nearest edge, counted) or error "
-                               "(components.stripdraw.table)",
+        "cases_note": "every finished case behind the table: its labels and results, so that any case can be "
+                      "rebuilt from the sweep (surrogate.campaign.make_case), rerun and checked "
+                      "(tribocosim surrogate verify)",
+        "out_of_range_policy": "clamp (default: nearest edge, counted) or error (components.stripdraw.table); "
+                               "lookups that read a node with simulated = 0 are counted too",
         "code_version": code_version(),
         "source_digest": source_digest(),
         "case_code_versions": sorted({r.get("code_version", "unknown") for r in records}),
         "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu, json_clean(meta),
-                          contact_area=ac_mean, particle_area=ap_mean, contact_area_std=ac_std,
-                          particle_area_std=ap_std)
-    return table, fits
-
-
-def low_velocity_policy(fits: FitReport) -> tuple[str, str]:
-    """How the rows below the campaign's velocities get A_p, and why.
-
-    ``"alpha_law"``: scaled by alpha(v)/alpha(v_min) of the fitted law b (1 - exp(-v/v_ref)),
-    used only when the law describes the campaign: alpha rises from the smallest to the largest
-    campaign velocity, R^2 of the law >= 0.5, and v_ref is resolved (not below v_min/2, where the
-    law is flat over the campaign and says nothing about slower sliding). Otherwise ``"hold"``:
-    A_p as measured at the smallest campaign velocity (the nearest data; no trend is invented).
-    """
-    law, per_v = fits.law, sorted(fits.alpha, key=lambda a: a.velocity)
-    if not law.b > 0:
-        return "hold", "no blocked flake in the campaign (alpha = 0)"
-    if not per_v[-1].alpha > per_v[0].alpha:
-        return "hold", (f"alpha does not rise with v over the campaign (alpha = {per_v[0].alpha:.4g} at "
-                        f"{per_v[0].velocity:g} m/s, {per_v[-1].alpha:.4g} at {per_v[-1].velocity:g} m/s), "
-                        "unlike the paper's Fig. 15, so the saturating law cannot be extrapolated")
-    if not (math.isfinite(law.r2) and law.r2 >= 0.5):
-        return "hold", f"the alpha(v) law fits the campaign poorly (R^2 = {law.r2:.3g} < 0.5)"
-    if law.note:
-        return "hold", law.note
-    return "alpha_law", (f"alpha(v) = b (1 - exp(-v/v_ref)), b = {law.b:.4g}, v_ref = {law.v_ref:.4g} m/s, "
-                         f"R^2 = {law.r2:.3f}")
-
-
-def _threshold_uncertainty(table: FrictionTable) -> float:
-    """Standard error of beta_thres = s_c E* / alpha_max (Eq. 24) from the recorded fit errors.
-
-    First-order propagation of the standard errors of s_c and of the alpha that set the threshold
-    (the largest per-velocity alpha, or the law's b when that is larger); 0 when the metadata hold no
-    fits or the threshold is the cap 1.
-    """
-    fits = table.metadata.get("fits")
-    thr = table.beta_threshold
-    if not fits or thr >= 1.0:
-        return 0.0
-    law = fits["alpha_law"]
-    cands = [(a["alpha"], a["alpha_stderr"]) for a in fits["alpha_per_velocity"] if a["alpha"] is not None]
-    if law.get("b") is not None:
-        cands.append((law["b"], law.get("b_err")))
-    alpha, alpha_err = max(cands, key=lambda c: c[0])
-    c = fits["contact_area"]
-    rel2 = (alpha_err / alpha) ** 2 if alpha_err else 0.0
-    rel2 += (c["slope_err"] / c["slope"]) ** 2 if c.get("slope_err") else 0.0
-    return thr * math.sqrt(rel2)
-
-
-def _measured_beta(table: FrictionTable) -> np.ndarray:
-    """The beta nodes of a table that are not extrapolated (0 and the campaign's debris levels)."""
-    top = table.metadata.get("axes", {}).get("beta", {}).get("measured_max")
-    if top is None:
-        return table.beta
-    return table.beta[table.beta <= top * (1.0 + 1e-9)]
-
-
-def _along_beta(table: FrictionTable, values: np.ndarray, beta: np.ndarray) -> np.ndarray:
-    """``values`` (nP, nv, nb) of ``table`` at other beta nodes, linear along beta in each cell.
-
-    The last cell's line continues past the axis' end: above the measured levels A_p is linear in beta
-    and A_c constant (module docstring), so nodes of a slightly larger threshold lie on that line.
-    """
-    k = np.clip(np.searchsorted(table.beta, beta, side="right") - 1, 0, table.beta.size - 2)
-    t = (beta - table.beta[k]) / (table.beta[k + 1] - table.beta[k])
-    return (1.0 - t) * values[..., k] + t * values[..., k + 1]
+    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), arr["mu"], json_clean(meta),
+                          contact_area=arr["ac"], particle_area=arr["ap"], contact_area_std=arr["ac_std"],
+                          particle_area_std=arr["ap_std"],
+                          extras={"simulated": arr["simulated"], "contact_area_se": arr["ac_se"],
+                                  "particle_area_se": arr["ap_se"], "particle_area_clusters": arr["apc"],
+                                  "particle_area_clusters_se": arr["apc_se"]})
+    return table, json_clean(fits)
 
 
 def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:
-    """Differences of two tables on ``a``'s nodes, against the uncertainty recorded with ``a``.
+    """Differences of two tables with the same axes, against the uncertainty recorded with both.
 
-    The tolerance per node is the larger of the recorded ensemble std of mu and one contact
-    pixel, tau0 / (P n^2) (a rebuild with the same seeds may differ in the last bits of the FFT
-    plans, which can flip one pixel and move a flake's path). Returns max |mu_a - mu_b|, the largest
-    ratio to the tolerance, the number of nodes beyond it and ``within_uncertainty``.
-
-    The pressure, velocity and measured beta nodes (0 and the debris levels) must be the same. The
-    extrapolated beta nodes end at beta_thres (Eq. 24), which the fitted alpha sets, so a rebuild
-    puts them elsewhere by a fraction of its standard error: then the thresholds must agree within
-    the standard error recorded with ``a`` (:func:`_threshold_uncertainty`), and ``b`` is read at
-    ``a``'s extrapolated nodes along its own (linear) extension.
+    The tolerance per node is two combined standard errors of the tabulated A_p (sqrt(se_a^2 + se_b^2),
+    version 3) or the recorded member spread (versions 1 and 2), and at least one contact pixel
+    (1/n^2 of A0; tau0 / (P n^2) for mu). Returns the largest difference of mu and the areas, the largest
+    ratio to the tolerance, the nodes beyond it and ``within_uncertainty``.
     """
-    for name in ("pressure", "velocity"):
+    for name in ("pressure", "velocity", "beta"):
         x, y = getattr(a, name), getattr(b, name)
         if x.shape != y.shape or not np.allclose(x, y, rtol=1e-9, atol=0.0):
             raise TableError(f"the tables have different {name} axes; they cannot be compared node by node")
-    arrays = ("mu",) + ((("contact_area", "particle_area")) if a.version == 2 and b.version == 2 else ())
-    out: dict = {}
-    if a.beta.shape == b.beta.shape and np.allclose(a.beta, b.beta, rtol=1e-9, atol=0.0):
-        on_a = {name: getattr(b, name) for name in arrays}
-        thr_ok = True
-    else:
-        ma, mb = _measured_beta(a), _measured_beta(b)
-        if ma.size == a.beta.size or mb.size == b.beta.size or ma.shape != mb.shape \
-                or not np.allclose(ma, mb, rtol=1e-9, atol=0.0):
-            raise TableError("the tables have different beta axes (measured debris levels "
-                             f"{list(ma)} and {list(mb)}); they cannot be compared node by node")
-        thr_tol = _threshold_uncertainty(a)
-        thr_diff = abs(a.beta_threshold - b.beta_threshold)
-        thr_ok = thr_diff <= thr_tol
-        out["beta_threshold"] = {"a": a.beta_threshold, "b": b.beta_threshold, "abs_diff": thr_diff,
-                                 "tolerance": thr_tol, "note": "extrapolated beta nodes differ: b is read at "
-                                 "a's nodes along its linear extension; tolerance = standard error of "
-                                 "beta_thres = s_c E*/alpha_max recorded with a"}
-        on_a = {name: _along_beta(b, getattr(b, name), a.beta) for name in arrays}
-    d = np.abs(a.mu - on_a["mu"])
-    std = np.asarray(a.metadata.get("ensemble", {}).get("mu_std", np.zeros_like(a.mu)), float)
-    # one contact pixel more or less (last-bit differences of FFT plans can flip one): tau0/(P n^2)
-    tau0 = a.metadata.get("calibration", {}).get("tau0")
     n = a.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("n", 256)
-    pixel = tau0 / (a.pressure[:, None, None] * n * n) if tau0 else np.zeros_like(a.mu)
-    tol = np.maximum(np.maximum(std, pixel), 1e-12)
-    out.update({"max_abs_diff": float(d.max()), "max_diff_over_tolerance": float(np.max(d / tol)),
-                "nodes_beyond_tolerance": int(np.count_nonzero(d > tol)), "nodes": int(d.size),
-                "tolerance": "max(recorded ensemble std, one contact pixel: tau0/(P n^2) for mu, 1/n^2 for the areas)"})
-    ok = bool(np.all(d <= tol)) and thr_ok
-    for name in arrays[1:]:
-        da = np.abs(getattr(a, name) - on_a[name])
-        tol_a = np.maximum(np.maximum(getattr(a, name + "_std"), 1.0 / (n * n)), 1e-15)
-        out[f"{name}_max_abs_diff"] = float(da.max())
-        out[f"{name}_nodes_beyond_tolerance"] = int(np.count_nonzero(da > tol_a))
-        ok = ok and bool(np.all(da <= tol_a))
-    if a.version != b.version:
-        out["note"] = f"format versions {a.version} and {b.version}: only mu is compared"
+    pixel = 1.0 / (n * n)
+    out: dict = {"nodes": int(a.mu.size)}
+    ok = True
+    names = [x for x in ("particle_area", "contact_area") if x in a.arrays() and x in b.arrays()]
+    for name in names:
+        se = (np.hypot(a.array(name + "_se"), b.array(name + "_se")) if a.version == 3 and b.version == 3
+              else np.asarray(a.array(name + "_std")))
+        tol = np.maximum(2.0 * se, pixel)
+        d = np.abs(a.array(name) - b.array(name))
+        out[f"{name}_max_abs_diff"] = float(d.max())
+        out[f"{name}_max_diff_over_tolerance"] = float(np.max(d / tol))
+        out[f"{name}_nodes_beyond_tolerance"] = int(np.count_nonzero(d > tol))
+        ok = ok and bool(np.all(d <= tol))
+    tau0 = a.metadata.get("calibration", {}).get("tau0")
+    d = np.abs(a.mu - b.mu)
+    out["max_abs_diff"] = float(d.max())
+    if not names:
+        std = np.asarray(a.metadata.get("ensemble", {}).get("mu_std", np.zeros_like(a.mu)), float)
+        tol = np.maximum(np.maximum(std, tau0 / (a.pressure[:, None, None] * n * n) if tau0 else 0.0), 1e-12)
+        out["max_diff_over_tolerance"] = float(np.max(d / tol))
+        out["nodes_beyond_tolerance"] = int(np.count_nonzero(d > tol))
+        ok = ok and bool(np.all(d <= tol))
+    out["tolerance"] = ("2 combined standard errors of the tabulated areas (member spread for versions 1-2), at "
+                        "least one contact pixel")
     out["within_uncertainty"] = ok
     return out
 
@@ -416,20 +389,24 @@ def describe(table: FrictionTable) -> str:
     if cal:
         lines.append(f"  mu0 = {cal['mu0']:g}, tau0 = {cal['tau0'] / 1e6:.4g} MPa ({cal['tau0_source']})")
     fits = m.get("fits")
-    if fits:
-        lines.append("  Eq. 23 per velocity: A_p/A0 = alpha beta P / E*")
-        for a in fits["alpha_per_velocity"]:
-            lines.append(f"    v = {_f(a['velocity'], '>6g')} m/s  alpha = {_f(a['alpha'], '.4g')} +- {_f(a['alpha_stderr'], '.2g')} "
-                         f"(member std {_f(a['alpha_member_std'], '.2g')})  R^2 = {_f(a['r2'], '.3f')}  ({a['n_points']} points)")
-        law = fits["alpha_law"]
-        lines.append(f"  alpha(v) = b (1 - exp(-v/v_ref)): b = {_f(law['b'], '.4g')} +- {_f(law['b_err'], '.2g')}, "
-                     f"v_ref = {_f(law['v_ref'], '.4g')} +- {_f(law['v_ref_err'], '.2g')} m/s, R^2 = {_f(law['r2'], '.3f')}")
-        if law.get("note"):
-            lines.append(f"    note: {law['note']}")
+    if fits and "beta_forms" in fits:
+        bf = fits["beta_forms"]
+        lines.append(f"  A_p(beta) per (P, v): form '{bf['chosen']}' (total AIC "
+                     + ", ".join(f"{f} {_f(a, '.1f')}" for f, a in bf["total_aic"].items())
+                     + f" over {bf['rows_compared']} rows, {bf['points']} points)")
+        for a in fits.get("alpha_eq23_per_velocity", []):
+            lines.append(f"    Eq. 23 at v = {_f(a['velocity'], 'g')} m/s: alpha = {_f(a['alpha'], '.4g')} +- "
+                         f"{_f(a['alpha_stderr'], '.2g')}, R^2 = {_f(a['r2'], '.3f')} ({a['n_points']} points)")
         c = fits["contact_area"]
         lines.append(f"  A_c/A0 = s_c P: s_c = {_f(c['slope'], '.4g')} +- {_f(c['slope_err'], '.2g')} 1/Pa "
-                     f"(1/s_c = {1 / c['slope'] / 1e6:.4g} MPa), R^2 = {_f(c['r2'], '.4f')}; kappa = "
-                     f"{_f(c['kappa'], '.4g')} with h'_rms = {_f(c['rms_slope'], '.4g')} ({c['source']})")
+                     f"(1/s_c = {1 / c['slope'] / 1e6:.4g} MPa), R^2 = {_f(c['r2'], '.4f')} ({c['source']})")
+        for cap in fits.get("caps", []):
+            if cap["velocity"] == table.velocity[-1] or cap["velocity"] == 0.08:
+                lines.append(f"    cap at s = 1, P = {cap['pressure'] / 1e6:g} MPa, v = {cap['velocity']:g} m/s: "
+                             f"{_f(cap['beta_cap_s1'], '.3g')} (simulated up to {cap['simulated_max_beta']:.3g})")
+    if table.version == 3:
+        sim = table.array("simulated")
+        lines.append(f"  simulated nodes {int(sim.sum())} of {sim.size} (the others hold their row's fit)")
     ax = m.get("axes", {}).get("velocity", {})
     if ax.get("note"):
         lines.append(f"  velocity note: {ax['note']}")

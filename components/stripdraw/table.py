@@ -16,13 +16,21 @@ key                        shape / type                   meaning
 ``particle_area``          (nP, nv, nb) float64, >= 0     version 2: ensemble mean of A_p/A0 [-]
 ``contact_area_std``       (nP, nv, nb) float64, >= 0     version 2: member std of A_c/A0 [-]
 ``particle_area_std``      (nP, nv, nb) float64, >= 0     version 2: member std of A_p/A0 [-]
+``simulated``              (nP, nv, nb) float64, 0 or 1   version 3: 1 where slides were run at the node
+``contact_area_se``        (nP, nv, nb) float64, >= 0     version 3: standard error of ``contact_area``
+``particle_area_se``       (nP, nv, nb) float64, >= 0     version 3: standard error of ``particle_area``
+``particle_area_clusters`` (nP, nv, nb) float64, >= 0     version 3: A_p/A0 of the paper's cluster rule alone
+``particle_area_clusters_se`` (nP, nv, nb) float64, >= 0  version 3: its standard error
 ``metadata``               0-d str (JSON object)          see below
 =========================  =============================  ===========================================
 
 Version 2 carries the contact areas behind mu, so that the strip-draw model can compute
-mu = mu0 (1 - A_p / A_c) with either contact-area convention (docs/model.md section 4); version 1
-(mu only) stays readable. ``metadata`` always holds ``format`` (``"tribocosim-friction-table"``),
-``format_version`` (1 or 2), ``units`` (array -> unit), ``provenance`` (``"closed_form"`` or
+mu = mu0 (1 - A_p / A_c) with either contact-area convention (docs/model.md section 4); version 3 adds
+where the values were simulated (the others come from the fit of A_p(beta) and are counted when read,
+docs/model.md section 4), the standard errors of the tabulated areas, and the flake-borne area of the
+paper's blocking rule alone (Fig. 8) beside that of every load-bearing flake; versions 1 (mu only) and 2
+stay readable. ``metadata`` always holds ``format`` (``"tribocosim-friction-table"``),
+``format_version`` (1, 2 or 3), ``units`` (array -> unit), ``provenance`` (``"closed_form"`` or
 ``"mesoscale"``), ``beta_threshold`` (the cap of beta, Eq. 24) and ``content_hash``: the SHA-256
 of the axes and arrays (float64, little-endian, C order) and of the canonical JSON of the other
 metadata. A file whose hash or format version does not match is refused.
@@ -46,11 +54,13 @@ import numpy as np
 from tribocosim.components.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
-FORMAT_VERSION = 2  # written when the table carries the areas; 1 (mu only) is still read and written
-VERSIONS = (1, 2)
+FORMAT_VERSION = 3  # written when the table carries the version 3 arrays; 1 and 2 are still read and written
+VERSIONS = (1, 2, 3)
 AXES = ("pressure", "velocity", "beta")
 AREAS = ("contact_area", "particle_area", "contact_area_std", "particle_area_std")
-UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1", **{a: "1" for a in AREAS}}
+#: the version 3 arrays (all of them, or none)
+EXTRAS = ("simulated", "contact_area_se", "particle_area_se", "particle_area_clusters", "particle_area_clusters_se")
+UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1", **{a: "1" for a in (*AREAS, *EXTRAS)}}
 
 
 def _as_axis(name: str, values) -> np.ndarray:
@@ -81,6 +91,8 @@ class FrictionTable:
     contact_area, particle_area, contact_area_std, particle_area_std : array_like, optional
         Version 2: the ensemble means of A_c/A0 and A_p/A0 and their member standard deviations,
         same shape as ``mu`` (all four, or none).
+    extras : dict, optional
+        Version 3 (with the version 2 areas): every array of :data:`EXTRAS` by name, same shape as ``mu``.
     """
 
     pressure: np.ndarray
@@ -92,6 +104,7 @@ class FrictionTable:
     particle_area: np.ndarray | None = None
     contact_area_std: np.ndarray | None = None
     particle_area_std: np.ndarray | None = None
+    extras: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in AXES:
@@ -100,13 +113,23 @@ class FrictionTable:
         given = [a for a in AREAS if getattr(self, a) is not None]
         if given and len(given) != len(AREAS):
             raise ParameterError(f"table areas: {given} given; a version 2 table needs all of {list(AREAS)}")
-        for name in ("mu", *given):
-            arr = np.ascontiguousarray(getattr(self, name), dtype=np.float64)
+        extras = dict(self.extras or {})
+        if extras and (sorted(extras) != sorted(EXTRAS) or not given):
+            raise ParameterError(f"table extras: {sorted(extras)} given; a version 3 table needs the version 2 "
+                                 f"areas and all of {list(EXTRAS)}")
+        for name in ("mu", *given, *extras):
+            arr = np.ascontiguousarray(extras[name] if name in extras else getattr(self, name), dtype=np.float64)
             if arr.shape != shape:
                 raise ParameterError(f"table {name} has shape {arr.shape}; the axes need {shape}")
             if not np.all(np.isfinite(arr)) or np.any(arr < 0):
                 raise ParameterError(f"table {name} must be finite and >= 0 everywhere")
-            object.__setattr__(self, name, arr)
+            if name in extras:
+                extras[name] = arr
+            else:
+                object.__setattr__(self, name, arr)
+        if extras and not np.all((extras["simulated"] == 0) | (extras["simulated"] == 1)):
+            raise ParameterError("table simulated must be 0 or 1 at every node")
+        object.__setattr__(self, "extras", extras)
         bt = self.metadata.get("beta_threshold")
         if bt is None or not (0 < float(bt) <= 1):
             raise ParameterError(f"table metadata beta_threshold = {bt!r}; a value in (0, 1] is required")
@@ -114,12 +137,21 @@ class FrictionTable:
 
     @property
     def version(self) -> int:
-        """The format version: 2 when the table carries the areas, else 1."""
-        return 2 if self.contact_area is not None else 1
+        """The format version: 3 with the version 3 arrays, 2 with the areas, else 1."""
+        return 3 if self.extras else 2 if self.contact_area is not None else 1
 
     def arrays(self) -> tuple[str, ...]:
-        """The names of the value arrays this table holds (``mu``, and the areas in version 2)."""
-        return ("mu", *AREAS) if self.version == 2 else ("mu",)
+        """The names of the value arrays this table holds (``mu``, the areas in version 2, the extras in 3)."""
+        return ("mu", *AREAS, *EXTRAS)[: {1: 1, 2: 1 + len(AREAS), 3: 1 + len(AREAS) + len(EXTRAS)}[self.version]]
+
+    def array(self, name: str) -> np.ndarray:
+        """One of :meth:`arrays` by name."""
+        if name in self.extras:
+            return self.extras[name]
+        if name not in self.arrays():
+            raise ParameterError(f"table array {name!r} is not in this version {self.version} table; "
+                                 f"it holds {list(self.arrays())}")
+        return getattr(self, name)
 
     @property
     def beta_threshold(self) -> float:
@@ -136,7 +168,7 @@ class FrictionTable:
         h = hashlib.sha256()
         h.update(f"{FORMAT}:{self.version}".encode())
         for name in (*AXES, *self.arrays()):
-            arr = np.ascontiguousarray(getattr(self, name), dtype="<f8")
+            arr = np.ascontiguousarray(self.array(name) if name not in AXES else getattr(self, name), dtype="<f8")
             h.update(name.encode())
             h.update(str(arr.shape).encode())
             h.update(arr.tobytes())
@@ -234,7 +266,8 @@ def write_table(path: str | os.PathLike, table: FrictionTable) -> str:
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez(
         tmp,
-        **{name: getattr(stamped, name) for name in (*AXES, *stamped.arrays())},
+        **{name: getattr(stamped, name) for name in AXES},
+        **{name: stamped.array(name) for name in stamped.arrays()},
         metadata=np.array(json.dumps(meta, sort_keys=True)),
     )
     os.replace(tmp, path)
@@ -259,7 +292,7 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
             if not isinstance(meta, dict):
                 raise ValueError("metadata is not a JSON object")
             version = meta.get("format_version")
-            names = (*AXES, "mu", *(AREAS if version == 2 else ()))
+            names = (*AXES, "mu", *(AREAS if version in (2, 3) else ()), *(EXTRAS if version == 3 else ()))
             arrays = {k: np.array(data[k]) for k in names if version in VERSIONS}
     except Exception as exc:  # noqa: BLE001 - any parse failure is a malformed file
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
@@ -271,7 +304,8 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
         )
     try:
         table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta,
-                              **{a: arrays[a] for a in AREAS if a in arrays})
+                              **{a: arrays[a] for a in AREAS if a in arrays},
+                              extras={a: arrays[a] for a in EXTRAS if a in arrays})
     except (ParameterError, ValueError, TypeError) as exc:  # also members that are not float arrays
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
     if table.content_hash() != meta.get("content_hash"):

@@ -13,8 +13,7 @@ from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cli import main as tribocosim
 from tribocosim.surrogate import surrogate_cli
 
-TINY = ((Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-cli"')
-        + "beta_extension = 2\n")
+TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-cli"')
 
 
 @pytest.fixture(scope="module")
@@ -30,11 +29,11 @@ def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
     d, rc = built
     assert rc == 0
     table = read_table(d / "out" / "friction_table.npz")
-    assert table.provenance == "mesoscale" and table.mu.shape == (2, 4, 4)
+    assert table.provenance == "mesoscale" and table.mu.shape == (2, 3, 2) and table.version == 3
     assert len(list((d / "out" / "cases").glob("*.json"))) == 2 * 2 * 4
     fits = json.loads((d / "out" / "fits.json").read_text())
     assert fits["content_hash"] == table.metadata["content_hash"]
-    assert {"alpha_per_velocity", "alpha_law", "contact_area"} <= set(fits)
+    assert {"beta_forms", "caps", "contact_area"} <= set(fits)
     camp = table.metadata["campaign"]
     assert camp["executor"] == {"executor": "process-pool", "workers": 1} and camp["cases_failed"] == []
     # a rerun computes nothing and rebuilds the same numbers
@@ -50,7 +49,7 @@ def test_show_prints_summary_and_plots(built, tmp_path, capsys):
     png = tmp_path / "mu.png"
     assert surrogate_cli.main(["show", str(d / "out" / "friction_table.npz"), "--plot", str(png)]) == 0
     out = capsys.readouterr().out
-    assert "provenance=mesoscale" in out and "alpha(v) = b (1 - exp(-v/v_ref))" in out
+    assert "provenance=mesoscale" in out and "A_p(beta) per (P, v): form" in out
     assert "mu at v = 0.08 m/s" in out and png.stat().st_size > 1000
 
 
@@ -78,7 +77,7 @@ def test_bad_sweep_and_usage_errors(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"sweep file {f}, line 7: [grid] betas: unknown key 'betas'" in err
     assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 1
-    assert "preset = 'nope' is not known; available: ['paper', 'quick', 'rolloff']" in capsys.readouterr().err
+    assert "preset = 'nope' is not known; available: ['paper', 'quick']" in capsys.readouterr().err
     assert surrogate_cli.main(["frobnicate"]) == 2
     assert surrogate_cli.main(["build"]) == 2
     assert tribocosim(["surrogate", "--help"]) == 0

@@ -1,0 +1,104 @@
+"""The table against direct slides at points between its nodes (docs/physics/table_domain.md).
+
+At an off-node point (P, v, beta) inside the simulated domain, a set of slides with the table's own sweep
+settings (:func:`tribocosim.surrogate.campaign.make_case`: surfaces, domain, damping, placement; the flake
+count that gives beta on the domain, Eq. 10) gives <A_p>/A0 with its standard error s_d (member std /
+sqrt(members)). The table gives its trilinear interpolation of A_p with the interpolated standard error s_t
+of the tabulated value (the fit's). The check passes when |A_p,direct - A_p,table| <= 2 sqrt(s_d^2 + s_t^2)
+(two combined standard errors) at every point, and every node the interpolation reads was simulated.
+
+:data:`POINTS`: one point at moderate debris (P = 3 MPa, beta = 0.15) and one at beta >= 0.3 (P = 15 MPa,
+beta = 0.4), both at the strip-draw test's 0.08 m/s, each between pressure nodes and between debris levels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tribocosim.components.errors import TableError
+
+from .campaign import make_case, run_case
+from .sweep import parse_sweep_dict
+
+#: (P [Pa], v [m/s], beta) of the standing check (module docstring)
+POINTS = ((3e6, 0.08, 0.15), (15e6, 0.08, 0.4))
+#: placement seeds of the check's slides (none of them a table seed of the shipped preset)
+SEEDS = (101, 102, 103)
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One point of the check."""
+
+    pressure: float
+    velocity: float
+    beta: float  # of the flake count used
+    members: int
+    direct: float
+    direct_se: float
+    table: float
+    table_se: float
+    all_nodes_simulated: bool
+    wall_s: float
+
+    @property
+    def combined_se(self) -> float:
+        return math.hypot(self.direct_se, self.table_se)
+
+    @property
+    def passed(self) -> bool:
+        return self.all_nodes_simulated and abs(self.direct - self.table) <= 2.0 * self.combined_se
+
+    def to_dict(self) -> dict:
+        return {"pressure": self.pressure, "velocity": self.velocity, "beta": self.beta, "members": self.members,
+                "a_p_direct": self.direct, "a_p_direct_se": self.direct_se, "a_p_table": self.table,
+                "a_p_table_se": self.table_se, "combined_se": self.combined_se,
+                "difference_over_combined_se": (self.direct - self.table) / self.combined_se
+                if self.combined_se > 0 else math.inf,
+                "all_nodes_simulated": self.all_nodes_simulated, "passed": self.passed, "wall_s": self.wall_s}
+
+
+def check_cases(table, points=POINTS, seeds=SEEDS) -> list:
+    """The slides of the check: every point x surface pair x seed, from the table's recorded sweep."""
+    camp = table.metadata.get("campaign", {})
+    if table.version < 3 or "sweep" not in camp:
+        raise TableError("the direct-slide check needs a version 3 table that records its sweep")
+    sweep = parse_sweep_dict(camp["sweep"])
+    size = sweep.base_config().size
+    diameter = sweep.flakes[0].diameter
+    cases = []
+    for p, v, beta in points:
+        count = max(1, round(beta * size**2 / (math.pi * (0.5 * diameter) ** 2)))
+        for s in range(len(sweep.surfaces)):
+            for seed in seeds:
+                cases.append(make_case(sweep, s, p, v, count, diameter, seed))
+    return cases
+
+
+def run_check(table, executor, points=POINTS, seeds=SEEDS) -> list[CheckResult]:
+    """Run the check's slides through ``executor`` and compare them with ``table`` (module docstring)."""
+    cases = {c.case_id: c for c in check_cases(table, points, seeds)}
+    done: dict = {}
+    for cid, outcome in executor.map_unordered(run_case, [(cid, c.payload()) for cid, c in cases.items()]):
+        if isinstance(outcome, BaseException) or outcome.get("status") != "done":
+            err = outcome if isinstance(outcome, BaseException) else outcome.get("error", {}).get("message")
+            raise TableError(f"a slide of the direct-slide check failed ({cases[cid].labels}): {err}")
+        done[cid] = outcome
+    results = []
+    sim = table.array("simulated")
+    for p, v, _ in points:
+        recs = [(cases[cid], out) for cid, out in done.items()
+                if cases[cid].labels["pressure"] == p and cases[cid].labels["velocity"] == v]
+        beta = recs[0][0].labels["beta"]
+        ap = np.array([out["summary"]["mean_particle_fraction"] for _, out in recs])
+        t_ap = float(table.interpolate_array(table.particle_area, p, v, beta, "error")[0])
+        t_se = float(table.interpolate_array(table.array("particle_area_se"), p, v, beta, "error")[0])
+        # the interpolation reads a node only with a positive weight: unsimulated nodes with weight 0 do not count
+        unsim = float(table.interpolate_array(1.0 - sim, p, v, beta, "error")[0])
+        results.append(CheckResult(p, v, beta, ap.size, float(ap.mean()),
+                                   float(ap.std(ddof=1) / math.sqrt(ap.size)) if ap.size > 1 else math.inf,
+                                   t_ap, t_se, unsim == 0.0, float(sum(out["wall_s"] for _, out in recs))))
+    return results
