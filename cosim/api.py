@@ -241,6 +241,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         total = time.perf_counter() - t0
         fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
         calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
+        m.warnings.extend(_outside_table_warnings(b))
         b.close()
     meta = _metadata(b, started, total, fmu_times, calls)
     if failure is not None:
@@ -260,6 +261,30 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     if failure is not None:
         raise RunFailed(f"{failure}; the run stopped at t = {m.grid.time(m.n):.9g} s", result) from failure
     return result
+
+
+#: the output through which a strip-draw FMU counts its friction-table lookups outside the simulated range
+CLAMP_OUTPUT = "table_clamp_count"
+
+
+def _outside_table_warnings(b: Build) -> list[str]:
+    """A warning for every FMU whose ``table_clamp_count`` output ended above 0 (read at the end of the run)."""
+    out = []
+    for i, name in enumerate(b.names):
+        var = b.plan.fmus[name].variables.get(CLAMP_OUTPUT)
+        if var is None or var.causality != "output":
+            continue
+        try:
+            slave = b.master.system.slaves[i]
+            getter = slave.get_integer if var.type == "Integer" else slave.get_real
+            count = float(getter([var.valueReference])[0])
+        except Exception:  # noqa: BLE001 - an FMU that cannot answer after a failure says nothing here
+            continue
+        if count > 0:
+            out.append(f"FMU instance '{name}': {count:.0f} friction-table lookups read values outside the table's "
+                       f"simulated range ({CLAMP_OUTPUT}): there the friction rests on values the mesoscale "
+                       "campaign did not simulate (docs/model.md section 4)")
+    return out
 
 
 def default_out_dir(scene_path: Path) -> Path:

@@ -106,3 +106,23 @@ def test_packaged_scenes_resolve_by_name_and_write_to_the_working_directory(tmp_
         assert "scene file not found: nope" in str(exc) and "demo" in str(exc)
     else:
         raise AssertionError("an unknown scene name must be refused")
+
+
+def test_run_says_when_the_friction_table_was_read_outside_its_simulated_range(tmp_path, capsys):
+    """The strip at 60 MPa (above the shipped table's 30 MPa) for 0.05 s: every nodal lookup is clamped, the
+    FMU counts them in table_clamp_count and tribocosim run warns, naming the instance and the count; the
+    default test (10 MPa) draws without a warning."""
+    scene = tmp_path / "hot.toml"
+    scene.write_text('[experiment]\nstart = 0.0\nstop = 0.05\nstep = 1e-3\n[fmus.strip]\ncomponent = "stripdraw"\n'
+                     'parameters = { normal_force = 73500.0, grip_velocity = 0.08 }\n'
+                     '[output]\nfile = "hot.csv"\nvariables = ["strip.table_clamp_count"]\n')
+    assert tribocosim(["run", str(scene), "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    counted = read_csv(tmp_path / "hot.csv")["strip.table_clamp_count"][-1]
+    assert counted > 0 and f"FMU instance 'strip': {counted:.0f} friction-table lookups" in err, err
+    meta = json.loads((tmp_path / "hot.json").read_text())
+    assert any("table_clamp_count" in w for w in meta["warnings"])
+    cold = tmp_path / "cold.toml"
+    cold.write_text(scene.read_text().replace("73500.0", "12250.0").replace("hot.csv", "cold.csv"))
+    assert tribocosim(["run", str(cold), "--out", str(tmp_path)]) == 0
+    assert "friction-table lookups" not in capsys.readouterr().err
