@@ -46,7 +46,7 @@ from .sweep import Sweep
 CASE_FORMAT = 2
 CASE_LOG_ENV = "TRIBOCOSIM_CASE_LOG"
 SERIES = ("slide_distance", "contact_fraction", "particle_fraction", "particle_fraction_clusters",
-          "n_blocked", "n_blocked_clusters", "bem_iterations", "tool_height")
+          "n_blocked", "n_blocked_clusters", "bem_iterations", "tool_height", "particle_fraction_cluster_thresholds")
 
 
 def code_version() -> str:
@@ -195,7 +195,7 @@ def run_case(payload: dict) -> dict:
         base["source_digest"] = source_digest()  # of the code this process has just imported
         result = run_slide(SlideConfig(**payload["config"]))
         summary = result.summary()
-        series = {k: np.asarray(getattr(result, k)).tolist() for k in SERIES if hasattr(result, k)}
+        series = {k: np.asarray(getattr(result, k)).tolist() for k in SERIES if getattr(result, k, None) is not None}
     except Exception as exc:  # noqa: BLE001 - recorded with the case, the campaign goes on
         return {**base, "status": "failed", "wall_s": time.perf_counter() - t0,
                 "error": {"type": type(exc).__name__, "message": str(exc),

@@ -101,14 +101,16 @@ def _stacked(fps: list[Footprint], field) -> tuple[np.ndarray, np.ndarray, np.nd
     return z_lo, z_hi, np.isfinite(z_lo), np.asarray(field)[ix[:, :, None], iy[:, None, :]]
 
 
-def classify(fps: list[Footprint], h_top) -> tuple[np.ndarray, np.ndarray]:
+def classify(fps: list[Footprint], h_top, threshold: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Blocked flags (cluster rule, Fig. 8) and overlap-cluster counts against the tool ``h_top``
-    (:func:`overlap_clusters` of every flake, labelled in one call)."""
+    (:func:`overlap_clusters` of every flake, labelled in one call); a pixel overlaps when the flake's upper
+    surface is above the tool by more than ``threshold`` [m] (0: the paper's rule; negative: within that
+    distance below it)."""
     if len({fp.z_lo.shape for fp in fps}) != 1:
-        counts = np.array([overlap_clusters(fp, h_top) for fp in fps], dtype=np.int64)
+        counts = np.array([overlap_clusters(fp, h_top + threshold) for fp in fps], dtype=np.int64)
         return counts >= MIN_CLUSTERS_BLOCKED, counts
     _, z_hi, inside, window = _stacked(fps, h_top)
-    mask = inside & (np.nan_to_num(z_hi, nan=-np.inf) > window)
+    mask = inside & (np.nan_to_num(z_hi, nan=-np.inf) > window + threshold)
     # 8-connected within each flake's window, never across flakes
     labels, _ = ndimage.label(mask, structure=np.stack([np.zeros((3, 3), bool), _EIGHT,
                                                         np.zeros((3, 3), bool)]))
@@ -261,6 +263,7 @@ class SlideResult:
     n_blocked_clusters: np.ndarray
     bem_iterations: np.ndarray
     tool_height: np.ndarray
+    particle_fraction_cluster_thresholds: np.ndarray | None = None  # (steps, len(config.cluster_thresholds))
     snapshots: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     info: dict = field(default_factory=dict)
@@ -268,7 +271,13 @@ class SlideResult:
     def summary(self) -> dict:
         """<A_p>/A0 (Eq. 22; all blocked flakes, and by the cluster rule alone), <A_c>/A0,
         fraction of steps with a blocked flake, timings."""
+        extra = {}
+        if self.particle_fraction_cluster_thresholds is not None and self.particle_fraction_cluster_thresholds.size:
+            extra["mean_particle_fraction_cluster_thresholds"] = [
+                float(x) for x in np.mean(self.particle_fraction_cluster_thresholds, axis=0)]
+            extra["cluster_thresholds"] = [float(x) for x in self.config.cluster_thresholds]
         return {
+            **extra,
             "mean_particle_fraction": float(np.mean(self.particle_fraction)),
             "mean_particle_fraction_clusters": float(np.mean(self.particle_fraction_clusters)),
             "mean_contact_fraction": float(np.mean(self.contact_fraction)),
@@ -419,12 +428,16 @@ class SlideSimulation:
         mask = blocked_mask(fps, blocked, c.n)
         self.timings["classify"] += t2 - t1 + time.perf_counter() - t3
         self.timings["bem"] += t3 - t2
+        # A_p of the cluster rule alone with other overlap thresholds (a count on the same slide)
+        by_thresholds = [particle_area_fraction(self.traction, blocked_mask(fps, classify(fps, h_top, th)[0], c.n))
+                         for th in c.cluster_thresholds or ()]
         return {
             "slide_distance": self.k * c.dx,
             "contact_fraction": float(np.mean(self.traction > 0.0)),
             "particle_fraction": particle_area_fraction(self.traction, mask),
             "particle_fraction_clusters": particle_area_fraction(
                 self.traction, blocked_mask(fps, by_clusters, c.n)),
+            "particle_fraction_cluster_thresholds": by_thresholds,
             "n_blocked": int(blocked.sum()),
             "n_blocked_clusters": int(by_clusters.sum()),
             "bem_iterations": int(self.last_result.iterations),
@@ -457,6 +470,9 @@ class SlideSimulation:
                 "particle_fraction_clusters", "n_blocked", "n_blocked_clusters",
                 "bem_iterations", "tool_height")
         cols = {k: np.array([r[k] for r in recs]) for k in keys}
+        if c.cluster_thresholds:
+            cols["particle_fraction_cluster_thresholds"] = np.array(
+                [r["particle_fraction_cluster_thresholds"] for r in recs], dtype=float)
         info = {**init, "contact_resolves": self.resolves, "dem_dt": self.params.dt,
                 "dem_steps_per_pixel": self.n_sub,
                 "penalty_k_area": self.params.k_area, "face_samples": len(self.params.samples)}

@@ -33,7 +33,7 @@ from tribocosim.components.errors import ParameterError, check_range
 DEFAULT_OIL_VISCOSITY = 32e-6 * 870.0
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
-                 "placement_pressure", "placement", "pair_spacing_px")
+                 "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds")
 #: how the flakes are laid into the gap at the start of a slide (:func:`tribocosim.surrogate.flakes.random_placement`)
 PLACEMENTS = ("monolayer", "deposition")
 
@@ -123,6 +123,10 @@ class SlideConfig:
         both. It is the staggered scheme's non-penetration condition: with a threshold > 0 the tool
         may squeeze a flake the solve does not see, and on steep surfaces the DEM may then stop with
         a crushed flake. A_p by the paper's cluster rule alone is recorded in every run.
+    cluster_thresholds : tuple of float or None
+        Overlap thresholds [m] at which A_p of the paper's cluster rule alone is also counted on the same slide
+        (a pixel overlaps the tool when the flake is above it by more than the threshold; the rule itself uses
+        0); recorded per step and as slide means. None: none.
     n_slide_steps : int or None
         Number of one-pixel sliding steps; default 2n (the tool slides 2L).
     snapshot_every : int
@@ -160,6 +164,7 @@ class SlideConfig:
     sample_spacing_px: float = 1.0
     pair_spacing_px: float | None = None
     pinch_overlap_fraction: float = 0.0
+    cluster_thresholds: tuple | None = None
     n_slide_steps: int | None = None
     snapshot_every: int = 0
     bem_tol: float = 1e-8
@@ -226,6 +231,13 @@ class SlideConfig:
             _number("pair_spacing_px", self.pair_spacing_px, "pixels")
             check_range("pair_spacing_px", self.pair_spacing_px, 0.0, 4.0, low_inclusive=False)
         check_range("pinch_overlap_fraction", self.pinch_overlap_fraction, 0.0, 0.5)
+        if self.cluster_thresholds is not None:
+            if not isinstance(self.cluster_thresholds, (tuple, list)) or not all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) < self.flake_thickness
+                    for x in self.cluster_thresholds):
+                raise ParameterError(f"cluster_thresholds = {self.cluster_thresholds!r}; allowed: a list of "
+                                     f"thresholds [m] smaller in magnitude than flake_thickness = {self.flake_thickness!r}")
+            object.__setattr__(self, "cluster_thresholds", tuple(float(x) for x in self.cluster_thresholds))
         if self.n_slide_steps is not None:
             _int("n_slide_steps", self.n_slide_steps, 1)
         _int("snapshot_every", self.snapshot_every, 0)

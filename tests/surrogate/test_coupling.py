@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -51,6 +52,33 @@ def test_clusters_are_eight_connected_and_bumps_outside_do_not_count():
     h = tool_with_bumps([(-3, 0), (3, 0)])
     h[16, 19] = 0.3e-6  # above z_hi = c sqrt(1 - 9/36) = 0.217 um
     assert classify(fps, h)[1][0] == 2
+
+
+def test_cluster_threshold_moves_the_overlap_level():
+    """A third bump overlapping the flake by 0.077 um counts at threshold 0 and at +0.05 um, not at +0.1 um; a
+    tool 0.02 um above the flake counts only with a threshold of -0.05 um."""
+    fps = footprints(CENTRE, FLAT, SHAPE, N, L)
+    h = tool_with_bumps([(-3, 0), (3, 0)])
+    h[16, 19] = 0.14e-6  # the tool 0.077 um below the flake's upper face (0.217 um there): overlap 0.077 um
+    assert [classify(fps, h, th)[1][0] for th in (0.0, 0.05e-6, 0.1e-6)] == [3, 3, 2]
+    near = tool_with_bumps([(-3, 0), (3, 0)])
+    near[16, 19] = 0.237e-6  # 0.02 um above the face: no overlap, within 0.05 um
+    assert [classify(fps, near, th)[1][0] for th in (0.0, -0.05e-6)] == [2, 3]
+
+
+def test_slide_counts_the_cluster_rule_at_other_thresholds_on_the_same_slide():
+    """At threshold 0 the extra count is the cluster rule's own A_p, step by step; the thresholds do not change
+    the slide (the load-bearing flakes and every other series are those of a slide without them)."""
+    cfg = small_config(n_flakes=20, n_slide_steps=8)
+    with_th = run_slide(replace(cfg, cluster_thresholds=(0.0, 0.02e-6, -0.02e-6)), solver=FlatPunchSolver(cfg.p_crit),
+                        surfaces=wavy_surfaces(64, 200e-6))
+    plain = run_slide(cfg, solver=FlatPunchSolver(cfg.p_crit), surfaces=wavy_surfaces(64, 200e-6))
+    assert with_th.particle_fraction_cluster_thresholds.shape == (8, 3)
+    assert np.array_equal(with_th.particle_fraction_cluster_thresholds[:, 0], with_th.particle_fraction_clusters)
+    for name in ("particle_fraction", "contact_fraction", "n_blocked", "tool_height"):
+        assert np.array_equal(getattr(with_th, name), getattr(plain, name)), name
+    s = with_th.summary()
+    assert s["cluster_thresholds"] == [0.0, 0.02e-6, -0.02e-6] and len(s["mean_particle_fraction_cluster_thresholds"]) == 3
 
 
 def test_modified_tool_is_min_of_tool_and_blocked_flake_lower_surface():
