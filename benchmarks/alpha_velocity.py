@@ -1,36 +1,43 @@
-"""The alpha(v) study of issue 17, item 3 (docs/physics/alpha_velocity.md).
+"""The alpha(v) study on the paper's terms (docs/physics/alpha_velocity.md).
 
-alpha is Eq. 23 read per slide: alpha = <A_p>/A0 / (beta P / E*), with <A_p>/A0 the mean over the
-2L of sliding (Eq. 22). For each damping setting the same grid of slides is run:
+alpha is Eq. 23 read per slide: alpha = <A_p>/A0 / (beta P / E*), with <A_p>/A0 the mean over the 2L of
+sliding (Eq. 22), for two observables recorded on every slide: A_p of every load-bearing flake (ours: the
+paper's cluster rule, the pinch and the hold rules of surrogate.coupling) and A_p of the flakes the paper's
+cluster rule alone blocks (at least three overlap clusters with the tool, Fig. 8), the latter also at other
+overlap thresholds (``CLUSTER_THRESHOLDS``, fractions of h_p; the rule itself reads 0).
 
-- velocity v0 = 1, 2, 5, 10, 20, 50 m/s (the paper's Fig. 15 range);
-- 2 surface pairs x 3 flake placements = 6 members per point (mean and standard deviation, ddof 1);
-- roll-off surfaces with the measured statistics (paper Sec. 2.4; docs/physics/surfaces.md): sheet
-  1.40 um / slope 0.34, tool 0.60 um / slope 0.34, H = 0.8, shortest wavelength 5 um and 6.25 um,
-  the roll-off wavelengths solved by ``surfaces.rolloff_wavelength`` for this grid;
-- a reduced domain: 128 x 128 pixels of 1 um (L = 128 um; the paper's is 500 um), 7 flakes of
-  12 um x 0.5 um (beta = 0.048), P = 10 MPa, one flake contact law (penalty_velocity 50 m/s).
+Grid of every setting (``SETTINGS``):
 
-Settings (``SETTINGS``): the oil's viscosity eta (Stokes drag of a thin disc,
-``DampingRates.from_viscosity``) from 0 (no damping: the low-damping limit) over the mineral-oil range,
-to 100 x VG 32 (2.8 Pa s: the drag of a flake in a film ~1 um thin is ~3.5-60 x the unbounded
-Stokes drag, surrogate.dem docstring), and the one-rate gamma = 5e7 1/s of the tables built before
-issue 17 for reference. Every run records A_p of every
-load-bearing flake (the paper's cluster rule with our pinch/hold rules) and A_p of the flakes the
-cluster rule alone blocks (item 3 b).
+- v0 = 1, 2, 5, 10, 20, 50 m/s (the paper's Fig. 15 range);
+- 2 surface pairs x 5 placements = 10 members per point (mean, standard error);
+- roll-off surfaces with the measured statistics (paper Sec. 2.4; docs/physics/surfaces.md), shortest
+  wavelength 5 um and 6.25 um, the roll-off wavelengths solved for the grid;
+- 128 x 128 um, 7 flakes of 12 um x 0.5 um (beta = 0.048), P = 10 MPa, dt_safety 0.25.
 
-The slides run as campaigns (``surrogate.campaign``: each finished case is written at once, a rerun
-resumes), one folder per setting under ``--out``::
+Settings: the oil's viscosity eta (Stokes drag of a thin disc, DampingRates.from_viscosity) at 0.028 Pa s
+(ISO VG 32 at 40 C, the default), 0.0028 and 0.00028 Pa s (the damping per pixel of sliding Lambda from ~18
+down to ~0.004: Lambda << 1 over the whole range), each with the penalty stiffness fixed by the Hertz rule at
+50 m/s (``fixed``: one contact law for every speed) and with the paper's rule (``hertz_v0``: overlap 5 % of
+h_p at the Hertz peak force of an impact at v0, so the stiffness scales with v0). ``refined`` settings repeat
+the viscous ones with the fixed penalty on the grid of half the pixel size (256^2 on the same 128 um; 6
+members): Lambda = gamma dx / v0 halves with the pixel, so the collapse of alpha on Lambda predicts
+alpha(dx/2, v0) = alpha(dx, 2 v0).
 
-    python benchmarks/alpha_velocity.py run --out /tmp/alpha_v [--workers 2] [--settings oil_0028 ...]
-    python benchmarks/alpha_velocity.py report --out /tmp/alpha_v [--figures docs/images]
+The slides run as campaigns (surrogate.campaign: each finished case is written at once, a rerun resumes), one
+folder per setting under ``--out``::
 
-``report`` prints the Markdown tables of the document and writes its figures.
+    python benchmarks/alpha_velocity.py run --out /tmp/alpha_v [--workers 2] [--settings oil_0028_fixed ...]
+    python benchmarks/alpha_velocity.py report --out /tmp/alpha_v [--figures docs/images] [--json F]
+
+``report`` prints the Markdown tables of the document (alpha per velocity as mean +- standard error, the
+paired ratio alpha(50 m/s) / alpha(1 m/s) per member, the threshold sweep, the refinement) and writes the
+figures; ``--json`` writes the per-velocity means for ``tribocosim report paper``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from pathlib import Path
@@ -38,53 +45,70 @@ from pathlib import Path
 import numpy as np
 
 VELOCITIES = (1.0, 2.0, 5.0, 10.0, 20.0, 50.0)
-SEEDS = (11, 12, 13)
+SEEDS = (11, 12, 13, 14, 15)
+REFINED_SEEDS = (11, 12, 13)
 #: (sheet seed, tool seed, shortest wavelength [m]) of the two surface pairs
 SURFACE_PAIRS = ((1, 2, 5e-6), (3, 4, 6.25e-6))
-N, SIZE, PRESSURE, N_FLAKES = 128, 128e-6, 10e6, 7
+SIZE, PRESSURE, N_FLAKES = 128e-6, 10e6, 7
 SHEET, TOOL, SLOPE, HURST = (1.40e-6, 0.60e-6, 0.34, 0.8)
-#: name -> (label, SlideConfig damping keys)
+H_P = 0.5e-6
+#: overlap thresholds of the cluster rule counted besides 0 (fractions of h_p)
+CLUSTER_THRESHOLDS = (-0.05, 0.05, 0.1)
+VISCOSITIES = {"oil_0028": (0.028, "eta = 0.028 Pa s (ISO VG 32, 40 C)"),
+               "oil_00028": (0.0028, "eta = 0.0028 Pa s"),
+               "oil_000028": (0.00028, "eta = 0.00028 Pa s")}
+PENALTIES = {"fixed": "penalty at 50 m/s", "hertz_v0": "penalty at v0 (the paper's rule)"}
+#: name -> (label, SlideConfig keys, grid points per side, seeds)
 SETTINGS = {
-    "oil_0": ("eta = 0 (no damping)", {"oil_viscosity": 0.0}),
-    "oil_00028": ("eta = 0.0028 Pa s", {"oil_viscosity": 0.0028}),
-    "oil_0028": ("eta = 0.028 Pa s (ISO VG 32, 40 C)", {"oil_viscosity": 0.028}),
-    "oil_028": ("eta = 0.28 Pa s", {"oil_viscosity": 0.28}),
-    "oil_28": ("eta = 2.8 Pa s (thin-film bound)", {"oil_viscosity": 2.8}),
-    "gamma_5e7": ("gamma = 5e7 1/s (old default)", {"damping_rate": 5e7}),
+    **{f"{o}_{p}": (f"{VISCOSITIES[o][1]}, {PENALTIES[p]}", {"oil_viscosity": VISCOSITIES[o][0], "penalty": p},
+                    128, SEEDS)
+       for o in VISCOSITIES for p in PENALTIES},
+    **{f"{o}_refined": (f"{VISCOSITIES[o][1]}, penalty at 50 m/s, half the pixel",
+                        {"oil_viscosity": VISCOSITIES[o][0], "penalty": "fixed"}, 256, REFINED_SEEDS)
+       for o in ("oil_0028", "oil_00028")},
 }
 
 
-def base_configs() -> list[dict]:
-    """The SlideConfig keys of each surface pair (roll-off wavelengths solved for this grid)."""
+def base_configs(n: int = 128) -> list[dict]:
+    """The SlideConfig keys of each surface pair on an n x n grid (roll-off wavelengths solved for it)."""
     from tribocosim.surrogate.surfaces import rolloff_wavelength
 
     pairs = []
     for sheet_seed, tool_seed, shortest in SURFACE_PAIRS:
         ratio = shortest / SIZE
         pairs.append({
-            "n": N, "size": SIZE, "pressure": PRESSURE, "n_flakes": N_FLAKES, "hurst": HURST,
+            "n": n, "size": SIZE, "pressure": PRESSURE, "n_flakes": N_FLAKES, "hurst": HURST,
             "wavelength_ratio": ratio, "sheet_rms_height": SHEET, "tool_rms_height": TOOL,
-            "sheet_rolloff_wavelength": rolloff_wavelength(SHEET, SLOPE, HURST, SIZE, N, ratio),
-            "tool_rolloff_wavelength": rolloff_wavelength(TOOL, SLOPE, HURST, SIZE, N, ratio),
-            "sheet_seed": sheet_seed, "tool_seed": tool_seed,
-            "penalty_velocity": 50.0, "dt_safety": 0.25,
+            "sheet_rolloff_wavelength": rolloff_wavelength(SHEET, SLOPE, HURST, SIZE, n, ratio),
+            "tool_rolloff_wavelength": rolloff_wavelength(TOOL, SLOPE, HURST, SIZE, n, ratio),
+            "sheet_seed": sheet_seed, "tool_seed": tool_seed, "dt_safety": 0.25,
+            "cluster_thresholds": tuple(f * H_P for f in CLUSTER_THRESHOLDS),
         })
     return pairs
+
+
+def config(setting: str, surface: int, v0: float, seed: int):
+    """The SlideConfig of one member of a setting at v0."""
+    from tribocosim.surrogate.slide_config import SlideConfig
+
+    _, keys, n, _ = SETTINGS[setting]
+    keys = dict(keys)
+    penalty = keys.pop("penalty")
+    return SlideConfig(**{**base_configs(n)[surface], **keys, "v0": v0, "flake_seed": seed,
+                          "penalty_velocity": 50.0 if penalty == "fixed" else v0})
 
 
 def cases(setting: str) -> list:
     """The campaign cases of one setting, labelled by velocity, surface pair and seed."""
     from tribocosim.surrogate.campaign import Case
-    from tribocosim.surrogate.slide_config import SlideConfig
 
-    damping = SETTINGS[setting][1]
     out = []
-    for s_idx, pair in enumerate(base_configs()):
+    for s_idx in range(len(SURFACE_PAIRS)):
         for v in VELOCITIES:
-            for seed in SEEDS:
-                cfg = SlideConfig(**{**pair, **damping, "v0": v, "flake_seed": seed})
-                out.append(Case(cfg, {"velocity": v, "seed": seed, "surface": s_idx,
-                                      "beta": cfg.beta, "pressure": PRESSURE}))
+            for seed in SETTINGS[setting][3]:
+                cfg = config(setting, s_idx, v, seed)
+                out.append(Case(cfg, {"velocity": v, "seed": seed, "surface": s_idx, "beta": cfg.beta,
+                                      "pressure": PRESSURE}))
     return out
 
 
@@ -103,21 +127,38 @@ def run(args) -> None:
 
 
 def member_alphas(records: list[dict]) -> dict:
-    """velocity -> {"all": [...], "clusters": [...], "wall": [...]}: alpha of every finished member."""
+    """velocity -> {"all": {member: alpha}, "clusters": {...}, "t<k>": {...} per threshold, "wall": [...]}."""
     table: dict = {}
     for r in records:
-        s = r["summary"]
-        x = s["beta"] * r["labels"]["pressure"] / r["config"]["e_star"]
-        row = table.setdefault(r["labels"]["velocity"], {"all": [], "clusters": [], "wall": []})
-        row["all"].append(s["mean_particle_fraction"] / x)
-        row["clusters"].append(s["mean_particle_fraction_clusters"] / x)
+        s, lab = r["summary"], r["labels"]
+        x = s["beta"] * lab["pressure"] / r["config"]["e_star"]
+        member = (lab["surface"], lab["seed"])
+        row = table.setdefault(lab["velocity"], {"all": {}, "clusters": {}, "wall": []})
+        row["all"][member] = s["mean_particle_fraction"] / x
+        row["clusters"][member] = s["mean_particle_fraction_clusters"] / x
+        for k, value in enumerate(s.get("mean_particle_fraction_cluster_thresholds", [])):
+            row.setdefault(f"t{k}", {})[member] = value / x
         row["wall"].append(r.get("wall_s", math.nan))
     return table
 
 
-def _mean_std(values) -> tuple[float, float]:
-    a = np.asarray(values, dtype=float)
-    return float(a.mean()), (float(a.std(ddof=1)) if a.size > 1 else math.nan)
+def mean_se(values) -> tuple[float, float, int]:
+    """Mean, standard error (std ddof 1 / sqrt n) and count."""
+    a = np.asarray(list(values), dtype=float)
+    if a.size == 0:
+        return math.nan, math.nan, 0
+    return float(a.mean()), (float(a.std(ddof=1) / math.sqrt(a.size)) if a.size > 1 else math.nan), int(a.size)
+
+
+def paired_ratio(table: dict, key: str, hi: float = 50.0, lo: float = 1.0) -> tuple[float, float, int]:
+    """alpha(hi) / alpha(lo) per member (same surfaces and placement), mean +- standard error."""
+    a, b = table.get(hi, {}).get(key, {}), table.get(lo, {}).get(key, {})
+    return mean_se(a[m] / b[m] for m in set(a) & set(b) if b[m] > 0)
+
+
+def _cell(vals: dict) -> str:
+    m, se, n = mean_se(vals.values())
+    return "-" if n == 0 else f"{m:.3g} +- {se:.2g} ({n})"
 
 
 def report(args) -> None:
@@ -132,36 +173,45 @@ def report(args) -> None:
         results[name] = (member_alphas(done), [f for f in failed if f.get("status") != "missing"])
     if not results:
         sys.exit(f"no campaign under {args.out}; run first")
-    print("| setting | " + " | ".join(f"{v:g} m/s" for v in VELOCITIES) + " | failed |")
-    print("|---|" + "---|" * (len(VELOCITIES) + 1))
-    for key, what in (("all", "A_p of every load-bearing flake"), ("clusters", "cluster rule alone")):
+    keys = [("all", "every load-bearing flake"), ("clusters", "cluster rule alone")]
+    for key, what in keys:
+        print(f"\nalpha of {what}, mean +- standard error (members):\n")
+        print("| setting | " + " | ".join(f"{v:g} m/s" for v in VELOCITIES) + " | alpha(50)/alpha(1), paired | failed |")
+        print("|---|" + "---|" * (len(VELOCITIES) + 2))
         for name, (table, failed) in results.items():
-            cells = []
-            for v in VELOCITIES:
-                vals = table.get(v, {}).get(key, [])
-                if not vals:
-                    cells.append("-")
-                    continue
-                m, sd = _mean_std(vals)
-                cells.append(f"{m:.3g} +- {sd:.2g} ({len(vals)})")
-            print(f"| {SETTINGS[name][0]}, {what} | " + " | ".join(cells) + f" | {len(failed)} |")
-    print()
+            cells = [_cell(table.get(v, {}).get(key, {})) for v in VELOCITIES]
+            r = paired_ratio(table, key)
+            ratio = "-" if r[2] == 0 else f"{r[0]:.3g} +- {r[1]:.2g} ({r[2]})"
+            print(f"| {SETTINGS[name][0]} | " + " | ".join(cells) + f" | {ratio} | {len(failed)} |")
+    print("\nthe cluster rule at other overlap thresholds (fractions of h_p), alpha at 1 and 50 m/s and the paired "
+          "ratio:\n")
+    print("| setting | threshold | 1 m/s | 50 m/s | alpha(50)/alpha(1) |")
+    print("|---|---|---|---|---|")
+    for name, (table, _) in results.items():
+        for k, frac in [(None, 0.0)] + list(enumerate(CLUSTER_THRESHOLDS)):
+            key = "clusters" if k is None else f"t{k}"
+            r = paired_ratio(table, key)
+            print(f"| {SETTINGS[name][0]} | {frac:+g} | {_cell(table.get(1.0, {}).get(key, {}))} | "
+                  f"{_cell(table.get(50.0, {}).get(key, {}))} | "
+                  + ("-" if r[2] == 0 else f"{r[0]:.3g} +- {r[1]:.2g}") + " |")
+    print("\nmean wall time per slide [s]:\n")
     print("| setting | " + " | ".join(f"{v:g} m/s" for v in VELOCITIES) + " |")
     print("|---|" + "---|" * len(VELOCITIES))
     for name, (table, _) in results.items():
         cells = [f"{np.mean(table[v]['wall']):.1f}" if v in table else "-" for v in VELOCITIES]
-        print(f"| {SETTINGS[name][0]}: mean wall time per case [s] | " + " | ".join(cells) + " |")
-    print()
-    print("| setting | gamma_plane [1/s] | Lambda at 1 m/s | Lambda at 50 m/s |")
-    print("|---|---|---|---|")
-    for name in results:
-        lam1 = damping_per_pixel(name, 1.0)
-        print(f"| {SETTINGS[name][0]} | {lam1 / base_configs()[0]['size'] * N:.3g} | {lam1:.3g} | "
-              f"{damping_per_pixel(name, 50.0):.3g} |")
+        print(f"| {SETTINGS[name][0]} | " + " | ".join(cells) + " |")
     for name, (_, failed) in results.items():
         for f in failed:
             err = f.get("error", {})
             print(f"failed [{name}] {f.get('labels')}: {err.get('type')}: {err.get('message', '')[:160]}")
+    if args.json:
+        out = {name: {"label": SETTINGS[name][0], "lambda": {str(v): damping_per_pixel(name, v) for v in VELOCITIES},
+                      **{key: {str(v): mean_se(table[v][key].values()) for v in VELOCITIES if v in table}
+                         for key in ("all", "clusters")},
+                      "ratio_50_1": {key: paired_ratio(table, key) for key in ("all", "clusters")}}
+               for name, (table, _) in results.items()}
+        Path(args.json).write_text(json.dumps(out, indent=1))
+        print(f"wrote {args.json}")
     if args.figures:
         _figures(results, Path(args.figures))
 
@@ -173,38 +223,40 @@ def _figures(results: dict, folder: Path) -> None:
     import matplotlib.pyplot as plt
 
     folder.mkdir(parents=True, exist_ok=True)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=False)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, key, title in ((axes[0], "all", "A_p of every load-bearing flake"),
                            (axes[1], "clusters", "the paper's cluster rule alone")):
         for name, (table, _) in results.items():
+            if name.endswith("_refined"):
+                continue
             vs = [v for v in VELOCITIES if v in table]
-            ms = [_mean_std(table[v][key]) for v in vs]
-            ax.errorbar(vs, [m for m, _ in ms], yerr=[s for _, s in ms], marker="o", capsize=3,
+            ms = [mean_se(table[v][key].values()) for v in vs]
+            ax.errorbar(vs, [m for m, _, _ in ms], yerr=[2 * e for _, e, _ in ms], marker="o", capsize=3,
                         label=SETTINGS[name][0])
         ax.set_xscale("log")
         ax.set_xlabel("sliding velocity v0 [m/s]")
         ax.set_ylabel("alpha (Eq. 23)")
         ax.set_title(title)
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle("alpha(v): roll-off surfaces, 128 um, 7 flakes, 10 MPa; mean +- std of 6 members")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("alpha(v): roll-off surfaces, 128 um, 7 flakes, 10 MPa; mean +- 2 standard errors of 10 members")
     fig.tight_layout()
     path = folder / "alpha_velocity.png"
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for name, (table, _) in results.items():
-        vs = [v for v in VELOCITIES if v in table]
-        if not vs or damping_per_pixel(name, 1.0) == 0.0:
+        if name.endswith("_hertz_v0"):
             continue
-        ms = [_mean_std(table[v]["all"]) for v in vs]
-        ax.errorbar([damping_per_pixel(name, v) for v in vs], [m for m, _ in ms],
-                    yerr=[s for _, s in ms], marker="o", capsize=3, label=SETTINGS[name][0])
+        vs = [v for v in VELOCITIES if v in table]
+        ms = [mean_se(table[v]["all"].values()) for v in vs]
+        ax.errorbar([damping_per_pixel(name, v) for v in vs], [m for m, _, _ in ms], yerr=[2 * e for _, e, _ in ms],
+                    marker="s" if name.endswith("_refined") else "o", capsize=3, label=SETTINGS[name][0])
     ax.set_xscale("log")
     ax.set_xlabel("damping per pixel of sliding  Lambda = gamma_plane dx / v0")
     ax.set_ylabel("alpha (Eq. 23), every load-bearing flake")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     path = folder / "alpha_damping_per_pixel.png"
     fig.savefig(path, dpi=110)
@@ -212,12 +264,11 @@ def _figures(results: dict, folder: Path) -> None:
 
 
 def damping_per_pixel(setting: str, v0: float) -> float:
-    """Lambda = gamma_plane dx / v0: the in-plane damping rate times the time to slide one pixel (how
-    much of a flake's in-plane velocity the oil takes away while the tool advances one pixel)."""
+    """Lambda = gamma_plane dx / v0: the in-plane damping rate times the time to slide one pixel (how much of a
+    flake's in-plane velocity the oil takes away while the tool advances one pixel)."""
     from tribocosim.surrogate.dem import DampingRates, FlakeShape
-    from tribocosim.surrogate.slide_config import SlideConfig
 
-    cfg = SlideConfig(**{**base_configs()[0], **SETTINGS[setting][1], "v0": v0})
+    cfg = config(setting, 0, v0, SEEDS[0])
     damping = cfg.damping(FlakeShape(cfg.flake_diameter, cfg.flake_thickness, cfg.flake_density))
     rate = damping.velocity_plane if isinstance(damping, DampingRates) else float(damping)
     return rate * cfg.dx / v0
@@ -233,6 +284,7 @@ def main(argv=None) -> None:
     p = sub.add_parser("report")
     p.add_argument("--out", required=True)
     p.add_argument("--figures", default=None)
+    p.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     (run if args.cmd == "run" else report)(args)
 
