@@ -113,6 +113,8 @@ class Native:
     outputs only the FMI 3.0 FMU has: Float64 arrays of ``array_size`` values (the glue's
     ``tc_component_array``). ``interpolates_inputs``: the model takes its inputs' time derivatives at the
     step's start (FMI 2.0 ``canInterpolateInputs``, ``fmi2SetRealInputDerivatives``, orders 1 and 2).
+    ``convert_resource(source, folder) -> path``: writes a resource file in the form the C code reads (the
+    friction table's array file) into ``folder``; the native FMU carries what it writes instead of the source.
     """
 
     prefix: str
@@ -121,6 +123,7 @@ class Native:
     arrays: tuple[Port, ...] = ()
     array_size: ArraySize | None = None
     interpolates_inputs: bool = False
+    convert_resource: Callable[[Path, Path], Path] | None = None
 
 
 @dataclass(frozen=True)

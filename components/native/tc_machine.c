@@ -35,7 +35,7 @@ struct tc_machine {
 static double setpoint(const tc_machine *m, double t) {
     if (m->p.ramp_time == 0) return m->p.velocity_setpoint;
     const double s = t / m->p.ramp_time;
-    return m->p.velocity_setpoint * (s < 1.0 ? s : 1.0); /* Python's min(1.0, s) */
+    return m->p.velocity_setpoint * (s < 1.0 ? s : 1.0);
 }
 
 void tc_machine_free(tc_machine *m) { free(m); }
@@ -92,7 +92,7 @@ int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg) {
     memcpy(z, m->z, sizeof z);
     for (int k = 0; k + 1 < n_cuts; ++k) {
         const double a = cuts[k], b = cuts[k + 1], h = b - a;
-        if (!(h > 0)) /* Python: ZeroDivisionError */
+        if (!(h > 0)) /* a step lost in rounding against the time */
             return tc_fail(msg, TC_DISCARD, "step of %s s is lost in rounding at t = %.17g s", tc_repr_double(h, r), a);
         const double va = setpoint(m, a), vb = setpoint(m, b);
         const double u0[2] = {va, pull_force}, u1[2] = {(vb - va) / h, 0.0};

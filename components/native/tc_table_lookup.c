@@ -1,8 +1,6 @@
-/* Trilinear lookup of mu(P, v, beta), or of an area array of a version 2 table, in a friction table
- * (FrictionTable.interpolate_array with a scalar pressure, the path the strip-draw model uses;
- * stripdraw/table.py).
+/* Trilinear lookup of mu(P, v, beta), or of an area array of a version 2 table, in a friction table.
  *
- * Each axis is located as FrictionTable._locate does: the query is clamped to [axis_0, axis_last], the
+ * Each axis is located so: the query is clamped to [axis_0, axis_last], the
  * cell index is i = min(searchsorted(axis, q, "right") - 1, n - 2) and the local coordinate
  * t = (q - axis_i) / (axis_{i+1} - axis_i) (i = 0, t = 0 on a one-point axis). The pressure is located
  * once and the table interpolated linearly in P to a (v, beta) plane,
@@ -14,10 +12,8 @@
  *     mu = (1 - tv) ((1 - tb) plane(iv, ib) + tb plane(iv, ib + sb))
  *          + tv ((1 - tb) plane(iv + sv, ib) + tb plane(iv + sv, ib + sb)),
  *
- * with sv, sb = 1 (0 on a one-point axis). The operations are NumPy's, in its order, so the values are
- * bit-identical. A query outside an axis is flagged (clamp policy) or refused with the message of
- * table.py's TableDomainError (error policy: pressure first, then the first velocity, then the first beta
- * outside the table).
+ * with sv, sb = 1 (0 on a one-point axis). A query outside an axis is flagged (clamp policy) or refused
+ * (error policy: pressure first, then the first velocity, then the first beta outside the table).
  */
 #include "tc_table.h"
 
@@ -29,8 +25,7 @@
 
 static int outside(const double *axis, size_t n, double q) { return q < axis[0] || q > axis[n - 1]; }
 
-/* FrictionTable._locate for one query (NaN stays NaN, as np.maximum/np.minimum propagate it, and sorts
- * after every axis value, as in np.searchsorted). */
+/* the cell and the local coordinate of one query */
 static void locate(const double *axis, size_t n, double q, size_t *i, double *t) {
     double qc = q < axis[0] ? axis[0] : q;
     qc = qc > axis[n - 1] ? axis[n - 1] : qc;
@@ -39,7 +34,7 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
         *t = 0.0;
         return;
     }
-    size_t lo = 0, hi = n; /* searchsorted(axis, qc, side="right"): the first k with qc < axis[k] */
+    size_t lo = 0, hi = n; /* the first k with qc < axis[k] */
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
         if (qc < axis[mid])
