@@ -27,6 +27,7 @@ class MachineModel(NativeLinearModel):
 
     OUTPUT_NAMES = ("grip_velocity", "grip_position", "velocity_setpoint", "motor_force")
     INPUT_NAMES = ("pull_force",)
+    N_STATES = 6  # z = [x_m, v_m, x_g, v_g, F_m, I]
     PREFIX = "tc_machine"
 
     def __init__(self, params: MachineParameters):

@@ -49,7 +49,7 @@ def encode(entries: dict) -> bytes:
             data = value.encode("utf-8")
             out += [struct.pack("<H", len(raw)), raw, struct.pack("<BB", TEXT, 0), struct.pack("<Q", len(data)), data]
             continue
-        a = np.ascontiguousarray(value, dtype="<f8")
+        a = np.array(value, dtype="<f8", order="C")  # (ascontiguousarray would make a scalar 1-D)
         if a.ndim > MAX_NDIM:
             raise ParameterError(f"array file entry {name!r} has {a.ndim} dimensions; at most {MAX_NDIM} are allowed")
         out += [struct.pack("<H", len(raw)), raw, struct.pack("<BB", FLOAT64, a.ndim),

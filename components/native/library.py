@@ -32,7 +32,11 @@ from tribocosim.components.paths import cache_dir
 #: the C sources of the core library (the models and what they read and write; not the FMI layer)
 SOURCES = ("tc_common.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_arrays.c", "tc_friction.c",
            "tc_stripdraw.c", "tc_galpha.c", "tc_fields.c", "tc_linear.c", "tc_press.c", "tc_machine.c")
-TC_OK, TC_DISCARD, TC_ERROR, TC_NOMEM = 0, 1, 2, 3
+#: the status codes of tc_common.h
+TC_OK = 0
+TC_DISCARD = 1
+TC_ERROR = 2
+TC_NOMEM = 3
 #: a library shipped beside this module (a Python FMU's), used instead of building one
 BUNDLED = Path(__file__).resolve().parent / f"libtc_core{'.dll' if sys.platform.startswith('win') else '.so'}"
 

@@ -17,6 +17,7 @@ class NativeLinearModel:
     OUTPUT_NAMES: tuple[str, ...] = ()
     INPUT_NAMES: tuple[str, ...] = ()
     PREFIX = ""
+    N_STATES = 0  # the state vector z, after the state image's 8-byte header
 
     def __init__(self, params):
         self.params = params
@@ -49,6 +50,11 @@ class NativeLinearModel:
         out = (ctypes.c_double * len(self.OUTPUT_NAMES))()
         self._fn["outputs"](self._handle, ctypes.cast(out, DBL_P))
         return dict(zip(self.OUTPUT_NAMES, out))
+
+    @property
+    def state(self) -> np.ndarray:
+        """The state vector z (a copy)."""
+        return np.frombuffer(self.get_state()[8:8 + 8 * self.N_STATES].tobytes(), dtype=np.float64).copy()
 
     def get_state(self) -> np.ndarray:
         """The state as bytes (a uint8 array)."""

@@ -26,6 +26,7 @@ class PressModel(NativeLinearModel):
 
     OUTPUT_NAMES = ("normal_force", "force_setpoint")
     INPUT_NAMES = ()
+    N_STATES = 4  # z = [x, v, F_a, I]
     PREFIX = "tc_press"
 
     def __init__(self, params: PressParameters):
