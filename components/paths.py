@@ -7,7 +7,6 @@ site-packages and from an editable install of the repository (where ``tribocosim
 
 from __future__ import annotations
 
-import os
 from importlib.resources import files
 from pathlib import Path
 
@@ -16,13 +15,6 @@ from tribocosim.components.errors import SceneError
 MODELS_DIR = Path(str(files("tribocosim.models")))
 DEFAULT_TABLE = MODELS_DIR / "friction_table.npz"
 SCENES_DIR = MODELS_DIR / "scenes"
-
-
-def cache_dir() -> Path:
-    """The cache folder of built FMUs and of the native core library: ``$TRIBOCOSIM_CACHE`` or
-    ``~/.cache/tribocosim/fmus``."""
-    env = os.environ.get("TRIBOCOSIM_CACHE")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "tribocosim" / "fmus"
 
 
 def packaged_scenes() -> list[str]:

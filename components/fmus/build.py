@@ -174,8 +174,17 @@ def runtime_files(name: str) -> list[Path]:
 
 
 def resource_paths(name: str) -> list[str]:
-    """The paths, relative to ``resources/``, of the modules FMU ``name`` bundles (``tribocosim/...``)."""
-    return sorted(_staged_path(m, p).as_posix() for m, p in runtime_modules(name).items())
+    """The paths, relative to ``resources/``, of the modules FMU ``name`` bundles (``tribocosim/...``), and of the
+    native core library beside its binding."""
+    paths = [_staged_path(m, p) for m, p in runtime_modules(name).items()]
+    paths += [p.parent / _bundled_library_name() for p in paths if p.as_posix() == _LIBRARY_PATH]
+    return sorted(p.as_posix() for p in paths)
+
+
+def _bundled_library_name() -> str:
+    from tribocosim.components.native import library
+
+    return library.BUNDLED.name
 
 
 def _staged_path(module: str, source: Path) -> Path:
@@ -188,6 +197,7 @@ def _staged_path(module: str, source: Path) -> Path:
 
 #: the binding of the native core: an FMU whose modules import it carries the compiled library too
 NATIVE_LIBRARY_MODULE = f"{PACKAGE}.components.native.library"
+_LIBRARY_PATH = f"{PACKAGE}/components/native/library.py"
 
 
 def source_digest(name: str) -> str:
@@ -256,7 +266,7 @@ def _build_one(name: str, out: Path) -> Path:
             if module == NATIVE_LIBRARY_MODULE:  # the models' native core, for this machine's platform
                 from tribocosim.components.native import library
 
-                shutil.copy2(library.library_path(), dest.parent / library.BUNDLED.name)
+                shutil.copy2(library.library_path(), dest.parent / _bundled_library_name())
         data = []
         for path in comp.resource_files:
             shutil.copy2(path, stage / path.name)

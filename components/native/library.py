@@ -27,7 +27,6 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.components.errors import ParameterError, TribocosimError
-from tribocosim.components.paths import cache_dir
 
 #: the C sources of the core library (the models and what they read and write; not the FMI layer)
 SOURCES = ("tc_common.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_arrays.c", "tc_friction.c",
@@ -90,6 +89,13 @@ def ptr(a: np.ndarray, ctype=DBL_P):
 
 
 # ------------------------------------------------------------------------------------------------ building
+def cache_dir() -> Path:
+    """The cache folder of built FMUs and of the core library: ``$TRIBOCOSIM_CACHE`` or
+    ``~/.cache/tribocosim/fmus``."""
+    env = os.environ.get("TRIBOCOSIM_CACHE")
+    return Path(env).expanduser() if env else Path.home() / ".cache" / "tribocosim" / "fmus"
+
+
 def _headers(folder: Path) -> None:
     from tribocosim.components import registry
     from tribocosim.components.native.declarations import write_params_headers
@@ -151,20 +157,13 @@ class Core:
     """The loaded library, its prototypes and the status check."""
 
     def __init__(self, path: str | os.PathLike):
-        from tribocosim.components.machine.parameters import MachineParameters
-        from tribocosim.components.press.parameters import PressParameters
-        from tribocosim.components.stripdraw.parameters import StripDrawParameters
-
         try:
             self.lib = lib = ctypes.CDLL(str(path))
         except OSError as exc:
             raise CoreBuildError(f"the native core library {path} cannot be loaded: {exc}") from exc
         self.path = Path(path)
-        self.StripDrawParams = params_struct(StripDrawParameters)
-        self.PressParams = params_struct(PressParameters)
-        self.MachineParams = params_struct(MachineParameters)
         i, d, sz, msg = ctypes.c_int, ctypes.c_double, ctypes.c_size_t, Msg
-        sd_p, pr_p, ma_p = (ctypes.POINTER(s) for s in (self.StripDrawParams, self.PressParams, self.MachineParams))
+        sd_p = pr_p = ma_p = VP  # the parameter structs, passed by reference (Core.struct)
         out = ctypes.POINTER(VP)
         proto = {
             "tc_table_from_arrays": (i, [sz, sz, sz, DBL_P, DBL_P, DBL_P, DBL_P, d, out, msg]),
@@ -220,6 +219,16 @@ class Core:
             fn = getattr(lib, name)
             fn.restype = res
             fn.argtypes = args
+
+    @staticmethod
+    @functools.lru_cache(maxsize=None)
+    def params_class(cls):
+        """The C parameter struct type of a parameter dataclass (made once per class)."""
+        return params_struct(cls)
+
+    def struct(self, params):
+        """The C parameter struct of a parameter dataclass instance (pass it with ctypes.byref)."""
+        return to_struct(self.params_class(type(params)), params)
 
     def call(self, fn, *args, error=ParameterError, discard=None) -> None:
         """Call ``fn(*args, msg)`` and raise on a status other than TC_OK: ``discard`` (default ``error``) for

@@ -6,7 +6,7 @@ import ctypes
 
 import numpy as np
 
-from tribocosim.components.native.library import DBL_P, VP, core, to_struct
+from tribocosim.components.native.library import DBL_P, VP, core
 
 
 class NativeLinearModel:
@@ -24,8 +24,7 @@ class NativeLinearModel:
         c = self._core = core()
         self._fn = {name: getattr(c.lib, f"{self.PREFIX}_{name}") for name in (
             "create", "free", "step", "outputs", "state_size", "get_state", "set_state", "time")}
-        struct_cls = c.PressParams if self.PREFIX == "tc_press" else c.MachineParams
-        self._struct = to_struct(struct_cls, params)
+        self._struct = c.struct(params)
         self._handle = VP()
         c.call(self._fn["create"], ctypes.byref(self._struct), ctypes.byref(self._handle))
 

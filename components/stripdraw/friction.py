@@ -46,7 +46,7 @@ import math
 import numpy as np
 
 from tribocosim.components.errors import ParameterError, TableDomainError
-from tribocosim.components.native.library import UBYTE_P, VP, core, ptr, to_struct
+from tribocosim.components.native.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import AREAS, FrictionTable
 
@@ -85,7 +85,7 @@ class FrictionLaw:
         self.name = params.friction_model
         self.table = table if params.friction_model == "table" else None
         c = self._core = core()
-        self._struct = to_struct(c.StripDrawParams, params)
+        self._struct = c.struct(params)
         self._native = NativeTable(self.table) if self.table is not None else None
         c.call(c.lib.tc_law_check, ctypes.byref(self._struct), self.native_table)
 

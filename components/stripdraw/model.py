@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tribocosim.components.errors import ConvergenceError, ParameterError, TableDomainError
-from tribocosim.components.native.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr, to_struct
+from tribocosim.components.native.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
 OUTPUT_NAMES = (
@@ -95,7 +95,7 @@ class StripDrawModel:
         self.params = params
         self.law = friction_law
         c = self._core = core()
-        self._struct = to_struct(c.StripDrawParams, params)
+        self._struct = c.struct(params)
         self._handle = VP()
         bf = None if beta_field is None else np.ascontiguousarray(beta_field, dtype=float).ravel()
         c.call(c.lib.tc_stripdraw_create, ctypes.byref(self._struct), friction_law.native_table,

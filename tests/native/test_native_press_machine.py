@@ -16,7 +16,7 @@ import scipy.linalg
 
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.machine import MachineModel, MachineParameters
-from tribocosim.components.native.library import VP, core, ptr, to_struct
+from tribocosim.components.native.library import VP, core, ptr
 from tribocosim.components.press import PressModel, PressParameters
 
 
@@ -84,7 +84,7 @@ BAD_TABLES = [";", "   ", "0 0; 0.01", "0 0 1; 0.01 5", "0 0; 0.01 abc", "0 0; 0
 def _native_press(text: str):
     """A native press with ``setpoint_table`` = text, the Python check bypassed (the C reader's own verdict)."""
     c = core()
-    struct = to_struct(c.PressParams, PressParameters())
+    struct = c.struct(PressParameters())
     struct.setpoint_table = text.encode()
     handle = VP()
     c.call(c.lib.tc_press_create, ctypes.byref(struct), ctypes.byref(handle))

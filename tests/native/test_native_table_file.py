@@ -19,7 +19,7 @@ import pytest
 
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.native import arrays, toolchain
-from tribocosim.components.native.library import VP, core, ptr, to_struct
+from tribocosim.components.native.library import VP, core, ptr
 from tribocosim.components.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import closed_form_table, make_friction_law
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
@@ -39,7 +39,7 @@ def read_resource(path):
 def law_mu(handle, params: StripDrawParameters, grid) -> np.ndarray:
     """tc_law_mu of the strip-draw law on the native table ``handle`` at every (P, v, beta) of grid."""
     c = core()
-    struct = to_struct(c.StripDrawParams, params)
+    struct = c.struct(params)
     p, v, b = grid
     out = np.empty(v.size)
     for pk in np.unique(p):
