@@ -14,7 +14,7 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    ``fmpy.simulate_fmu`` on the extracted FMU against a plain loop over ``model.step`` that
    records the same outputs. Target: FMU <= 1.2 x model.
 3. cold start in a fresh process (``--cold``): ``fmpy simulate StripDraw.fmu`` from the command
-   line (extraction, imports, numba compilation of the bundled kernels) against a fresh process
+   line (extraction, imports, loading the bundled core library) against a fresh process
    that imports the model and runs the same draw.
 
 In this process the FMU reuses the already imported ``components`` package (see
@@ -140,7 +140,7 @@ for k in range({n}):
 
 def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
     """Fresh-process wall times: (model script, `fmpy simulate` first run, second run on a
-    pre-extracted FMU whose numba cache is warm)."""
+    pre-extracted FMU)."""
     fmpy_exe = str(Path(sys.executable).with_name("fmpy"))
     script = _COLD_MODEL.format(root=str(PROJECT_ROOT), n=N_DRAW, dt=DT, f=F10, v=V0)
     t0 = time.perf_counter()
@@ -154,7 +154,7 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
 
     unzipped = str(extract(str(fmu), str(tmp / "cold_unzipped")))
     runner = f"from fmpy import simulate_fmu; simulate_fmu({unzipped!r})"
-    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)  # fills the numba cache
+    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)  # a first run
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)
     t_warm_cache = time.perf_counter() - t0
@@ -226,7 +226,7 @@ def main(argv=None) -> int:
             fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))
         unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
-        _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # compile/load the kernels
+        _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # load the core library
 
         load = os.getloadavg()
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
@@ -253,7 +253,7 @@ def main(argv=None) -> int:
         if args.cold:
             cm, cf, cw = cold(Path(fmu), tmp)
             print(f"fresh process  model script {cm:6.2f} s   `fmpy simulate` {cf:6.2f} s   "
-                  f"simulate_fmu on a pre-extracted FMU with warm numba cache {cw:6.2f} s")  # fmt: skip
+                  f"simulate_fmu on a pre-extracted FMU, second run {cw:6.2f} s")  # fmt: skip
         load = os.getloadavg()
         print(f"load average after: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     return 0

@@ -114,7 +114,9 @@ class Native:
     ``tc_component_array``). ``interpolates_inputs``: the model takes its inputs' time derivatives at the
     step's start (FMI 2.0 ``canInterpolateInputs``, ``fmi2SetRealInputDerivatives``, orders 1 and 2).
     ``convert_resource(source, folder) -> path``: writes a resource file in the form the C code reads (the
-    friction table's array file) into ``folder``; the native FMU carries what it writes instead of the source.
+    friction table's array file, ``<stem>.tca``) into ``folder``; the native FMU carries what it writes instead of
+    the source, and a scene that sets one of ``resource_parameters`` to a file passes the native FMU its
+    converted form.
     """
 
     prefix: str
@@ -124,6 +126,7 @@ class Native:
     array_size: ArraySize | None = None
     interpolates_inputs: bool = False
     convert_resource: Callable[[Path, Path], Path] | None = None
+    resource_parameters: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -218,6 +218,7 @@ COMPONENT = Component(
                            "tc_table_file.c", "tc_arrays.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
-                  interpolates_inputs=True, convert_resource=convert_resource),
+                  interpolates_inputs=True, convert_resource=convert_resource,
+                  resource_parameters=("table_file",)),
     default_experiment=(0.0, 1.75, 1e-3),
 )
