@@ -29,8 +29,9 @@ DT = 1e-3  # s
 N_DRAW = 1750  # steps: 140 mm at 0.08 m/s
 
 
-def count(steps: int, n_elements: int | None) -> tuple[int, float]:
-    """(instructions collected in the host loop, per step)."""
+def count(steps: int, n_elements: int | None, keep: Path | None = None) -> tuple[int, float]:
+    """(instructions collected in the host loop, per step); ``keep``: copy callgrind's output file there (for
+    callgrind_annotate)."""
     from fmpy import extract, read_model_description
 
     from tribocosim.components.fmus.native import build_native_fmus, fmi2_headers
@@ -59,6 +60,8 @@ def count(steps: int, n_elements: int | None) -> tuple[int, float]:
         proc = subprocess.run(vg + cmd, capture_output=True, text=True, env={"PATH": "/usr/bin:/bin"})
         if proc.returncode != 0:
             raise SystemExit(f"callgrind run failed:\n{proc.stderr[-2000:]}")
+        if keep is not None:
+            shutil.copy2(out, keep)
         match = re.search(r"^summary:\s+(\d+)", out.read_text(), re.MULTILINE)
         if match is None:
             raise SystemExit("no summary line in the callgrind output")
@@ -70,8 +73,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=int, default=N_DRAW)
     parser.add_argument("--n-elements", type=int, default=None, help="mesh (default: the FMU's default)")
+    parser.add_argument("--keep", type=Path, default=None, help="copy callgrind's output file here")
     args = parser.parse_args(argv)
-    total, per = count(args.steps, args.n_elements)
+    total, per = count(args.steps, args.n_elements, args.keep)
     print(f"callgrind, C host loop (fmi2SetReal + fmi2DoStep + fmi2GetReal), {args.steps} steps of the default draw: "
           f"{total} instructions, {per:.0f} per step")
     return 0

@@ -104,17 +104,17 @@ def _headers(folder: Path) -> None:
 
 
 def digest() -> str:
-    """SHA-256 of what the library is made of: sources, headers, generated parameter headers, flags, compiler."""
-    from tribocosim.components import registry
-    from tribocosim.components.native import declarations, toolchain
+    """SHA-256 of what the library is made of: sources, headers, what generates the parameter headers (the
+    parameter modules of the package's components and the generator), flags, compiler. Imports no component."""
+    from tribocosim.components.native import toolchain
 
     h = hashlib.sha256()
-    for path in sorted({*(toolchain.SOURCE_DIR / s for s in SOURCES), *toolchain.SOURCE_DIR.glob("*.h")}):
+    package = toolchain.SOURCE_DIR.parent
+    for path in sorted({*(toolchain.SOURCE_DIR / s for s in SOURCES), *toolchain.SOURCE_DIR.glob("*.h"),
+                        toolchain.SOURCE_DIR / "declarations.py", package / "params.py",
+                        *package.glob("*/parameters.py")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    for comp in registry.components().values():
-        if comp.native is not None:
-            h.update(declarations.params_header(comp).encode())
     try:
         from importlib.metadata import version
 

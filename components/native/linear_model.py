@@ -1,4 +1,5 @@
-"""The binding of the native linear models (press, drawing machine): one class, the model named by its prefix."""
+"""The binding of the native linear models (press, drawing machine): one class, the model named by its prefix; and
+the native matrix exponential (``tc_expm``: balancing, then scaling and squaring of a Taylor polynomial)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,17 @@ import ctypes
 
 import numpy as np
 
-from tribocosim.components.native.library import DBL_P, VP, core
+from tribocosim.components.native.library import DBL_P, VP, core, ptr
+
+
+def expm(M) -> np.ndarray:
+    """exp(M) of a square matrix of at most 16 rows (the native core's; ParameterError if it is not finite or too
+    large to scale)."""
+    M = np.ascontiguousarray(M, dtype=float)
+    E = np.empty_like(M)
+    c = core()
+    c.call(c.lib.tc_expm, M.shape[0], ptr(M), ptr(E))
+    return E
 
 
 class NativeLinearModel:

@@ -45,8 +45,8 @@
  * computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
- * nodes). tests/components/test_stripdraw_galpha.py holds this step against a monolithic dense Newton solve of the
- * same Pi written in NumPy (the same minimiser, to a stated tolerance).
+ * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
+ * bar and to the explicit scheme.
  */
 #include <math.h>
 #include <string.h>

@@ -118,15 +118,19 @@ struct tc_stripdraw {
 
 void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                    double *ov) {
-#define TC_SD_OVERLAP(lo, hi) (fmin((hi), a_hi) - fmax((lo), a_lo))
+    /* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
+     * positions are finite, and the compares vectorise) */
+#define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
     if (n == 0) return;
     for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
         const double x = X[i] + U[i];
-        ov[i] = fmax(0.0, TC_SD_OVERLAP(x - half_le, x + half_le));
+        const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
+        ov[i] = d > 0.0 ? d : 0.0;
     }
     const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
-    ov[0] = fmax(0.0, TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le));
-    if (n > 1) ov[n - 1] = fmax(0.0, TC_SD_OVERLAP(xn - half_le, xn));
+    const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
+    ov[0] = d0 > 0.0 ? d0 : 0.0;
+    if (n > 1) ov[n - 1] = dn > 0.0 ? dn : 0.0;
 #undef TC_SD_OVERLAP
 }
 
@@ -144,13 +148,24 @@ int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last)
 void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
                double *work) {
     double *c = work, *d = work + n;
-    double cp = sup[0] / diag[0], dp = rhs[0] / diag[0];
-    c[0] = cp;
-    d[0] = dp;
-    for (size_t i = 1; i < n; ++i) {
-        const double m = diag[i] - sub[i] * cp;
-        c[i] = cp = sup[i] / m;
-        d[i] = dp = (rhs[i] - sub[i] * dp) / m;
+    /* with no subdiagonal (the advection of debris on a strip drawn forwards) the forward sweep is divisions that
+     * need not wait for each other */
+    int lower = 0;
+    for (size_t i = 1; i < n && !lower; ++i) lower = sub[i] != 0.0;
+    if (!lower) {
+        for (size_t i = 0; i < n; ++i) {
+            c[i] = sup[i] / diag[i];
+            d[i] = rhs[i] / diag[i];
+        }
+    } else {
+        double cp = sup[0] / diag[0], dp = rhs[0] / diag[0]; /* the recurrences' carries, kept in registers */
+        c[0] = cp;
+        d[0] = dp;
+        for (size_t i = 1; i < n; ++i) {
+            const double m = diag[i] - sub[i] * cp;
+            c[i] = cp = sup[i] / m;
+            d[i] = dp = (rhs[i] - sub[i] * dp) / m;
+        }
     }
     double xp = d[n - 1];
     x[n - 1] = xp;
@@ -278,7 +293,7 @@ static void form_slip_rates(tc_stripdraw *m) {
  * and the key kept for reuse. */
 static int friction_limits(tc_stripdraw *m, double pressure, double speed, int policy, tc_msg msg) {
     const size_t n = m->n;
-    for (size_t i = 0; i < n; ++i) m->tmax[i] = 0.0;
+    for (size_t i = m->limit_lo; i < m->limit_hi; ++i) m->tmax[i] = 0.0; /* 0 elsewhere already */
     m->limit_pressure = pressure;
     m->limit_speed = speed;
     m->limit_lo = m->limit_hi = 0;

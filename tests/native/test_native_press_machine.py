@@ -16,17 +16,9 @@ import scipy.linalg
 
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.machine import MachineModel, MachineParameters
-from tribocosim.components.native.library import VP, core, ptr
+from tribocosim.components.native.library import VP, core
+from tribocosim.components.native.linear_model import expm
 from tribocosim.components.press import PressModel, PressParameters
-
-
-def expm(M: np.ndarray) -> np.ndarray:
-    """The native matrix exponential (balancing, scaling and squaring of a Taylor polynomial)."""
-    M = np.ascontiguousarray(M, dtype=float)
-    E = np.empty_like(M)
-    c = core()
-    c.call(c.lib.tc_expm, M.shape[0], ptr(M), ptr(E))
-    return E
 
 
 def test_expm_closed_forms():
