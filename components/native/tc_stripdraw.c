@@ -394,15 +394,25 @@ static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
     return fmin(m->beta_cap, m->cap_value);
 }
 
-/* the largest |a| (NaN if there is one) */
-static double largest_magnitude(const double *a, size_t n) {
-    double mx = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-        const double v = fabs(a[i]);
-        if (v > mx || v != v) mx = v;
-        if (mx != mx) break;
-    }
-    return mx;
+/* whether every a[i] is finite (a sum in four lanes: inf or NaN anywhere makes it non-finite) */
+static int all_finite(const double *a, size_t n) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) s[k] += 0.0 * a[i + (size_t)k];
+    for (; i < n; ++i) s[0] += 0.0 * a[i];
+    return isfinite(s[0] + s[1] + s[2] + s[3]);
+}
+
+/* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
+static double largest(const double *a, size_t n) {
+    double mx[4] = {a[0], a[0], a[0], a[0]};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) mx[k] = a[i + (size_t)k] > mx[k] ? a[i + (size_t)k] : mx[k];
+    for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
+    const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
+    return m23 > m01 ? m23 : m01;
 }
 
 /* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU, with
@@ -415,7 +425,7 @@ static void transport(tc_stripdraw *m, double pressure, double speed, const doub
     size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
     if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
     if (m->w_first > m->w_last) t0 = f0, t1 = l0;
-    const int windowed = isfinite(kp * largest_magnitude(m->dU, n)) && m->beta_hi == m->beta_hi;
+    const int windowed = isfinite(kp) && all_finite(m->dU, n) && m->beta_hi == m->beta_hi;
     if (!windowed) t0 = 0, t1 = n - 1;
     const double cap = interval_cap(m, pressure, speed);
     if (t0 <= t1) {
@@ -896,8 +906,7 @@ void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPU
         wu += m->w[i] * m->U[i];
         wb += m->w[i] * m->beta[i];
     }
-    double bmax = m->beta[0];
-    for (size_t i = 1; i < n; ++i) bmax = m->beta[i] > bmax ? m->beta[i] : bmax;
+    const double bmax = largest(m->beta, n);
     const double fs = friction_force(m);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
