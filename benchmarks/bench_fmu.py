@@ -161,6 +161,22 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
     return t_model, t_fmu, t_warm_cache
 
 
+def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
+    """The C host of tests/native/host (compiled into ``tmp``) running the default draw (``steps`` steps of 1 ms at
+    10 MPa and 0.08 m/s) on the extracted StripDraw FMU, without printing: the command line."""
+    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.native.toolchain import compile_executable
+
+    host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
+                              include_dirs=[fmi2_headers()], libs=["-ldl"])
+    schedule = tmp / "draw.txt"
+    schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(steps)))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    return [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
+            "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
+            "--no-print"]
+
+
 #: n_elements of the C host's mesh-scaling line (the default's is the main figure)
 MESHES = (100, 450, 900)
 
@@ -169,8 +185,7 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     """The native FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import build_native_fmus, fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.fmus.native import build_native_fmus
 
     fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
     md = read_model_description(str(fmu))
@@ -179,14 +194,8 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     py_md = read_model_description(str(python_fmu))
     py_unzipped = str(extract(str(python_fmu), str(tmp / "python_unzipped")))
     _, t_python = per_step(py_unzipped, py_md, n_warm=200, n=steps, repeat=repeat)
-    host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
-                              include_dirs=[fmi2_headers()], libs=["-ldl"])
-    schedule = tmp / "draw.txt"
-    schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(N_DRAW)))
+    cmd = host_command(tmp, unzipped, md, N_DRAW)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    cmd = [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
-           "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
-           "--no-print"]
 
     def host_loop(extra=()):
         best = float("inf")

@@ -22,10 +22,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-PROJECT_ROOT = Path(__file__).resolve().parents[1]
-F10 = 10e6 * 0.035 * 0.035  # N: 10 MPa on the 35 x 35 mm pad
-V0 = 0.08  # m/s
-DT = 1e-3  # s
 N_DRAW = 1750  # steps: 140 mm at 0.08 m/s
 
 
@@ -34,8 +30,9 @@ def count(steps: int, n_elements: int | None, keep: Path | None = None) -> tuple
     callgrind_annotate)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import build_native_fmus, fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from bench_fmu import host_command  # the same host and draw as the wall-clock figure
+
+    from tribocosim.components.fmus.native import build_native_fmus
 
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not on the PATH")
@@ -44,14 +41,8 @@ def count(steps: int, n_elements: int | None, keep: Path | None = None) -> tuple
         fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
         md = read_model_description(str(fmu))
         unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
-        host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
-                                  include_dirs=[fmi2_headers()], libs=["-ldl"])
-        schedule = tmp / "draw.txt"
-        schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(steps)))
+        cmd = host_command(tmp, unzipped, md, steps)
         vr = {v.name: v.valueReference for v in md.modelVariables}
-        cmd = [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
-               "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
-               "--no-print"]
         if n_elements is not None:
             cmd += ["--set", f"i:{vr['n_elements']}={n_elements}"]
         out = tmp / "callgrind.out"

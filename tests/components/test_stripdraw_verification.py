@@ -8,14 +8,11 @@
   integrator second order in the time step on the linear bar; explicit and implicit integrators agree;
 - continuity of the outputs in the step: they are functions of the state, so a vanishing step changes them by a
   vanishing amount (linearly in the step);
-- no numba: the model is the C core.
 """
 
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -172,14 +169,3 @@ def test_a_vanishing_step_changes_the_outputs_by_a_vanishing_amount(integrator):
     for k in ("friction_force", "mu_mean", "sliding_distance", "grip_position"):
         assert change[1e-14][k] <= 20 * change[1e-15][k] + 1e-14, (k, change)
 
-
-def test_the_model_runs_without_numba():
-    code = ("import sys, tribocosim\n"
-            "from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law\n"
-            "p = StripDrawParameters(friction_model='closed_form')\n"
-            "m = StripDrawModel(p, make_friction_law(p))\n"
-            "m.step(1e-3, {'normal_force': 12250.0, 'grip_velocity': 0.08})\n"
-            "print('numba' in sys.modules)")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip() == "False"

@@ -213,23 +213,29 @@ def test_c_host_without_python_equals_the_binding_bit_for_bit(fmi2_host, unzippe
     assert want[:, 0].max() > 0, "the strip must be pulled"
 
 
+def _initialized_strip(unzipped, md, name: str):
+    """A StripDraw FMU2Slave with its default parameters, out of initialization mode."""
+    from fmpy.fmi2 import FMU2Slave
+
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",
+                  instanceName=name)
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    return s
+
+
 def test_a_vanishing_step_changes_the_fmus_outputs_by_a_vanishing_amount(unzipped, descriptions):
     """After 500 steps of the default draw, doStep(1e-15 s) in fmpy changes no output by more than 1e-9 relative
     (the rates of the state: tests/components/test_stripdraw_verification.py), and gives the binding's numbers
     bit for bit."""
-    from fmpy.fmi2 import FMU2Slave
-
     from tribocosim.components.stripdraw.component import COMPONENT
 
     md = descriptions["StripDraw"]
     vr = {v.name: v.valueReference for v in md.modelVariables}
     names = [n for n in STRIP_OUTPUTS if n != "table_clamp_count"]
-    s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",
-                  instanceName="tiny")
-    s.instantiate()
-    s.setupExperiment(startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
+    s = _initialized_strip(unzipped, md, "tiny")
     model = COMPONENT.make({}).model
     t = 0.0
     steps = [(dt, f, v) for dt, f, v in _strip_schedule("demo", 500)] + [(1e-15, 12250.0, 0.08)]
@@ -496,12 +502,7 @@ def test_libcosimpy_gives_the_same_outputs_as_fmpy(native_fmus, unzipped, descri
                                 [(f, v) for _, f, v in schedule], outs))
     md = descriptions["StripDraw"]
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped["StripDraw"]), modelIdentifier="StripDraw",
-                  instanceName="f")
-    s.instantiate()
-    s.setupExperiment(startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
+    s = _initialized_strip(unzipped, md, "f")
     rows = []
     for k, (_, f, v) in enumerate(schedule):  # libcosim passes doStep the difference of integer-ns times
         dt = ((k + 1) * 1_000_000) / 1e9 - (k * 1_000_000) / 1e9
