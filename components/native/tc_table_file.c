@@ -86,7 +86,7 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
     if (rc == TC_OK) rc = from_arrays(a, file, out, msg);
     else if (rc == TC_ERROR && strcmp(file, path) != 0)
         rc = tc_fail(msg, TC_ERROR, "friction table %s: the native model reads its resource form %s, which cannot be "
-                     "read (write it with tribocosim.components.stripdraw.table.write_table_resource)", path, file);
+                     "read (write it with: tribocosim fmu table-resource TABLE.npz)", path, file);
     tc_arrays_free(a);
     free(file);
     return rc;

@@ -102,6 +102,19 @@ def test_an_npz_name_reads_its_resource_beside_it(folder):
     core().lib.tc_table_free(read_resource(folder / "named.npz"))
 
 
+def test_the_command_line_writes_the_resource(folder):
+    write_table(folder / "cli.npz", closed_form_table())
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "table-resource", str(folder / "cli.npz")],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and proc.stdout.strip() == str((folder / "cli.tca").resolve()), proc.stderr
+    core().lib.tc_table_free(read_resource(folder / "cli.npz"))
+    (folder / "broken.npz").write_bytes(b"not a table")
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "table-resource",
+                           str(folder / "broken.npz")], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1 and "broken.npz is malformed" in proc.stderr
+    assert not (folder / "broken.tca").exists()
+
+
 def test_unknown_entries_are_skipped(folder):
     """A table resource may gain arrays (a second A_p observable, the largest simulated beta per (P, v))."""
     entries = resource_entries(read_table(DEFAULT_TABLE))
