@@ -147,7 +147,7 @@ static double window_eval(const window_problem *w, const double *d, double *T, s
     r[hi] += w->sg + w->kg * d[hi];
     pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
     double rm = 0.0;
-    for (size_t i = lo; i <= hi; ++i) rm = fmax(rm, fabs(r[i]));
+    for (size_t i = lo; i <= hi; ++i) rm = fabs(r[i]) > rm ? fabs(r[i]) : rm;
     *rmax = rm;
     return pot;
 }
@@ -323,14 +323,14 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     d[N] = 0.0;
     double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
     dU[0] = left;
-    fprev[0] = 0.0 - ke * left;
+    fprev[0] = -ke * left;
     for (size_t i = 1; i < N; ++i) {
         const double right = dU[i] + (d[i + 1] - d[i]);
         dU[i] = right;
-        fprev[i] = (0.0 + ke * left) - ke * right;
+        fprev[i] = ke * left - ke * right;
         left = right;
     }
-    fprev[N] = 0.0 + ke * left;
+    fprev[N] = ke * left;
     memset(contact, 0, n);
     double fr = 0.0;
     for (size_t kw = lo; kw <= hi + 1; ++kw) {
