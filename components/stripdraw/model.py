@@ -109,6 +109,13 @@ class StripDrawModel:
             explicit_time_step=info("explicit_time_step"),
         )
         self.beta_cap = info("beta_cap")
+        # buffers reused by every step (a step's cost is mostly the calls' own)
+        self._msg_buf = ctypes.create_string_buffer(2048)
+        self._msg = Msg(ctypes.addressof(self._msg_buf), len(self._msg_buf))
+        self._held = (ctypes.c_double * 2)()
+        self._out = (ctypes.c_double * len(OUTPUT_NAMES))()
+        self._out_p = ctypes.cast(self._out, DBL_P)
+        self._held_p = ctypes.cast(self._held, DBL_P)
 
     def __del__(self):
         handle = getattr(self, "_handle", None)
@@ -181,16 +188,16 @@ class StripDrawModel:
         ConvergenceError
             If the implicit solve fails even after step halving; the state is unchanged.
         """
-        d = derivatives or {}
-        dn = np.array(d.get("normal_force", (0.0, 0.0)), dtype=float)
-        dv = np.array(d.get("grip_velocity", (0.0, 0.0)), dtype=float)
         c = self._core
-        buf = ctypes.create_string_buffer(2048)
-        status = c.lib.tc_stripdraw_step_poly(self._handle, float(dt), float(inputs["normal_force"]), ptr(dn),
-                                              float(inputs["grip_velocity"]), ptr(dv),
-                                              Msg(ctypes.addressof(buf), len(buf)))
+        if derivatives:
+            dn = ptr(np.array(derivatives.get("normal_force", (0.0, 0.0)), dtype=float))
+            dv = ptr(np.array(derivatives.get("grip_velocity", (0.0, 0.0)), dtype=float))
+        else:
+            dn = dv = self._held_p
+        status = c.lib.tc_stripdraw_step_poly(self._handle, float(dt), float(inputs["normal_force"]), dn,
+                                              float(inputs["grip_velocity"]), dv, self._msg)
         if status != TC_OK:
-            text = buf.value.decode(errors="replace")
+            text = self._msg_buf.value.decode(errors="replace")
             if status == TC_NOMEM:
                 raise MemoryError(text)
             raise _REFUSALS.get(c.lib.tc_stripdraw_refusal(self._handle), ParameterError)(text)
@@ -199,9 +206,8 @@ class StripDrawModel:
     # ------------------------------------------------------------------ outputs
     def outputs(self) -> dict:
         """The outputs of the current state (see the module docstring)."""
-        out = (ctypes.c_double * len(OUTPUT_NAMES))()
-        self._core.lib.tc_stripdraw_outputs(self._handle, ctypes.cast(out, DBL_P))
-        return dict(zip(OUTPUT_NAMES, out))
+        self._core.lib.tc_stripdraw_outputs(self._handle, self._out_p)
+        return dict(zip(OUTPUT_NAMES, self._out))
 
     def fields(self) -> dict:
         """Nodal fields for plots: X, U, beta, slip (plastic slip U_p), contact weight."""
