@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose, assert_array_equal
+from numpy.testing import assert_array_equal
 
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
