@@ -54,6 +54,11 @@ static int domain_error(const char *name, const char *unit, double bad, const do
                    tc_repr_double(bad, r), unit, axis[0], axis[n - 1], unit);
 }
 
+/* bilinear in (|v|, beta) between the P-interpolated values at a cell's four corners */
+static double bilinear(double p00, double p01, double p10, double p11, double tv, double tb) {
+    return (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
+}
+
 /* The P-interpolated (v, beta) plane of one array at the four corners of a cell, then bilinear in (|v|, beta). */
 static double interpolate(const double *m0, const double *m1, double tp, size_t c00, size_t c01, size_t c10,
                           size_t c11, double tv, double tb) {
@@ -69,7 +74,37 @@ static double interpolate(const double *m0, const double *m1, double tp, size_t 
         p10 = (1.0 - tp) * m0[c10] + tp * m1[c10];
         p11 = (1.0 - tp) * m0[c11] + tp * m1[c11];
     }
-    return (1.0 - tv) * ((1.0 - tb) * p00 + tb * p01) + tv * ((1.0 - tb) * p10 + tb * p11);
+    return bilinear(p00, p01, p10, p11, tv, tb);
+}
+
+#define ROWS_MAX 64 /* beta axes up to this length get the rows of one velocity cell interpolated in P once */
+
+/* Every query at one velocity v (the grip's, for every node): the two velocity rows of its cell interpolated in P
+ * once (values m, and b when not NULL), then each query bilinear in (|v|, beta): the numbers interpolate() gives,
+ * with fewer operations. */
+static void lookup_rows(const tc_table *table, const double *m0, const double *m1, const double *b0, const double *b1,
+                        double tp, double v, size_t n, const double *beta, int outpv, double *out, double *out_b,
+                        unsigned char *clamped) {
+    const size_t nv = table->n_velocity, nb = table->n_beta, sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
+    double rows[4][ROWS_MAX]; /* m at the cell's two velocities, then b */
+    size_t iv, ib;
+    double tv, tb;
+    locate(table->velocity, nv, v, &iv, &tv);
+    for (size_t j = 0; j < nb; ++j) {
+        const size_t c0 = iv * nb + j, c1 = (iv + sv) * nb + j;
+        rows[0][j] = (1.0 - tp) * m0[c0] + tp * m1[c0];
+        rows[1][j] = (1.0 - tp) * m0[c1] + tp * m1[c1];
+        if (b0 != NULL) {
+            rows[2][j] = (1.0 - tp) * b0[c0] + tp * b1[c0];
+            rows[3][j] = (1.0 - tp) * b0[c1] + tp * b1[c1];
+        }
+    }
+    for (size_t k = 0; k < n; ++k) {
+        locate(table->beta, nb, beta[k], &ib, &tb);
+        out[k] = bilinear(rows[0][ib], rows[0][ib + sb], rows[1][ib], rows[1][ib + sb], tv, tb);
+        if (b0 != NULL) out_b[k] = bilinear(rows[2][ib], rows[2][ib + sb], rows[3][ib], rows[3][ib + sb], tv, tb);
+        if (clamped != NULL) clamped[k] = (unsigned char)(outpv || outside(table->beta, nb, beta[k]));
+    }
 }
 
 int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure, size_t n,
@@ -97,6 +132,14 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
     const double *m0 = values + ip * plane, *m1 = nP > 1 ? values + (ip + 1) * plane : NULL;
     const double *b0 = values_b != NULL ? values_b + ip * plane : NULL;
     const double *b1 = values_b != NULL && nP > 1 ? values_b + (ip + 1) * plane : NULL;
+    int one_velocity = n > 1 && nP > 1 && nb <= ROWS_MAX;
+    for (size_t k = 1; k < n && one_velocity; ++k) one_velocity = fabs(velocity[k]) == fabs(velocity[0]);
+    if (one_velocity) {
+        const double v = fabs(velocity[0]);
+        lookup_rows(table, m0, m1, b0, b1, tp, v, n, beta, outp || outside(table->velocity, nv, v), out, out_b,
+                    clamped);
+        return TC_OK;
+    }
     int outv = 0;
     for (size_t k = 0; k < n; ++k) {
         const double v = fabs(velocity[k]), b = beta[k];
