@@ -122,9 +122,9 @@ PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", m
 def test_internal_step_zero_is_the_model_before_the_grid():
     """Regression numbers of the model before internal_step existed: 60 steps of 1, 0.37 and 2.3 ms, closed form
     with slip-rate velocity, varying normal force, ramped grip, held to 1e-10. friction_force is the friction of
-    the state at the end of the step (the return-mapped tractions at the current debris and pressure): 1703.0899
-    N, where the friction held over the last coupling interval gave 1712.5118 N (-0.55 %: the normal force
-    changes at every step here)."""
+    the state at the end of the step (the return-mapped tractions at the current debris and pressure), 0.55 %
+    below the friction held over the last coupling interval (1712.5118 N; the normal force changes at every step
+    here)."""
     m = _model(**PINNED_LAW)
     for k in range(60):
         dt = (1e-3, 3.7e-4, 2.3e-3)[k % 3]

@@ -173,8 +173,8 @@ def test_explicit_and_implicit_give_the_same_friction():
 @pytest.mark.parametrize("integrator", ["implicit", "explicit"])
 def test_a_vanishing_step_changes_the_outputs_by_a_vanishing_amount(integrator):
     """Every output is a function of the state at the communication point: after a draw, a step h changes each by
-    about its rate times h (h = 1e-15 s: at most 1e-9 relative, where the friction held over the last interval
-    jumped by 1.4e-4), and by ten times that for 10 h (no jump). The rates: the one node that sticks loads at
+    about its rate times h (h = 1e-15 s: at most 1e-9 relative; a friction held over the last coupling interval would
+    jump by ~1e-4), and by ten times that for 10 h (no jump). The rates: the one node that sticks loads at
     k_s V (friction, 2e-10 relative per 1e-15 s); the pull force of the implicit step carries the rounding of the
     draw-sized displacements, k_e ulp(U) (1e-11 relative), which does not scale with h."""
     dt = 1e-3 if integrator == "implicit" else 1e-4
