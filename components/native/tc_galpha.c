@@ -92,11 +92,19 @@ void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double 
 }
 
 /* the window: the nodes with ov > 0 and the free nodes between them, free nodes only (<= N-1); node N-1 alone
- * when no free node touches the pad */
-static void window(size_t n, const double *ov, size_t *lo_out, size_t *hi_out) {
+ * when no free node touches the pad. The nodes with ov > 0 lie in [first, last] (first > last: anywhere). */
+static void window(size_t n, const double *ov, size_t first, size_t last, size_t *lo_out, size_t *hi_out) {
     const size_t N = n - 1;
     size_t lo, hi;
-    if (!tc_sd_positive_range(n, ov, &lo, &hi) || lo > N - 1) {
+    int found;
+    if (first <= last && last < n) {
+        found = tc_sd_positive_range(last + 1 - first, ov + first, &lo, &hi);
+        lo += first;
+        hi += first;
+    } else {
+        found = tc_sd_positive_range(n, ov, &lo, &hi);
+    }
+    if (!found || lo > N - 1) {
         *lo_out = *hi_out = N - 1;
         return;
     }
@@ -153,7 +161,7 @@ static double window_eval(const window_problem *w, const double *d, double *T, s
 }
 
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
+                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
                  double rtol, const double *chain, double *fric, double *reaction, double *work,
                  signed char *iwork) {
@@ -170,7 +178,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     /* a step whose square underflows cannot be taken */
     if (beta * dt * dt == 0.0) return -2;
     size_t lo, hi;
-    window(n, ov, &lo, &hi);
+    window(n, ov, first, last, &lo, &hi);
     const double cm = (1.0 - am) / (beta * dt * dt);
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;

@@ -356,10 +356,13 @@ static int refuse(tc_stripdraw *m, int kind) {
     return TC_DISCARD;
 }
 
-static int implicit_step(tc_stripdraw *m, double h, const double *ov, double vg, int depth, tc_msg msg) {
+/* one implicit step of h from the overlaps ov (nonzero within [first, last]; first > last: not known), halved when
+ * its Newton iteration does not converge */
+static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t first, size_t last, double vg, int depth,
+                         tc_msg msg) {
     const size_t n = m->n;
     double fric, reaction;
-    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, m->mass, m->ke, m->ks, m->wT,
+    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke, m->ks, m->wT,
                           m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
                           NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
     if (it >= 0) {
@@ -375,11 +378,11 @@ static int implicit_step(tc_stripdraw *m, double h, const double *ov, double vg,
                        "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
                        "the step halved %d times to %.3g s",
                        m->time, depth, h);
-    int rc = implicit_step(m, 0.5 * h, ov, vg, depth + 1, msg);
+    int rc = implicit_step(m, 0.5 * h, ov, first, last, vg, depth + 1, msg);
     if (rc != TC_OK) return rc;
     double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
     tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
-    return implicit_step(m, 0.5 * h, ov_mid, vg, depth + 1, msg);
+    return implicit_step(m, 0.5 * h, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
 /* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
@@ -478,7 +481,7 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
                        m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
     } else {
         for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le;
-        int rc = implicit_step(m, h, m->ov, vg, 0, msg);
+        int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
