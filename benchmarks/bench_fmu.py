@@ -3,7 +3,8 @@
 Measures, for the default parameters (table friction, implicit integrator, 150 elements):
 
 0. the native FMU (issue 13): per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
-   pythonfmu FMU through the same loop (target: native at least 10x faster), and the default 140 mm draw
+   pythonfmu FMU through the same loop (both run the native core: the difference is the FMI layer, C against
+   pythonfmu), and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
    loop, per-step cost and real-time factor (target >= 500), and the same draw on other meshes (MESHES:
    the step's cost grows with the bar's nodes);
@@ -12,9 +13,9 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
 2. the default 140 mm draw at V0 = 0.08 m/s (1.75 s) with a 1 ms communication step:
    ``fmpy.simulate_fmu`` on the extracted FMU against a plain loop over ``model.step`` that
-   records the same outputs. Target: FMU <= 1.2 x model.
+   records the same outputs (the model is the native core: the ratio is fmpy's and the FMI layer's cost).
 3. cold start in a fresh process (``--cold``): ``fmpy simulate StripDraw.fmu`` from the command
-   line (extraction, imports, numba compilation of the bundled kernels) against a fresh process
+   line (extraction, imports, loading the bundled core library) against a fresh process
    that imports the model and runs the same draw.
 
 In this process the FMU reuses the already imported ``components`` package (see
@@ -140,7 +141,7 @@ for k in range({n}):
 
 def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
     """Fresh-process wall times: (model script, `fmpy simulate` first run, second run on a
-    pre-extracted FMU whose numba cache is warm)."""
+    pre-extracted FMU)."""
     fmpy_exe = str(Path(sys.executable).with_name("fmpy"))
     script = _COLD_MODEL.format(root=str(PROJECT_ROOT), n=N_DRAW, dt=DT, f=F10, v=V0)
     t0 = time.perf_counter()
@@ -154,11 +155,27 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
 
     unzipped = str(extract(str(fmu), str(tmp / "cold_unzipped")))
     runner = f"from fmpy import simulate_fmu; simulate_fmu({unzipped!r})"
-    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)  # fills the numba cache
+    subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)  # a first run
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-c", runner], check=True, cwd=tmp)
     t_warm_cache = time.perf_counter() - t0
     return t_model, t_fmu, t_warm_cache
+
+
+def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
+    """The C host of tests/native/host (compiled into ``tmp``) running the default draw (``steps`` steps of 1 ms at
+    10 MPa and 0.08 m/s) on the extracted StripDraw FMU, without printing: the command line."""
+    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.native.toolchain import compile_executable
+
+    host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
+                              include_dirs=[fmi2_headers()], libs=["-ldl"])
+    schedule = tmp / "draw.txt"
+    schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(steps)))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    return [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
+            "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
+            "--no-print"]
 
 
 #: n_elements of the C host's mesh-scaling line (the default's is the main figure)
@@ -169,8 +186,7 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     """The native FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import build_native_fmus, fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.fmus.native import build_native_fmus
 
     fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
     md = read_model_description(str(fmu))
@@ -179,14 +195,8 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     py_md = read_model_description(str(python_fmu))
     py_unzipped = str(extract(str(python_fmu), str(tmp / "python_unzipped")))
     _, t_python = per_step(py_unzipped, py_md, n_warm=200, n=steps, repeat=repeat)
-    host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
-                              include_dirs=[fmi2_headers()], libs=["-ldl"])
-    schedule = tmp / "draw.txt"
-    schedule.write_text("".join(f"{DT!r},{F10!r},{V0!r}\n" for _ in range(N_DRAW)))
+    cmd = host_command(tmp, unzipped, md, N_DRAW)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    cmd = [str(host), unzipped, "StripDraw", md.guid, "--inputs", f"{vr['normal_force']},{vr['grip_velocity']}",
-           "--outputs", f"r:{vr['pull_force']},r:{vr['mu_mean']},r:{vr['beta_max']}", "--steps", str(schedule),
-           "--no-print"]
 
     def host_loop(extra=()):
         best = float("inf")
@@ -226,7 +236,7 @@ def main(argv=None) -> int:
             fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))
         unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
-        _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # compile/load the kernels
+        _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # load the core library
 
         load = os.getloadavg()
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
@@ -234,8 +244,7 @@ def main(argv=None) -> int:
         nat = native(tmp, Path(fmu), args.repeat, args.steps)
         speedup = nat["fmpy_python"] / nat["fmpy_native"]
         print(f"native FMU   fmpy set+doStep+get {nat['fmpy_native'] * 1e6:8.1f} us/step   pythonfmu FMU "
-              f"{nat['fmpy_python'] * 1e6:8.1f} us/step   native {speedup:.1f}x faster "
-              f"({'meets' if speedup >= 10 else 'MISSES'} the 10x target)")
+              f"{nat['fmpy_python'] * 1e6:8.1f} us/step   native {speedup:.1f}x faster (the same core: FMI layers)")
         rtf = N_DRAW * DT / nat["host_loop"]
         print(f"native FMU   140 mm draw at 1 ms in the C host (no Python): {nat['host_loop'] * 1e3:8.2f} ms, "
               f"{nat['host_loop'] / N_DRAW * 1e6:6.2f} us/step, real-time factor {rtf:.0f} "
@@ -247,13 +256,12 @@ def main(argv=None) -> int:
         print(f"per step     model.step {tm * 1e6:8.1f} us   FMU set+doStep+get {tf * 1e6:8.1f} us   "
               f"overhead {(tf - tm) * 1e6:6.1f} us ({tf / tm:.2f}x)")  # fmt: skip
         dm, df, diff = full_draw(unzipped, md, repeat=args.repeat)
-        verdict = "meets" if df <= 1.2 * dm else "MISSES"
         print(f"140 mm draw  model loop {dm:8.3f} s    fmpy.simulate_fmu  {df:8.3f} s    "
-              f"ratio {df / dm:.2f} ({verdict} the 1.2x target); max rel. diff of pull_force {diff:.1e}")  # fmt: skip
+              f"ratio {df / dm:.2f}; max rel. diff of pull_force {diff:.1e}")  # fmt: skip
         if args.cold:
             cm, cf, cw = cold(Path(fmu), tmp)
             print(f"fresh process  model script {cm:6.2f} s   `fmpy simulate` {cf:6.2f} s   "
-                  f"simulate_fmu on a pre-extracted FMU with warm numba cache {cw:6.2f} s")  # fmt: skip
+                  f"simulate_fmu on a pre-extracted FMU, second run {cw:6.2f} s")  # fmt: skip
         load = os.getloadavg()
         print(f"load average after: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     return 0

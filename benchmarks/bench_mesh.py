@@ -55,7 +55,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     table = read_table(DEFAULT_TABLE)
     meshes = sorted(args.meshes, reverse=True)
-    draw(meshes[-1], table)  # warm up the compiled kernels
+    draw(meshes[-1], table)  # warm up (the core library)
     ref_mu, ref_X, ref_beta, ref_wall = draw(meshes[0], table)
     print(f"reference n_elements = {meshes[0]}: mu_bar = {ref_mu:.6f}, max beta = {ref_beta.max():.5f}, "
           f"{ref_wall:.2f} s")

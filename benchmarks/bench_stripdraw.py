@@ -4,7 +4,7 @@ For pad lengths 35, 70 and 140 mm (P_N = 10 MPa, default mesh, shipped friction 
 the wall time, the real-time factor (simulated / wall time) and mu_bar (mean over the last 20 % of
 the draw) of each integrator, and the relative mu_bar difference between them. Wall times are
 the best of 3 runs for the implicit integrator (one run for the explicit one), after a warm-up
-run that compiles the kernels.
+run that loads the native core (built on first use).
 
 Targets (issue 2): implicit >= 50x faster than real time; explicit finishes the 35 mm case in under
 5 minutes; mu_bar of the two agree within 1 %.
@@ -22,7 +22,7 @@ from tribocosim.cosim.demo import run_strip_draw, steady_mean
 
 def one(tool_length: float, integrator: str, step: float, repeats: int):
     """Run one draw ``repeats`` times; return (best wall time, simulated time, mu_bar)."""
-    run_strip_draw(tool_length=tool_length, integrator=integrator, draw_length=0.002, step=step)  # warm up (JIT)
+    run_strip_draw(tool_length=tool_length, integrator=integrator, draw_length=0.002, step=step)  # warm up (the core library)
     best = float("inf")
     for _ in range(repeats):
         t0 = time.perf_counter()

@@ -122,6 +122,10 @@ class Native:
     outputs only the FMI 3.0 FMU has: Float64 arrays of ``array_size`` values (the glue's
     ``tc_component_array``). ``interpolates_inputs``: the model takes its inputs' time derivatives at the
     step's start (FMI 2.0 ``canInterpolateInputs``, ``fmi2SetRealInputDerivatives``, orders 1 and 2).
+    ``convert_resource(source, folder) -> path``: writes a resource file in the form the C code reads (the
+    friction table's array file, ``<stem>.tca``) into ``folder``; the native FMU carries what it writes instead of
+    the source, and a scene that sets one of ``resource_parameters`` to a file passes the native FMU its
+    converted form.
     """
 
     prefix: str
@@ -130,6 +134,8 @@ class Native:
     arrays: tuple[Port, ...] = ()
     array_size: ArraySize | None = None
     interpolates_inputs: bool = False
+    convert_resource: Callable[[Path, Path], Path] | None = None
+    resource_parameters: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

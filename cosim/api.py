@@ -183,9 +183,34 @@ def build(plan: Plan) -> Build:
         d = {}
         for pname, value in scene.fmus[n].parameters.items():
             var = model.variables[pname]
-            d[var.valueReference] = (var.type, value)
+            d[var.valueReference] = (var.type, native_resource(scene.fmus[n], pname, value))
         params.append(d)
     return Build(master, plan, names, params, notes)
+
+
+def native_resource(spec, name: str, value):
+    """The value of parameter ``name`` of a scene FMU as the FMU reads it: for a native FMU of a component whose
+    parameter names a resource file the C code reads in another form (the strip's ``table_file``, a .npz table),
+    that form, converted once into the cache; every other value as it is."""
+    if spec.component is None or spec.variant == "python" or not isinstance(value, str) or not value:
+        return value
+    from tribocosim.components import registry
+
+    comp = registry.find(spec.component)
+    native = comp.native if comp is not None else None
+    if native is None or native.convert_resource is None or name not in native.resource_parameters:
+        return value
+    source = Path(value)
+    if not source.is_absolute() or not source.is_file():  # a file in the FMU's resources: converted by its build
+        return value
+    from tribocosim.cosim.fmucache import cache_dir
+
+    folder = cache_dir() / "resources" / hashlib.sha256(source.read_bytes()).hexdigest()[:20]
+    converted = folder / f"{source.stem}.tca"
+    if not converted.is_file():
+        folder.mkdir(parents=True, exist_ok=True)
+        native.convert_resource(source, folder)
+    return str(converted)
 
 
 def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, overrides: dict | None = None,

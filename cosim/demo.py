@@ -127,7 +127,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    field_file = out / "beta_field.npz"
+    field_file = out / "beta_field.csv"
     over = {"fmus.strip.parameters.field_output": str(field_file),
             "fmus.strip.parameters.field_output_interval": field_interval}
     if tool_length is not None:

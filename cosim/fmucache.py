@@ -22,12 +22,7 @@ import tempfile
 from pathlib import Path
 
 from tribocosim.components.errors import SceneError, TribocosimError
-
-
-def cache_dir() -> Path:
-    """The FMU cache folder: ``$TRIBOCOSIM_CACHE`` or ``~/.cache/tribocosim/fmus``."""
-    env = os.environ.get("TRIBOCOSIM_CACHE")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "tribocosim" / "fmus"
+from tribocosim.components.native.library import cache_dir
 
 
 def host_platform() -> str:

@@ -23,10 +23,9 @@ Implementations
     (implicit coupling, no delay; the remaining error is O(dt)). Tested against
     :class:`TwoMassOscillator` with the pure parts :class:`MassPart` and :class:`MassCouplingPart`.
 
-Not yet wired: the strip-draw scenes. ``tribocosim.components.stripdraw.model.StripDrawModel`` has the
-required ``step``/``get_state``/``set_state``, but the press and drawing-machine models it is
-coupled to do not exist yet (issue 8); once they do, a scene-to-:class:`CoupledModels`
-factory (mapping each ``component = ...`` FMU to its model class and parameters) completes this.
+The strip-draw scenes: :func:`tribocosim.cosim.reference_components.reference_for_scene` maps each
+``component = ...`` FMU to its model (the bindings of the native core, the FMUs' own code) and couples them
+with :class:`CoupledModels`.
 """
 
 from __future__ import annotations

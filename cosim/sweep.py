@@ -338,10 +338,10 @@ def pass_overrides(sweep: Sweep, case: Case, folder: Path, k: int) -> dict:
     over = dict(case.overrides)
     if sweep.field_instance:
         base = f"fmus.{sweep.field_instance}.parameters"
-        over[f"{base}.field_output"] = str(folder / f"pass-{k}.field.npz")
+        over[f"{base}.field_output"] = str(folder / f"pass-{k}.field.csv")
         over[f"{base}.field_output_interval"] = sweep.field_interval
         if k > 1:
-            over[f"{base}.field_input"] = str(folder / f"pass-{k - 1}.field.npz")
+            over[f"{base}.field_input"] = str(folder / f"pass-{k - 1}.field.csv")
     return over
 
 
@@ -476,7 +476,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
             files, labels = [], []
             for c in chosen:
                 for k in range(1, sweep.passes + 1):
-                    files.append(out / "cases" / c.name / f"pass-{k}.field.npz")
+                    files.append(out / "cases" / c.name / f"pass-{k}.field.csv")
                     free = {n: v for n, v in c.variables.items() if n not in maps}
                     labels.append(", ".join([f"{n} = {v:g}" if not isinstance(v, str) else f"{n} = {v}"
                                              for n, v in free.items()] + ([f"pass {k}"] if sweep.passes > 1 else [])))

@@ -21,11 +21,14 @@ FMU's name. For each FMU the build
 Before building anything, every selected FMU's files and import closure are checked, so that a
 missing file fails the whole build without leaving some of the FMUs built.
 
+The models are bindings over the native core (:mod:`tribocosim.components.native.library`): an FMU carries
+the core library compiled for the machine that builds it, beside the binding (the FMU runs on that platform).
+
 An FMU's ``resources/`` then holds its script, ``tribocosim/__init__.py``,
 ``tribocosim/components/__init__.py``, ``errors.py``, ``description.py``, ``params.py``, the shared
 plumbing ``tribocosim/components/fmus/{adapter,statecodec,exitguard}.py``, the component's folder
-modules that the model imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press:
-``press/*`` and ``linear.py``; DrawingMachine: ``machine/*`` and ``linear.py``), plus the copy of
+modules that the model imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press: ``press/*``;
+DrawingMachine: ``machine/*``; all: the native binding and its library), plus the copy of
 pythonfmu's Python files that pythonfmu always adds; nothing from ``surrogate`` or ``cosim``, and no
 numba, scipy, pyfftw or matplotlib.
 """
@@ -171,8 +174,17 @@ def runtime_files(name: str) -> list[Path]:
 
 
 def resource_paths(name: str) -> list[str]:
-    """The paths, relative to ``resources/``, of the modules FMU ``name`` bundles (``tribocosim/...``)."""
-    return sorted(_staged_path(m, p).as_posix() for m, p in runtime_modules(name).items())
+    """The paths, relative to ``resources/``, of the modules FMU ``name`` bundles (``tribocosim/...``), and of the
+    native core library beside its binding."""
+    paths = [_staged_path(m, p) for m, p in runtime_modules(name).items()]
+    paths += [p.parent / _bundled_library_name() for p in paths if p.as_posix() == _LIBRARY_PATH]
+    return sorted(p.as_posix() for p in paths)
+
+
+def _bundled_library_name() -> str:
+    from tribocosim.components.native import library
+
+    return library.BUNDLED.name
 
 
 def _staged_path(module: str, source: Path) -> Path:
@@ -183,13 +195,24 @@ def _staged_path(module: str, source: Path) -> Path:
     return Path(*parts[:-1], f"{parts[-1]}.py")
 
 
+#: the binding of the native core: an FMU whose modules import it carries the compiled library too
+NATIVE_LIBRARY_MODULE = f"{PACKAGE}.components.native.library"
+_LIBRARY_PATH = f"{PACKAGE}/components/native/library.py"
+
+
 def source_digest(name: str) -> str:
-    """SHA-256 over the script, its runtime modules and the resource files of FMU ``name``."""
+    """SHA-256 over the script, its runtime modules, the native core it carries and the resource files of FMU
+    ``name``."""
     comp = component(name)
     h = hashlib.sha256(adapter_script(comp).encode())
-    for label, path in [*runtime_modules(name).items(), *((r.name, r) for r in comp.resource_files)]:
+    modules = runtime_modules(name)
+    for label, path in [*modules.items(), *((r.name, r) for r in comp.resource_files)]:
         h.update(str(label).encode())
         h.update(Path(path).read_bytes())
+    if NATIVE_LIBRARY_MODULE in modules:
+        from tribocosim.components.native import library
+
+        h.update(library.digest().encode())
     return h.hexdigest()
 
 
@@ -240,6 +263,10 @@ def _build_one(name: str, out: Path) -> Path:
             dest.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(path, dest)
             tops.add(module.split(".")[0])
+            if module == NATIVE_LIBRARY_MODULE:  # the models' native core, for this machine's platform
+                from tribocosim.components.native import library
+
+                shutil.copy2(library.library_path(), dest.parent / _bundled_library_name())
         data = []
         for path in comp.resource_files:
             shutil.copy2(path, stage / path.name)

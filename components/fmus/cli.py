@@ -7,6 +7,8 @@
         --fmi 3: FMI 3.0 co-simulation variants of the native FMUs, same file names (StripDraw.fmu...),
         into build/fmus/fmi3 unless --out is given
     tribocosim fmu list                                  the FMUs this project builds
+    tribocosim fmu table-resource TABLE.npz [--out F]    the table's resource form for the native StripDraw FMU
+        (TABLE.tca beside it unless --out is given), from the verified table
 """
 
 from __future__ import annotations
@@ -38,6 +40,10 @@ def _parser() -> argparse.ArgumentParser:
                             "also outputs the nodal fields beta, U, contact as arrays of n_nodes = n_elements + 1 "
                             "values (n_nodes and n_elements are structural parameters)")
     sub.add_parser("list", help="list the FMUs this project builds")
+    res = sub.add_parser("table-resource", help="write a friction table's resource form (.tca), which the native "
+                                                "StripDraw FMU reads when its table_file names the .npz")
+    res.add_argument("table", help="the friction table (.npz)")
+    res.add_argument("--out", help="the file to write (default: the table's path with the suffix .tca)")
     return parser
 
 
@@ -48,6 +54,16 @@ def main(argv: list[str] | None = None) -> int:
     from tribocosim.components.fmus.build import FmuBuildError, build_fmus, fmus
     from tribocosim.components.fmus.native import PLATFORMS, build_native_fmus
 
+    if args.command == "table-resource":
+        from tribocosim.components.errors import TribocosimError
+        from tribocosim.components.stripdraw.table import write_table_resource
+
+        try:
+            print(write_table_resource(args.table, args.out).resolve())
+        except TribocosimError as exc:
+            print(f"tribocosim fmu table-resource: {exc}", file=sys.stderr)
+            return 1
+        return 0
     if args.command == "list":
         for name, comp in fmus().items():
             print(f"{name}\t{registry.module_of(comp)}")

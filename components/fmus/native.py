@@ -14,8 +14,9 @@ For each component with a native implementation (``Component.native``) the build
    (FMI 2.0; darwin64 a universal binary, x86_64 and arm64, for Intel and Apple Silicon Macs; FMI 2.0 has no
    folder for ARM Linux) or ``binaries/{x86_64-linux,x86_64-windows,x86_64-darwin,aarch64-linux,
    aarch64-darwin}`` (FMI 3.0 platform tuples);
-3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table)
-   into ``<ModelIdentifier>.fmu`` (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
+3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table,
+   in the resource form the C code reads: ``Native.convert_resource``) into ``<ModelIdentifier>.fmu``
+   (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
    it into place atomically, next to a JSON record of its source digest.
 
 The GUID (FMI 3.0: instantiation token) is derived from the source digest (C sources, generated
@@ -294,6 +295,8 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
                 inside = binary_path(name, platform, fmi_version)
                 z.write(stage / inside, inside)
             for path in comp.resource_files:
+                if comp.native.convert_resource is not None:  # the form the C code reads
+                    path = comp.native.convert_resource(path, stage)
                 z.write(path, f"resources/{path.name}")
             if not comp.resource_files:
                 z.writestr("resources/", "")

@@ -42,20 +42,9 @@ int tc_fail(tc_msg msg, int status, const char *fmt, ...)
 #endif
     ;
 
-/* NumPy's pairwise summation of a contiguous float64 array, as np.sum reduces it (sums match bit for bit). */
-TC_API double tc_pairwise_sum(const double *a, size_t n);
-
-/* tc_pairwise_sum of an array that is +0 outside [lo, hi] and holds no -0: the blocks of the summation that lie
- * wholly outside sum to +0 and adding +0 changes no partial sum, so they are skipped (the same value, bit for
- * bit, in O(hi - lo + log n)). */
-TC_API double tc_pairwise_sum_range(const double *a, size_t n, size_t lo, size_t hi);
-
-/* Python's repr() of a float ("0.08", "12250.0", "1e-05", "nan", "-inf") into buf; returns buf. */
+/* The shortest "%g" text of x that reads back to the same double ("0.08", "12250", "1e-05", "nan", "-inf"), for
+ * messages; returns buf. */
 #define TC_REPR_SIZE 32
 TC_API const char *tc_repr_double(double x, char buf[TC_REPR_SIZE]);
-
-/* Python's repr() of a str (quotes chosen and escapes as Python does for ASCII; other UTF-8 bytes are
- * copied), truncated to size; returns buf. */
-TC_API const char *tc_repr_string(const char *s, char *buf, size_t size);
 
 #endif

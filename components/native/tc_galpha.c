@@ -1,18 +1,60 @@
-/* One generalized-alpha step of the bar, the free parts of the bar condensed onto the pad.
+/* One generalized-alpha step of the bar, with the free parts of the bar condensed onto the pad.
  *
- * Native twin of components/stripdraw/galpha.py (its docstring states the equations: the incremental
- * potential, the static condensation of the tail and the grip side, the window Newton iteration and the
- * elimination factors). The arithmetic follows the loop form there operation by operation, compiled without
- * fused multiply-add, so the two round alike (tests/native/test_native_stripdraw.py).
+ * The step (Chung & Hulbert 1993, doi:10.1115/1.2900803; force-averaged form, docs/model.md section 2)
+ * minimises the convex incremental potential of the free nodes 0..N-1 (node N is the grip, moved with the
+ * grip velocity):
+ *
+ *     Pi(u) = sum_i [ cm m_i / 2 (u_i - u~_i)^2 + lin_i (u_i - u0_i) ]
+ *           + (1 - af) [ 1/2 u^T K u + sum_i w_T ov_i phi_i(u_i - Up_i) ],
+ *
+ * with cm = (1 - am) / (b dt^2), the Newmark predictor u~ = u_n + dt v_n + dt^2 (1/2 - b) a_n,
+ * lin_i = am m_i a_n,i + af f_n,i, u0 = u_n + dt V0 (the strip following the grip rigidly: the initial
+ * guess) and phi the potential of the return-mapped interface spring (interface_law below; Eq. 4-5).
+ *
+ * Only the nodes under the pad (ov_i > 0) make Pi non-quadratic. The bar outside the pad, the *tail*
+ * (nodes 0..lo-1, not yet drawn in) and the *grip side* (hi+1..N-1), is a linear chain, so it is solved
+ * exactly for any position of the pad's end nodes (static condensation, a Schur complement): Gaussian
+ * elimination of the tail from node 0 towards lo and of the grip side from N-1 towards hi. What the
+ * elimination leaves on an end node is a spring of stiffness K_t (K_g) and a force s_t (s_g), so that
+ * the potential of the window [lo, hi],
+ *
+ *     Pi_W(d) = sum_{i in W} [ cm m_i / 2 (x_i + d_i)^2 + lin_i d_i + (1 - af) w_T ov_i phi_i(z_i + d_i) ]
+ *             + (1 - af) k_e / 2 sum_{e = lo}^{hi-1} (dU_e + d_{e+1} - d_e)^2
+ *             + s_t d_lo + K_t d_lo^2 / 2 + s_g d_hi + K_g d_hi^2 / 2,
+ *
+ * is Pi minimised over the free chains (up to a constant). The unknowns are the increments d = u - u0,
+ * with x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i, z_i = u0_i - Up_i and dU_e = U_e+1 - U_e:
+ * no difference of two displacements of the size of the draw is ever taken. The window is solved by
+ * Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by a
+ * backtracking (Armijo) line search on Pi_W; it is converged when a full Newton step lands on the set it
+ * was built from (the problem is linear on that set, so that step was exact), or when the window's
+ * residual is below ``rtol`` times the force scale (friction capacity + grip pull). The chains are then
+ * back-substituted and every free node gets its Newmark update.
+ *
+ * The elimination factors depend on the step length only (tc_sd_chain_factors; the model keeps them per
+ * step length). Written with c = (1 - af) k_e and the excess e_i = d'_i - c of the eliminated diagonal d'_i
+ * over c, the recurrences have no cancellation:
+ *
+ *     tail:       e_0 = cm m_0,              e_i = cm m_i + q_{i-1} e_{i-1},   q_i = c / (c + e_i),
+ *     grip side:  g_{N-1} = cm m_{N-1} + c,  g_j = cm m_j + q'_{j+1} g_{j+1}, q'_j = c / (c + g_j),
+ *
+ * and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
+ * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
+ * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
+ * Both chains are swept side by side (they are independent), with each node's residual and Newmark update
+ * computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
+ *
+ * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
+ * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
+ * bar and to the explicit scheme.
  */
 #include <math.h>
 #include <string.h>
 
 #include "tc_stripdraw.h"
 
-static double py_max(double a, double b) { return b > a ? b : a; }
-
-/* kernels.interface_law for one node: traction, slipping flag, potential phi */
+/* the interface law (Eq. 4-5) for one node: traction, slipping flag, and the potential phi of the return-mapped
+ * spring (k_s x^2 / 2 sticking, T_max |x| - T_max^2 / (2 k_s) slipping; its derivative is T) */
 static double interface_law(double x, double ks, double tmax, int *slipping, double *phi) {
     const double trial = ks * x;
     if (trial > tmax) {
@@ -49,11 +91,20 @@ void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double 
     }
 }
 
-/* galpha._window */
-static void window(size_t n, const double *ov, size_t *lo_out, size_t *hi_out) {
+/* the window: the nodes with ov > 0 and the free nodes between them, free nodes only (<= N-1); node N-1 alone
+ * when no free node touches the pad. The nodes with ov > 0 lie in [first, last] (first > last: anywhere). */
+static void window(size_t n, const double *ov, size_t first, size_t last, size_t *lo_out, size_t *hi_out) {
     const size_t N = n - 1;
     size_t lo, hi;
-    if (!tc_sd_positive_range(n, ov, &lo, &hi) || lo > N - 1) {
+    int found;
+    if (first <= last && last < n) {
+        found = tc_sd_positive_range(last + 1 - first, ov + first, &lo, &hi);
+        lo += first;
+        hi += first;
+    } else {
+        found = tc_sd_positive_range(n, ov, &lo, &hi);
+    }
+    if (!found || lo > N - 1) {
         *lo_out = *hi_out = N - 1;
         return;
     }
@@ -61,14 +112,15 @@ static void window(size_t n, const double *ov, size_t *lo_out, size_t *hi_out) {
     *hi_out = hi < N - 1 ? hi : N - 1;
 }
 
-/* the window's inputs and its boundary springs (galpha._window_eval's arguments) */
+/* the window's inputs and its boundary springs */
 typedef struct {
     size_t lo, hi;
     const double *x, *z, *dU, *lin, *ov, *m, *tmax;
     double ke, ks, wT, af, cm, st, kt, sg, kg;
 } window_problem;
 
-/* galpha._window_eval */
+/* Pi_W(d), the window residual r = dPi_W/dd and max |r|; tractions T and stick/slip states (0 off the pad,
+ * 1 stick, 2/3 slip +/-) and the nodal forces f (contact + elements inside the window) */
 static double window_eval(const window_problem *w, const double *d, double *T, signed char *state, double *f,
                           double *r, double *rmax) {
     const size_t lo = w->lo, hi = w->hi;
@@ -103,13 +155,13 @@ static double window_eval(const window_problem *w, const double *d, double *T, s
     r[hi] += w->sg + w->kg * d[hi];
     pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
     double rm = 0.0;
-    for (size_t i = lo; i <= hi; ++i) rm = py_max(rm, fabs(r[i]));
+    for (size_t i = lo; i <= hi; ++i) rm = fabs(r[i]) > rm ? fabs(r[i]) : rm;
     *rmax = rm;
     return pot;
 }
 
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, const double *m, double ke, double ks, double wT,
+                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
                  double rtol, const double *chain, double *fric, double *reaction, double *work,
                  signed char *iwork) {
@@ -123,10 +175,10 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     double *rhs = work + 14 * n, *step = work + 15 * n, *tw = work + 16 * n; /* tw: 2 n for the Thomas solve */
     signed char *state = iwork, *used = iwork + n;
 
-    /* the compiled loop form raises ZeroDivisionError (numba's Python error model) when dt^2 underflows */
+    /* a step whose square underflows cannot be taken */
     if (beta * dt * dt == 0.0) return -2;
     size_t lo, hi;
-    window(n, ov, &lo, &hi);
+    window(n, ov, first, last, &lo, &hi);
     const double cm = (1.0 - am) / (beta * dt * dt);
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;
@@ -273,19 +325,20 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
         state[N] = (signed char)(!slipping ? 1 : 2);
     }
-    /* the elements' extensions at the new state from the increments (galpha.py: not from the updated U), their
+    /* the elements' extensions at the new state from the increments (not from the updated U, whose rounding to
+     * draw-sized values would make the forces jump by ~k_e ulp(U) between nearby inputs), their
      * forces at every node, then the friction of the nodes under the pad (window and grip node) */
     d[N] = 0.0;
     double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
     dU[0] = left;
-    fprev[0] = 0.0 - ke * left;
+    fprev[0] = -ke * left;
     for (size_t i = 1; i < N; ++i) {
         const double right = dU[i] + (d[i + 1] - d[i]);
         dU[i] = right;
-        fprev[i] = (0.0 + ke * left) - ke * right;
+        fprev[i] = ke * left - ke * right;
         left = right;
     }
-    fprev[N] = 0.0 + ke * left;
+    fprev[N] = ke * left;
     memset(contact, 0, n);
     double fr = 0.0;
     for (size_t kw = lo; kw <= hi + 1; ++kw) {

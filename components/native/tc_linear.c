@@ -1,9 +1,4 @@
-/* Matrix exponential and the affine-input propagator of components/linear.py (see tc_linear.h).
- *
- * The operation order follows linear.py: balancing sums are NumPy's pairwise sums, the Taylor terms are
- * term = (term X) / k, and the result is unbalanced as (E_ij d_i) / d_j. Matrix products are plain
- * loops, where NumPy calls BLAS; that is the only source of (rounding-level) differences.
- */
+/* Matrix exponential and the affine-input propagator (see tc_linear.h). */
 #include "tc_linear.h"
 
 #include <math.h>
@@ -15,22 +10,20 @@
 
 
 void tc_balance(size_t n, const double *M, double *d) {
-    double A[MAXD * MAXD], v[MAXD];
+    double A[MAXD * MAXD];
     memcpy(A, M, n * n * sizeof *A);
     for (size_t i = 0; i < n; ++i) d[i] = 1.0;
     for (int sweep = 0; sweep < 100; ++sweep) {
         int converged = 1;
         for (size_t i = 0; i < n; ++i) {
-            size_t k = 0;
+            double c = 0.0, r = 0.0; /* 1-norms of column and row i without the diagonal */
             for (size_t j = 0; j < n; ++j)
-                if (j != i) v[k++] = fabs(A[j * n + i]);
-            double c = tc_pairwise_sum(v, k); /* 1-norm of column i without the diagonal */
-            k = 0;
-            for (size_t j = 0; j < n; ++j)
-                if (j != i) v[k++] = fabs(A[i * n + j]);
-            double r = tc_pairwise_sum(v, k); /* 1-norm of row i without the diagonal */
+                if (j != i) {
+                    c += fabs(A[j * n + i]);
+                    r += fabs(A[i * n + j]);
+                }
             if (c == 0.0 || r == 0.0) continue;
-            /* linear.balance would loop forever on an infinite norm; such a matrix fails in tc_expm */
+            /* an infinite norm cannot be balanced; such a matrix fails in tc_expm */
             if (!isfinite(c) || !isfinite(r)) continue;
             double f = 1.0;
             while (c < r / 2.0) {
@@ -64,10 +57,10 @@ static void matmul(size_t n, const double *A, const double *B, double *C) {
         }
 }
 
-/* linear._expm_taylor: scaling by 2^-s with ||M/2^s||_1 <= 1/4, 18 Taylor terms, s squarings. */
+/* scaling by 2^-s with ||M/2^s||_1 <= 1/4, 18 Taylor terms, s squarings. */
 static int expm_taylor(size_t n, const double *M, double *E, tc_msg msg) {
     double X[MAXD * MAXD], term[MAXD * MAXD], tmp[MAXD * MAXD];
-    double norm = 0.0; /* np.linalg.norm(M, 1): the largest column sum of |M_ij| (rows added in order) */
+    double norm = 0.0; /* the 1-norm: the largest column sum of |M_ij| */
     for (size_t j = 0; j < n; ++j) {
         double col = 0.0;
         for (size_t i = 0; i < n; ++i) col += fabs(M[i * n + j]);
@@ -76,7 +69,7 @@ static int expm_taylor(size_t n, const double *M, double *E, tc_msg msg) {
     int s = 0;
     if (norm > 0) {
         double e = ceil(log2(norm / 0.25));
-        /* Python raises here (math.ceil of inf, or 2.0**s overflowing) */
+        /* too large to scale (or not finite) */
         if (!(e < 1024.0))
             return tc_fail(msg, TC_DISCARD, "matrix exponential: the matrix norm %.17g is too large to scale", norm);
         s = e > 0.0 ? (int)e : 0;

@@ -1,4 +1,4 @@
-/* Exact time stepping of small linear ODE systems x' = A x + B u(t) (mirrors components/linear.py).
+/* Exact time stepping of small linear ODE systems x' = A x + B u(t)
  *
  * Over a step in which the input is affine in time, u(t0 + s) = u0 + s u1, the state is advanced exactly
  * (to rounding) with the exponential of the augmented matrix (Van Loan 1978, doi:10.1109/TAC.1978.1101743)
@@ -9,8 +9,7 @@
  *
  * tc_expm balances the matrix (diagonal similarity by powers of 2, Parlett & Reinsch 1969, as LAPACK's
  * gebal without permutations), then uses scaling and squaring of an 18-term Taylor polynomial (Moler &
- * Van Loan 2003, doi:10.1137/S00361445024180), exactly as linear.expm does. Products are plain loops (no
- * BLAS), so the results agree with NumPy's to rounding, not bit for bit.
+ * Van Loan 2003, doi:10.1137/S00361445024180). Products are plain loops.
  *
  * Everything is sized at compile time (at most TC_LINEAR_MAX_DIM rows of the augmented matrix): no
  * allocation, no global state. Matrices are row-major.
@@ -27,12 +26,12 @@
 #define TC_LINEAR_MAX_DIM (TC_LINEAR_MAX_STATES + 2 * TC_LINEAR_MAX_INPUTS) /* n + 2 m */
 #define TC_LINEAR_CACHE 8 /* propagators kept per instance, one per step length */
 
-/* Balancing scales d (powers of 2) of the n x n matrix M (linear.balance): diag(1/d) M diag(d) has rows
+/* Balancing scales d (powers of 2) of the n x n matrix M: diag(1/d) M diag(d) has rows
  * and columns of comparable norm. n <= TC_LINEAR_MAX_DIM. */
 TC_API void tc_balance(size_t n, const double *M, double *d);
 
-/* E = exp(M) for the n x n matrix M (linear.expm). TC_DISCARD when M is not finite or too large to
- * scale (where linear.expm would raise or never return); E is then untouched. */
+/* E = exp(M) for the n x n matrix M. TC_DISCARD when M is not finite or too large to scale; E is then
+ * untouched. */
 TC_API int tc_expm(size_t n, const double *M, double *E, tc_msg msg);
 
 /* One cached propagator (Phi, G0, G1) for a step length dt. */
@@ -44,7 +43,7 @@ typedef struct tc_propagator_entry {
     double G1[TC_LINEAR_MAX_STATES * TC_LINEAR_MAX_INPUTS];
 } tc_propagator_entry;
 
-/* linear.AffineInputPropagator: A (n x n), B (n x m), and a small cache of step lengths. The cache
+/* The propagator of x' = A x + B u: A (n x n), B (n x m), and a small cache of step lengths. The cache
  * changes nothing but the cost: a propagator is a function of dt alone. */
 typedef struct tc_propagator {
     size_t n, m;

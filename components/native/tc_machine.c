@@ -1,4 +1,4 @@
-/* The drawing machine (components/machine/model.py), advanced exactly over each step.
+/* The drawing machine, advanced exactly over each step (Python binding: components/machine/model.py).
  *
  * The motor's rotor inertia J_m appears at the screw nut as m_m = J_m (2 pi / lead)^2:
  *
@@ -7,9 +7,9 @@
  *     tau_i F_m' = F_c - F_m                                  (current loop: first-order lag)
  *     F_c = K_p (v_set - v_m) + K_i I,   I' = v_set - v_m     (PI speed control on the motor encoder)
  *
- * With z = [x_m, v_m, x_g, v_g, F_m, I] and w = [v_set, F_p] this is z' = A z + B w (matrices below, as in
- * machine/model.py). v_set ramps linearly from 0 to velocity_setpoint over ramp_time, so a step is split at
- * the ramp's end and each piece advanced with v_set affine and F_p held (tc_propagator_step).
+ * With z = [x_m, v_m, x_g, v_g, F_m, I] and w = [v_set, F_p] this is z' = A z + B w (matrices below). v_set
+ * ramps linearly from 0 to velocity_setpoint over ramp_time, so a step is split at the ramp's end and each piece
+ * advanced with v_set affine and F_p held (tc_propagator_step).
  */
 #include "tc_machine.h"
 
@@ -31,11 +31,11 @@ struct tc_machine {
     double time, pull_force;
 };
 
-/* MachineModel.setpoint: v_set(t) = velocity_setpoint min(1, t / ramp_time) */
+/* v_set(t) = velocity_setpoint min(1, t / ramp_time) */
 static double setpoint(const tc_machine *m, double t) {
     if (m->p.ramp_time == 0) return m->p.velocity_setpoint;
     const double s = t / m->p.ramp_time;
-    return m->p.velocity_setpoint * (s < 1.0 ? s : 1.0); /* Python's min(1.0, s) */
+    return m->p.velocity_setpoint * (s < 1.0 ? s : 1.0);
 }
 
 void tc_machine_free(tc_machine *m) { free(m); }
@@ -92,7 +92,7 @@ int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg) {
     memcpy(z, m->z, sizeof z);
     for (int k = 0; k + 1 < n_cuts; ++k) {
         const double a = cuts[k], b = cuts[k + 1], h = b - a;
-        if (!(h > 0)) /* Python: ZeroDivisionError */
+        if (!(h > 0)) /* a step lost in rounding against the time */
             return tc_fail(msg, TC_DISCARD, "step of %s s is lost in rounding at t = %.17g s", tc_repr_double(h, r), a);
         const double va = setpoint(m, a), vb = setpoint(m, b);
         const double u0[2] = {va, pull_force}, u1[2] = {(vb - va) / h, 0.0};

@@ -1,4 +1,4 @@
-/* The drawing machine: servo drive that pulls the strip (native twin of components/machine/model.py).
+/* The drawing machine: servo drive that pulls the strip (Python binding: components/machine/model.py).
  *
  * States z = [x_m, v_m, x_g, v_g, F_m, I] (motor side and grip positions [m] and velocities [m/s], motor force
  * [N], integral of the speed error [m]); inputs w = [v_set, F_p], the velocity set-point (a ramp from 0 to
@@ -14,7 +14,7 @@
 #include "tc_common.h"
 #include "tc_machine_params.h"
 
-/* outputs, in the order of MachineModel.OUTPUT_NAMES */
+/* outputs, in the order of the component's outputs (components/machine/model.py) */
 enum tc_machine_output {
     TC_MACHINE_GRIP_VELOCITY = 0, /* v_g [m/s] */
     TC_MACHINE_GRIP_POSITION,     /* x_g [m] */
@@ -28,7 +28,7 @@ typedef struct tc_machine tc_machine;
 TC_API int tc_machine_create(const tc_machine_params *p, tc_machine **out, tc_msg msg);
 TC_API void tc_machine_free(tc_machine *m);
 
-/* Advance by dt [s] with pull_force [N] held (MachineModel.step); TC_DISCARD with the state unchanged for a
+/* Advance by dt [s] with pull_force [N] held; TC_DISCARD with the state unchanged for a
  * non-finite input, dt <= 0, a step lost in rounding against the time, or a non-finite state. */
 TC_API int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg);
 TC_API void tc_machine_outputs(const tc_machine *m, double out[TC_MACHINE_N_OUTPUTS]);

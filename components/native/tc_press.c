@@ -1,4 +1,4 @@
-/* The servo-hydraulic press (components/press/model.py), advanced exactly between set-point breakpoints.
+/* The servo-hydraulic press, advanced exactly between set-point breakpoints.
  *
  *     m_p v' = F_a - k_f x - c_f v                          (piston on the frame stiffness)
  *     F_N    = k_f x + c_f v                                (force on the pad: the output)
@@ -10,7 +10,7 @@
  *     A = [[0, 1, 0, 0], [-k/m, -c/m, 1/m, 0], [-K_p k/tau, -K_p c/tau, -1/tau, K_i/tau], [-k, -c, 0, 0]],
  *     B = [0, 0, (1 + K_p)/tau, 1].
  *
- * F_set is piecewise linear (np.interp of the breakpoints, held after the last one), so each step is split at
+ * F_set is piecewise linear (held before the first and after the last breakpoint), so each step is split at
  * the breakpoints inside it and every piece advanced with the input affine in time (tc_propagator_step).
  */
 #include "tc_press.h"
@@ -36,89 +36,38 @@ struct tc_press {
 };
 
 /* ---------------------------------------------------------------------------------------------------
- * the set-point table: "t0 F0; t1 F1; ..." read as PressParameters.setpoints() reads it
+ * the set-point table "t0 F0; t1 F1; ...": entries separated by ';' (blank ones skipped), each a time [s] and a
+ * force [N] separated by spaces or tabs, each a decimal number [+-](digits[.digits] | .digits)[(e|E)[+-]digits]
+ * (components/press/parameters.py checks the same grammar)
  * ------------------------------------------------------------------------------------------------- */
 
-/* Length in bytes of the whitespace character at s that Python's str.split() and str.strip() skip (the ASCII
- * ones, and the UTF-8 encodings of the other Unicode spaces); 0 if s does not start with one. */
-static size_t space_len(const unsigned char *s) {
-    if (*s == ' ' || (*s >= 0x09 && *s <= 0x0d) || (*s >= 0x1c && *s <= 0x1f)) return 1;
-    if (s[0] == 0xc2 && (s[1] == 0x85 || s[1] == 0xa0)) return 2;
-    if (s[0] == 0xe1 && s[1] == 0x9a && s[2] == 0x80) return 3; /* U+1680 */
-    if (s[0] == 0xe2 && s[1] == 0x80 &&
-        ((s[2] >= 0x80 && s[2] <= 0x8a) || s[2] == 0xa8 || s[2] == 0xa9 || s[2] == 0xaf))
-        return 3;                                                        /* U+2000-200A, 2028, 2029, 202F */
-    if (s[0] == 0xe2 && s[1] == 0x81 && s[2] == 0x9f) return 3; /* U+205F */
-    if (s[0] == 0xe3 && s[1] == 0x80 && s[2] == 0x80) return 3; /* U+3000 */
-    return 0;
-}
+static int is_blank(char c) { return c == ' ' || c == '\t'; }
+static int is_digit(char c) { return c >= '0' && c <= '9'; }
 
-/* Digits with single underscores between them (PEP 515), from s[*i]; appends the digits to out and returns
- * how many were read (the underscore not followed by a digit is left unread). */
-static size_t read_digits(const char *s, size_t len, size_t *i, char *out, size_t *n_out) {
-    size_t count = 0;
-    while (*i < len) {
-        char c = s[*i];
-        if (c >= '0' && c <= '9') {
-            out[(*n_out)++] = c;
-            ++count;
-            ++*i;
-        } else if (c == '_' && count > 0 && *i + 1 < len && s[*i + 1] >= '0' && s[*i + 1] <= '9') {
-            ++*i;
-        } else {
-            break;
-        }
-    }
-    return count;
-}
-
-static int equals_nocase(const char *s, size_t len, const char *word) {
-    size_t k = 0;
-    for (; k < len && word[k]; ++k) {
-        char c = s[k];
-        if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
-        if (c != word[k]) return 0;
-    }
-    return k == len && word[k] == '\0';
-}
-
-/* Python's float() of a token without whitespace: [sign] (digits [. digits] | . digits) [e [sign] digits],
- * underscores between digits, or inf / infinity / nan in any case. The decimal digits are converted by strtod
- * as "<digits>e<exponent>" (no decimal point, so the C locale does not matter). work holds len + 32 chars. */
-static int py_float(const char *s, size_t len, double *value, char *work) {
-    size_t i = 0, nd = 0;
-    int neg = 0;
-    if (i < len && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
-    if (equals_nocase(s + i, len - i, "inf") || equals_nocase(s + i, len - i, "infinity")) {
-        *value = neg ? -INFINITY : INFINITY;
-        return 1;
-    }
-    if (equals_nocase(s + i, len - i, "nan")) {
-        *value = NAN;
-        return 1;
-    }
-    size_t n_int = read_digits(s, len, &i, work, &nd), n_frac = 0;
-    if (i < len && s[i] == '.') {
-        ++i;
-        n_frac = read_digits(s, len, &i, work, &nd);
-    }
+/* One number of the grammar at s[0..len) into *value; 0 if the token is not one. The digits are converted as
+ * "<digits>e<exponent>" (no decimal point, so the C locale does not matter); work holds len + 32 chars. */
+static int parse_number(const char *s, size_t len, double *value, char *work) {
+    size_t i = 0, nd = 0, n_int = 0, n_frac = 0;
+    const int neg = len > 0 && s[0] == '-';
+    if (len > 0 && (s[0] == '+' || s[0] == '-')) ++i;
+    for (; i < len && is_digit(s[i]); ++i, ++n_int) work[nd++] = s[i];
+    if (i < len && s[i] == '.')
+        for (++i; i < len && is_digit(s[i]); ++i, ++n_frac) work[nd++] = s[i];
     if (n_int + n_frac == 0) return 0;
     long long exponent = 0;
     if (i < len && (s[i] == 'e' || s[i] == 'E')) {
         ++i;
-        int eneg = 0;
-        if (i < len && (s[i] == '+' || s[i] == '-')) eneg = s[i++] == '-';
-        size_t ne = nd; /* the exponent's digits go after the mantissa's, for the moment */
-        const size_t n_exp = read_digits(s, len, &i, work, &ne);
+        const int eneg = i < len && s[i] == '-';
+        if (i < len && (s[i] == '+' || s[i] == '-')) ++i;
+        size_t n_exp = 0;
+        for (; i < len && is_digit(s[i]); ++i, ++n_exp)
+            if (exponent < 100000000) exponent = exponent * 10 + (s[i] - '0'); /* saturated far beyond a double's */
         if (n_exp == 0) return 0;
-        for (size_t k = nd; k < ne; ++k) /* saturated far beyond the range of a double */
-            if (exponent < 100000000) exponent = exponent * 10 + (work[k] - '0');
         if (eneg) exponent = -exponent;
     }
     if (i != len) return 0;
-    exponent -= (long long)n_frac;
-    snprintf(work + nd, 32, "e%lld", exponent);
-    double v = strtod(work, NULL);
+    snprintf(work + nd, 32, "e%lld", exponent - (long long)n_frac);
+    const double v = strtod(work, NULL);
     *value = neg ? -v : v;
     return 1;
 }
@@ -147,55 +96,41 @@ static int setpoints(const tc_press_params *p, tc_press *m, tc_msg msg) {
     size_t n_items = 1;
     for (size_t k = 0; k < len; ++k) n_items += table[k] == ';';
     char *work = malloc(len + 64);
-    char *quoted = malloc(len * 4 + 8); /* repr of the table for messages */
     m->t_set = malloc(n_items * sizeof(double));
     m->f_set = malloc(n_items * sizeof(double));
-    if (work == NULL || quoted == NULL || m->t_set == NULL || m->f_set == NULL) {
+    if (work == NULL || m->t_set == NULL || m->f_set == NULL) {
         free(work);
-        free(quoted);
         return tc_fail(msg, TC_NOMEM, "out of memory for the press set-point table");
     }
-    tc_repr_string(table, quoted, len * 4 + 8);
-    int rc = TC_OK, bad_count = 0;
+    int rc = TC_OK;
     size_t n_pairs = 0;
     const char *item = table;
-    for (;;) { /* table.split(";"): every item is converted before the entry sizes are checked */
+    for (;;) {
         const char *end = strchr(item, ';');
         if (end == NULL) end = table + len;
         size_t n_tok = 0;
         double vals[2] = {0.0, 0.0};
-        const char *c = item;
-        while (c < end) { /* item.split() */
-            size_t sl = space_len((const unsigned char *)c);
-            if (sl) {
-                c += sl;
+        for (const char *c = item; c < end;) {
+            if (is_blank(*c)) {
+                ++c;
                 continue;
             }
             const char *tok = c;
-            while (c < end && !space_len((const unsigned char *)c)) ++c;
+            while (c < end && !is_blank(*c)) ++c;
             double v;
-            if (!py_float(tok, (size_t)(c - tok), &v, work)) {
-                char *token = malloc((size_t)(c - tok) + 1), *tq = malloc((size_t)(c - tok) * 4 + 8);
-                if (token == NULL || tq == NULL) {
-                    free(token);
-                    free(tq);
-                    rc = tc_fail(msg, TC_NOMEM, "out of memory for the press set-point table");
-                } else {
-                    memcpy(token, tok, (size_t)(c - tok));
-                    token[c - tok] = '\0';
-                    tc_repr_string(token, tq, (size_t)(c - tok) * 4 + 8);
-                    rc = tc_fail(msg, TC_ERROR,
-                                 "setpoint_table = %s is malformed: could not convert string to float: %s", quoted, tq);
-                    free(token);
-                    free(tq);
-                }
+            if (n_tok >= 2 || !parse_number(tok, (size_t)(c - tok), &v, work)) {
+                rc = tc_fail(msg, TC_ERROR, "setpoint_table = '%s' is malformed: each entry is a time and a force, "
+                             "two decimal numbers separated by spaces (entries separated by ';')", table);
                 goto done;
             }
-            if (n_tok < 2) vals[n_tok] = v;
-            ++n_tok;
+            vals[n_tok++] = v;
         }
-        if (n_tok > 0) { /* items that are blank after strip() are skipped */
-            if (n_tok != 2) bad_count = 1;
+        if (n_tok == 1) {
+            rc = tc_fail(msg, TC_ERROR, "setpoint_table = '%s' is malformed: each entry is a time and a force, two "
+                         "decimal numbers separated by spaces (entries separated by ';')", table);
+            goto done;
+        }
+        if (n_tok == 2) {
             m->t_set[n_pairs] = vals[0];
             m->f_set[n_pairs] = vals[1];
             ++n_pairs;
@@ -203,26 +138,25 @@ static int setpoints(const tc_press_params *p, tc_press *m, tc_msg msg) {
         if (*end == '\0') break;
         item = end + 1;
     }
-    if (n_pairs == 0 || bad_count) {
-        rc = tc_fail(msg, TC_ERROR, "setpoint_table = %s is malformed: each entry needs a time and a force", quoted);
+    if (n_pairs == 0) {
+        rc = tc_fail(msg, TC_ERROR, "setpoint_table = '%s' is malformed: it has no entry", table);
         goto done;
     }
     for (size_t k = 0; k < n_pairs; ++k) {
         const double t = m->t_set[k], f = m->f_set[k];
         if (!isfinite(t) || !isfinite(f) || f < 0 || (k > 0 && !(t - m->t_set[k - 1] > 0))) {
             rc = tc_fail(msg, TC_ERROR,
-                         "setpoint_table = %s: times must increase and forces be finite and >= 0", quoted);
+                         "setpoint_table = '%s': times must increase and forces be finite and >= 0", table);
             goto done;
         }
     }
     m->n_set = n_pairs;
 done:
     free(work);
-    free(quoted);
     return rc;
 }
 
-/* np.interp(t, t_set, f_set) for one point (numpy/_core/src/multiarray/compiled_base.c, arr_interp). */
+/* F_set(x): linear between the breakpoints, held before the first and after the last. */
 static double setpoint(const tc_press *m, double x) {
     const double *xp = m->t_set, *fp = m->f_set;
     const size_t n = m->n_set;
@@ -288,7 +222,7 @@ int tc_press_create(const tc_press_params *p, tc_press **out, tc_msg msg) {
 /* advance z over [a, b] with F_set affine between its values at a and b */
 static int piece(tc_press *m, double *z, double a, double b, tc_msg msg) {
     const double fa = setpoint(m, a), fb = setpoint(m, b), h = b - a;
-    if (!(h > 0)) { /* Python: ZeroDivisionError */
+    if (!(h > 0)) { /* a step lost in rounding against the time */
         char r[TC_REPR_SIZE];
         return tc_fail(msg, TC_DISCARD, "step of %s s is lost in rounding at t = %.17g s", tc_repr_double(h, r), a);
     }

@@ -1,4 +1,4 @@
-/* The servo-hydraulic press that closes the strip-draw pads (native twin of components/press/model.py).
+/* The servo-hydraulic press that closes the strip-draw pads (Python binding: components/press/model.py).
  *
  * States z = [x, v, F_a, I] (pad displacement [m], velocity [m/s], actuator force [N], integral of the force
  * error [N s]); the force set-point F_set(t) is piecewise linear (a ramp, or setpoint_table "t0 F0; t1 F1; ...").
@@ -13,7 +13,7 @@
 #include "tc_common.h"
 #include "tc_press_params.h"
 
-/* outputs, in the order of PressModel.OUTPUT_NAMES */
+/* outputs, in the order of the component's outputs (components/press/model.py) */
 enum tc_press_output {
     TC_PRESS_NORMAL_FORCE = 0, /* force on the pad k_f x + c_f v [N] */
     TC_PRESS_FORCE_SETPOINT,   /* F_set at the current time [N] */
@@ -22,13 +22,13 @@ enum tc_press_output {
 
 typedef struct tc_press tc_press;
 
-/* Create a press (PressModel.__init__). The set-point table is parsed with the rules and messages of
- * PressParameters.setpoints() (press/parameters.py): TC_ERROR when malformed; it is copied, and
+/* Create a press. The set-point table is read with the grammar of tc_press.c (PressParameters checks the
+ * same): TC_ERROR when malformed; it is copied, and
  * p->setpoint_table may be NULL (empty). */
 TC_API int tc_press_create(const tc_press_params *p, tc_press **out, tc_msg msg);
 TC_API void tc_press_free(tc_press *m);
 
-/* Advance by dt [s] (PressModel.step); TC_DISCARD with the state unchanged for a non-finite dt, dt <= 0,
+/* Advance by dt [s]; TC_DISCARD with the state unchanged for a non-finite dt, dt <= 0,
  * a step lost in rounding against the time, or a non-finite state. */
 TC_API int tc_press_step(tc_press *m, double dt, tc_msg msg);
 TC_API void tc_press_outputs(const tc_press *m, double out[TC_PRESS_N_OUTPUTS]);

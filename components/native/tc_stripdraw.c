@@ -1,11 +1,6 @@
 /* The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law.
  *
- * Native twin of components/stripdraw/{model,kernels,transport,friction,mesh}.py; the Python modules are the
- * readable reference and their docstrings give the reasoning. The arithmetic here is written in the order of
- * the Python loop forms (the ones numba compiles) and of NumPy's element-wise expressions, and the sources are
- * compiled without fused multiply-add, so both implementations round alike (see tests/native).
- *
- * Physics (paper Sec. 3-4, App. B-C):
+ * Physics (paper Sec. 3-4, App. B-C; docs/model.md sections 1-4):
  *
  * - bar, half model (one pad, one face): rho U_tt = E U_XX (Eq. 2), linear elements of length l_e, lumped
  *   masses m_i = rho A l_e (half at both ends), element stiffness k_e = E A / l_e (Eq. 29-30); the grip node
@@ -18,38 +13,33 @@
  *   stress-free (Up_i := U_i); k_s = shear_stiffness_factor E / h_B;
  * - explicit integrator: central difference (App. B, Eq. 31-32) at cfl_safety x 2 / omega_max, with
  *   omega_max^2 <= (4 k_e + k_s w_T l_e) / m_1 (Gershgorin), sub-cycled inside each coupling interval;
- * - implicit integrator: generalized-alpha (Chung & Hulbert 1993) in force-averaged form,
- *   M [(1-am) a_{n+1} + am a_n] + (1-af) f(u_{n+1}) + af f(u_n) = 0, Newmark updates, am = (2r-1)/(r+1),
- *   af = r/(r+1), gamma = 1/2 - am + af, beta = (1 - am + af)^2 / 4 (r = rho_inf); each step is solved by
- *   Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by an Armijo
- *   line search on the step's convex incremental potential Pi (kernels.py states Pi); a step that does not
- *   converge in 60 iterations is halved, up to 12 times;
- * - friction (Eq. 6-9, 23): constant mu_const; closed form mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) with
- *   alpha(v) = b (1 - exp(-|v|/v_ref)) (evaluated with expm1, as NumPy does) or b when v_ref = 0; or the table:
- *   version 2, mu = mu0 (1 - s A_p / A_c) with A_p from the table and A_c from it (mesoscale) or Eq. 8,
- *   version 1, its mu (tc_table_lookup); v is the grip speed |V0| or each node's slip rate of the last
- *   interval (friction_velocity);
+ * - implicit integrator: generalized-alpha (Chung & Hulbert 1993), the bar outside the pad condensed onto it
+ *   (tc_galpha.c states the equations); a step that does not converge in 60 Newton iterations is halved, up
+ *   to 12 times;
+ * - friction mu(P, v, beta) (Eq. 6-9, 23): tc_friction.h; v is the grip speed |V0| or each node's slip rate of
+ *   the last interval (friction_velocity);
  * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
  *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
- *   tridiagonal M-matrix, Thomas algorithm), then the cap beta <= beta_thres (Eq. 24) whose removal is summed;
- *   unless beta_threshold is set, the cap of a version 2 table is where s A_p reaches A_c at the interval's
- *   pressure and grip speed (friction.TableFriction.beta_cap).
+ *   tridiagonal M-matrix with unit column sums: beta >= 0 and sum(beta) conserved for any step), then the cap
+ *   beta <= beta_thres (Eq. 24) whose removal is summed; unless beta_threshold is set, the cap is the law's at
+ *   the interval's pressure and grip speed.
  *
- * Coupling (model.py): a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one
- * piece, the step, when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max -
- * 1e-9)) intervals with h_max = window_courant l_e / |V0| (the largest |V0| of the piece's ends and middle);
- * the inputs are polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly)
- * and each interval takes their means (input_mean); per interval mu is evaluated on the nodes that can
- * reach the pad (contact nodes +- ceil(window_courant) + 1) and held, the bar advanced, then beta updated from
- * the nodal slip increments with the contact weights averaged over the interval.
+ * Coupling: a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one piece, the step,
+ * when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max - 1e-9)) intervals with
+ * h_max = window_courant l_e / |V0| (the largest |V0| of the piece's ends and middle); the inputs are
+ * polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly) and each
+ * interval takes their means (input_mean); per interval mu is held on the nodes that can reach the pad (contact
+ * nodes +- ceil(window_courant) + 1), the bar advanced, then beta updated from the nodal slip increments with
+ * the contact weights averaged over the interval.
  *
- * Outputs: pull_force = 2 x the axial force at the grip (Eq. 1: mu = pull_force / (2 F_N)), friction_force
- * F_S = sum of nodal friction forces, mu_mean = F_S / F_N (Eq. 28), contact-weighted means under the pad.
+ * Outputs are functions of the state at the communication point (a vanishing step changes them by a vanishing
+ * amount): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
+ * friction_force F_S = sum over the nodes under the pad of T_i w_T ov_i with T_i = k_s (U_i - Up_i) limited to
+ * mu(P, v, beta_i) P of the current debris (what the return mapping of a vanishing step gives), mu_mean =
+ * F_S / F_N (Eq. 28), contact-weighted means under the pad at the current displacements.
  *
- * Where the Python model fails from deep inside a step (numba's ZeroDivisionError when dt^2 underflows, an
- * OverflowError for infinitely many intervals) the native step is refused the same way (TC_DISCARD, state
- * unchanged); a step that would need more than TC_STRIPDRAW_MAX_INTERVALS intervals or
- * TC_STRIPDRAW_MAX_SUBSTEPS explicit steps (where Python would run for days) is refused as well.
+ * A step that would need more than TC_STRIPDRAW_MAX_INTERVALS intervals or TC_STRIPDRAW_MAX_SUBSTEPS explicit
+ * steps is refused (TC_DISCARD, state unchanged) before any is taken.
  */
 #include "tc_stripdraw.h"
 
@@ -59,56 +49,60 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define LEAD_LENGTH 0.005 /* mesh.LEAD_LENGTH [m] */
-#define MAX_HALVINGS 12   /* model._MAX_HALVINGS */
-#define CHAIN_CACHE 4     /* model._CHAIN_CACHE */
+#include "tc_friction.h"
+
+#define LEAD_LENGTH 0.005 /* m of strip behind the material under the pad at the end of the draw */
+#define MAX_HALVINGS 12
+#define CHAIN_CACHE 4     /* step lengths whose elimination factors are kept */
 #ifndef TC_STRIPDRAW_NEWTON_MAX_ITER
-#define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* model._NEWTON_MAX_ITER; the tests build with fewer to exercise the halving */
+#define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* the tests build with fewer to exercise the halving */
 #endif
-#define NEWTON_RTOL 1e-10 /* model._NEWTON_RTOL: residual relative to the friction capacity + grip pull */
-#define GRID_TOLERANCE 1e-6 /* model.GRID_TOLERANCE: a step's end this close to a grid point (in internal_step) is on it */
+#define NEWTON_RTOL 1e-10 /* residual relative to the friction capacity + grip pull */
+#define GRID_TOLERANCE 1e-6 /* a step's end this close to a grid point (in internal_step) is on it */
 #define STATE_MAGIC 0x44534354u /* "TCSD" in little-endian bytes */
-#define STATE_VERSION 1u
+#define STATE_VERSION 2u
 #define STATE_HEADER 16
 #define N_STATE_ARRAYS 7
-#define N_STATE_DOUBLES 5
+#define N_STATE_DOUBLES 7
 #define N_STATE_INTS 2
 
 struct tc_stripdraw {
     tc_stripdraw_params p;
     const tc_table *table; /* borrowed; NULL unless the table law is used */
     size_t n;              /* nodes; node n - 1 is the grip */
-    /* mesh (mesh.BarMesh) and constants */
+    /* mesh and constants */
     double le, half_le, a_lo, a_hi, ke, ks, wT, dt_explicit, pad_area;
     double am, af, gamma, beta_nm; /* generalized-alpha */
     double beta_cap;      /* params.beta_threshold if > 0, else the law's threshold */
-    double law_threshold; /* law_beta_threshold */
-    long long reach; /* ceil(window_courant) + 1 */
+    long long reach;      /* ceil(window_courant) + 1 */
     double *X, *mass, *minv;
-    /* state (model._ARRAYS, model._SCALARS) */
+    /* state */
     double *U, *V, *A, *Up, *beta, *slip_rate, *fprev;
     signed char *contact;
-    double time, friction_force, reaction, normal_force, beta_removed;
+    double time, reaction, normal_force, grip_velocity, beta_removed, beta_produced;
     long long n_steps, clamp_count;
-    /* derived from U: contact weights (model._w), and the first and last node where they are not 0 (w_first >
-     * w_last: none) */
+    /* derived from U: contact weights, and the first and last node where they are not 0 (w_first > w_last: none) */
     double *w;
     size_t w_first, w_last;
-    /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates; model._interval divides
-     * at every interval, and the rates are read only by the slip-rate friction law and the state image) */
+    /* derived from the state: the friction limits mu P of the nodes that can reach the pad (tmax), at the
+     * state's pressure and velocity; the next interval reuses them when its pressure and speed are the same */
+    double *tmax;
+    double limit_pressure, limit_speed;
+    size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
+    int limit_clamped;         /* a lookup was outside the table */
+    /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
     double slip_h, backup_slip_h;
-    /* every beta <= beta_hi and none is -0 (NaN: not known), so a cap >= beta_hi changes no node away from the
-     * pad (interval); over may be nonzero only in [over_lo, over_hi] */
+    /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
     double beta_hi;
-    size_t over_lo, over_hi;
+    int refusal; /* enum tc_stripdraw_refusal of the last refused step */
     /* work arrays */
-    double *tmax, *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *over, *awork;
+    double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
     double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
     double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
     double chain_h[CHAIN_CACHE];
     int chain_used, chain_next;
-    double cap_pressure, cap_speed, cap_value; /* law_beta_cap of the last (P, |V0|), when cap_known */
+    double cap_pressure, cap_speed, cap_value; /* tc_law_beta_cap of the last (P, |V0|), when cap_known */
     int cap_known;
     unsigned char *clamped; /* table lookups flagged as clamped */
     signed char *giwork;
@@ -119,50 +113,24 @@ struct tc_stripdraw {
 };
 
 /* ---------------------------------------------------------------------------------------------------
- * helpers
- * ------------------------------------------------------------------------------------------------- */
-
-
-
-/* Python's max(a, b) / min(a, b) for floats (numba compiles them the same way): b replaces a only if
- * strictly larger / smaller. */
-static double py_max(double a, double b) { return b > a ? b : a; }
-static double py_min(double a, double b) { return b < a ? b : a; }
-
-/* np.max of a[0..n-1] (n >= 1), or of |a| when magnitude is set: the largest value, NaN if there is one (four
- * running maxima, so that the compares overlap) */
-static double largest(const double *a, size_t n, int magnitude) {
-    const double a0 = magnitude ? fabs(a[0]) : a[0];
-    double mx[4] = {a0, a0, a0, a0};
-    int nan = 0;
-    for (size_t i = 0; i < n; i += 4)
-        for (size_t k = 0; k < 4 && i + k < n; ++k) {
-            const double v = magnitude ? fabs(a[i + k]) : a[i + k];
-            mx[k] = v > mx[k] ? v : mx[k];
-            nan |= v != v;
-        }
-    return nan ? NAN : py_max(py_max(mx[0], mx[1]), py_max(mx[2], mx[3]));
-}
-
-/* ---------------------------------------------------------------------------------------------------
- * kernels (kernels.py, transport.py)
+ * kernels
  * ------------------------------------------------------------------------------------------------- */
 
 void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                    double *ov) {
-    /* np.maximum(0.0, np.minimum(hi, a_hi) - np.maximum(lo, a_lo)) of the segment [lo, hi]; NaN propagates as
-     * in NumPy */
+    /* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
+     * positions are finite, and the compares vectorise) */
 #define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
     if (n == 0) return;
     for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
         const double x = X[i] + U[i];
         const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
-        ov[i] = d < 0.0 ? 0.0 : d;
+        ov[i] = d > 0.0 ? d : 0.0;
     }
     const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
     const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
-    ov[0] = d0 < 0.0 ? 0.0 : d0;
-    if (n > 1) ov[n - 1] = dn < 0.0 ? 0.0 : dn;
+    ov[0] = d0 > 0.0 ? d0 : 0.0;
+    if (n > 1) ov[n - 1] = dn > 0.0 ? dn : 0.0;
 #undef TC_SD_OVERLAP
 }
 
@@ -180,8 +148,8 @@ int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last)
 void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs, double *x,
                double *work) {
     double *c = work, *d = work + n;
-    /* with no subdiagonal (the advection of debris on a strip drawn forwards) m = diag - 0 c = diag, the same
-     * numbers: the forward sweep reduces to divisions that need not wait for each other */
+    /* with no subdiagonal (the advection of debris on a strip drawn forwards) the forward sweep is divisions that
+     * need not wait for each other */
     int lower = 0;
     for (size_t i = 1; i < n && !lower; ++i) lower = sub[i] != 0.0;
     if (!lower) {
@@ -204,13 +172,21 @@ void tc_thomas(size_t n, const double *sub, const double *diag, const double *su
     for (size_t i = n - 1; i-- > 0;) x[i] = xp = d[i] - c[i] * xp;
 }
 
+/* The interface law (Eq. 4-5) on one node of elastic slip x: the traction limited to +-tmax; *slipping when
+ * the trial traction exceeds it. */
+static double traction(double x, double ks, double tmax, int *slipping) {
+    const double trial = ks * x;
+    *slipping = fabs(trial) > tmax;
+    return trial > tmax ? tmax : (trial < -tmax ? -tmax : trial);
+}
+
 void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
                     signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
                     double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
                     double *reaction, double *f) {
     const size_t N = n - 1;
     double fr = 0.0;
-    for (size_t i = 0; i < n; ++i) f[i] = 0.0; /* reaction = -f[N] is defined even for n_sub = 0 */
+    for (size_t i = 0; i < n; ++i) f[i] = 0.0;
     for (long long s = 0; s < n_sub; ++s) {
         /* predictor: U += dt V + dt^2/2 A, V += dt/2 A; the grip follows V0 */
         for (size_t i = 0; i < N; ++i) {
@@ -232,20 +208,15 @@ void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, 
             const double x = X[i] + U[i];
             const double lo = i == 0 ? x : x - half_le;
             const double hi = i == N ? x : x + half_le;
-            const double ov = py_min(hi, a_hi) - py_max(lo, a_lo);
+            const double ov = fmin(hi, a_hi) - fmax(lo, a_lo);
             if (ov > 0.0) {
                 if (contact[i] == 0) {
                     Up[i] = U[i];
                     contact[i] = 1;
                 }
-                double T = ks * (U[i] - Up[i]);
-                if (T > tmax[i]) {
-                    T = tmax[i];
-                    Up[i] = U[i] - T / ks;
-                } else if (T < -tmax[i]) {
-                    T = -tmax[i];
-                    Up[i] = U[i] - T / ks;
-                }
+                int slipping;
+                const double T = traction(U[i] - Up[i], ks, tmax[i], &slipping);
+                if (slipping) Up[i] = U[i] - T / ks;
                 const double F = T * wT * ov;
                 f[i] -= F;
                 fr += F;
@@ -263,7 +234,7 @@ void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, 
     *reaction = -f[N];
 }
 
-/* transport._advect_loop */
+/* implicit upwind advection of beta under the pad (Eq. 13-14); work holds 5 n doubles */
 void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
                   double element_length, double *out, double *work) {
     memcpy(out, beta, n_all * sizeof *out);
@@ -277,7 +248,7 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
         sup[k] = 0.0;
     }
     for (size_t k = 0; k + 1 < n; ++k) {
-        const size_t a = (size_t)lo + k, b = a + 1;
+        const size_t a = lo + k, b = a + 1;
         if (weight[a] > 0.0 && weight[b] > 0.0) {
             /* face Courant number; upwind: from node k+1 into k when c > 0, from k into k+1 otherwise */
             const double c = zeta * 0.5 * (dU[a] + dU[b]) / element_length;
@@ -294,151 +265,10 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
 }
 
 /* ---------------------------------------------------------------------------------------------------
- * friction laws (friction.py)
+ * the model
  * ------------------------------------------------------------------------------------------------- */
 
-#define REACH_RTOL 1e-12 /* friction.REACH_RTOL: s A_p "reaches" A_c within this relative tolerance */
-
-static const tc_msg NO_MSG = {NULL, 0}; /* for lookups under the clamp policy, which cannot fail */
-
-static int table_v2(const tc_stripdraw_params *p, const tc_table *table) {
-    return p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table->format_version >= 2;
-}
-
-/* A_c/A0 by the contact_area convention (TableFriction.contact) at one pressure for n (velocity, beta):
- * Eq. 8, kappa P / (h'_rms E*), or the table's (clamped). */
-static void contact_area(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
-                         const double *velocity, const double *beta, double *ac) {
-    if (p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8) {
-        const double eq8 = p->kappa * pressure / (p->rms_slope * p->e_star);
-        for (size_t k = 0; k < n; ++k) ac[k] = eq8;
-        return;
-    }
-    /* the clamp policy never fails */
-    (void)tc_table_lookup(table, table->contact_area, pressure, n, velocity, beta, TC_TABLE_CLAMP, ac, NULL, NO_MSG);
-}
-
-/* TableFriction._crossing: where s A_p reaches A_c along the table's beta axis at (P, v) (both are piecewise
- * linear in beta there, so the crossing is exact), limited to 1; 1 when A_p stays below A_c. */
-static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
-    const double *b = table->beta;
-    double d_prev = 0.0;
-    for (size_t k = 0; k < table->n_beta; ++k) {
-        double ap, ac;
-        (void)tc_table_lookup(table, table->particle_area, pressure, 1, &velocity, b + k, TC_TABLE_CLAMP, &ap, NULL,
-                              NO_MSG);
-        contact_area(p, table, pressure, 1, &velocity, b + k, &ac);
-        const double d = p->particle_area_scale * ap - ac;
-        if (d >= -REACH_RTOL * ac) {
-            if (k == 0) return 0.0;
-            return py_min(1.0, b[k - 1] + (b[k] - b[k - 1]) * (-d_prev) / (d - d_prev));
-        }
-        d_prev = d;
-    }
-    return 1.0;
-}
-
-/* beta_threshold of the law (Eq. 24): constant 1; closed form kappa / (s b h'_rms) limited to 1; a version 1
- * table's metadata; a version 2 table's largest crossing over its (P > 0, v) nodes. */
-static double law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table) {
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE) {
-        if (!table_v2(p, table)) return table->beta_threshold;
-        double top = 1.0;
-        int first = 1;
-        for (size_t i = 0; i < table->n_pressure; ++i) {
-            if (!(table->pressure[i] > 0)) continue;
-            for (size_t j = 0; j < table->n_velocity; ++j) {
-                const double c = crossing(p, table, table->pressure[i], table->velocity[j]);
-                top = first ? c : py_max(top, c);
-                first = 0;
-            }
-        }
-        return top;
-    }
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM) {
-        const double top = p->particle_area_scale * p->alpha_b * p->rms_slope;
-        if (top <= 0) return 1.0;
-        return py_min(1.0, p->kappa / top);
-    }
-    return 1.0;
-}
-
-/* law.beta_cap(P, |V0|): a version 2 table's crossing at the interval's pressure and speed (the threshold
- * without pressure); every other law's threshold. */
-static double law_beta_cap(tc_stripdraw *m, double pressure, double speed) {
-    if (m->table != NULL && table_v2(&m->p, m->table) && pressure > 0) {
-        /* a function of (P, |V0|) alone: kept for the last pair (a draw repeats it interval after interval) */
-        if (!(m->cap_known && pressure == m->cap_pressure && speed == m->cap_speed)) {
-            m->cap_value = crossing(&m->p, m->table, pressure, speed);
-            m->cap_pressure = pressure;
-            m->cap_speed = speed;
-            m->cap_known = 1;
-        }
-        return m->cap_value;
-    }
-    return m->law_threshold;
-}
-
-/* the slip rates of the last interval, |dU| / h (model._interval), into slip_rate if they are not there */
-static void form_slip_rates(tc_stripdraw *m) {
-    if (!(m->slip_h > 0)) return;
-    for (size_t i = 0; i < m->n; ++i) m->slip_rate[i] = fabs(m->dU[i]) / m->slip_h;
-    m->slip_h = 0.0;
-}
-
-/* mu of the nodes lo..lo+cnt-1 at pressure P (law.mu with the velocity model.py passes), flags of clamped
- * table lookups into m->clamped. */
-static int law_mu(tc_stripdraw *m, double pressure, double vg, size_t lo, size_t cnt, tc_msg msg) {
-    const tc_stripdraw_params *p = &m->p;
-    const int grip = p->friction_velocity == TC_STRIPDRAW_FRICTION_VELOCITY_GRIP;
-    const double *b = m->beta + lo;
-    if (!grip) form_slip_rates(m);
-    switch (p->friction_model) {
-    case TC_STRIPDRAW_FRICTION_MODEL_CONSTANT:
-        for (size_t k = 0; k < cnt; ++k) {
-            m->mu[k] = p->mu_const;
-            m->clamped[k] = 0;
-        }
-        return TC_OK;
-    case TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM:
-        for (size_t k = 0; k < cnt; ++k) {
-            const double v = grip ? fabs(vg) : m->slip_rate[lo + k];
-            const double alpha = p->alpha_v_ref == 0 ? p->alpha_b
-                                                     : p->alpha_b * -expm1(-fabs(v) / p->alpha_v_ref); /* Eq. 23 */
-            m->mu[k] = p->mu0 * (1.0 - p->particle_area_scale * alpha * b[k] * p->rms_slope / p->kappa); /* Eq. 9 */
-            m->clamped[k] = 0;
-        }
-        return TC_OK;
-    default: {
-        const double *v = m->slip_rate + lo;
-        if (grip) {
-            for (size_t k = 0; k < cnt; ++k) m->vel[k] = fabs(vg);
-            v = m->vel;
-        }
-        if (!table_v2(p, m->table))
-            return tc_table_mu(m->table, pressure, cnt, v, b, p->table_policy, m->mu, m->clamped, msg);
-        /* mu = mu0 (1 - s A_p / A_c), Eq. 7 with Eq. 6; A_c from the table (one lookup of both) or Eq. 8 */
-        const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
-        int rc = tc_table_lookup2(m->table, m->table->particle_area, eq8 ? NULL : m->table->contact_area, pressure,
-                                  cnt, v, b, p->table_policy, m->mu, m->ac, m->clamped, msg);
-        if (rc != TC_OK) return rc;
-        if (eq8) contact_area(p, m->table, pressure, cnt, v, b, m->ac);
-        for (size_t k = 0; k < cnt; ++k) {
-            const double share = m->ac[k] > 0 ? p->particle_area_scale * m->mu[k] / m->ac[k] : 0.0;
-            const double rest = 1.0 - share;
-            m->mu[k] = p->mu0 * (rest < 0.0 ? 0.0 : rest); /* np.maximum(0.0, rest) */
-        }
-        return TC_OK;
-    }
-    }
-}
-
-/* ---------------------------------------------------------------------------------------------------
- * the model (model.py)
- * ------------------------------------------------------------------------------------------------- */
-
-/* model._weights into m->w (the overlap of each node's segment with the pad over l_e), and its nonzero range.
- * An overlap of 0 gives a weight of +0 without the division (bit for bit what 0 / l_e gives). */
+/* the contact weights of U (the overlap with the pad over l_e) and their nonzero range */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
     const size_t n = m->n;
@@ -448,12 +278,62 @@ static void update_weights(tc_stripdraw *m) {
     while (last > first && w[last - 1] == 0.0) --last;
     m->w_first = first < n ? first : 1;
     m->w_last = first < n ? last - 1 : 0;
-    for (size_t i = first; i < last; ++i)
-        if (w[i] != 0.0) w[i] = w[i] / m->le;
+    for (size_t i = first; i < last; ++i) w[i] = w[i] / m->le;
 }
 
-/* StripDrawModel._chain: the elimination factors of the free bar for the step length h, kept for the last
- * CHAIN_CACHE step lengths (first in, first out). */
+/* the slip rates of the last interval, |dU| / h, into slip_rate if they are not there */
+static void form_slip_rates(tc_stripdraw *m) {
+    if (!(m->slip_h > 0)) return;
+    for (size_t i = 0; i < m->n; ++i) m->slip_rate[i] = fabs(m->dU[i]) / m->slip_h;
+    m->slip_h = 0.0;
+}
+
+/* The friction limits mu P of the nodes that can reach the pad within an interval (contact nodes +- reach) at
+ * pressure P and grip speed (or the slip rates), into tmax (0 elsewhere), the clamped lookups flagged; the range
+ * and the key kept for reuse. */
+static int friction_limits(tc_stripdraw *m, double pressure, double speed, int policy, tc_msg msg) {
+    const size_t n = m->n;
+    for (size_t i = m->limit_lo; i < m->limit_hi; ++i) m->tmax[i] = 0.0; /* 0 elsewhere already */
+    m->limit_pressure = pressure;
+    m->limit_speed = speed;
+    m->limit_lo = m->limit_hi = 0;
+    m->limit_clamped = 0;
+    if (!(pressure > 0)) return TC_OK;
+    long long lo = 0, hi = (long long)n;
+    if (m->w_first <= m->w_last) {
+        const long long first = (long long)m->w_first, last = (long long)m->w_last;
+        lo = first - m->reach > 0 ? first - m->reach : 0;
+        hi = last + 1 + m->reach < (long long)n ? last + 1 + m->reach : (long long)n;
+    }
+    if (hi <= lo) return TC_OK;
+    const size_t l = (size_t)lo, cnt = (size_t)(hi - lo);
+    const double *v = m->vel;
+    if (m->p.friction_velocity == TC_STRIPDRAW_FRICTION_VELOCITY_GRIP) {
+        for (size_t k = 0; k < cnt; ++k) m->vel[k] = speed;
+    } else {
+        form_slip_rates(m);
+        v = m->slip_rate + l;
+    }
+    tc_stripdraw_params p = m->p;
+    p.table_policy = policy;
+    int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, msg);
+    if (rc != TC_OK) return rc;
+    for (size_t k = 0; k < cnt; ++k) {
+        m->tmax[l + k] = m->mu[k] * pressure;
+        m->limit_clamped |= m->clamped[k];
+    }
+    m->limit_lo = l;
+    m->limit_hi = l + cnt;
+    return TC_OK;
+}
+
+/* the limits of the state (its pressure and velocity), for the outputs and the next interval; they cannot fail */
+static void state_limits(tc_stripdraw *m) {
+    const tc_msg none = {NULL, 0};
+    (void)friction_limits(m, m->normal_force / m->pad_area, fabs(m->grip_velocity), TC_TABLE_CLAMP, none);
+}
+
+/* the elimination factors of the free bar for the step length h, kept for the last CHAIN_CACHE step lengths */
 static const double *chain_for(tc_stripdraw *m, double h) {
     const size_t size = TC_SD_CHAIN(m->n);
     for (int k = 0; k < m->chain_used; ++k)
@@ -471,126 +351,158 @@ static const double *chain_for(tc_stripdraw *m, double h) {
     return m->chain + (size_t)k * size;
 }
 
-static int implicit_step(tc_stripdraw *m, double h, const double *ov, double vg, int depth, double *fric,
-                         double *reaction, tc_msg msg) {
+static int refuse(tc_stripdraw *m, int kind) {
+    m->refusal = kind;
+    return TC_DISCARD;
+}
+
+/* one implicit step of h from the overlaps ov (nonzero within [first, last]; first > last: not known), halved when
+ * its Newton iteration does not converge */
+static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t first, size_t last, double vg, int depth,
+                         tc_msg msg) {
     const size_t n = m->n;
-    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, m->mass, m->ke, m->ks, m->wT,
+    double fric, reaction;
+    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke, m->ks, m->wT,
                           m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
-                          NEWTON_RTOL, chain_for(m, h), fric, reaction, m->gwork, m->giwork);
-    if (it >= 0) return TC_OK;
-    if (it == -2) { /* Python: ZeroDivisionError */
-        char r[TC_REPR_SIZE];
-        return tc_fail(msg, TC_DISCARD,
-                       "division by zero: the implicit bar step of %s s is too short (its square underflows) at "
-                       "t = %.9g s", tc_repr_double(h, r), m->time);
+                          NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
+    if (it >= 0) {
+        m->reaction = reaction;
+        return TC_OK;
     }
+    if (it == -2)
+        return tc_fail(msg, refuse(m, TC_REFUSED_SOLVER),
+                       "the implicit bar step of %.3g s is too short (its square underflows) at t = %.9g s", h,
+                       m->time);
     if (depth >= MAX_HALVINGS)
-        return tc_fail(msg, TC_DISCARD,
+        return tc_fail(msg, refuse(m, TC_REFUSED_SOLVER),
                        "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
                        "the step halved %d times to %.3g s",
                        m->time, depth, h);
-    int rc = implicit_step(m, 0.5 * h, ov, vg, depth + 1, fric, reaction, msg);
+    int rc = implicit_step(m, 0.5 * h, ov, first, last, vg, depth + 1, msg);
     if (rc != TC_OK) return rc;
     double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
     tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
-    return implicit_step(m, 0.5 * h, ov_mid, vg, depth + 1, fric, reaction, msg);
+    return implicit_step(m, 0.5 * h, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
-/* StripDrawModel._interval: one coupling interval of length h. */
-static int interval(tc_stripdraw *m, double h, double pressure, double vg, tc_msg msg) {
+/* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
+static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
+    if (m->p.beta_threshold > 0) return m->beta_cap;
+    if (!(m->cap_known && pressure == m->cap_pressure && speed == m->cap_speed)) {
+        m->cap_value = tc_law_beta_cap(&m->p, m->table, pressure, speed);
+        m->cap_pressure = pressure;
+        m->cap_speed = speed;
+        m->cap_known = 1;
+    }
+    return fmin(m->beta_cap, m->cap_value);
+}
+
+/* whether every a[i] is finite (a sum in four lanes: inf or NaN anywhere makes it non-finite) */
+static int all_finite(const double *a, size_t n) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) s[k] += 0.0 * a[i + (size_t)k];
+    for (; i < n; ++i) s[0] += 0.0 * a[i];
+    return isfinite(s[0] + s[1] + s[2] + s[3]);
+}
+
+/* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
+static double largest(const double *a, size_t n) {
+    double mx[4] = {a[0], a[0], a[0], a[0]};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) mx[k] = a[i + (size_t)k] > mx[k] ? a[i + (size_t)k] : mx[k];
+    for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
+    const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
+    return m23 > m01 ? m23 : m01;
+}
+
+/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU, with
+ * the weights averaged over the interval. Only nodes where the weights of the start (w0, range [f0, l0]) or the
+ * end are not 0 change (the source and the flux are 0 elsewhere), unless the cap falls below beta elsewhere. */
+static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0) {
     const tc_stripdraw_params *p = &m->p;
     const size_t n = m->n;
-    for (size_t i = 0; i < n; ++i) m->tmax[i] = 0.0;
-    if (pressure > 0) {
-        /* only nodes that can be under the pad during this interval need mu: the pad slides at most
-         * window_courant elements per interval */
-        size_t f, l; /* the nodes with w > 0, which lie in [w_first, w_last] */
-        long long lo = 0, hi = (long long)n;
-        if (m->w_first <= m->w_last &&
-            tc_sd_positive_range(m->w_last + 1 - m->w_first, m->w + m->w_first, &f, &l)) {
-            const long long first = (long long)(m->w_first + f), last = (long long)(m->w_first + l);
-            lo = first - m->reach > 0 ? first - m->reach : 0;
-            hi = last + 1 + m->reach < (long long)n ? last + 1 + m->reach : (long long)n;
-        }
-        if (hi > lo) {
-            const size_t cnt = (size_t)(hi - lo);
-            int rc = law_mu(m, pressure, vg, (size_t)lo, cnt, msg);
-            if (rc != TC_OK) return rc;
-            for (size_t k = 0; k < cnt; ++k) {
-                if (m->clamped[k] && m->w[(size_t)lo + k] > 0) m->clamp_count += 1;
-                m->tmax[(size_t)lo + k] = m->mu[k] * pressure;
-            }
-        }
-    }
-    memcpy(m->U0, m->U, n * sizeof *m->U);
-    double fric, reaction;
-    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
-        double q = ceil(h / m->dt_explicit - 1e-9);
-        long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
-        tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
-                       m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &reaction, m->fwork);
-    } else {
-        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le; /* w0 * element_length */
-        int rc = implicit_step(m, h, m->ov, vg, 0, &fric, &reaction, msg);
-        if (rc != TC_OK) return rc;
-    }
-    m->friction_force = fric;
-    m->reaction = reaction;
-    /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
-    const double du_max = largest(m->dU, n, 1);
-    m->slip_h = h;
-    double *w0 = m->w; /* the weights at the start of the interval */
-    const size_t w0_first = m->w_first, w0_last = m->w_last;
-    m->w = m->w0;
-    m->w0 = w0;
-    update_weights(m);
-    /* transport.transport_step: Archard source (Eq. 37), advection (Eq. 13-14), cap (Eq. 24). The weight
-     * 0.5 (w0 + w) is 0 outside the nodes where w0 or w is not, and there the source adds +0 (a finite) and the
-     * advection leaves the node alone: new = beta + 0, which is beta (no beta is -0 while beta_hi is known).
-     * So the source and the advection run over [t0, t1] only, unless a source term could be inf (0 x inf). */
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
-    size_t t0 = w0_first < m->w_first ? w0_first : m->w_first, t1 = w0_last > m->w_last ? w0_last : m->w_last;
-    if (w0_first > w0_last) t0 = m->w_first, t1 = m->w_last;
-    if (m->w_first > m->w_last) t0 = w0_first, t1 = w0_last;
-    const int windowed = isfinite(kp * du_max) && m->beta_hi == m->beta_hi;
+    size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
+    if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
+    if (m->w_first > m->w_last) t0 = f0, t1 = l0;
+    const int windowed = isfinite(kp) && all_finite(m->dU, n) && m->beta_hi == m->beta_hi;
     if (!windowed) t0 = 0, t1 = n - 1;
-    const double cap = p->beta_threshold > 0 ? m->beta_cap : py_min(m->beta_cap, law_beta_cap(m, pressure, fabs(vg)));
+    const double cap = interval_cap(m, pressure, speed);
     if (t0 <= t1) {
+        double produced = 0.0;
         for (size_t i = t0; i <= t1; ++i) {
             m->weight[i] = 0.5 * (w0[i] + m->w[i]);
-            const double a = kp * fabs(m->dU[i]);
-            /* off the pad (weight 0, a finite) the source is 0 / hh = +0: the same sum without the division */
-            m->bsrc[i] = m->weight[i] == 0.0 && isfinite(a) ? m->beta[i] + 0.0 : m->beta[i] + a * m->weight[i] / hh;
+            const double src = m->weight[i] == 0.0 ? 0.0 : kp * fabs(m->dU[i]) * m->weight[i] / hh;
+            m->bsrc[i] = m->beta[i] + src;
+            produced += src;
         }
+        m->beta_produced += produced;
         tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
     }
     /* the cap: over every node unless it is >= every beta away from [t0, t1] */
     size_t c0 = t0, c1 = t1;
     if (!(windowed && cap >= m->beta_hi)) c0 = 0, c1 = n - 1;
-    for (size_t i = m->over_lo; i <= m->over_hi && i < n; ++i) m->over[i] = 0.0; /* the last interval's */
-    int removed = 0, unknown = 0;
+    double removed = 0.0;
+    int finite = 1;
     for (size_t i = c0; i <= c1 && i < n; ++i) {
-        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i] + 0.0; /* beta + 0: see above */
-        const double d = b - cap;
-        m->over[i] = d < 0.0 ? 0.0 : d; /* np.maximum(new - cap, 0.0) */
-        const double r = b > cap ? cap : b; /* np.minimum(new, cap) */
-        m->beta[i] = r;
-        removed |= !(m->over[i] == 0.0);
-        unknown |= r != r || (r == 0.0 && signbit(r)); /* NaN, or a -0 that Python's next + 0 would make +0 */
+        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i];
+        if (b > cap) removed += b - cap;
+        m->beta[i] = b > cap ? cap : b;
+        finite &= isfinite(b);
     }
-    m->over_lo = c0;
-    m->over_hi = c1;
-    m->beta_hi = unknown ? NAN : cap;
-    /* the sum of over; the nodes outside [c0, c1] add +0 (the sum of zeros when nothing was removed) */
-    if (removed) m->beta_removed += tc_pairwise_sum_range(m->over, n, c0, c1);
+    m->beta_hi = finite ? cap : NAN;
+    m->beta_removed += removed;
+}
+
+/* one coupling interval of length h at normal force fn (>= 0) and grip velocity vg */
+static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    const size_t n = m->n;
+    const double speed = fabs(vg), pressure = fn / m->pad_area; /* as state_limits computes it */
+    /* the limits of the state serve when the pressure and the speed are the same (and under the error policy
+     * when none was clamped); else they are looked up under the model's policy */
+    const int same = pressure == m->limit_pressure &&
+                     (p->friction_velocity != TC_STRIPDRAW_FRICTION_VELOCITY_GRIP || speed == m->limit_speed) &&
+                     (p->table_policy == TC_TABLE_CLAMP || !m->limit_clamped);
+    if (!same) {
+        int rc = friction_limits(m, pressure, speed, p->table_policy, msg);
+        if (rc != TC_OK) return rc == TC_DISCARD ? refuse(m, TC_REFUSED_TABLE) : rc;
+    }
+    for (size_t i = m->limit_lo; i < m->limit_hi; ++i)
+        if (m->clamped[i - m->limit_lo] && m->w[i] > 0) m->clamp_count += 1;
+    memcpy(m->U0, m->U, n * sizeof *m->U);
+    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        double q = ceil(h / m->dt_explicit - 1e-9), fric;
+        long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
+        tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
+                       m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
+    } else {
+        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le;
+        int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
+        if (rc != TC_OK) return rc;
+    }
+    /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
+    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
+    m->slip_h = h;
+    m->normal_force = fn;
+    m->grip_velocity = vg;
+    double *w0 = m->w; /* the weights at the start of the interval */
+    const size_t f0 = m->w_first, l0 = m->w_last;
+    m->w = m->w0;
+    m->w0 = w0;
+    update_weights(m);
+    transport(m, pressure, speed, w0, f0, l0);
+    state_limits(m);
     return TC_OK;
 }
 
-/* model.grid_pieces: the pieces of the step [t, t + dt] cut at the grid points k tau strictly inside it, as at
- * most three runs of len[j] x count[j] (counts as doubles: they are integers, and a step with more pieces than
- * TC_STRIPDRAW_MAX_INTERVALS is refused by the caller before any is taken). Returns the number of runs. Where
- * Python's math.floor/ceil of an infinite t / tau raises OverflowError, the counts come out infinite. */
+/* The pieces of the step [t, t + dt] cut at the grid points k tau strictly inside it, as at most three runs of
+ * len[j] x count[j] (counts as doubles: a step with more pieces than TC_STRIPDRAW_MAX_INTERVALS is refused
+ * before any is taken). An end within GRID_TOLERANCE tau of a grid point is on it; a piece between two grid
+ * points is tau exactly. Returns the number of runs; an infinite t / tau gives an infinite count. */
 static int grid_pieces(double t, double dt, double tau, double len[3], double count[3]) {
     if (!(tau > 0)) {
         len[0] = dt;
@@ -600,7 +512,7 @@ static int grid_pieces(double t, double dt, double tau, double len[3], double co
     const double end = t + dt;
     const double a = t / tau;
     const double b = end / tau;
-    const double ka = nearbyint(a); /* round(); ties (never within the tolerance) may go either way */
+    const double ka = nearbyint(a);
     const double kb = nearbyint(b);
     const int start_on = fabs(a - ka) <= GRID_TOLERANCE;
     const int end_on = fabs(b - kb) <= GRID_TOLERANCE;
@@ -628,28 +540,25 @@ static int grid_pieces(double t, double dt, double tau, double len[3], double co
     return k;
 }
 
-/* model.input_mean: the mean over [a, b] of the input polynomial c[0] + c[1] s + c[2] s^2 (its value at a when
- * a == b); the same operations in the same order as Python. */
+/* the mean over [a, b] of the input polynomial c[0] + c[1] s + c[2] s^2 (its value at a when a == b): the exact
+ * impulse of a force and the exact displacement of a velocity that vary so */
 static double input_mean(const double c[3], double a, double b) {
     return c[0] + c[1] * 0.5 * (a + b) + c[2] * (a * a + a * b + b * b) / 3.0;
 }
 
-/* StripDrawModel._piece: the number of coupling intervals of the piece [s, s + len] (at the largest grip speed
- * of its ends and middle, as Python's max of the three). */
+/* the number of coupling intervals of the piece [s, s + len] (at the largest grip speed of its ends and middle) */
 static double piece_intervals(const tc_stripdraw *m, const double vg[3], double s, double len) {
-    double speed = fabs(input_mean(vg, s, s));
-    speed = py_max(speed, fabs(input_mean(vg, s + 0.5 * len, s + 0.5 * len)));
-    speed = py_max(speed, fabs(input_mean(vg, s + len, s + len)));
+    const double speed = fmax(fabs(input_mean(vg, s, s)),
+                              fmax(fabs(input_mean(vg, s + 0.5 * len, s + 0.5 * len)), fabs(input_mean(vg, s + len, s + len))));
     const double h_max = speed != 0 ? m->p.window_courant * m->le / speed : INFINITY;
     const double q = ceil(len / h_max - 1e-9);
     return q > 1.0 ? q : 1.0;
 }
 
-/* StripDrawModel._advance: cut the step on the internal grid, each piece into coupling intervals; the inputs
- * are the polynomials fn, vg (Taylor coefficients at the step's start), each interval takes their mean. */
+/* cut the step on the internal grid, each piece into coupling intervals; the inputs are the polynomials fn, vg
+ * (Taylor coefficients at the step's start), each interval takes their means */
 static int advance(tc_stripdraw *m, double dt, const double fn[3], const double vg[3], tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
-    char r1[TC_REPR_SIZE], r2[TC_REPR_SIZE];
     const int held = fn[1] == 0.0 && fn[2] == 0.0 && vg[1] == 0.0 && vg[2] == 0.0;
     double len[3], count[3];
     const int runs = grid_pieces(m->time, dt, p->internal_step, len, count);
@@ -657,8 +566,9 @@ static int advance(tc_stripdraw *m, double dt, const double fn[3], const double 
     double total = 0.0, total_sub = 0.0, pieces = 0.0;
     for (int j = 0; j < runs; ++j) pieces += count[j];
     if (!(pieces <= TC_STRIPDRAW_MAX_INTERVALS))
-        return tc_fail(msg, TC_DISCARD, "dt = %s s cuts into %.3g pieces of internal_step, so as many coupling "
-                       "intervals at least; at most %.0e are allowed", tc_repr_double(dt, r1), pieces, TC_STRIPDRAW_MAX_INTERVALS);
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT), "dt = %.17g s cuts into %.3g pieces of internal_step, so as "
+                       "many coupling intervals at least; at most %.0e are allowed", dt, pieces,
+                       TC_STRIPDRAW_MAX_INTERVALS);
     double s = 0.0;
     for (int j = 0; j < runs; ++j) {
         const long long reps = held ? 1 : (long long)count[j];
@@ -674,12 +584,13 @@ static int advance(tc_stripdraw *m, double dt, const double fn[3], const double 
         }
     }
     if (!(total <= TC_STRIPDRAW_MAX_INTERVALS))
-        return tc_fail(msg, TC_DISCARD,
-                       "dt = %s s at grip_velocity = %s m/s needs %.3g coupling intervals; at most %.0e are allowed",
-                       tc_repr_double(dt, r1), tc_repr_double(vg[0], r2), total, TC_STRIPDRAW_MAX_INTERVALS);
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT),
+                       "dt = %.17g s at grip_velocity = %.17g m/s needs %.3g coupling intervals; at most %.0e are "
+                       "allowed", dt, vg[0], total, TC_STRIPDRAW_MAX_INTERVALS);
     if (!(total_sub <= TC_STRIPDRAW_MAX_SUBSTEPS))
-        return tc_fail(msg, TC_DISCARD, "dt = %s s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step",
-                       tc_repr_double(dt, r1), total_sub, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT),
+                       "dt = %.17g s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step", dt,
+                       total_sub, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
     s = 0.0;
     for (int j = 0; j < runs; ++j) {
         for (long long k = 0; k < (long long)count[j]; ++k) {
@@ -688,9 +599,7 @@ static int advance(tc_stripdraw *m, double dt, const double fn[3], const double 
             for (long long i = 0; i < (long long)n_int; ++i) {
                 const double a = s + (double)i * h, b = s + (double)(i + 1) * h;
                 /* a normal force interpolated below zero is a pad that lifts off: no pressure (no adhesion) */
-                m->normal_force = py_max(0.0, input_mean(fn, a, b));
-                const double pressure = m->normal_force / (p->tool_length * p->tool_width);
-                int rc = interval(m, h, pressure, input_mean(vg, a, b), msg);
+                int rc = interval(m, h, fmax(0.0, input_mean(fn, a, b)), input_mean(vg, a, b), msg);
                 if (rc != TC_OK) return rc;
             }
             s += len[j];
@@ -727,8 +636,8 @@ static void write_image(const tc_stripdraw *m, unsigned char *b, const double *s
             memcpy(b + i * sizeof rate, &rate, sizeof rate);
         }
     }
-    const double scalars[N_STATE_DOUBLES] = {m->time, m->friction_force, m->reaction, m->normal_force,
-                                             m->beta_removed};
+    const double scalars[N_STATE_DOUBLES] = {m->time, m->reaction, m->normal_force, m->grip_velocity,
+                                             m->beta_removed, m->beta_produced, m->beta_hi};
     memcpy(b, scalars, sizeof scalars);
     b += sizeof scalars;
     const int64_t counts[N_STATE_INTS] = {(int64_t)m->n_steps, (int64_t)m->clamp_count};
@@ -737,11 +646,6 @@ static void write_image(const tc_stripdraw *m, unsigned char *b, const double *s
     memcpy(b, m->contact, n);
 }
 
-static void write_state(const tc_stripdraw *m, unsigned char *b) {
-    write_image(m, b, m->slip_h > 0 ? m->dU : m->slip_rate, m->slip_h);
-}
-
-/* the state image of a user's set_state, or of the backup (the slip rates as the backup held them) */
 static void read_state(tc_stripdraw *m, const unsigned char *b) {
     const size_t n = m->n, nb = n * sizeof(double);
     b += STATE_HEADER;
@@ -751,10 +655,12 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     memcpy(scalars, b, sizeof scalars);
     b += sizeof scalars;
     m->time = scalars[0];
-    m->friction_force = scalars[1];
-    m->reaction = scalars[2];
-    m->normal_force = scalars[3];
+    m->reaction = scalars[1];
+    m->normal_force = scalars[2];
+    m->grip_velocity = scalars[3];
     m->beta_removed = scalars[4];
+    m->beta_produced = scalars[5];
+    m->beta_hi = scalars[6];
     int64_t counts[N_STATE_INTS];
     memcpy(counts, b, sizeof counts);
     b += sizeof counts;
@@ -762,28 +668,29 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     m->clamp_count = (long long)counts[1];
     memcpy(m->contact, b, n);
     m->slip_h = 0.0;
-    m->beta_hi = NAN;
-    update_weights(m); /* derived, as set_state recomputes _w */
+    update_weights(m);
+    state_limits(m);
 }
 
-/* The state before a step (restore_state brings it back if the step is refused): the state image with the
- * slip rates as they are held (unformed: dU, and slip_h). */
 static void backup_state(tc_stripdraw *m) {
     write_image(m, m->backup, m->slip_h > 0 ? m->dU : m->slip_rate, 0.0);
     m->backup_slip_h = m->slip_h;
 }
 
 static void restore_state(tc_stripdraw *m) {
-    read_state(m, m->backup); /* bit-identical: arrays, scalars, and the weights recomputed from U */
+    read_state(m, m->backup);
     if (m->backup_slip_h > 0) { /* the image holds dU */
         memcpy(m->dU, m->slip_rate, m->n * sizeof *m->dU);
         m->slip_h = m->backup_slip_h;
+        state_limits(m); /* with the slip rates as they were */
     }
 }
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
 
-void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) { write_state(m, buf); }
+void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) {
+    write_image(m, buf, m->slip_h > 0 ? m->dU : m->slip_rate, m->slip_h);
+}
 
 int tc_stripdraw_set_state(tc_stripdraw *m, const void *buf, size_t size, tc_msg msg) {
     const unsigned char *b = buf;
@@ -820,7 +727,6 @@ void tc_stripdraw_free(tc_stripdraw *m) {
 
 int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
                         size_t n_beta, tc_stripdraw **out, tc_msg msg) {
-    char r1[TC_REPR_SIZE];
     if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no place for the model (out is NULL)");
     *out = NULL;
     if (p == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no parameters (p is NULL)");
@@ -841,19 +747,10 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
                        p->integrator);
     if (p->n_elements < 1 || p->n_elements > 100000000)
         return tc_fail(msg, TC_ERROR, "n_elements = %d is out of range; allowed: [1, 100000000]", p->n_elements);
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table == NULL)
-        return tc_fail(msg, TC_ERROR, "friction_model = 'table' needs a friction table; none was given");
+    int rc = tc_law_check(p, table, msg);
+    if (rc != TC_OK) return rc;
     const size_t n = (size_t)p->n_elements + 1;
-    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table->format_version < 2 &&
-        (p->contact_area != TC_STRIPDRAW_CONTACT_AREA_MESOSCALE || p->particle_area_scale != 1.0))
-        return tc_fail(msg, TC_ERROR,
-                       "contact_area = '%s' with particle_area_scale = %s needs a friction table of format version 2 "
-                       "(with the contact areas); this table is version 1 (mu only): rebuild it with tribocosim "
-                       "surrogate table",
-                       p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8 ? "eq8" : "mesoscale",
-                       tc_repr_double(p->particle_area_scale, r1));
-    const double law_threshold = law_beta_threshold(p, table);
-    const double cap = p->beta_threshold > 0 ? p->beta_threshold : law_threshold;
+    const double cap = p->beta_threshold > 0 ? p->beta_threshold : tc_law_beta_threshold(p, table);
     if (beta_field != NULL) {
         int ok = n_beta == n;
         for (size_t i = 0; ok && i < n; ++i) ok = isfinite(beta_field[i]) && !(beta_field[i] < 0);
@@ -862,23 +759,20 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
                            "beta_field must hold %zu finite values >= 0 (one per node); got shape (%zu,)", n, n_beta);
     }
     double bmax = 0.0;
-    int over = 0;
     for (size_t i = 0; i < n; ++i) {
         const double b = beta_field != NULL ? beta_field[i] : p->beta_initial;
-        if (i == 0 || b > bmax) bmax = b;
-        if (b > cap) over = 1;
+        bmax = i == 0 || b > bmax ? b : bmax;
     }
-    if (over)
-        return tc_fail(msg, TC_ERROR, "initial beta = %s exceeds the cap beta_threshold = %g", tc_repr_double(bmax, r1),
-                       cap);
+    if (bmax > cap)
+        return tc_fail(msg, TC_ERROR, "initial beta = %.17g exceeds the cap beta_threshold = %g", bmax, cap);
 
     tc_stripdraw *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
     const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
-    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, work 11, advection 5, then the
-     * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level (13) and the
-     * cached elimination factors */
-    const size_t n_arrays = 3 + 7 + 1 + 11 + 5 +
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, advection 5, then the
+     * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level and the cached
+     * elimination factors */
+    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 5 +
                             (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
                                       : 1);
     m->state_size = state_size(n);
@@ -889,11 +783,11 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
         return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model (%zu nodes)", n);
     }
     double *q = m->pool;
-    double **arrays[] = {&m->X,    &m->mass, &m->minv,      &m->U,  &m->V,      &m->A,      &m->Up,
-                         &m->beta, &m->slip_rate, &m->fprev, &m->w,  &m->tmax,   &m->U0,     &m->w0,
-                         &m->dU,   &m->weight,    &m->vel,   &m->mu, &m->ac,     &m->bsrc,   &m->bnew,
-                         &m->over};
+    double **arrays[] = {&m->X,     &m->mass, &m->minv,   &m->U,   &m->V,     &m->A,   &m->Up,
+                         &m->beta,  &m->slip_rate, &m->fprev, &m->w, &m->tmax,  &m->U0,  &m->w0,
+                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew};
     for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
+    q += n; /* spare */
     m->awork = q;
     q += 5 * n;
     if (implicit) {
@@ -912,8 +806,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
     m->n = n;
     m->beta_cap = cap;
-    m->law_threshold = law_threshold;
-    /* mesh.BarMesh.build */
+    /* the mesh */
     const double length = LEAD_LENGTH + p->draw_length + p->tool_length + p->free_length;
     const double le = length / (double)p->n_elements;
     const double bar_area = p->sheet_width * (0.5 * p->sheet_thickness);
@@ -931,25 +824,20 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     m->wT = p->tool_width;
     m->pad_area = p->tool_length * p->tool_width;
     const double node_ks = m->ks * p->tool_width * le;
-    m->dt_explicit = p->cfl_safety * (2.0 / sqrt((4.0 * m->ke + node_ks) / m->mass[1])); /* critical_time_step */
+    m->dt_explicit = p->cfl_safety * (2.0 / sqrt((4.0 * m->ke + node_ks) / m->mass[n > 2 ? 1 : 0]));
     for (size_t i = 0; i < n; ++i) m->minv[i] = 1.0 / m->mass[i];
     const double r = p->rho_inf;
     m->am = (2.0 * r - 1.0) / (r + 1.0);
     m->af = r / (r + 1.0);
     m->gamma = 0.5 - m->am + m->af;
-    m->beta_nm = 0.25 * pow(1.0 - m->am + m->af, 2.0); /* Python's float ** 2 is pow() */
-    /* math.ceil(window_courant) + 1, kept within [-n, n] (where it acts as +-infinity) */
-    const double reach = ceil(p->window_courant) + 1.0;
-    if (reach >= -(double)n && reach <= (double)n)
-        m->reach = (long long)reach;
-    else
-        m->reach = reach < 0 ? -(long long)n : (long long)n;
-    /* state */
+    m->beta_nm = 0.25 * (1.0 - m->am + m->af) * (1.0 - m->am + m->af);
+    const double reach = ceil(p->window_courant) + 1.0; /* kept within [-n, n], where it acts as +-infinity */
+    m->reach = reach >= -(double)n && reach <= (double)n ? (long long)reach : (reach < 0 ? -(long long)n : (long long)n);
+    /* the state */
     for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? beta_field[i] : p->beta_initial;
     m->beta_hi = NAN; /* the first interval caps every node */
-    m->over_lo = 0;
-    m->over_hi = n - 1;
     update_weights(m);
+    state_limits(m);
     *out = m;
     return TC_OK;
 }
@@ -964,31 +852,31 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     static const char *const names[4] = {"d(normal_force)/dt", "d2(normal_force)/dt2", "d(grip_velocity)/dt",
                                          "d2(grip_velocity)/dt2"};
     const double d[4] = {d_normal_force[0], d_normal_force[1], d_grip_velocity[0], d_grip_velocity[1]};
-    char r1[TC_REPR_SIZE];
+    char r[TC_REPR_SIZE];
+    m->refusal = TC_REFUSED_INPUT;
     if (!isfinite(dt))
-        return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r1));
-    if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r1));
+        return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r));
+    if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r));
     if (!isfinite(normal_force))
         return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
-                       tc_repr_double(normal_force, r1));
+                       tc_repr_double(normal_force, r));
     if (normal_force < 0)
-        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r1));
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r));
     if (!isfinite(grip_velocity))
         return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
-                       tc_repr_double(grip_velocity, r1));
+                       tc_repr_double(grip_velocity, r));
     for (int k = 0; k < 4; ++k)
         if (!isfinite(d[k]))
             return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
-                           tc_repr_double(d[k], r1));
+                           tc_repr_double(d[k], r));
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
-        double probe[4] = {0.0, 0.0, 0.0, 0.0}; /* 0 x U is NaN for an infinite or NaN U, else 0 */
-        for (size_t i = 0; i < m->n; i += 4)
-            for (size_t k = 0; k < 4 && i + k < m->n; ++k) probe[k] += 0.0 * m->U[i + k];
-        const int finite = isfinite(m->reaction) && isfinite(probe[0] + probe[1] + probe[2] + probe[3]);
-        if (!finite) rc = tc_fail(msg, TC_DISCARD, "non-finite bar state at t = %.9g s", m->time + dt);
+        int finite = isfinite(m->reaction);
+        for (size_t i = 0; i < m->n && finite; ++i) finite = isfinite(m->U[i]);
+        if (!finite)
+            rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
         restore_state(m);
@@ -999,21 +887,33 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     return TC_OK;
 }
 
+int tc_stripdraw_refusal(const tc_stripdraw *m) { return m->refusal; }
+
+/* friction force of the state: the return-mapped tractions of the nodes under the pad at the state's limits */
+static double friction_force(const tc_stripdraw *m) {
+    double fs = 0.0;
+    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
+        if (!(m->w[i] > 0.0) || !m->contact[i]) continue; /* a node entering the pad starts stress-free */
+        int slipping;
+        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (m->w[i] * m->le);
+    }
+    return fs;
+}
+
 void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
     const size_t n = m->n;
     const double fn = m->normal_force;
-    /* the contact-weighted means over the nodes with a weight (the others add 0; NumPy's w @ U rounds in its own
-     * order anyway: the module docstring of tests/native/test_native_stripdraw.py) */
     double wsum = 0.0, wu = 0.0, wb = 0.0;
     for (size_t i = m->w_first; i <= m->w_last && i < n; ++i) {
         wsum += m->w[i];
         wu += m->w[i] * m->U[i];
         wb += m->w[i] * m->beta[i];
     }
-    const double bmax = largest(m->beta, n, 0);
+    const double bmax = largest(m->beta, n);
+    const double fs = friction_force(m);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
-    out[TC_STRIPDRAW_FRICTION_FORCE] = m->friction_force;
-    out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? m->friction_force / fn : 0.0;
+    out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
+    out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? fs / fn : 0.0;
     out[TC_STRIPDRAW_SLIDING_DISTANCE] = wsum > 0 ? wu / wsum : 0.0;
     out[TC_STRIPDRAW_BETA_MEAN] = wsum > 0 ? wb / wsum : 0.0;
     out[TC_STRIPDRAW_BETA_MAX] = bmax;
@@ -1033,13 +933,56 @@ void tc_stripdraw_fields(const tc_stripdraw *m, double *X, double *U, double *be
     if (contact != NULL) memcpy(contact, m->w, nb);
 }
 
+void tc_stripdraw_nodal(const tc_stripdraw *m, int which, double *out) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    switch (which) {
+    case TC_SD_NODAL_X: memcpy(out, m->X, nb); break;
+    case TC_SD_NODAL_U: memcpy(out, m->U, nb); break;
+    case TC_SD_NODAL_V: memcpy(out, m->V, nb); break;
+    case TC_SD_NODAL_A: memcpy(out, m->A, nb); break;
+    case TC_SD_NODAL_UP: memcpy(out, m->Up, nb); break;
+    case TC_SD_NODAL_BETA: memcpy(out, m->beta, nb); break;
+    case TC_SD_NODAL_CONTACT_WEIGHT: memcpy(out, m->w, nb); break;
+    case TC_SD_NODAL_MASS: memcpy(out, m->mass, nb); break;
+    case TC_SD_NODAL_FRICTION_LIMIT: memcpy(out, m->tmax, nb); break;
+    case TC_SD_NODAL_SLIP_RATE:
+        if (m->slip_h > 0)
+            for (size_t i = 0; i < n; ++i) out[i] = fabs(m->dU[i]) / m->slip_h;
+        else
+            memcpy(out, m->slip_rate, nb);
+        break;
+    case TC_SD_NODAL_CONTACT:
+        for (size_t i = 0; i < n; ++i) out[i] = m->contact[i];
+        break;
+    default:
+        for (size_t i = 0; i < n; ++i) out[i] = NAN;
+    }
+}
+
+double tc_stripdraw_info(const tc_stripdraw *m, int which) {
+    switch (which) {
+    case TC_SD_INFO_TIME: return m->time;
+    case TC_SD_INFO_N_STEPS: return (double)m->n_steps;
+    case TC_SD_INFO_CLAMP_COUNT: return (double)m->clamp_count;
+    case TC_SD_INFO_BETA_REMOVED: return m->beta_removed;
+    case TC_SD_INFO_BETA_PRODUCED: return m->beta_produced;
+    case TC_SD_INFO_BETA_CAP: return m->beta_cap;
+    case TC_SD_INFO_EXPLICIT_TIME_STEP: return m->dt_explicit;
+    case TC_SD_INFO_ELEMENT_LENGTH: return m->le;
+    case TC_SD_INFO_WINDOW_LO: return m->a_lo;
+    case TC_SD_INFO_WINDOW_HI: return m->a_hi;
+    case TC_SD_INFO_ELEMENT_STIFFNESS: return m->ke;
+    case TC_SD_INFO_SHEAR_STIFFNESS: return m->ks;
+    case TC_SD_INFO_NORMAL_FORCE: return m->normal_force;
+    case TC_SD_INFO_GRIP_VELOCITY: return m->grip_velocity;
+    case TC_SD_INFO_REACTION: return m->reaction;
+    default: return NAN;
+    }
+}
+
 void tc_stripdraw_window(const tc_stripdraw *m, double window[2]) {
     window[0] = m->a_lo;
     window[1] = m->a_hi;
 }
 
 double tc_stripdraw_time(const tc_stripdraw *m) { return m->time; }
-
-double tc_stripdraw_beta_cap(const tc_stripdraw *m) { return m->beta_cap; }
-
-double tc_stripdraw_explicit_time_step(const tc_stripdraw *m) { return m->dt_explicit; }

@@ -1,10 +1,10 @@
 /* Glue of the StripDraw FMU: the generic FMI wrapper's component functions (tc_fmu.h) on the native
- * strip-draw model, with what the Python component (tribocosim/components/stripdraw/component.py) does
- * around it:
+ * strip-draw model, with what the component (tribocosim/components/stripdraw/component.py) declares:
  *
  *   - table_file: the friction table used when friction_model = table, relative to the FMU's resources
- *     folder or absolute; read and verified (format version, content hash) by tc_table_read; its hash is
- *     part of the state image, so a state is restored only into an instance using the same table;
+ *     folder or absolute, read in its resource form by tc_table_read (the build converts the shipped table
+ *     into resources/); its content hash is part of the state image, so a state is restored only into an
+ *     instance using the same table;
  *   - field_input: the strip starts from the last beta row of a field file written for this mesh;
  *   - field_output / field_output_interval: the nodal fields recorded at the start, after every step at
  *     least the interval after the last row, and written at terminate with the final state (tc_fields);
@@ -37,46 +37,20 @@ static int is_absolute(const char *path) {
     return path[0] == '/' || path[0] == '\\' || (path[0] && path[1] == ':');
 }
 
-/* the FMU's parameters as a JSON object with sorted keys (the field file's metadata, as the Python FMU) */
-static char *parameters_json(const tc_param_value *values) {
-    int order[TC_N_PARAMETERS];
+/* the FMU's parameters as "name: value" lines (the field file's parameter lines) */
+static char *parameters_text(const tc_param_value *values) {
     size_t size = 16, used = 0;
     char number[TC_REPR_SIZE];
-    for (int k = 0; k < TC_N_PARAMETERS; ++k) {
-        order[k] = k;
-        size += strlen(TC_VARIABLES[k].name) + 8 + TC_REPR_SIZE + (values[k].text ? 6 * strlen(values[k].text) : 0);
-    }
-    for (int a = 1; a < TC_N_PARAMETERS; ++a) { /* insertion sort by name: a few dozen entries */
-        int key = order[a], b = a - 1;
-        while (b >= 0 && strcmp(TC_VARIABLES[order[b]].name, TC_VARIABLES[key].name) > 0) {
-            order[b + 1] = order[b];
-            --b;
-        }
-        order[b + 1] = key;
-    }
+    for (int k = 0; k < TC_N_PARAMETERS; ++k)
+        size += strlen(TC_VARIABLES[k].name) + 8 + TC_REPR_SIZE + (values[k].text ? strlen(values[k].text) : 0);
     char *out = malloc(size);
     if (out == NULL) return NULL;
-    out[used++] = '{';
-    for (int i = 0; i < TC_N_PARAMETERS; ++i) {
-        const tc_variable *v = &TC_VARIABLES[order[i]];
-        const tc_param_value *p = &values[order[i]];
-        used += (size_t)snprintf(out + used, size - used, "%s\"%s\": ", i ? ", " : "", v->name);
-        if (v->kind == TC_KIND_STRING) {
-            out[used++] = '"';
-            for (const unsigned char *s = (const unsigned char *)p->text; *s; ++s) {
-                if (*s == '"' || *s == '\\') used += (size_t)snprintf(out + used, size - used, "\\%c", *s);
-                else if (*s < 0x20 || *s > 0x7e) used += (size_t)snprintf(out + used, size - used, "\\u%04x", *s);
-                else out[used++] = (char)*s;
-            }
-            out[used++] = '"';
-        } else if (v->kind == TC_KIND_INTEGER) {
-            used += (size_t)snprintf(out + used, size - used, "%.0f", p->number);
-        } else {
-            used += (size_t)snprintf(out + used, size - used, "%s", tc_repr_double(p->number, number));
-        }
+    out[0] = '\0';
+    for (int k = 0; k < TC_N_PARAMETERS; ++k) {
+        const tc_variable *v = &TC_VARIABLES[k];
+        const char *value = v->kind == TC_KIND_STRING ? values[k].text : tc_repr_double(values[k].number, number);
+        used += (size_t)snprintf(out + used, size - used, "%s: %s\n", v->name, value);
     }
-    out[used++] = '}';
-    out[used] = '\0';
     return out;
 }
 
@@ -146,13 +120,13 @@ int tc_component_create(const tc_param_value *values, const char *resources, tc_
     }
     if (rc == TC_OK && values[TC_P_field_output].text[0]) {
         double window[2];
-        char *json = parameters_json(values);
+        char *text = parameters_text(values);
         tc_stripdraw_window(c->model, window);
-        rc = json == NULL ? tc_fail(msg, TC_NOMEM, "out of memory for the field metadata")
+        rc = text == NULL ? tc_fail(msg, TC_NOMEM, "out of memory for the field metadata")
                           : tc_field_recorder_create(values[TC_P_field_output].text,
                                                      values[TC_P_field_output_interval].number, c->n, c->X, window,
-                                                     json, &c->recorder, msg);
-        free(json);
+                                                     text, &c->recorder, msg);
+        free(text);
         if (rc == TC_OK) rc = record(c, 1, msg);
     }
     if (rc != TC_OK) {

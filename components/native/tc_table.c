@@ -1,4 +1,4 @@
-/* The friction table in memory: construction from arrays (with the checks of table.py) and release. */
+/* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0) and release. */
 #include "tc_table.h"
 
 #include <math.h>

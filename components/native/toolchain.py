@@ -17,10 +17,10 @@ aarch64-darwin  ``aarch64-macos``                             ``.dylib``
 FMI 2.0 knows one macOS folder, darwin64, for every Mac: its binary is a universal Mach-O that holds an x86_64
 and an arm64 slice (Apple Silicon loads the arm64 one), each compiled by zig and joined by
 :func:`write_universal`, a fat-header writer (zig ships no ``lipo``). FMI 3.0 has a folder per platform tuple,
-thin binaries each. (glibc 2.17: the library loads on any Linux from 2012 on.) Flags: C11, ``-O2``, all warnings as
-errors, and ``-ffp-contract=off`` so that no multiply-add is fused: the native code must round
-exactly like the Python reference it is tested against. The first build for a target compiles
-zig's C library for it once (minutes for win64), kept in zig's cache folder.
+thin binaries each. (glibc 2.17: the library loads on any Linux from 2012 on.) Flags: C11, ``-O2``, all warnings
+as errors, the baseline instruction set of each target (no ``-march=native``: a shipped FMU runs on any machine of
+its architecture). The first build for a target compiles zig's C library for it once (minutes for win64), kept in
+zig's cache folder.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ PLATFORMS = {
 
 #: the warning and language flags every native source is compiled with
 CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wno-sign-conversion",
-          "-Werror", "-ffp-contract=off", "-fno-fast-math", "-fvisibility=hidden")
+          "-Werror", "-fno-fast-math", "-fvisibility=hidden")
 
 #: where the C sources live (package data of this package)
 SOURCE_DIR = Path(__file__).resolve().parent

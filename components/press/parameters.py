@@ -6,6 +6,7 @@ the FMU variable declarations (:mod:`tribocosim.components.press.component`).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,13 +15,21 @@ from tribocosim.components.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
 
 
+#: the grammar of one set-point table entry (the native press reads the same, tc_press.c): a time and a force,
+#: decimal numbers separated by spaces or tabs
+_NUMBER = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_ENTRY = re.compile(rf"[ \t]*{_NUMBER}[ \t]+{_NUMBER}[ \t]*")
+
+
 @dataclass(frozen=True)
 class PressParameters:
     """Parameters of the press (SI units)."""
 
     force_setpoint: float = param(12250.0, "N", "normal force to hold on one pad (10 MPa on 35 x 35 mm)", 0.0, 1e8)
     ramp_time: float = param(0.05, "s", "time to ramp the set-point from 0 to force_setpoint", 0.0, 1e4)
-    setpoint_table: str = param("", "", "optional set-point table 't0 F0; t1 F1; ...' [s N], overrides the ramp", text=True)
+    setpoint_table: str = param("", "", "optional set-point table 't0 F0; t1 F1; ...' [s N], overrides the ramp: "
+                                "entries separated by ';', each a time and a force, decimal numbers separated by "
+                                "spaces", text=True)
     kp: float = param(0.5, "1", "proportional gain of the force controller", 0.0, 1e3)
     ki: float = param(200.0, "1/s", "integral gain of the force controller", 0.0, 1e6)
     actuator_time_constant: float = param(5e-3, "s", "first-order lag of the hydraulic actuator", 1e-6, 10.0)
@@ -38,15 +47,16 @@ class PressParameters:
             if self.ramp_time == 0:
                 return np.array([0.0]), np.array([self.force_setpoint])
             return np.array([0.0, self.ramp_time]), np.array([0.0, self.force_setpoint])
-        try:
-            pairs = [tuple(float(x) for x in item.split()) for item in self.setpoint_table.split(";") if item.strip()]
-            if not pairs or any(len(p) != 2 for p in pairs):
-                raise ValueError("each entry needs a time and a force")
-        except ValueError as exc:
-            raise ParameterError(f"setpoint_table = {self.setpoint_table!r} is malformed: {exc}") from exc
+        entries = [item for item in self.setpoint_table.split(";") if item.strip(" \t")]
+        if not entries:
+            raise ParameterError(f"setpoint_table = '{self.setpoint_table}' is malformed: it has no entry")
+        if not all(_ENTRY.fullmatch(item) for item in entries):
+            raise ParameterError(f"setpoint_table = '{self.setpoint_table}' is malformed: each entry is a time and a "
+                                 "force, two decimal numbers separated by spaces (entries separated by ';')")
+        pairs = [[float(x) for x in item.split()] for item in entries]
         t, f = np.array(pairs).T
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))) or np.any(np.diff(t) <= 0) or np.any(f < 0):
             raise ParameterError(
-                f"setpoint_table = {self.setpoint_table!r}: times must increase and forces be finite and >= 0"
+                f"setpoint_table = '{self.setpoint_table}': times must increase and forces be finite and >= 0"
             )
         return t, f

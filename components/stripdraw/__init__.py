@@ -1,10 +1,10 @@
 """The strip-draw model: 1D bar under a pad, interface law, debris transport, friction law.
 
-Pure physics (numpy; numba optional): no FMI, no printing. The table module is the one place
-that reads and writes friction-table files.
+A binding over the native core (``components/native``): no FMI, no printing. The table module is the one
+place that reads and writes friction-table files.
 
 The names below are imported on first use, so that importing a light module of this package
-(``parameters``, ``table``) does not import the model and its compiled kernels.
+(``parameters``, ``table``) does not load the native library.
 """
 
 from tribocosim.components.lazy import lazy_exports

@@ -14,9 +14,11 @@ Variables
 ``table_file``
     Used when ``friction_model = "table"``. A relative path is taken relative to the FMU's
     ``resources/`` folder, where the default table ``friction_table.npz`` is bundled; an absolute
-    path is used as is. A missing or malformed table file is an initialization error naming the
-    path. The table's content hash is part of the FMU state: a state is restored only into an
-    instance that uses the same table.
+    path is used as is. The native FMU reads a table ``X.npz`` in its resource form ``X.tca``
+    (:func:`tribocosim.components.stripdraw.table.write_table_resource`; the build converts the bundled
+    table). A missing or malformed table file is an initialization error naming the path. The table's
+    content hash is part of the FMU state: a state is restored only into an instance that uses the same
+    table.
 
 ``field_output``, ``field_output_interval``, ``field_input`` (the debris field, for maps and passes)
     When ``field_output`` names a file (relative: to the importer's working directory), the FMU
@@ -66,12 +68,12 @@ class StripDrawFiles:
         TABLE_RESOURCE[1], "", "friction table (.npz) used when friction_model = table: a path relative to the "
         "FMU's resources folder, or absolute", text=True)
     field_output: str = param(
-        "", "", "file (.npz) to write the nodal fields time, X, beta, U, contact to at terminate; empty: none "
+        "", "", "file (CSV) to write the nodal fields time, X, beta, U, contact to at terminate; empty: none "
         "(relative paths: to the working directory)", text=True)
     field_output_interval: float = param(0.0, "s", "least time between two recorded rows of field_output; "
                                          "0: every step", 0.0, None)
     field_input: str = param(
-        "", "", "field file (.npz, from field_output) whose last beta row is the initial debris field (a later "
+        "", "", "field file (CSV, from field_output) whose last beta row is the initial debris field (a later "
         "pass); empty: beta_initial everywhere", text=True)
 
     def __post_init__(self) -> None:
@@ -124,17 +126,25 @@ def build(params: StripDrawParameters, files: StripDrawFiles, resources: Path) -
     """The model: the table loaded (if used), the initial debris field read (if given)."""
     from tribocosim.components.stripdraw.fields import read_initial_beta
     from tribocosim.components.stripdraw.friction import make_friction_law
-    from tribocosim.components.stripdraw.mesh import BarMesh
     from tribocosim.components.stripdraw.model import StripDrawModel
 
     table = _table(params, files, resources)
-    beta = read_initial_beta(files.field_input, BarMesh.build(params).X) if files.field_input else None
-    model = StripDrawModel(params, make_friction_law(params, table), beta_field=beta)
+    law = make_friction_law(params, table)
+    model = StripDrawModel(params, law)
+    if files.field_input:  # a later pass: the strip starts from the last beta row of an earlier one
+        model = StripDrawModel(params, law, beta_field=read_initial_beta(files.field_input, model.mesh.X))
     if table is None:
         return Built(model, {"friction table hash": None})
     digest = table.metadata.get("content_hash")
     note = f"friction table {files.table_path(resources)}: provenance {table.provenance}, content hash {digest}"
     return Built(model, {"friction table hash": digest}, [note])
+
+
+def convert_resource(source: Path, folder: Path) -> Path:
+    """The friction table's resource form for the native FMU (``friction_table.npz`` -> ``friction_table.tca``)."""
+    from tribocosim.components.stripdraw.table import RESOURCE_SUFFIX, write_table_resource
+
+    return write_table_resource(source, Path(folder) / (Path(source).stem + RESOURCE_SUFFIX))
 
 
 def check(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
@@ -208,10 +218,11 @@ COMPONENT = Component(
     check=check,
     observer=observer,
     native=Native(prefix="tc_stripdraw",
-                  sources=("tc_stripdraw.c", "tc_galpha.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_npz.c",
-                           "tc_sha256.c", "tc_json.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
+                  sources=("tc_stripdraw.c", "tc_galpha.c", "tc_friction.c", "tc_table.c", "tc_table_lookup.c",
+                           "tc_table_file.c", "tc_arrays.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
-                  interpolates_inputs=True),
+                  interpolates_inputs=True, convert_resource=convert_resource,
+                  resource_parameters=("table_file",)),
     default_experiment=(0.0, 1.75, 1e-3),
 )

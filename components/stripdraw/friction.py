@@ -1,4 +1,5 @@
-"""Local friction laws mu(P, v, beta) behind one interface (paper Sec. 4, Eq. 6-9, 23-24; docs/model.md section 4).
+"""Local friction laws mu(P, v, beta) (paper Sec. 4, Eq. 6-9, 23-24; docs/model.md section 4): a binding over the
+native law (``components/native/tc_friction.c``, the same code the strip-draw model and its FMU run).
 
 Bowden-Tabor with debris (Eq. 7): mu = tau0 (A_c - A_p) / (P A0), A_c the real contact area and A_p
 the part of it carried by blocked flakes. tau0 is set by the particle-free coefficient
@@ -18,12 +19,13 @@ A_c (``contact_area``):
     than any contact capped at p_crit (docs/model.md section 4): blocked flakes take a larger share,
     which is the regime of the paper's macro figures (Eq. 9).
 
-The cap of beta (Eq. 24) is where s A_p reaches A_c: :meth:`TableFriction.beta_cap` finds it on the
+The cap of beta (Eq. 24) is where s A_p reaches A_c: :meth:`FrictionLaw.beta_cap` finds it on the
 table's beta axis at the interval's pressure and sliding velocity (A_p and A_c are piecewise linear
 in beta there, so the crossing is exact), limited to 1; the largest of these caps at the table's
 (P, v) nodes bounds beta everywhere (``beta_threshold``: the initial debris is checked against it).
 
-Laws, sharing ``mu(pressure, velocity, beta) -> (mu, clamped)`` and ``beta_cap(pressure, velocity)``:
+Laws (``friction_model``), each a :class:`FrictionLaw` with ``mu(pressure, velocity, beta) -> (mu, clamped)``,
+``beta_cap(pressure, velocity)`` and ``beta_threshold``:
 
 - ``table``: the above with a friction table; a version 1 table (mu only) gives its mu as it is
   (``mesoscale``, scale 1 only);
@@ -37,169 +39,102 @@ Laws, sharing ``mu(pressure, velocity, beta) -> (mu, clamped)`` and ``beta_cap(p
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.components.errors import ParameterError, TableDomainError
+from tribocosim.components.native.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
-from tribocosim.components.stripdraw.table import FrictionTable
+from tribocosim.components.stripdraw.table import AREAS, FrictionTable
 
 
-REACH_RTOL = 1e-12  # s A_p "reaches" A_c within this relative tolerance
+class NativeTable:
+    """A friction table in the native core (``tc_table``), made from a :class:`FrictionTable`'s arrays."""
+
+    def __init__(self, table: FrictionTable):
+        c = self._core = core()
+        self.handle = VP()
+        self._arrays = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in ("pressure", "velocity", "beta",
+                                                                                    "mu")]
+        p, v, b, mu = self._arrays
+        c.call(c.lib.tc_table_from_arrays, p.size, v.size, b.size, ptr(p), ptr(v), ptr(b), ptr(mu),
+               table.beta_threshold, ctypes.byref(self.handle))
+        if table.version == 2:
+            areas = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in AREAS]
+            c.call(c.lib.tc_table_set_areas, self.handle, *(ptr(a) for a in areas))
+
+    def __del__(self):
+        if getattr(self, "handle", None):
+            self._core.lib.tc_table_free(self.handle)
+            self.handle = None
 
 
-@dataclass(frozen=True)
-class ConstantFriction:
-    """mu = mu_const everywhere; debris does not change friction (beta is capped at 1)."""
+class FrictionLaw:
+    """The friction law that ``params.friction_model`` names (the module docstring), evaluated by the native core.
 
-    mu_const: float
-    beta_threshold: float = 1.0
-    name: str = "constant"
+    ``table`` is required for ``friction_model = "table"`` and ignored otherwise.
+    """
 
-    def mu(self, pressure, velocity, beta):
-        """Return ``(mu, clamped)`` broadcast over the inputs."""
-        shape = np.broadcast(np.asarray(pressure), np.asarray(velocity), np.asarray(beta)).shape
-        return np.full(shape, self.mu_const), np.zeros(shape, dtype=bool)
-
-    def beta_cap(self, pressure: float, velocity: float) -> float:
-        """The cap of beta at this pressure and velocity: 1."""
-        return self.beta_threshold
-
-
-@dataclass(frozen=True)
-class ClosedFormFriction:
-    """mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) (Eq. 9 with Eq. 23)."""
-
-    mu0: float
-    kappa: float
-    rms_slope: float
-    alpha_b: float
-    alpha_v_ref: float
-    particle_area_scale: float = 1.0
-    name: str = "closed_form"
-
-    def alpha(self, velocity):
-        """alpha(v) of Eq. 23: b (1 - exp(-|v| / v_ref)) (Fig. 15), or b when v_ref is 0."""
-        v = np.abs(np.asarray(velocity, float))
-        if self.alpha_v_ref == 0:
-            return np.full(v.shape, self.alpha_b) if v.ndim else self.alpha_b
-        return self.alpha_b * -np.expm1(-v / self.alpha_v_ref)
+    def __init__(self, params: StripDrawParameters, table: FrictionTable | None = None):
+        if params.friction_model == "table" and table is None:
+            raise ParameterError("friction_model = 'table' needs a friction table; none was given")
+        self.params = params
+        self.name = params.friction_model
+        self.table = table if params.friction_model == "table" else None
+        c = self._core = core()
+        self._struct = c.struct(params)
+        self._native = NativeTable(self.table) if self.table is not None else None
+        c.call(c.lib.tc_law_check, ctypes.byref(self._struct), self.native_table)
 
     @property
-    def beta_threshold(self) -> float:
-        """Eq. 24 with the largest alpha (b), limited to 1."""
-        top = self.particle_area_scale * self.alpha_b * self.rms_slope
-        return 1.0 if top <= 0 else min(1.0, self.kappa / top)
-
-    def beta_cap(self, pressure: float, velocity: float) -> float:
-        """The cap of beta (Eq. 24) with the saturated alpha: A_p <= A_c at every velocity."""
-        return self.beta_threshold
+    def native_table(self):
+        """The native table handle (None without a table)."""
+        return self._native.handle if self._native is not None else None
 
     def mu(self, pressure, velocity, beta):
-        """Return ``(mu, clamped)`` broadcast over the inputs (nothing is ever clamped)."""
-        p, v, b = np.broadcast_arrays(np.asarray(pressure, float), np.asarray(velocity, float), np.asarray(beta, float))
-        mu = self.mu0 * (1.0 - self.particle_area_scale * self.alpha(v) * b * self.rms_slope / self.kappa)
-        return mu, np.zeros(p.shape, dtype=bool)
-
-
-@dataclass(frozen=True)
-class TableFriction:
-    """mu = mu0 (1 - s A_p / A_c) from a friction table, A_c by the ``contact_area`` convention."""
-
-    table: FrictionTable
-    policy: str = "clamp"
-    mu0: float = 0.15
-    contact_area: str = "mesoscale"
-    kappa: float = 2.0
-    rms_slope: float = 0.34
-    e_star: float = 55e9
-    particle_area_scale: float = 1.0
-    name: str = "table"
-
-    def __post_init__(self) -> None:
-        if self.table.version == 1 and (self.contact_area != "mesoscale" or self.particle_area_scale != 1.0):
-            raise ParameterError(
-                f"contact_area = {self.contact_area!r} with particle_area_scale = {self.particle_area_scale!r} needs a "
-                "friction table of format version 2 (with the contact areas); this table is version 1 (mu only): "
-                "rebuild it with tribocosim surrogate table")
+        """``(mu, clamped)`` at the query points (broadcast together); TableDomainError outside the table under
+        ``table_policy = "error"``."""
+        p, v, b = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (pressure, velocity, beta)))
+        mu = np.empty(p.shape)
+        clamped = np.zeros(p.shape, dtype=np.uint8)
+        c = self._core
+        for value in np.unique(p):  # one native call per pressure
+            at = p == value
+            vq, bq = np.ascontiguousarray(v[at]), np.ascontiguousarray(b[at])
+            out, flags, work = np.empty(vq.size), np.zeros(vq.size, dtype=np.uint8), np.empty(vq.size)
+            c.call(c.lib.tc_law_mu, ctypes.byref(self._struct), self.native_table, float(value), vq.size, ptr(vq),
+                   ptr(bq), ptr(out), ptr(flags, UBYTE_P), ptr(work), discard=TableDomainError)
+            mu[at], clamped[at] = out, flags
+        return (mu if mu.ndim else float(mu)), clamped.astype(bool)
 
     @functools.cached_property
     def beta_threshold(self) -> float:
-        """The largest cap of beta: the table's (version 1), else the largest of the caps at the table's
-        (P, v) nodes (:meth:`beta_cap`): above it, s A_p exceeds A_c at every node."""
-        t = self.table
-        if t.version == 1:
-            return t.beta_threshold
-        return max((self._crossing(float(p), float(v)) for p in t.pressure if p > 0 for v in t.velocity),
-                   default=1.0)
-
-    def contact(self, pressure, velocity, beta):
-        """A_c/A0 at the query points: the table's (``mesoscale``) or Eq. 8 (``eq8``)."""
-        if self.contact_area == "eq8":
-            p = np.asarray(pressure, float)
-            return self.kappa * p / (self.rms_slope * self.e_star) + 0.0 * np.asarray(beta, float)
-        ac, _ = self.table.interpolate_array(self.table.contact_area, pressure, velocity, beta, "clamp")
-        return ac
-
-    def mu(self, pressure, velocity, beta):
-        """Return ``(mu, clamped)``; raises TableDomainError under the ``error`` policy."""
-        t = self.table
-        if t.version == 1:
-            return t.interpolate(pressure, velocity, beta, self.policy)
-        ap, clamped = t.interpolate_array(t.particle_area, pressure, velocity, beta, self.policy)
-        ac = self.contact(pressure, velocity, beta)
-        share = np.where(ac > 0, self.particle_area_scale * ap / np.where(ac > 0, ac, 1.0), 0.0)
-        return self.mu0 * np.maximum(0.0, 1.0 - share), clamped
+        """The largest cap of beta (Eq. 24) of the law."""
+        return float(self._core.lib.tc_law_beta_threshold(ctypes.byref(self._struct), self.native_table))
 
     def beta_cap(self, pressure: float, velocity: float) -> float:
-        """Where s A_p reaches A_c along the beta axis at (P, |v|) (Eq. 24; exact: both are piecewise linear
-        in beta), limited to 1; 1 when A_p stays below A_c on the whole axis; without pressure (or with a
-        version 1 table) :attr:`beta_threshold`."""
-        if self.table.version == 1 or not pressure > 0:
-            return self.beta_threshold
-        return self._crossing(pressure, abs(velocity))
+        """The cap of beta (Eq. 24) at (P, |v|)."""
+        return float(self._core.lib.tc_law_beta_cap(ctypes.byref(self._struct), self.native_table, float(pressure),
+                                                     float(velocity)))
 
-    def _crossing(self, pressure: float, velocity: float) -> float:
-        t = self.table
-        b = t.beta
-        ap, _ = t.interpolate_array(t.particle_area, pressure, velocity, b, "clamp")
-        ac = self.contact(pressure, velocity, b)
-        d = self.particle_area_scale * ap - ac
-        for k in range(b.size):
-            if d[k] >= -REACH_RTOL * ac[k]:  # reached, up to rounding (a table tabulated to its cap)
-                if k == 0:
-                    return 0.0
-                return min(1.0, float(b[k - 1] + (b[k] - b[k - 1]) * (-d[k - 1]) / (d[k] - d[k - 1])))
-        return 1.0
+    def alpha(self, velocity):
+        """alpha(v) of Eq. 23 (the closed form): b (1 - exp(-|v| / v_ref)), or b when v_ref is 0."""
+        f = np.vectorize(lambda x: self._core.lib.tc_law_alpha(ctypes.byref(self._struct), float(x)), otypes=[float])
+        out = f(np.asarray(velocity, dtype=float))
+        return out if out.ndim else float(out)
 
 
-def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None):
-    """The friction law that ``params.friction_model`` names.
-
-    Parameters
-    ----------
-    params : StripDrawParameters
-        Model parameters.
-    table : FrictionTable, optional
-        Required when ``params.friction_model == "table"``.
-    """
-    if params.friction_model == "constant":
-        return ConstantFriction(params.mu_const)
-    if params.friction_model == "closed_form":
-        return closed_form_law(params)
-    if table is None:
-        raise ParameterError("friction_model = 'table' needs a friction table; none was given")
-    return TableFriction(table, params.table_policy, params.mu0, params.contact_area, params.kappa,
-                         params.rms_slope, params.e_star, params.particle_area_scale)
+def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None) -> FrictionLaw:
+    """The friction law that ``params.friction_model`` names (``table`` required for the table law)."""
+    return FrictionLaw(params, table)
 
 
-def closed_form_law(params: StripDrawParameters) -> ClosedFormFriction:
+def closed_form_law(params: StripDrawParameters) -> FrictionLaw:
     """The closed-form law with the parameters' mu0, kappa, h'_rms, b, v_ref and A_p scale."""
-    return ClosedFormFriction(params.mu0, params.kappa, params.rms_slope, params.alpha_b, params.alpha_v_ref,
-                              params.particle_area_scale)
+    return FrictionLaw(params.replace(friction_model="closed_form"))
 
 
 def closed_form_table(

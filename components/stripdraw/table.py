@@ -35,6 +35,11 @@ stay readable. ``metadata`` always holds ``format`` (``"tribocosim-friction-tabl
 of the axes and arrays (float64, little-endian, C order) and of the canonical JSON of the other
 metadata. A file whose hash or format version does not match is refused.
 
+The native code reads the table in its resource form (:func:`write_table_resource`): an array file
+(:mod:`tribocosim.components.native.arrays`) with the axes, mu, the areas (version 2), ``beta_threshold``,
+``content_hash`` and ``provenance``, written from a verified table (the FMU build bundles it as
+``friction_table.tca``; a table file ``X.npz`` has its resource at ``X.tca``).
+
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
 caller can report them) or ``"error"`` (raise :class:`~tribocosim.components.errors.TableDomainError`).
@@ -311,3 +316,27 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
     if table.content_hash() != meta.get("content_hash"):
         raise TableError(f"friction table {path} fails its content hash check (modified or corrupt)")
     return table
+
+
+#: the suffix of a table's resource form (the native reader takes ``X.npz`` to mean ``X.tca``)
+RESOURCE_SUFFIX = ".tca"
+
+
+def resource_entries(table: FrictionTable) -> dict:
+    """The entries of the table's resource form: axes, value arrays, ``beta_threshold``, ``content_hash``,
+    ``provenance`` (what the native model reads; further entries may be added without a change to its reader)."""
+    entries = {name: getattr(table, name) for name in (*AXES, *table.arrays())}
+    entries["beta_threshold"] = table.beta_threshold
+    entries["content_hash"] = str(table.metadata.get("content_hash", ""))
+    entries["provenance"] = table.provenance
+    return entries
+
+
+def write_table_resource(table_path: str | os.PathLike, out: str | os.PathLike | None = None) -> Path:
+    """Read and verify the table file ``table_path`` and write its resource form to ``out`` (default: beside it,
+    with the suffix ``.tca``); returns the path written."""
+    from tribocosim.components.native.arrays import write_arrays
+
+    table_path = Path(table_path)
+    target = Path(out) if out is not None else table_path.with_suffix(RESOURCE_SUFFIX)
+    return write_arrays(target, resource_entries(read_table(table_path)))

@@ -272,7 +272,7 @@ def stripdraw(settings: Settings) -> Family:
     meshes = (25, 50, 100, 200) if quick else (30, 60, 120, 240, 480)
     n_ref = 400 if quick else 960
     title = f"Strip-draw bar ({draw * 1e3:.0f} mm draw, 35 mm pad, 10 MPa): explicit vs implicit x mesh"
-    _strip_run("explicit", 20, 0.001)  # compile the kernels outside the timings
+    _strip_run("explicit", 20, 0.001)  # load the core library outside the timings
     _strip_run("implicit", 20, 0.001)
     w_ref, mu_ref, x_ref, b_ref, m_ref = _strip_run("explicit", n_ref, draw)
     settings.log(f"  stripdraw: reference explicit n = {n_ref} in {w_ref:.1f} s, mu_bar = {mu_ref:.6f}")

@@ -8,6 +8,8 @@ recorded fields must be identical), and the FMU's own scalar outputs (beta_max).
 from __future__ import annotations
 
 import numpy as np
+
+from tribocosim.components.stripdraw.fields import read_fields
 import pytest
 from fmpy.fmi1 import FMICallException
 from numpy.testing import assert_array_equal
@@ -44,8 +46,7 @@ def test_field_output_holds_the_models_fields_at_the_recorded_times(stripdraw_fm
     assert not path.exists(), "the file is written at terminate, not before"
     beta_max = inst.outputs()[5]
     inst.slave.terminate()
-    with np.load(path) as f:
-        data = {k: f[k] for k in f.files}
+    data = read_fields(path)
     model, fields = pure_fields(CHEAP, rows)
     # rows: t = 0, then every 4th step (the first step at least 3.5 steps after the last row), and the end
     expected_steps = [0, 4, 8, 12, 16, 20, 24, 28, 32, 36, 40]
@@ -76,8 +77,8 @@ def test_a_rolled_back_step_is_dropped_from_the_file(stripdraw_fmu_instance, tmp
         inst.step(dt, fn, v)
     inst.slave.freeFMUState(state)
     inst.slave.terminate()
-    with np.load(path) as f:
-        time, beta = f["time"], f["beta"]
+    f = read_fields(path)
+    time, beta = f["time"], f["beta"]
     np.testing.assert_allclose(time, DT * np.arange(13), rtol=1e-12, atol=1e-15)
     _, fields = pure_fields(CHEAP, rows)
     assert_array_equal(beta, np.array([f["beta"] for f in fields]), err_msg="rows of the rejected trial remain")
@@ -101,8 +102,7 @@ def test_field_input_starts_a_later_pass_from_the_last_beta_row(stripdraw_fmu_in
     for dt, fn, v in rows:
         inst.step(dt, fn, v)
     inst.slave.terminate()
-    with np.load(first) as f:
-        left = f["beta"][-1]
+    left = read_fields(first)["beta"][-1]
     second = stripdraw_fmu_instance("pass2", {**CHEAP, "field_input": str(first)})
     second.initialize()
     assert second.outputs()[5] == pytest.approx(left.max(), rel=1e-15), "beta_max at the start of pass 2"

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose, assert_array_equal
+from numpy.testing import assert_array_equal
 
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import OUTPUT_NAMES, StripDrawModel
@@ -67,12 +67,12 @@ _VENV_SCRIPT = textwrap.dedent(
         results.append(rows)
         s.terminate()
         s.freeInstance()
-    import tribocosim.components.stripdraw.kernels as kernels
+    import tribocosim.components.native.library as library
     print(json.dumps({
         "results": results,
         "unzipped": str(unzipped),
         "components": sys.modules["tribocosim.components"].__file__,
-        "use_numba": kernels.USE_NUMBA,
+        "library": str(library.core().path),
         "modules": sorted(sys.modules),
     }))
     """
@@ -102,14 +102,14 @@ def test_fmu_runs_in_a_venv_with_only_numpy_and_fmpy(stripdraw_fmu_file, numpy_f
     report = json.loads(proc.stdout.strip().splitlines()[-1])
     # the model code came from the FMU's resources, and nothing heavy was imported
     assert report["components"].startswith(report["unzipped"]), report["components"]
-    assert report["use_numba"] is False
+    assert report["library"].startswith(report["unzipped"]), "the core library the FMU carries"
     heavy = [m for m in report["modules"] if m.split(".")[0] in FORBIDDEN or m.startswith(FORBIDDEN[-2:])]
     assert heavy == [], heavy
     for (params, schedule), rows in zip(CASES, report["results"]):
         got, want = np.array(rows), _model_rows(params, schedule)
         for j, name in enumerate(OUTPUT_NAMES):
-            # NumPy fallback kernels in the venv vs numba here: same arithmetic up to rounding
-            assert_allclose(got[:, j], want[:, j], rtol=1e-12, atol=1e-15, err_msg=f"{name} {params}")
+            # the same native core
+            assert np.array_equal(got[:, j], want[:, j]), f"{name} {params}"
 
 
 def test_libcosimpy_gives_the_same_outputs_as_fmpy(stripdraw_fmu_file, stripdraw_fmu_instance, libcosim_run):

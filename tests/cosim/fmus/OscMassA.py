@@ -5,7 +5,7 @@
 Input ``force`` F with companion inputs ``der(force)`` and ``der(force,2)``: over a step the
 force is the polynomial F + F' tau + F'' tau^2 / 2 (the master's extrapolation), and the step is
 integrated exactly: the augmented linear system z = [x1, v1, F, F', F''] has z' = M z, so
-z(h) = expm(M h) z(0) (components.linear.expm, cached per h).
+z(h) = expm(M h) z(0) (the native core's expm, cached per h).
 Outputs x1, v1 (no direct feedthrough). The FMU state covers x1, v1, the inputs and time.
 """
 
@@ -14,7 +14,7 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
 from tribocosim.components.fmus.adapter import RealWithUnit, add_unit_definitions
-from tribocosim.components.linear import expm
+from tribocosim.components.native.linear_model import expm
 
 
 class OscMassA(Fmi2Slave):

@@ -1,0 +1,46 @@
+/* The local friction law mu(P, v, beta) of the strip draw (paper Sec. 4, Eq. 6-9, 23-24; docs/model.md section 4).
+ *
+ * Bowden-Tabor with debris (Eq. 7 with Eq. 6): mu = mu0 (1 - s A_p / A_c), s = particle_area_scale.
+ *   - constant:     mu = mu_const; beta capped at 1;
+ *   - closed_form:  A_p/A0 = alpha(v) beta P / E* (Eq. 23), A_c/A0 = kappa P / (h'_rms E*) (Eq. 8), so
+ *                   mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) (Eq. 9), alpha(v) = b (1 - exp(-|v| / v_ref))
+ *                   when v_ref > 0, else b; cap kappa / (s b h'_rms), limited to 1;
+ *   - table:        A_p (and A_c under contact_area = mesoscale) interpolated in a friction table (tc_table.h);
+ *                   A_c = kappa P / (h'_rms E*) under contact_area = eq8; mu >= 0. A table without the areas
+ *                   (format version 1) gives its mu as it is. The cap of beta at (P, v) is where s A_p reaches
+ *                   A_c along the table's beta axis (both piecewise linear in beta: the crossing is exact),
+ *                   limited to 1; the law's threshold is the largest such cap over the table's (P > 0, v) nodes.
+ * The velocity v is the grip speed or each node's slip rate (the caller chooses, friction_velocity).
+ */
+#ifndef TC_FRICTION_H
+#define TC_FRICTION_H
+
+#include <stddef.h>
+
+#include "tc_common.h"
+#include "tc_stripdraw_params.h"
+#include "tc_table.h"
+
+/* s A_p "reaches" A_c within this relative tolerance (a table tabulated to its cap) */
+#define TC_REACH_RTOL 1e-12
+
+/* TC_ERROR when the parameters ask for what the table cannot give (contact_area = eq8 or s != 1 with a table
+ * without the areas), or for the table law without a table. */
+TC_API int tc_law_check(const tc_stripdraw_params *p, const tc_table *table, tc_msg msg);
+
+/* mu at one pressure for n (velocity, beta) queries; clamped[k] (may be NULL) is 1 when query k was outside the
+ * table (clamp policy); ac_work holds n doubles. Under table_policy = error an outside query is TC_DISCARD, with
+ * nothing written. */
+TC_API int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
+                     const double *velocity, const double *beta, double *mu, unsigned char *clamped,
+                     double *ac_work, tc_msg msg);
+
+/* The largest cap of beta (Eq. 24) of the law, and its cap at (P, |v|) (the threshold when P = 0 or the law does
+ * not depend on P and v). */
+TC_API double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table);
+TC_API double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed);
+
+/* alpha(v) of Eq. 23 (closed form). */
+TC_API double tc_law_alpha(const tc_stripdraw_params *p, double velocity);
+
+#endif
