@@ -499,7 +499,7 @@ def test_a_discard_for_invalid_inputs_sets_terminate_simulation(unzipped, md):
     assert step(1e-3, 0.0) == (2, [False, False, False], 1e-3), "a zero step: not the inputs' fault"
     s.setFloat64([vr["normal_force"]], [-5.0])
     assert step(1e-3, 1e-3) == (2, [False, True, False], 1e-3)
-    assert any(st == 2 and "normal_force = -5.0 N" in m and "the inputs are at fault" in m for st, m in messages)
+    assert any(st == 2 and "normal_force = -5 N" in m and "the inputs are at fault" in m for st, m in messages)
     s.setFloat64([vr["normal_force"]], [12250.0])
     assert step(1e-3, 1e-3) == (0, [False, False, False], 2e-3)
     s.terminate()

@@ -505,7 +505,7 @@ def test_a_discard_for_invalid_inputs_asks_the_host_to_stop(unzipped, descriptio
         s.doStep(t, 1e-3)
     assert exc.value.status == 2
     assert s.getBooleanStatus(fmi2Terminated) is True and s.getRealStatus(fmi2LastSuccessfulTime) == t
-    assert any(st == 2 and "normal_force = -5.0 N" in m and "the inputs are at fault" in m for st, m in msgs), msgs
+    assert any(st == 2 and "normal_force = -5 N" in m and "the inputs are at fault" in m for st, m in msgs), msgs
     s.setReal([vr["normal_force"]], [12250.0])
     s.doStep(t, 1e-3)
     assert s.getBooleanStatus(fmi2Terminated) is False
@@ -531,12 +531,12 @@ def test_fmpy_simulate_fmu_with_a_negative_normal_force_ends_and_says_why(native
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "last time 0.0" in proc.stdout, proc.stdout
     out = proc.stdout + proc.stderr
-    assert out.count("normal_force = -5.0 N must be >= 0") == 1 and "the inputs are at fault" in out, out[-2000:]
+    assert out.count("normal_force = -5 N must be >= 0") == 1 and "the inputs are at fault" in out, out[-2000:]
 
 
 @pytest.mark.parametrize("inputs, parameters, message", [
     ({"grip_velocity": 1e6}, {}, "m is above draw_length = 0.14 m, the largest grip_position"),
-    ({"normal_force": 1e30}, {}, "contact_pressure = 8.163265306122448e+32 Pa is above hardness = 800000000.0 Pa"),
+    ({"normal_force": 1e30}, {}, "contact_pressure = 8.163265306122448e+32 Pa is above hardness = 8e+08 Pa"),
     ({"grip_velocity": 0.08}, {"draw_length": 0.002}, "m is above draw_length = 0.002 m, the largest grip_position"),
 ])
 def test_absurd_but_finite_inputs_give_a_warning_status_and_message(unzipped, descriptions, inputs, parameters,
