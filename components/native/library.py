@@ -168,6 +168,7 @@ class Core:
         proto = {
             "tc_table_from_arrays": (i, [sz, sz, sz, DBL_P, DBL_P, DBL_P, DBL_P, d, out, msg]),
             "tc_table_set_areas": (i, [VP, DBL_P, DBL_P, DBL_P, DBL_P, msg]),
+            "tc_table_set_extras": (i, [VP, DBL_P, DBL_P, msg]),
             "tc_table_read": (i, [ctypes.c_char_p, out, msg]),
             "tc_table_free": (None, [VP]),
             "tc_table_lookup": (i, [VP, DBL_P, d, sz, DBL_P, DBL_P, i, DBL_P, UBYTE_P, msg]),

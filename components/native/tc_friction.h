@@ -1,12 +1,17 @@
 /* The local friction law mu(P, v, beta) of the strip draw (paper Sec. 4, Eq. 6-9, 23-24; docs/model.md section 4).
  *
- * Bowden-Tabor with debris (Eq. 7 with Eq. 6): mu = mu0 (1 - s A_p / A_c), s = particle_area_scale.
+ * Bowden-Tabor with debris (Eq. 7 with Eq. 6) and a flake-borne contact of shear strength r tau0
+ * (r = flake_shear_ratio; the paper's frictionless flakes: r = 0): mu = mu0 [(1 - s A_p / A_c) + r s A_p / A_c]
+ * = mu0 (1 - (1 - r) s A_p / A_c), s = particle_area_scale. A_p is that of every load-bearing flake, or of the
+ * paper's cluster rule alone (particle_area_rule = clusters; version 3 tables).
  *   - constant:     mu = mu_const; beta capped at 1;
  *   - closed_form:  A_p/A0 = alpha(v) beta P / E* (Eq. 23), A_c/A0 = kappa P / (h'_rms E*) (Eq. 8), so
  *                   mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) (Eq. 9), alpha(v) = b (1 - exp(-|v| / v_ref))
  *                   when v_ref > 0, else b; cap kappa / (s b h'_rms), limited to 1;
  *   - table:        A_p (and A_c under contact_area = mesoscale) interpolated in a friction table (tc_table.h);
- *                   A_c = kappa P / (h'_rms E*) under contact_area = eq8; mu >= 0. A table without the areas
+ *                   A_c = kappa P / (h'_rms E*) under contact_area = eq8; mu >= 0. A lookup of a version 3 table
+ *                   whose interpolation reads a node the campaign did not simulate (simulated = 0) is flagged
+ *                   like one outside the axes. A table without the areas
  *                   (format version 1) gives its mu as it is. The cap of beta at (P, v) is where s A_p reaches
  *                   A_c along the table's beta axis (both piecewise linear in beta: the crossing is exact),
  *                   limited to 1; the law's threshold is the largest such cap over the table's (P > 0, v) nodes.

@@ -21,8 +21,13 @@
  * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
  *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
  *   tridiagonal M-matrix with unit column sums: beta >= 0 and sum(beta) conserved for any step), then the cap
- *   beta <= beta_thres (Eq. 24) whose removal is summed; unless beta_threshold is set, the cap is the law's at
- *   the interval's pressure and grip speed.
+ *   beta <= beta_thres (Eq. 24). With a debris sink (debris_sink_length lambda > 0: lateral ejection or
+ *   compaction into a transfer layer), source and sink are one local equation per unit slide s under the pad,
+ *   d beta / ds = q - beta / lambda (q = K P / (H h_p)), integrated exactly over the interval's slide
+ *   s_i = w_i |dU_i|: beta_i e^(-s_i/lambda) + q lambda (1 - e^(-s_i/lambda)), before the advection. What the sink
+ *   and the cap take is summed (beta_removed). Unless beta_threshold
+ *   is set, the cap is the law's at the interval's pressure and grip speed. A later pass starts from
+ *   debris_carry_over times the beta field the earlier one left (beta_field).
  *
  * Coupling: a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one piece, the step,
  * when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max - 1e-9)) intervals with
@@ -432,14 +437,24 @@ static void transport(tc_stripdraw *m, double pressure, double speed, const doub
     if (!windowed) t0 = 0, t1 = n - 1;
     const double cap = interval_cap(m, pressure, speed);
     if (t0 <= t1) {
-        double produced = 0.0;
+        double produced = 0.0, sunk = 0.0;
+        const double lambda = p->debris_sink_length;
         for (size_t i = t0; i <= t1; ++i) {
             m->weight[i] = 0.5 * (w0[i] + m->w[i]);
+            const double slide = m->weight[i] * fabs(m->dU[i]); /* s of the interval under the pad */
             const double src = m->weight[i] == 0.0 ? 0.0 : kp * fabs(m->dU[i]) * m->weight[i] / hh;
             m->bsrc[i] = m->beta[i] + src;
+            if (lambda > 0 && slide > 0) {
+                /* d beta / ds = q - beta / lambda (q = src / slide) integrated exactly over the slide */
+                const double decay = exp(-slide / lambda);
+                const double b = m->beta[i] * decay + (src == 0.0 ? 0.0 : src / slide * lambda * -expm1(-slide / lambda));
+                sunk += m->bsrc[i] - b;
+                m->bsrc[i] = b;
+            }
             produced += src;
         }
         m->beta_produced += produced;
+        m->beta_removed += sunk;
         tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
     }
     /* the cap: over every node unless it is >= every beta away from [t0, t1] */
@@ -760,7 +775,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     }
     double bmax = 0.0;
     for (size_t i = 0; i < n; ++i) {
-        const double b = beta_field != NULL ? beta_field[i] : p->beta_initial;
+        const double b = beta_field != NULL ? p->debris_carry_over * beta_field[i] : p->beta_initial;
         bmax = i == 0 || b > bmax ? b : bmax;
     }
     if (bmax > cap)
@@ -834,7 +849,8 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     const double reach = ceil(p->window_courant) + 1.0; /* kept within [-n, n], where it acts as +-infinity */
     m->reach = reach >= -(double)n && reach <= (double)n ? (long long)reach : (reach < 0 ? -(long long)n : (long long)n);
     /* the state */
-    for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? beta_field[i] : p->beta_initial;
+    /* a later pass starts from the debris the earlier one left, the share debris_carry_over of it */
+    for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? p->debris_carry_over * beta_field[i] : p->beta_initial;
     m->beta_hi = NAN; /* the first interval caps every node */
     update_weights(m);
     state_limits(m);

@@ -33,6 +33,8 @@ void tc_table_free(tc_table *table) {
     free(table->particle_area);
     free(table->contact_area_std);
     free(table->particle_area_std);
+    free(table->unsimulated);
+    free(table->particle_area_clusters);
     free(table);
 }
 
@@ -60,6 +62,7 @@ int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_beta, co
     t->beta = copy_array(beta, n_beta);
     t->mu = copy_array(mu, n);
     t->beta_threshold = beta_threshold;
+    t->format_version = 1;
     if (!t->pressure || !t->velocity || !t->beta || !t->mu) {
         tc_table_free(t);
         return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
@@ -85,5 +88,30 @@ int tc_table_set_areas(tc_table *table, const double *contact_area, const double
         *dst[a] = copy;
     }
     table->format_version = 2;
+    return TC_OK;
+}
+
+int tc_table_set_extras(tc_table *table, const double *simulated, const double *particle_area_clusters, tc_msg msg) {
+    if (table->format_version < 2)
+        return tc_fail(msg, TC_ERROR, "table version 3 arrays need the version 2 areas; this table has none");
+    const size_t n = table->n_pressure * table->n_velocity * table->n_beta;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(simulated[i] == 0.0 || simulated[i] == 1.0))
+            return tc_fail(msg, TC_ERROR, "table simulated must be 0 or 1 at every node");
+        if (!isfinite(particle_area_clusters[i]) || particle_area_clusters[i] < 0)
+            return tc_fail(msg, TC_ERROR, "table particle_area_clusters must be finite and >= 0 everywhere");
+    }
+    double *unsim = malloc(n * sizeof *unsim), *clusters = copy_array(particle_area_clusters, n);
+    if (unsim == NULL || clusters == NULL) {
+        free(unsim);
+        free(clusters);
+        return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
+    }
+    for (size_t i = 0; i < n; ++i) unsim[i] = 1.0 - simulated[i];
+    free(table->unsimulated);
+    free(table->particle_area_clusters);
+    table->unsimulated = unsim;
+    table->particle_area_clusters = clusters;
+    table->format_version = 3;
     return TC_OK;
 }

@@ -25,8 +25,11 @@ typedef struct tc_table {
     /* format version 2 (NULL in version 1): ensemble means of A_c/A0 and A_p/A0 and their member spreads,
      * same layout as mu */
     double *contact_area, *particle_area, *contact_area_std, *particle_area_std;
+    /* format version 3 (NULL before): 1 - simulated (1 where the node holds its row's fit, not slides), and A_p/A0
+     * of the paper's cluster rule alone, same layout as mu */
+    double *unsimulated, *particle_area_clusters;
     double beta_threshold;  /* metadata "beta_threshold": the cap of beta (Eq. 24), in (0, 1] */
-    int format_version;     /* 2 with the areas, else 1 */
+    int format_version;     /* 3 with the version 3 arrays, 2 with the areas, else 1 */
     char content_hash[65];  /* the table's content hash (SHA-256, lowercase hex), "" when not known */
     char provenance[32];    /* where the values come from ("mesoscale", "closed_form", ...) */
 } tc_table;
@@ -40,6 +43,11 @@ TC_API int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_b
 /* Attach the version 2 arrays (copied; checked finite and >= 0) and make the table version 2. */
 TC_API int tc_table_set_areas(tc_table *table, const double *contact_area, const double *particle_area,
                               const double *contact_area_std, const double *particle_area_std, tc_msg msg);
+
+/* Attach the version 3 arrays of a version 2 table (copied; simulated 0 or 1, the areas finite and >= 0) and make
+ * the table version 3. */
+TC_API int tc_table_set_extras(tc_table *table, const double *simulated, const double *particle_area_clusters,
+                               tc_msg msg);
 
 /* Read the friction table resource (an array file, tc_table_file.c) at path; a path ending in .npz names the
  * resource beside it ending in .tca. TC_ERROR naming the path when it is missing or malformed. */

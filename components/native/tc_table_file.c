@@ -2,8 +2,9 @@
  * table's .npz (components/stripdraw/table.py, write_table_resource; the FMU build writes it into resources/).
  *
  * Entries used: the axes pressure, velocity, beta (1-D), mu (nP, nv, nb), the areas contact_area, particle_area,
- * contact_area_std, particle_area_std (all four or none: format version 2 of the table), the scalar
- * beta_threshold and the texts content_hash and provenance. Other entries are ignored. The values are checked as
+ * contact_area_std, particle_area_std (all four or none: format version 2 of the table), simulated and
+ * particle_area_clusters (both or none: version 3), the scalar beta_threshold and the texts content_hash and
+ * provenance. Other entries are ignored. The values are checked as
  * tc_table_from_arrays checks them (increasing finite axes, finite values >= 0, the threshold in (0, 1]).
  *
  * A path ending in ".npz" names the table whose resource is the same path ending in ".tca" (so the FMU parameter
@@ -53,6 +54,18 @@ static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_
     }
     if (n_areas != 0 && n_areas != 4)
         return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it has %d of the 4 area arrays", path, n_areas);
+    const tc_array_entry *extras[2] = {tc_arrays_find(a, "simulated"), tc_arrays_find(a, "particle_area_clusters")};
+    int n_extras = 0;
+    for (int k = 0; k < 2; ++k) {
+        if (extras[k] == NULL) continue;
+        if (extras[k]->kind != TC_ARRAY_FLOAT64 || !shape_is(extras[k], 3, shape))
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: '%s' is not an array of the shape of mu",
+                           path, k == 0 ? "simulated" : "particle_area_clusters");
+        ++n_extras;
+    }
+    if (n_extras == 1 || (n_extras == 2 && n_areas != 4))
+        return tc_fail(msg, TC_ERROR, "friction table %s is malformed: version 3 needs simulated, "
+                       "particle_area_clusters and the 4 area arrays", path);
     char detail[300];
     tc_msg d = {detail, sizeof detail};
     tc_table *t = NULL;
@@ -60,11 +73,11 @@ static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_
                                   ax[2]->values, mu->values, bt->values[0], &t, d);
     if (rc == TC_OK && n_areas == 4)
         rc = tc_table_set_areas(t, areas[0]->values, areas[1]->values, areas[2]->values, areas[3]->values, d);
+    if (rc == TC_OK && n_extras == 2) rc = tc_table_set_extras(t, extras[0]->values, extras[1]->values, d);
     if (rc != TC_OK) {
         tc_table_free(t);
         return tc_fail(msg, rc, "friction table %s is malformed: %s", path, detail);
     }
-    t->format_version = n_areas == 4 ? 2 : 1;
     const tc_array_entry *hash = tc_arrays_find(a, "content_hash"), *prov = tc_arrays_find(a, "provenance");
     snprintf(t->content_hash, sizeof t->content_hash, "%s", hash != NULL && hash->kind == TC_ARRAY_TEXT ? hash->text : "");
     snprintf(t->provenance, sizeof t->provenance, "%s", prov != NULL && prov->kind == TC_ARRAY_TEXT ? prov->text : "unknown");

@@ -62,9 +62,14 @@ class NativeTable:
         p, v, b, mu = self._arrays
         c.call(c.lib.tc_table_from_arrays, p.size, v.size, b.size, ptr(p), ptr(v), ptr(b), ptr(mu),
                table.beta_threshold, ctypes.byref(self.handle))
-        if table.version == 2:
+        if table.version >= 2:
             areas = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in AREAS]
+            self._arrays += areas
             c.call(c.lib.tc_table_set_areas, self.handle, *(ptr(a) for a in areas))
+        if table.version >= 3:
+            extras = [np.ascontiguousarray(table.array(k), dtype=float) for k in ("simulated", "particle_area_clusters")]
+            self._arrays += extras
+            c.call(c.lib.tc_table_set_extras, self.handle, *(ptr(a) for a in extras))
 
     def __del__(self):
         if getattr(self, "handle", None):

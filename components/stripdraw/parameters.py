@@ -24,6 +24,7 @@ INTEGRATORS = ("explicit", "implicit")
 TABLE_POLICIES = ("clamp", "error")
 FRICTION_VELOCITIES = ("grip", "slip_rate")
 CONTACT_AREAS = ("mesoscale", "eq8")
+PARTICLE_AREA_RULES = ("load_bearing", "clusters")
 
 
 _p = param
@@ -62,6 +63,15 @@ class StripDrawParameters:
     beta_threshold: float = _p(
         0.0, "1", "cap of beta (Eq. 24); 0 takes it from the friction law", 0.0, 1.0
     )
+    debris_sink_length: float = _p(
+        0.0, "m", "debris sink: slide lambda over which debris under the pad leaves the interface (lateral ejection "
+        "or compaction into a transfer layer), d beta/ds = source - beta/lambda; 0: no sink (the paper's model)",
+        0.0, 1e3
+    )
+    debris_carry_over: float = _p(
+        1.0, "1", "share of the debris of the previous pass that a pass started from its field (field_input) keeps "
+        "(1: all of it, the paper's repeated passes without cleaning)", 0.0, 1.0
+    )
     # --- friction law (Eq. 6-9, 23) -------------------------------------------------------
     friction_model: str = _p("table", "", "friction law: table | closed_form | constant", choices=FRICTION_MODELS)
     mu0: float = _p(0.15, "1", "particle-free friction coefficient (calibration)", 0.0, 5.0)
@@ -84,6 +94,15 @@ class StripDrawParameters:
     particle_area_scale: float = _p(
         1.0, "1", "factor on the particle-borne area A_p (1: as the mesoscale campaign measured it; "
         "fitted by tribocosim calibrate)", 0.0, 1e6
+    )
+    particle_area_rule: str = _p(
+        "load_bearing", "", "which flakes carry A_p in the table law: load_bearing (every flake that bears load in the "
+        "mesoscale contact: the paper's cluster rule, pinched and held flakes) | clusters (the paper's cluster rule "
+        "alone, Fig. 8)", choices=PARTICLE_AREA_RULES
+    )
+    flake_shear_ratio: float = _p(
+        0.0, "1", "shear strength of the flake-borne contact over tau0, r in mu = mu0 [(1 - s A_p/A_c) + r s A_p/A_c] "
+        "(0: frictionless flakes, the paper's model)", 0.0, 1.0
     )
     friction_velocity: str = _p(
         "grip", "", "velocity in mu(P, v, beta): grip (the pulling speed, as the paper) | slip_rate (each node's)",

@@ -325,7 +325,8 @@ RESOURCE_SUFFIX = ".tca"
 def resource_entries(table: FrictionTable) -> dict:
     """The entries of the table's resource form: axes, value arrays, ``beta_threshold``, ``content_hash``,
     ``provenance`` (what the native model reads; further entries may be added without a change to its reader)."""
-    entries = {name: getattr(table, name) for name in (*AXES, *table.arrays())}
+    entries = {name: getattr(table, name) for name in AXES}
+    entries.update({name: table.array(name) for name in table.arrays()})
     entries["beta_threshold"] = table.beta_threshold
     entries["content_hash"] = str(table.metadata.get("content_hash", ""))
     entries["provenance"] = table.provenance

@@ -116,11 +116,11 @@ def test_the_command_line_writes_the_resource(folder):
 
 
 def test_unknown_entries_are_skipped(folder):
-    """A table resource may gain arrays (a second A_p observable, the largest simulated beta per (P, v))."""
+    """A table resource may gain arrays the native model does not read (another observable, a per-(P, v) array)."""
     entries = resource_entries(read_table(DEFAULT_TABLE))
     t = read_table(DEFAULT_TABLE)
     entries = {"largest_simulated_beta": np.ones((t.pressure.size, t.velocity.size)), **entries,
-               "particle_area_clusters": t.particle_area * 0.99, "note": "a text entry"}
+               "particle_area_wide": t.particle_area * 0.99, "note": "a text entry"}
     arrays.write_arrays(folder / "grown.tca", entries)
     core().lib.tc_table_free(read_resource(folder / "grown.tca"))
 
@@ -131,6 +131,9 @@ def _variants(entries):
     yield "no mu", {k: v for k, v in entries.items() if k != "mu"}, "no array 'mu'"
     yield "no threshold", {k: v for k, v in entries.items() if k != "beta_threshold"}, "no scalar 'beta_threshold'"
     yield "3 areas", {k: v for k, v in entries.items() if k != "particle_area_std"}, "3 of the 4 area arrays"
+    yield "half of version 3", {**entries, "simulated": np.ones_like(entries["mu"])}, "version 3 needs simulated"
+    yield "simulated not 0 or 1", {**entries, "simulated": np.full_like(entries["mu"], 0.5),
+                                   "particle_area_clusters": np.zeros_like(entries["mu"])}, "simulated must be 0 or 1"
     yield "mu shape", {**entries, "mu": entries["mu"][:, :, :-1]}, "no array 'mu' of shape"
     yield "axis order", {**entries, "beta": entries["beta"][::-1].copy()}, "strictly increasing"
     yield "negative mu", {**entries, "mu": -entries["mu"]}, "finite and >= 0"
