@@ -50,6 +50,10 @@ class Port:
     They are not the FMU's ``min``/``max`` (a host may pass through them: the model still computes):
     a set-point (:class:`SetPoint`) connected to an input outside them is a scene error, and an output
     outside them after a step is a warning of the native FMU (logged; the step returns Warning).
+
+    ``initial_inputs`` names the inputs an output depends on at the end of initialization (the native FMU
+    computes its outputs there from the inputs set during initialization: the model description's
+    InitialUnknown dependencies); empty: the parameters alone.
     """
 
     name: str
@@ -61,6 +65,7 @@ class Port:
     low: float | str | None = None
     high: float | str | None = None
     why: str = ""
+    initial_inputs: tuple = ()
 
     @property
     def model_key(self) -> str:

@@ -32,9 +32,11 @@ BASE_UNITS = {
 #: How a native FMU's outputs depend on its inputs, for the model descriptions' ModelStructure. The native FMI
 #: layer (components/native/tc_fmu_instance.c) computes the outputs in doStep and at the end of initialization
 #: only; fmi2SetReal/fmi3SetFloat64 of an input changes no output until the next doStep. So no output has direct
-#: feedthrough (FMI 2.0 section 2.2.8 Outputs, FMI 3.0 section 2.4.8 Output: dependencies=""), and at the end of
-#: initialization the outputs come from the parameters alone (InitialUnknown dependencies=""): outputs are
-#: initial="calculated", the model's values after initialization (FMI 2.0 section 2.2.7, FMI 3.0 section 2.4.7).
+#: feedthrough (FMI 2.0 section 2.2.8 Outputs, FMI 3.0 section 2.4.8 Output: dependencies=""); at the end of
+#: initialization an output depends on the inputs its Port names in ``initial_inputs`` (the strip's
+#: contact_pressure on normal_force) and otherwise on the parameters alone (InitialUnknown dependencies=""):
+#: outputs are initial="calculated", the model's values after initialization (FMI 2.0 section 2.2.7, FMI 3.0
+#: section 2.4.7).
 OUTPUT_DEPENDENCIES = ""
 INITIAL_DEPENDENCIES = ""
 

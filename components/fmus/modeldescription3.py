@@ -106,6 +106,8 @@ def model_description(comp: Component, token: str) -> str:
             SubElement(structure, "Output", {"valueReference": str(vr), "dependencies": OUTPUT_DEPENDENCIES})
     for vr, v in numbered:
         if v["causality"] == "output":
-            SubElement(structure, "InitialUnknown", {"valueReference": str(vr), "dependencies": INITIAL_DEPENDENCIES})
+            deps = declarations.initial_dependencies(common, v, 0) if "initial_inputs" in v else ""
+            SubElement(structure, "InitialUnknown", {"valueReference": str(vr),
+                                                     "dependencies": deps or INITIAL_DEPENDENCIES})
     indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"

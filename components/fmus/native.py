@@ -229,7 +229,8 @@ def model_description(comp: Component, fmu_guid: str) -> str:
             SubElement(out, "Unknown", {"index": str(index), "dependencies": OUTPUT_DEPENDENCIES})
         initial = SubElement(structure, "InitialUnknowns")
         for index in outputs:
-            SubElement(initial, "Unknown", {"index": str(index), "dependencies": INITIAL_DEPENDENCIES})
+            deps = declarations.initial_dependencies(vs, vs[index - 1], 1) or INITIAL_DEPENDENCIES
+            SubElement(initial, "Unknown", {"index": str(index), "dependencies": deps})
     indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
 

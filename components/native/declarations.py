@@ -98,11 +98,23 @@ def variables(comp: Component) -> list[dict]:
         out.append({"name": port.name, "kind": "real", "causality": "input", "index": k, "unit": port.unit or "1",
                     "start": port.start, "low": None, "high": None, "choices": (),
                     "description": port.description})
+    inputs = [port.name for port in comp.inputs]
     for k, port in enumerate(comp.outputs):
+        unknown = sorted(set(port.initial_inputs) - set(inputs))
+        if unknown:
+            raise TribocosimError(f"component {comp.name}: output {port.name} names initial_inputs {unknown} that are "
+                                  f"not inputs; inputs: {inputs}")
         out.append({"name": port.name, "kind": "integer" if port.integer else "real", "causality": "output",
                     "index": k, "unit": port.unit or "1", "start": port.start, "low": None, "high": None,
-                    "choices": (), "description": port.description})
+                    "choices": (), "description": port.description, "initial_inputs": tuple(port.initial_inputs)})
     return out
+
+
+def initial_dependencies(vs: list[dict], output: dict, base: int) -> str:
+    """The InitialUnknown dependencies of ``output`` among the variables ``vs`` (model-description order): their
+    positions + ``base`` (FMI 2.0: 1-based indices, base 1; FMI 3.0: value references, base 0), space-separated."""
+    names = set(output.get("initial_inputs", ()))
+    return " ".join(str(k + base) for k, v in enumerate(vs) if v["causality"] == "input" and v["name"] in names)
 
 
 def output_bounds(comp: Component) -> list[dict]:

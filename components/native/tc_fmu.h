@@ -70,6 +70,9 @@ void tc_component_free(tc_component *c);
  * unless the component interpolates inputs (TC_CAN_INTERPOLATE_INPUTS; FMI 2.0 canInterpolateInputs) and
  * the importer set them (fmi2SetRealInputDerivatives). */
 int tc_component_step(tc_component *c, double dt, const double *inputs, const double *derivatives, tc_msg msg);
+/* At the end of initialization: make the inputs (in their order) current without advancing time, so that the
+ * outputs report what depends on them (the Port's initial_inputs); TC_DISCARD naming an input a step would refuse. */
+int tc_component_start(tc_component *c, const double *inputs, tc_msg msg);
 /* The outputs, in their order (Integer outputs as doubles). */
 void tc_component_outputs(const tc_component *c, double *outputs);
 /* After every accepted step (side outputs: the strip's field file); a failure makes the instance unusable. */

@@ -200,9 +200,19 @@ int tc_inst_make_component(tc_instance *c) {
 int tc_inst_exit_initialization(tc_instance *c) {
     double start = c->time;
     if (tc_inst_make_component(c) != TC_LOG_OK) return TC_LOG_ERROR;
+    /* the outputs at the communication point t = start are the model's for the inputs set during initialization
+     * (initial="calculated"); inputs a step would refuse are logged, and the first doStep discards them */
+    int status = TC_LOG_OK;
+    if (tc_component_start(c->component, c->inputs, msg_of(c)) == TC_OK) {
+        tc_component_outputs(c->component, c->outputs);
+    } else {
+        tc_inst_logf(c, TC_LOG_WARNING, "at the end of initialization: %s; the outputs keep the values without the "
+                     "inputs", c->message);
+        status = TC_LOG_WARNING;
+    }
     c->time = start;
     c->phase = TC_PHASE_STEPPING;
-    return TC_LOG_OK;
+    return status;
 }
 
 int tc_inst_terminate(tc_instance *c) {

@@ -46,6 +46,13 @@ int tc_component_step(tc_component *c, double dt, const double *inputs, const do
     return TC_GLUE_STEP(c->model, dt, inputs, msg);
 }
 
+int tc_component_start(tc_component *c, const double *inputs, tc_msg msg) {
+    (void)c; /* the outputs at the start come from the state alone */
+    (void)inputs;
+    (void)msg;
+    return TC_OK;
+}
+
 void tc_component_outputs(const tc_component *c, double *outputs) { TC_GLUE_FN(_outputs)(c->model, outputs); }
 
 int tc_component_after_step(tc_component *c, tc_msg msg) {

@@ -863,6 +863,29 @@ int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double gr
     return tc_stripdraw_step_poly(m, dt, normal_force, none, grip_velocity, none, msg);
 }
 
+/* TC_DISCARD naming the input when the inputs cannot be used (non-finite, a negative normal force) */
+static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
+    char r[TC_REPR_SIZE];
+    if (!isfinite(normal_force))
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
+                       tc_repr_double(normal_force, r));
+    if (normal_force < 0)
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r));
+    if (!isfinite(grip_velocity))
+        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
+                       tc_repr_double(grip_velocity, r));
+    return TC_OK;
+}
+
+int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
+    int rc = check_inputs(normal_force, grip_velocity, msg);
+    if (rc != TC_OK) return rc;
+    m->normal_force = normal_force;
+    m->grip_velocity = grip_velocity;
+    state_limits(m);
+    return TC_OK;
+}
+
 int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, const double d_normal_force[2],
                            double grip_velocity, const double d_grip_velocity[2], tc_msg msg) {
     static const char *const names[4] = {"d(normal_force)/dt", "d2(normal_force)/dt2", "d(grip_velocity)/dt",
@@ -873,14 +896,8 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     if (!isfinite(dt))
         return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r));
     if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r));
-    if (!isfinite(normal_force))
-        return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
-                       tc_repr_double(normal_force, r));
-    if (normal_force < 0)
-        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r));
-    if (!isfinite(grip_velocity))
-        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
-                       tc_repr_double(grip_velocity, r));
+    int checked = check_inputs(normal_force, grip_velocity, msg);
+    if (checked != TC_OK) return checked;
     for (int k = 0; k < 4; ++k)
         if (!isfinite(d[k]))
             return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],

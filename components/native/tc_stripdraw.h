@@ -66,6 +66,11 @@ TC_API int tc_stripdraw_refusal(const tc_stripdraw *m);
 /* The outputs of the current state, indexed by enum tc_stripdraw_output. */
 TC_API void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]);
 
+/* Make the inputs current without advancing time (the end of initialization: the outputs then report them, e.g.
+ * contact_pressure = F_N / (L_T w_T)). TC_DISCARD naming the input, state unchanged, for inputs a step would refuse
+ * (non-finite, a negative normal force). */
+TC_API int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg);
+
 /* The state as a flat byte image (native byte order): a header (magic, version, node count), the arrays
  * U, V, A, Up, beta, slip_rate, fprev, the scalars time, reaction, normal_force, grip_velocity, beta_removed,
  * beta_produced, beta_hi, the counts n_steps, clamp_count, then the contact flags. Everything else is fixed by

@@ -142,6 +142,10 @@ int tc_component_step(tc_component *c, double dt, const double *inputs, const do
     return tc_stripdraw_step_poly(c->model, dt, inputs[0], derivatives, inputs[1], derivatives + 2, msg);
 }
 
+int tc_component_start(tc_component *c, const double *inputs, tc_msg msg) {
+    return tc_stripdraw_set_inputs(c->model, inputs[0], inputs[1], msg);
+}
+
 void tc_component_outputs(const tc_component *c, double *outputs) { tc_stripdraw_outputs(c->model, outputs); }
 
 int tc_component_after_step(tc_component *c, tc_msg msg) {

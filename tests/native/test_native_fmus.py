@@ -440,7 +440,9 @@ def test_no_output_has_direct_feedthrough_and_the_model_description_says_so(unzi
     outputs = [v for v in md.modelVariables if v.causality == "output"]
     inputs = [v for v in md.modelVariables if v.causality == "input"]
     assert [(u.variable.name, u.dependencies) for u in md.outputs] == [(v.name, []) for v in outputs]
-    assert [(u.variable.name, u.dependencies) for u in md.initialUnknowns] == [(v.name, []) for v in outputs]
+    initial = {"contact_pressure": ["normal_force"]} if name == "StripDraw" else {}  # at initialization only
+    assert [(u.variable.name, [d.name for d in u.dependencies]) for u in md.initialUnknowns] == \
+        [(v.name, initial.get(v.name, [])) for v in outputs]
     msgs = []
     s = _fmpy_instance(unzipped[name], md, {}, msgs)
     s.exitInitializationMode()
@@ -473,6 +475,34 @@ def test_outputs_after_initialization_are_the_model_s_values(unzipped, descripti
     s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40, "beta_initial": 0.01}, msgs)
     s.exitInitializationMode()
     assert s.getReal([vr["beta_max"].valueReference, vr["beta_mean"].valueReference]) == [0.01, 0.01]
+    s.terminate()
+    s.freeInstance()
+
+
+def test_outputs_at_the_start_report_the_inputs_set_during_initialization(unzipped, descriptions):
+    """contact_pressure at t = 0 is F_N / (L_T w_T) of the normal force set during initialization (the model's
+    value after initialization, not the 0 of no input), and the model description says it depends on that input
+    at initialization (InitialUnknown dependencies) and on none in a step (Outputs dependencies=""); a normal force
+    a step would refuse is logged as a warning and the first doStep discards it."""
+    md = descriptions["StripDraw"]
+    vr = {v.name: v for v in md.modelVariables}
+    index = {v.name: k + 1 for k, v in enumerate(md.modelVariables)}
+    initial = {u.variable.name: [d.name for d in u.dependencies] for u in md.initialUnknowns}
+    assert initial["contact_pressure"] == ["normal_force"] and initial["pull_force"] == []
+    assert all(not u.dependencies for u in md.outputs)
+    assert index["normal_force"] == next(k + 1 for k, v in enumerate(md.modelVariables) if v.name == "normal_force")
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40}, msgs)
+    s.setReal([vr["normal_force"].valueReference], [12250.0])
+    s.exitInitializationMode()
+    assert s.getReal([vr["contact_pressure"].valueReference]) == [12250.0 / (0.035 * 0.035)]
+    s.terminate()
+    s.freeInstance()
+    msgs = []
+    s = _fmpy_instance(unzipped["StripDraw"], md, {"n_elements": 40}, msgs)
+    s.setReal([vr["normal_force"].valueReference], [-5.0])
+    assert s.exitInitializationMode() == 1  # fmi2Warning
+    assert any(st == 1 and "at the end of initialization: normal_force = -5 N must be >= 0" in m for st, m in msgs), msgs
     s.terminate()
     s.freeInstance()
 
@@ -531,7 +561,8 @@ def test_fmpy_simulate_fmu_with_a_negative_normal_force_ends_and_says_why(native
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "last time 0.0" in proc.stdout, proc.stdout
     out = proc.stdout + proc.stderr
-    assert out.count("normal_force = -5 N must be >= 0") == 1 and "the inputs are at fault" in out, out[-2000:]
+    assert out.count("the inputs are at fault") == 1 and "normal_force = -5 N must be >= 0" in out, out[-2000:]
+    assert "at the end of initialization: normal_force = -5 N must be >= 0" in out, out[-2000:]
 
 
 @pytest.mark.parametrize("inputs, parameters, message", [
