@@ -7,16 +7,16 @@ preset's own slide settings and surfaces with one thing changed, as a resumable 
 (``surrogate.campaign``: each finished slide is written at once, a rerun resumes):
 
 ``similarity``
-    10 MPa, beta = 0.1: direct runs at v0 = 0.5 and 0.08 m/s (the DEM at v0 with the oil's damping)
-    against the same members run through the similarity (the DEM at 10 m/s, damping x 10 / v0).
+    10 MPa, beta = 0.1: direct runs at v0 = 0.5 m/s (4 members) and 0.08 m/s (2 members) (the DEM at v0 with the
+    oil's damping) against the same members run through the similarity (the DEM at 10 m/s, damping x 10 / v0).
 ``numerics``
     30 MPa, beta = 0.5 (a deposit with stacks), v0 = 0.08 m/s: dt_safety 0.25 with flake-flake points
     1 px apart against the preset's 0.5 and 2 px.
 ``plateau``
-    10 MPa, beta = 0.1 and 30 MPa, beta = 0.3: v0 = 0.02, 0.08, 0.5, 2 and 10 m/s with the preset's
-    settings: where the damping per pixel Lambda is large, A_p should not depend on v0.
+    10 MPa, beta = 0.1 and 30 MPa, beta = 0.3: v0 = 0.02, 0.08, 0.5 and 2 m/s with the preset's settings: where
+    the damping per pixel Lambda is large, A_p should not depend on v0.
 
-Members: 2 surface pairs x the seeds of the set. ``report`` prints, per set and point, <A_p>/A0, <A_c>/A0
+Members: 2 surface pairs x the seeds of the set (two placements). ``report`` prints, per set and point, <A_p>/A0, <A_c>/A0
 and alpha = <A_p>/A0 / (beta P / E*) as member mean +- standard error, the paired differences, and the
 cost (wall seconds of the slides)::
 
@@ -59,7 +59,7 @@ def cases(name: str) -> list:
     if name == "similarity":
         for s in surfaces:
             for seed in (11, 12):
-                for v0 in (0.5, 0.08):
+                for v0 in (0.5, 0.08) if seed == 11 else (0.5,):  # a direct slide at 0.08 m/s costs ~6 at 0.5
                     out.append(_case(sweep, s, 10e6, v0, 58, seed, "direct", dem_velocity=None))
                     out.append(_case(sweep, s, 10e6, v0, 58, seed, "similarity"))
     elif name == "numerics":
@@ -68,16 +68,16 @@ def cases(name: str) -> list:
             out.append(_case(sweep, s, 30e6, 0.08, 290, 11, "preset"))
     elif name == "plateau":
         for s in surfaces:
-            for seed in (11, 12, 13):
+            for seed in (11, 12):
                 for pressure, count in ((10e6, 58), (30e6, 174)):
-                    for v0 in (0.02, 0.08, 0.5, 2.0, 10.0):
+                    for v0 in (0.02, 0.08, 0.5, 2.0):
                         out.append(_case(sweep, s, pressure, v0, count, seed, "preset"))
     else:
         raise SystemExit(f"unknown set {name!r}; known: similarity, numerics, plateau")
     return out
 
 
-SETS = ("similarity", "numerics", "plateau")
+SETS = ("numerics", "plateau", "similarity")
 
 
 def run(args) -> None:
