@@ -93,3 +93,52 @@ def test_build_where_every_case_fails_reports_it(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "8 failed" in err and "no finished case" in err
     assert len(list((tmp_path / "o" / "cases").glob("*.error.json"))) == 8
+
+
+def test_verify_reruns_a_sample_of_the_recorded_cases(built, tmp_path, capsys):
+    """The tiny table's cheapest case of every level rebuilt from its recorded sweep (same case ids) and rerun on
+    the same FFT plans: identical to its recorded results. A table whose recorded result was altered (rebuilt
+    with a correct hash) fails, naming the case."""
+    d, _ = built
+    table_path = d / "out" / "friction_table.npz"
+    out_json = tmp_path / "verify.json"
+    assert surrogate_cli.main(["verify", str(table_path), "--budget-s", "100", "--workers", "1",
+                               "--json", str(out_json)]) == 0
+    printed = capsys.readouterr().out
+    results = json.loads(out_json.read_text())
+    assert {r["labels"]["n_flakes"] for r in results} == {0, 2} and all(r["verdict"] == "identical" for r in results)
+    assert "2 recorded cases rerun" in printed and "0 differ" in printed
+
+    from tribocosim.components.stripdraw.table import write_table
+
+    t = read_table(table_path)
+    meta = json.loads(json.dumps(t.metadata))
+    for case in meta["cases"]:  # every member of the level moves by 0.05 A0, beyond its spread and 13 pixels
+        if case["labels"]["n_flakes"] == 2:
+            case["a_p"] += 0.05
+    import dataclasses
+    write_table(tmp_path / "altered.npz", dataclasses.replace(t, metadata=meta))
+    assert surrogate_cli.main(["verify", str(tmp_path / "altered.npz"), "--budget-s", "1e9", "--workers", "1"]) == 1
+    assert "differs" in capsys.readouterr().out
+
+
+def test_direct_slide_check_of_a_table(built):
+    """surrogate.table_check on the tiny table: at a node with the table's own placements the direct slides are
+    the members behind it, and with one debris level the fitted line passes through their mean: no difference,
+    the check passes; a point outside the table's axes is refused."""
+    from tribocosim.components.errors import TableDomainError
+    from tribocosim.surrogate.executors import make_executor
+    from tribocosim.surrogate.table_check import run_check
+
+    d, _ = built
+    t = read_table(d / "out" / "friction_table.npz")
+    beta = float(t.beta[1])
+    ex = make_executor(1)
+    try:
+        on_node = run_check(t, ex, points=((5e6, 50.0, beta),), seeds=(1, 2, 3))[0]
+        assert on_node.members == 3 and on_node.all_nodes_simulated and on_node.passed
+        assert on_node.direct == pytest.approx(on_node.table, rel=1e-12)
+        with pytest.raises(TableDomainError, match="beta = .* is outside the table"):
+            run_check(t, ex, points=((5e6, 50.0, 1.5 * beta),), seeds=(1,))
+    finally:
+        ex.close()
