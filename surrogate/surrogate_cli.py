@@ -93,6 +93,11 @@ def _build(argv: list[str]) -> int:
     finally:
         executor.close()
     print(report.summary(), file=sys.stderr)
+    from .campaign import case_cpu_seconds, load_records
+
+    done = load_records(out)[1]
+    print(f"campaign cost: {case_cpu_seconds(done) / 3600:.3g} core-hours in {len(done)} finished cases "
+          f"(the sum of their wall times; this run {report.wall_s / 3600:.3g} h on {report.executor})", file=sys.stderr)
     if args.no_table:
         return 1 if report.failed else 0
     info = {"executor": report.executor, "campaign_wall_s": report.wall_s,

@@ -41,6 +41,7 @@ def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
                               "--table", str(d / "again.npz"), "--quiet"])
     err = capsys.readouterr().err
     assert rc2 == 0 and "16 already finished, 0 computed" in err
+    assert "campaign cost: " in err and "core-hours in 16 finished cases" in err
     assert np.array_equal(read_table(d / "again.npz").mu, table.mu)
 
 
