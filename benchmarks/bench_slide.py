@@ -8,6 +8,12 @@ after. It only reads ``SlideResult.timings`` and ``info``, so the same script ti
 4; set ``TRIBOCOSIM_FFTW_WISDOM`` to one file for both runs so that they use the same FFT plans, and
 so the same numbers).
 
+``deposit``: the shipped table's slides (surrogate/presets/quick.toml: 256^2 pixels of 1 um, roll-off
+surfaces, flakes deposited in the 1 MPa gap, the DEM at 10 m/s for the test's 0.08 m/s) at 30 MPa for the
+debris levels ``--betas`` (default 0.3, 0.5 and 1.0), each with the preset's numerics (``dt_safety`` 0.5,
+flake-flake points 2 px apart) and with the finer ones they replace (``dt_safety`` 0.25, 1 px), over
+``--steps`` pixels (default 30): the DEM and BEM cost per pixel of each, before and after.
+
 ``physics``: reduced-size checks of Sec. 6 on a 256^2 grid with 20 flakes:
 <A_p>/A0 vs flake diameter (6, 12, 24 um at 10 MPa) and vs pressure (2..30 MPa at 12 um); the
 pressure series is fitted with <A_p>/A0 = alpha beta p / E* (Eq. 23, a line through the origin)
@@ -16,6 +22,7 @@ and R^2 is reported. Several placements (``--seeds``) are averaged as in the pap
 Usage::
 
     python benchmarks/bench_slide.py perf [--sizes 256 512] [--steps K]
+    python benchmarks/bench_slide.py deposit [--betas 0.3 0.5 1.0] [--steps 30]
     python benchmarks/bench_slide.py physics [--seeds 3] [--jobs 2] [--steps K]
 
 ``--steps K`` slides K pixels instead of 2n (a quicker, partial run). Results are printed and
@@ -98,6 +105,36 @@ def perf(args) -> dict:
             "load": _load_note()}
 
 
+def deposit(args) -> dict:
+    import math
+
+    from tribocosim.surrogate.sweep import load_preset
+
+    sweep = load_preset("quick")
+    size = sweep.base_config().size
+    numerics = {"preset (dt_safety 0.5, pairs 2 px)": {},
+                "finer (dt_safety 0.25, pairs 1 px)": {"dt_safety": 0.25, "pair_spacing_px": None}}
+    rows = []
+    for beta in args.betas:
+        count = round(beta * size**2 / (math.pi * 36e-12))
+        for label, over in numerics.items():
+            kw = {**sweep.slide, **sweep.surfaces[0], "pressure": 30e6, "v0": 0.08, "n_flakes": count,
+                  "flake_seed": 11, "n_slide_steps": args.steps or 30, **over}
+            load0 = _load_note()
+            r = run_case(kw)
+            r.update(load_before=load0, load_after=_load_note(), numerics=label)
+            if "error" not in r:
+                r["split"] = time_split(r)
+                t = r["split"]
+                print(f"beta {beta:g} ({count} flakes), {label}: DEM {t['dem_ms_per_pixel'] / 1e3:.3f} s/pixel, "
+                      f"BEM {t['bem_s'] / r['steps']:.3f} s/pixel, <A_p>/A0 {r['mean_particle_fraction']:.4g} "
+                      f"over {r['steps']} pixels ({load0}; after: {r['load_after']})", flush=True)
+            else:
+                print(f"beta {beta:g}, {label}: {r['error']}", flush=True)
+            rows.append(r)
+    return {"mode": "deposit", "rows": rows, "load": _load_note()}
+
+
 def fit_alpha(rows, e_star: float) -> dict:
     """Least-squares alpha of <A_p>/A0 = alpha beta p/E* (through the origin) and its R^2."""
     x = np.array([r["beta"] * r["pressure"] / e_star for r in rows])
@@ -158,14 +195,15 @@ def physics(args) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("mode", choices=("perf", "physics"))
+    ap.add_argument("mode", choices=("perf", "physics", "deposit"))
+    ap.add_argument("--betas", type=float, nargs="+", default=[0.3, 0.5, 1.0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--steps", type=int, default=0, help="pixels to slide (0: the full 2n)")
     ap.add_argument("--out", default=None)
     args = ap.parse_args(argv)
-    report = perf(args) if args.mode == "perf" else physics(args)
+    report = {"perf": perf, "physics": physics, "deposit": deposit}[args.mode](args)
     out = args.out or f"bench_slide_{args.mode}.json"
     with open(out, "w") as fh:
         json.dump(report, fh, indent=1)
