@@ -4,7 +4,8 @@ The quick preset (surrogate/presets/quick.toml) slides at the strip-draw test's 
 at ``dem_velocity`` = 10 m/s with the damping per pixel of the physical speed, Lambda = gamma dx / v0, and
 with two cheaper numerics (``dt_safety`` 0.5, flake-flake points 2 px apart). Each set below runs the
 preset's own slide settings and surfaces with one thing changed, as a resumable campaign
-(``surrogate.campaign``: each finished slide is written at once, a rerun resumes):
+(``surrogate.campaign``: each finished slide is written at once, a rerun resumes), each slide over
+``STEPS`` = 128 pixels (half the domain; the comparisons are member by member over the same slide):
 
 ``similarity``
     10 MPa, beta = 0.1: direct runs at v0 = 0.5 m/s (4 members) and 0.08 m/s (2 members) (the DEM at v0 with the
@@ -41,12 +42,17 @@ def _preset():
     return load_preset("quick")
 
 
+#: pixels slid by the checks' slides: half the domain (the comparisons are paired, member by member, over the
+#: same slide; the table's slides go 2L = 512 pixels)
+STEPS = 128
+
+
 def _case(sweep, surface: int, pressure: float, v0: float, n_flakes: int, seed: int, label: str, **over):
     from tribocosim.surrogate.campaign import Case
     from tribocosim.surrogate.slide_config import SlideConfig
 
     cfg = SlideConfig(**{**sweep.slide, **sweep.surfaces[surface], "pressure": pressure, "v0": v0,
-                         "n_flakes": n_flakes, "flake_seed": seed, **over})
+                         "n_flakes": n_flakes, "flake_seed": seed, "n_slide_steps": STEPS, **over})
     return Case(cfg, {"setting": label, "pressure": pressure, "velocity": v0, "beta": cfg.beta,
                       "n_flakes": n_flakes, "seed": seed, "surface": surface})
 
