@@ -166,7 +166,7 @@ def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
     """The C host of tests/native/host (compiled into ``tmp``) running the default draw (``steps`` steps of 1 ms at
     10 MPa and 0.08 m/s) on the extracted StripDraw FMU, without printing: the command line."""
     from tribocosim.components.fmus.native import fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
                               include_dirs=[fmi2_headers()], libs=["-ldl"])

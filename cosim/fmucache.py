@@ -22,7 +22,7 @@ import tempfile
 from pathlib import Path
 
 from tribocosim.components.errors import SceneError, TribocosimError
-from tribocosim.components.native.library import cache_dir
+from tribocosim.components.native.toolchain.library import cache_dir
 
 
 def host_platform() -> str:

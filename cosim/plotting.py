@@ -48,8 +48,8 @@ def _pyplot():
 
 def read_field(path) -> dict:
     """The arrays of a StripDraw ``field_output`` file (time, X, beta, U, contact, window; its format's owner
-    is :mod:`tribocosim.components.stripdraw.fields`)."""
-    from tribocosim.components.stripdraw.fields import read_fields
+    is :mod:`tribocosim.components.native.resource_io.field_file`)."""
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     return read_fields(path)
 

@@ -21,7 +21,7 @@ FMU's name. For each FMU the build
 Before building anything, every selected FMU's files and import closure are checked, so that a
 missing file fails the whole build without leaving some of the FMUs built.
 
-The models are bindings over the native core (:mod:`tribocosim.components.native.library`): an FMU carries
+The models are bindings over the native core (:mod:`tribocosim.components.native.toolchain.library`): an FMU carries
 the core library compiled for the machine that builds it, beside the binding (the FMU runs on that platform).
 
 An FMU's ``resources/`` then holds its script, ``tribocosim/__init__.py``,
@@ -182,7 +182,7 @@ def resource_paths(name: str) -> list[str]:
 
 
 def _bundled_library_name() -> str:
-    from tribocosim.components.native import library
+    from tribocosim.components.native.toolchain import library
 
     return library.BUNDLED.name
 
@@ -196,8 +196,8 @@ def _staged_path(module: str, source: Path) -> Path:
 
 
 #: the binding of the native core: an FMU whose modules import it carries the compiled library too
-NATIVE_LIBRARY_MODULE = f"{PACKAGE}.components.native.library"
-_LIBRARY_PATH = f"{PACKAGE}/components/native/library.py"
+NATIVE_LIBRARY_MODULE = f"{PACKAGE}.components.native.toolchain.library"
+_LIBRARY_PATH = f"{PACKAGE}/components/native/toolchain/library.py"
 
 
 def source_digest(name: str) -> str:
@@ -210,7 +210,7 @@ def source_digest(name: str) -> str:
         h.update(str(label).encode())
         h.update(Path(path).read_bytes())
     if NATIVE_LIBRARY_MODULE in modules:
-        from tribocosim.components.native import library
+        from tribocosim.components.native.toolchain import library
 
         h.update(library.digest().encode())
     return h.hexdigest()
@@ -264,7 +264,7 @@ def _build_one(name: str, out: Path) -> Path:
             shutil.copy2(path, dest)
             tops.add(module.split(".")[0])
             if module == NATIVE_LIBRARY_MODULE:  # the models' native core, for this machine's platform
-                from tribocosim.components.native import library
+                from tribocosim.components.native.toolchain import library
 
                 shutil.copy2(library.library_path(), dest.parent / _bundled_library_name())
         data = []

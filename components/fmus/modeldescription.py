@@ -2,7 +2,7 @@
 
 The Python (pythonfmu) and native variants of a component's FMU declare the same variables with the
 same descriptions and units, both from the component's description; the native builder writes its
-whole model description from :func:`tribocosim.components.native.declarations.variables`, the
+whole model description from :func:`tribocosim.components.native.toolchain.declarations.variables`, the
 pythonfmu adapter lets pythonfmu write it and adds the unit definitions.
 """
 

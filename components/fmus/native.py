@@ -3,14 +3,14 @@
 For each component with a native implementation (``Component.native``) the build
 
 1. generates, from the component's description, the parameter header and the FMU's variable table
-   (:mod:`tribocosim.components.native.declarations`) and the model description (FMI 2.0: this
+   (:mod:`tribocosim.components.native.toolchain.declarations`) and the model description (FMI 2.0: this
    module, with the same names, units, descriptions, start values, ranges and value references as
    the Python variant; FMI 3.0: :mod:`.modeldescription3`, the same variables plus ``time`` and
    the strip's nodal-field arrays);
 2. compiles the model's C sources, its glue, the FMI core (``tc_fmu_instance.c``) and the wrapper
    of the FMI version (``tc_fmi2.c`` or ``tc_fmi3.c``, against the standard's headers that fmpy
    ships) with the C compiler of the ``ziglang`` package
-   (:mod:`tribocosim.components.native.toolchain`) into ``binaries/{linux64,win64,darwin64}``
+   (:mod:`tribocosim.components.native.toolchain.compiler`) into ``binaries/{linux64,win64,darwin64}``
    (FMI 2.0; darwin64 a universal binary, x86_64 and arm64, for Intel and Apple Silicon Macs; FMI 2.0 has no
    folder for ARM Linux) or ``binaries/{x86_64-linux,x86_64-windows,x86_64-darwin,aarch64-linux,
    aarch64-darwin}`` (FMI 3.0 platform tuples);
@@ -41,12 +41,12 @@ from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
 from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
-from tribocosim.components.native import declarations, toolchain
+from tribocosim.components.native.toolchain import compiler, declarations
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
 #: version-independent FMI core and the version's wrapper
-SHARED_SOURCES = {2: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi2.c"),
-                  3: ("tc_common.c", "tc_fmu_instance.c", "tc_fmi3.c")}
+SHARED_SOURCES = {2: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi2.c"),
+                  3: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi3.c")}
 #: the platforms a native FMU is built for (by default all): the machines it runs on
 PLATFORMS = ("linux64", "win64", "darwin64", "aarch64-linux", "aarch64-darwin")
 FMI_VERSIONS = (2, 3)
@@ -96,7 +96,7 @@ def fmi3_headers() -> Path:
 
 def sources(comp: Component, fmi_version: int = 2) -> list[Path]:
     """The C files of a component's native FMU."""
-    return [toolchain.SOURCE_DIR / name for name in (*SHARED_SOURCES[_check_version(fmi_version)],
+    return [compiler.source(name) for name in (*SHARED_SOURCES[_check_version(fmi_version)],
                                                      *comp.native.sources)]
 
 
@@ -106,7 +106,7 @@ def binary_path(name: str, platform: str, fmi_version: int = 2) -> str:
     if platform not in folders:
         raise FmuBuildError(f"platform {platform!r} has no FMI {fmi_version}.0 binaries folder; "
                             f"FMI {fmi_version}.0 has {', '.join(sorted(set(folders.values())))}")
-    return f"binaries/{folders[platform]}/{name}{toolchain.PLATFORMS[platform][1]}"
+    return f"binaries/{folders[platform]}/{name}{compiler.PLATFORMS[platform][1]}"
 
 
 def _targets(platforms, fmi_version: int) -> dict[str, str]:
@@ -147,7 +147,7 @@ def source_digest(name: str, fmi_version: int = 2) -> str:
     """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
     comp = component(name)
     h = hashlib.sha256()
-    for path in sorted({*sources(comp, fmi_version), *toolchain.SOURCE_DIR.glob("*.h")}):
+    for path in sorted({*sources(comp, fmi_version), *compiler.headers()}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     h.update(declarations.params_header(comp).encode())
@@ -156,7 +156,7 @@ def source_digest(name: str, fmi_version: int = 2) -> str:
     for path in comp.resource_files:
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    h.update(" ".join((*toolchain.CFLAGS, _zig_version(), *PLATFORMS)).encode())
+    h.update(" ".join((*compiler.CFLAGS, _zig_version(), *PLATFORMS)).encode())
     return h.hexdigest()
 
 
@@ -254,8 +254,8 @@ def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, 
     for platform, target in _targets(platforms, fmi_version).items():
         out = folder / binary_path(name, platform, fmi_version)
         try:
-            built[platform] = toolchain.compile_shared(sources(comp, fmi_version), out, target, **headers)
-        except toolchain.CompileError as exc:
+            built[platform] = compiler.compile_shared(sources(comp, fmi_version), out, target, **headers)
+        except compiler.CompileError as exc:
             raise FmuBuildError(f"FMU {name}: {exc}") from exc
     return built
 

@@ -30,7 +30,7 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
         "tribocosim.components.stripdraw.friction",
         "tribocosim.components.stripdraw.table",
         "tribocosim.components.stripdraw.parameters",
-        "tribocosim.components.native.library",
+        "tribocosim.components.native.toolchain.library",
     }
     assert must <= mods, sorted(must - mods)
     assert all(m.startswith("tribocosim") for m in mods), sorted(mods)
@@ -49,10 +49,11 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.params",
         "tribocosim.components.description",
         "tribocosim.components.native",  # the binding of the native core (built by the FMU's builder)
-        "tribocosim.components.native.library",
-        "tribocosim.components.native.linear_model",
-        "tribocosim.components.native.declarations",
         "tribocosim.components.native.toolchain",
+        "tribocosim.components.native.toolchain.library",
+        "tribocosim.components.native.toolchain.compiler",
+        "tribocosim.components.native.toolchain.declarations",
+        "tribocosim.components.linear_model",
         "tribocosim.components.registry",
         f"tribocosim.components.{model}",
         f"tribocosim.components.{model}.component",

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tribocosim.components.stripdraw.fields import read_fields
+from tribocosim.components.native.resource_io.field_file import read_fields
 import pytest
 from fmpy.fmi1 import FMICallException
 from numpy.testing import assert_array_equal

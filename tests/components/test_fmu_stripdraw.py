@@ -136,7 +136,7 @@ def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     ours = {n for n in names if n.startswith("resources/") and not n.startswith("resources/pythonfmu/")}
     closure = {"resources/" + p for p in resource_paths("StripDraw")}
     assert ours == closure | {"resources/StripDraw.py", "resources/friction_table.npz", "resources/slavemodule.txt"}
-    assert "resources/tribocosim/components/native/libtc_core.so" in ours, "the native core it binds"
+    assert "resources/tribocosim/components/native/toolchain/libtc_core.so" in ours, "the native core it binds"
     for module in ("errors", "fmus/statecodec", "stripdraw/model", "stripdraw/friction", "stripdraw/table"):
         assert f"resources/tribocosim/components/{module}.py" in ours, module
     assert bundled_table == TABLE.read_bytes()

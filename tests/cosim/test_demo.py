@@ -47,7 +47,7 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
         f = tmp_path / "demo" / name
         assert f.is_file() and f.stat().st_size > 20_000, name
         assert str(f) in out, f"{name} location printed"
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     field = read_fields(tmp_path / "demo" / "beta_field.csv")
     assert field["beta"].shape == (177, field["X"].size), "rows every 10 ms (+ t = 0)"

@@ -176,7 +176,7 @@ def test_each_later_pass_has_lower_mu_bar(tmp_path):
     assert mu[0] > mu[1] > mu[2], f"mu_bar per pass: {mu}"
     # pass k + 1 really started from what pass k left: its field file's first row is pass k's last
     folder = tmp_path / "out" / "cases" / "case-000"
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     for k in (1, 2):
         a, b = read_fields(folder / f"pass-{k}.field.csv"), read_fields(folder / f"pass-{k + 1}.field.csv")

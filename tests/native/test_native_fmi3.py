@@ -90,7 +90,7 @@ def md(built):
 def hosts(tmp_path_factory) -> dict[int, Path]:
     """The C hosts of both versions (linux64 executables, no Python)."""
     from tribocosim.components.fmus.native import fmi3_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     folder = tmp_path_factory.mktemp("hosts")
     flags = ["-isystem", str(fmi3_headers())]  # fmi3FunctionTypes.h has prototype-less callbacks
@@ -214,7 +214,7 @@ def test_stripdraw_through_fmpy_equals_the_fmi2_fmu_and_its_field_output_to_the_
     from fmpy.fmi2 import FMU2Slave
 
     from tribocosim.components.stripdraw.component import COMPONENT
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     schedule = _schedule(60)
     m2, m3 = md[2, "StripDraw"], md[3, "StripDraw"]
@@ -293,7 +293,7 @@ def test_c_hosts_give_the_same_outputs_to_the_bit_and_replay_a_serialized_state(
         fuzz = [line for line in proc.stderr.splitlines() if "fuzz:" in line][-1]
         assert int(fuzz.split()[-5]) > 0 and int(fuzz.split()[-2]) > 0, fuzz
         if name == "StripDraw":
-            from tribocosim.components.stripdraw.fields import read_fields
+            from tribocosim.components.native.resource_io.field_file import read_fields
 
             recorded = read_fields(field)
             arrays = got3[:, 1 + len(outputs):].reshape(len(steps), 3, _default_nodes())

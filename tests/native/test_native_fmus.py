@@ -81,7 +81,7 @@ def descriptions(native_fmus):
 def fmi2_host(tmp_path_factory) -> Path:
     """The C host, compiled with the project's toolchain (a linux64 executable, no Python)."""
     from tribocosim.components.fmus.native import fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     out = tmp_path_factory.mktemp("host") / "fmi2_host"
     return compile_executable([HERE / "host" / "fmi2_host.c"], out, include_dirs=[fmi2_headers()], libs=["-ldl"])
@@ -206,7 +206,7 @@ def test_c_host_without_python_equals_the_binding_bit_for_bit(fmi2_host, unzippe
     for j, name in enumerate(STRIP_OUTPUTS):
         scale = max(np.abs(want[:, j]).max(), 1e-300)
         worst[name] = float(np.abs(got[:, j + 1] - want[:, j]).max() / scale)
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     beta = read_fields(field)["beta"][-1]
     worst["beta field"] = float(np.abs(beta - model.beta).max() / max(model.beta.max(), 1e-300))

@@ -58,7 +58,7 @@ def params_header(comp: Component) -> str:
     guard = f"{prefix.upper()}_PARAMS_H"
     lines = [
         f"/* Parameters of the {comp.name} model: one member per field of {comp.parameters.__name__}, same names and",
-        " * order. GENERATED from the component's description by tribocosim/components/native/declarations.py:",
+        " * order. GENERATED from the component's description by tribocosim/components/native/toolchain/declarations.py:",
         " * do not edit. float fields are double, integer fields int, choice fields int (the index of the value",
         f" * among its choices, named {prefix.upper()}_<FIELD>_<CHOICE>), text fields const char *. SI units. */",
         f"#ifndef {guard}",
@@ -193,7 +193,7 @@ def model_header(comp: Component, guid: str) -> str:
     n_par = sum(v["causality"] == "parameter" for v in vs)
     lines = [
         f"/* The {comp.model_identifier} FMU's variables and parameter struct filler. GENERATED from the component's",
-        " * description by tribocosim/components/native/declarations.py: do not edit. */",
+        " * description by tribocosim/components/native/toolchain/declarations.py: do not edit. */",
         "#ifndef TC_FMU_MODEL_H",
         "#define TC_FMU_MODEL_H",
         "",

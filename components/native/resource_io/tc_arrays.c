@@ -1,4 +1,4 @@
-/* Reader of the array file (tc_arrays.h; the layout is in components/native/arrays.py). */
+/* Reader of the array file (tc_arrays.h; the layout is in components/native/resource_io/array_file.py). */
 #include "tc_arrays.h"
 
 #include <errno.h>

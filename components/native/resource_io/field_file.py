@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.components.errors import ParameterError
-from tribocosim.components.native.library import VP, core, ptr
+from tribocosim.components.native.toolchain.library import VP, core, ptr
 
 HEADER = "# tribocosim strip-draw nodal fields, format 1"
 QUANTITIES = ("beta", "U", "contact")

@@ -1,5 +1,5 @@
 /* The array file (.tca): named float64 arrays and texts in one flat little-endian binary file, the one format the
- * native code reads. Written by the Python side (components/native/arrays.py, which documents the layout) from the
+ * native code reads. Written by the Python side (components/native/resource_io/array_file.py, which documents the layout) from the
  * general formats it reads (the friction table's .npz). Entries are looked up by name; unknown ones are skipped.
  */
 #ifndef TC_ARRAYS_H

@@ -47,8 +47,22 @@ PLATFORMS = {
 CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wno-sign-conversion",
           "-Werror", "-fno-fast-math", "-fvisibility=hidden")
 
-#: where the C sources live (package data of this package)
-SOURCE_DIR = Path(__file__).resolve().parent
+#: the native package: its C sources are package data, in one folder per role
+NATIVE_DIR = Path(__file__).resolve().parents[1]
+#: the folders of the C sources, by role: the models' physics (core), the FMI layer and the component glue (fmi), and
+#: the files the C code reads and writes (resource_io); every one is on the include path of every compile
+SOURCE_FOLDERS = ("core", "fmi", "resource_io")
+INCLUDE_DIRS = tuple(NATIVE_DIR / folder for folder in SOURCE_FOLDERS)
+
+
+def source(name: str) -> Path:
+    """The C source ``name``, given relative to the native package (``"core/tc_stripdraw.c"``)."""
+    return NATIVE_DIR / name
+
+
+def headers() -> list[Path]:
+    """Every C header of the native sources, in a fixed order."""
+    return sorted(h for d in INCLUDE_DIRS for h in d.glob("*.h"))
 
 
 class CompileError(TribocosimError):
@@ -106,7 +120,7 @@ def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64"
 
 
 def _command(target: str, include_dirs, defines, extra_flags) -> list[str]:
-    return [*zig_command(), "-target", target, *CFLAGS, *(f"-I{d}" for d in (SOURCE_DIR, *include_dirs)),
+    return [*zig_command(), "-target", target, *CFLAGS, *(f"-I{d}" for d in (*INCLUDE_DIRS, *include_dirs)),
             *(f"-D{d}" for d in defines), *extra_flags]
 
 

@@ -7,7 +7,7 @@ import ctypes
 
 import numpy as np
 
-from tribocosim.components.native.library import DBL_P, VP, core, ptr
+from tribocosim.components.native.toolchain.library import DBL_P, VP, core, ptr
 
 
 def expm(M) -> np.ndarray:

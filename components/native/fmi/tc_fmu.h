@@ -3,7 +3,7 @@
  *
  * The variable table (TC_VARIABLES), the value references and the function that fills a model's parameter
  * struct are GENERATED from the component's description (tribocosim/components/<name>/component.py) by
- * tribocosim/components/native/declarations.py into "tc_fmu_model.h" when an FMU is built; the same
+ * tribocosim/components/native/toolchain/declarations.py into "tc_fmu_model.h" when an FMU is built; the same
  * description generates the modelDescription.xml, so the two cannot drift. A component's glue file
  * (tc_<name>_fmu.c) implements the tc_component functions below on top of its native model.
  *

@@ -2,7 +2,7 @@
 built from the same sources as the FMUs and loaded with ctypes; the Python models are thin bindings over it.
 
 The library is compiled on first use with the C compiler of the ``ziglang`` package
-(:mod:`tribocosim.components.native.toolchain`, the FMUs' compiler and flags, ``-DTC_EXPORT_CORE`` so that the
+(:mod:`tribocosim.components.native.toolchain.compiler`, the FMUs' compiler and flags, ``-DTC_EXPORT_CORE`` so that the
 core functions are exported) into ``$TRIBOCOSIM_CACHE/core`` (default ``~/.cache/tribocosim/fmus/core``), under a
 name that carries the digest of its sources, generated headers, flags and compiler version: a changed source
 builds a new library, an unchanged one is loaded as it is. The build writes a temporary file and renames it into
@@ -29,8 +29,9 @@ import numpy as np
 from tribocosim.components.errors import ParameterError, TribocosimError
 
 #: the C sources of the core library (the models and what they read and write; not the FMI layer)
-SOURCES = ("tc_common.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_arrays.c", "tc_friction.c",
-           "tc_stripdraw.c", "tc_galpha.c", "tc_fields.c", "tc_linear.c", "tc_press.c", "tc_machine.c")
+SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "core/tc_friction.c",
+           "core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_linear.c", "core/tc_press.c", "core/tc_machine.c",
+           "resource_io/tc_table_file.c", "resource_io/tc_arrays.c", "resource_io/tc_fields.c")
 #: the status codes of tc_common.h
 TC_OK = 0
 TC_DISCARD = 1
@@ -98,7 +99,7 @@ def cache_dir() -> Path:
 
 def _headers(folder: Path) -> None:
     from tribocosim.components import registry
-    from tribocosim.components.native.declarations import write_params_headers
+    from tribocosim.components.native.toolchain.declarations import write_params_headers
 
     write_params_headers(folder, [c for c in registry.components().values() if c.native is not None])
 
@@ -106,13 +107,12 @@ def _headers(folder: Path) -> None:
 def digest() -> str:
     """SHA-256 of what the library is made of: sources, headers, what generates the parameter headers (the
     parameter modules of the package's components and the generator), flags, compiler. Imports no component."""
-    from tribocosim.components.native import toolchain
+    from tribocosim.components.native.toolchain import compiler
 
     h = hashlib.sha256()
-    package = toolchain.SOURCE_DIR.parent
-    for path in sorted({*(toolchain.SOURCE_DIR / s for s in SOURCES), *toolchain.SOURCE_DIR.glob("*.h"),
-                        toolchain.SOURCE_DIR / "declarations.py", package / "params.py",
-                        *package.glob("*/parameters.py")}):
+    package = compiler.NATIVE_DIR.parent
+    for path in sorted({*map(compiler.source, SOURCES), *compiler.headers(), Path(__file__).with_name("declarations.py"),
+                        package / "params.py", *package.glob("*/parameters.py")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     try:
@@ -121,13 +121,13 @@ def digest() -> str:
         zig = version("ziglang")
     except Exception:  # noqa: BLE001 - the build says what is missing
         zig = "?"
-    h.update(" ".join((*toolchain.CFLAGS, zig)).encode())
+    h.update(" ".join((*compiler.CFLAGS, zig)).encode())
     return h.hexdigest()
 
 
 def build(output: str | os.PathLike, defines=()) -> Path:
     """Compile the core library for this machine into ``output`` (atomically); CoreBuildError saying why not."""
-    from tribocosim.components.native import toolchain
+    from tribocosim.components.native.toolchain import compiler
 
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
     out = Path(output)
@@ -136,9 +136,9 @@ def build(output: str | os.PathLike, defines=()) -> Path:
         _headers(Path(tmp))
         partial = Path(tmp) / out.name
         try:
-            toolchain.compile_shared([toolchain.SOURCE_DIR / s for s in SOURCES], partial, platform,
+            compiler.compile_shared(list(map(compiler.source, SOURCES)), partial, platform,
                                      defines=["TC_EXPORT_CORE", *defines], include_dirs=[tmp])
-        except toolchain.CompileError as exc:
+        except compiler.CompileError as exc:
             raise CoreBuildError(f"the native core library cannot be built: {exc}") from exc
         os.replace(partial, out)
     return out
