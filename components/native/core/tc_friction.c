@@ -3,6 +3,8 @@
 
 #include <math.h>
 
+#include "tc_table_lookup.h"
+
 static const tc_msg NO_MSG = {NULL, 0}; /* lookups under the clamp policy cannot fail */
 
 static int with_areas(const tc_stripdraw_params *p, const tc_table *table) {

@@ -51,7 +51,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "tc_stripdraw.h"
+#include "tc_galpha.h"
+#include "tc_kernels.h"
 
 /* the interface law (Eq. 4-5) for one node: traction, slipping flag, and the potential phi of the return-mapped
  * spring (k_s x^2 / 2 sticking, T_max |x| - T_max^2 / (2 k_s) slipping; its derivative is T) */

@@ -125,33 +125,11 @@ TC_API double tc_stripdraw_info(const tc_stripdraw *m, int which);
 TC_API void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                           double *ov);
 
-/* the first and last index k < n with a[k] > 0 (the pad's nodes); returns 0 when there is none. */
-TC_API int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last);
-
-/* tridiagonal solve (Thomas algorithm); work holds 2 n doubles; x must not alias the inputs. */
-TC_API void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs,
-                      double *x, double *work);
-
 /* central difference sub-cycled n_sub times; f_work holds n doubles. */
 void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
                     signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
                     double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
                     double *reaction, double *f_work);
-
-/* the elimination factors of the free bar for one step (cm = (1 - am) / (beta dt^2), c = (1 - af) k_e) into chain
- * (TC_SD_CHAIN(n) doubles: rows et, qt, it, eg, qg, ig of n values each). */
-#define TC_SD_CHAIN(n) (6 * (n))
-void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain);
-
-/* one generalized-alpha step (tc_galpha.c): returns the Newton iterations, -1 without convergence, or -2 when
- * beta dt^2 is 0; nothing is changed when it returns < 0. chain holds tc_sd_chain_factors of dt; the nodes with
- * ov > 0 lie in [first, last] (first > last: not known). */
-#define TC_SD_GALPHA_WORK(n) (18 * (n))
-#define TC_SD_GALPHA_IWORK(n) (2 * (n))
-int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
-                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
-                 double rtol, const double *chain, double *fric, double *reaction, double *work, signed char *iwork);
 
 /* implicit upwind advection of beta under the pad; work holds 5 n doubles. */
 TC_API void tc_sd_advect(size_t n, const double *beta, const double *dU, const double *weight, double zeta,

@@ -1,7 +1,7 @@
-/* The friction table mu(P, v, beta) in memory, its trilinear lookup, and the reader of the table file.
+/* The friction table mu(P, v, beta) in memory: its axes, value arrays and checks.
  *
  * The table's format is owned by components/stripdraw/table.py (its docstring); the native code reads the
- * resource form the Python side converts it to (tc_table_file.c). Axes
+ * resource form the Python side converts it to (resource_io/tc_table_file.h). Lookups: tc_table_lookup.h. Axes
  * pressure [Pa], velocity [m/s], beta [-], strictly increasing; mu[(ip * n_velocity + iv) * n_beta + ib]
  * (C order of the (nP, nv, nb) array). Lookups outside the axes follow a policy: TC_TABLE_CLAMP
  * (evaluate at the nearest edge and flag the lookup) or TC_TABLE_ERROR (refuse, naming the quantity,
@@ -49,29 +49,6 @@ TC_API int tc_table_set_areas(tc_table *table, const double *contact_area, const
 TC_API int tc_table_set_extras(tc_table *table, const double *simulated, const double *particle_area_clusters,
                                tc_msg msg);
 
-/* Read the friction table resource (an array file, tc_table_file.c) at path; a path ending in .npz names the
- * resource beside it ending in .tca. TC_ERROR naming the path when it is missing or malformed. */
-TC_API int tc_table_read(const char *path, tc_table **out, tc_msg msg);
-
 TC_API void tc_table_free(tc_table *table);
-
-/* mu at one pressure for n (velocity, beta) queries (interpolate in P once, then bilinearly in (|v|, beta)).
- * clamped[k] (may be NULL) is set to 1 when query k (or the pressure) was outside the axes. Under TC_TABLE_ERROR
- * an outside query returns TC_DISCARD, naming the quantity, its value and the table's range, and writes
- * nothing. */
-TC_API int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity,
-                       const double *beta, int policy, double *mu, unsigned char *clamped, tc_msg msg);
-
-/* The same lookup in any array of the table with its layout (mu, or an area array of a version 2 table). */
-TC_API int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n,
-                           const double *velocity, const double *beta, int policy, double *out,
-                           unsigned char *clamped, tc_msg msg);
-
-/* Two arrays of the table at the same queries (A_p and A_c of the strip-draw law): the axes are located once
- * per query for both (and the velocity only when it differs from the query before). values_b and out_b may be
- * NULL (one array). */
-TC_API int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure,
-                            size_t n, const double *velocity, const double *beta, int policy, double *out,
-                            double *out_b, unsigned char *clamped, tc_msg msg);
 
 #endif

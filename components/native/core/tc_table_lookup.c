@@ -15,7 +15,7 @@
  * with sv, sb = 1 (0 on a one-point axis). A query outside an axis is flagged (clamp policy) or refused
  * (error policy: pressure first, then the first velocity, then the first beta outside the table).
  */
-#include "tc_table.h"
+#include "tc_table_lookup.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -19,7 +19,7 @@
 #include "tc_fmu.h"
 #include "tc_fmu_model.h"
 #include "tc_stripdraw.h"
-#include "tc_table.h"
+#include "tc_table_file.h"
 
 #define HASH_SIZE 64
 

@@ -10,12 +10,13 @@
  * A path ending in ".npz" names the table whose resource is the same path ending in ".tca" (so the FMU parameter
  * table_file may name the table as the Python side does).
  */
+#include "tc_table_file.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "tc_arrays.h"
-#include "tc_table.h"
 
 static const char *const AREAS[4] = {"contact_area", "particle_area", "contact_area_std", "particle_area_std"};
 
