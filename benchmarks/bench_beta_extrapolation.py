@@ -66,7 +66,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default="bench_beta_extrapolation.json")
     args = ap.parse_args(argv)
 
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table
     from tribocosim.surrogate.campaign import CampaignStore, expand_cases, run_campaign
     from tribocosim.surrogate.executors import ProcessPoolCaseExecutor

@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters

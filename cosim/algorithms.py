@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError
+from tribocosim.errors import ConvergenceError
 from tribocosim.cosim.extrapolation import StepPolynomial
 from tribocosim.cosim.slave import DISCARD
 from tribocosim.cosim.system import CoupledSystem

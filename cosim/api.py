@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError, CosimStepError, RunFailed
+from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
 from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.graph import gauss_seidel_order
 from tribocosim.cosim.master import Master
@@ -221,7 +221,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     ----------
     scene : str, Path or Plan
         A scene file, the name of a packaged scene (``"demo"``, see
-        :func:`tribocosim.components.paths.scene_file`), or an already validated plan.
+        :func:`tribocosim.paths.scene_file`), or an already validated plan.
     out_dir : str or Path, optional
         Folder for the output files; default: the scene file's folder, or ``./<scene name>`` for
         a packaged scene. ``[output] file`` is relative to it; the metadata JSON goes next to the
@@ -238,7 +238,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     Result
     """
     if not isinstance(scene, Plan):
-        from tribocosim.components.paths import scene_file
+        from tribocosim.paths import scene_file
         from tribocosim.cosim.reference_components import load_component_scene
 
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
@@ -315,7 +315,7 @@ def _outside_table_warnings(b: Build) -> list[str]:
 def default_out_dir(scene_path: Path) -> Path:
     """Where a run writes when no folder is given: the scene's folder, or ``./<stem>`` for a packaged scene
     (an installed package's folder is no place for results)."""
-    from tribocosim.components.paths import is_packaged
+    from tribocosim.paths import is_packaged
 
     return Path.cwd() / scene_path.stem if is_packaged(scene_path) else scene_path.parent
 

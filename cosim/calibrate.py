@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TribocosimError
+from tribocosim.errors import ParameterError, TribocosimError
 
 COLUMNS = ("pressure", "tool_length", "passes", "mu_bar")
 FITTABLE = ("particle_area_scale", "zeta")
@@ -257,7 +257,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim calibrate``."""
     args = _parser().parse_args(argv)
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.table import read_table, write_table
 

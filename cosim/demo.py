@@ -76,7 +76,7 @@ def steady_mean(outs, key: str = "mu_mean", fraction: float = 0.2) -> float:
 
 def demo_scene() -> Path:
     """The shipped demo scene, ``models/scenes/demo.toml`` (package data of ``tribocosim.models``)."""
-    from tribocosim.components.paths import SCENES_DIR
+    from tribocosim.paths import SCENES_DIR
 
     return SCENES_DIR / "demo.toml"
 
@@ -172,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tool-length", type=float, default=None, help="pad length [m] (default: the scene's, 0.035)")
     ap.add_argument("--no-plot", action="store_true", help="skip the figures")
     args = ap.parse_args(argv)
-    from tribocosim.components.errors import SceneError, TribocosimError
+    from tribocosim.errors import SceneError, TribocosimError
 
     t0 = time.perf_counter()
     try:

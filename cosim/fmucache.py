@@ -21,7 +21,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from tribocosim.components.errors import SceneError, TribocosimError
+from tribocosim.errors import SceneError, TribocosimError
 from tribocosim.components.native.toolchain.library import cache_dir
 
 

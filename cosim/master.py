@@ -25,7 +25,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 
-from tribocosim.components.errors import ConvergenceError, CosimStepError
+from tribocosim.errors import ConvergenceError, CosimStepError
 from tribocosim.cosim.algorithms import ALGORITHMS, Algorithm
 from tribocosim.cosim.recorder import Observer, Recorder
 from tribocosim.cosim.system import CoupledSystem, NonFiniteOutput

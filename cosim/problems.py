@@ -1,6 +1,6 @@
 """The one collector of scene and sweep problems: every problem found, then one SceneError.
 
-Each check adds :class:`~tribocosim.components.errors.Problem` items (file, dotted key, message)
+Each check adds :class:`~tribocosim.errors.Problem` items (file, dotted key, message)
 instead of stopping at the first; :meth:`Problems.raise_if_any` raises them together. The parser,
 the validation against the model descriptions, the component checks and the sweep reader all
 collect into it, so a user sees everything wrong with a file at once.
@@ -12,7 +12,7 @@ import difflib
 import math
 from pathlib import Path
 
-from tribocosim.components.errors import Problem, SceneError
+from tribocosim.errors import Problem, SceneError
 
 
 def known(names, given: str | None = None, limit: int = 40) -> str:

@@ -35,7 +35,7 @@ from typing import Protocol
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError
+from tribocosim.errors import ConvergenceError
 
 
 class Reference(Protocol):

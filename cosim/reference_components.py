@@ -30,7 +30,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from tribocosim.components.errors import ParameterError, Problem, SceneError
+from tribocosim.errors import ParameterError, Problem, SceneError
 
 
 def component_of(spec):

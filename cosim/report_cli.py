@@ -37,7 +37,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _paper(args) -> int:
-    from tribocosim.components.errors import TribocosimError
+    from tribocosim.errors import TribocosimError
     from tribocosim.cosim.reports.paper import run_report
 
     def log(msg):

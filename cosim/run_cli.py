@@ -20,7 +20,7 @@ import logging
 import sys
 from pathlib import Path
 
-from tribocosim.components.errors import RunFailed, SceneError, TribocosimError
+from tribocosim.errors import RunFailed, SceneError, TribocosimError
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim run``."""
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
-    from tribocosim.components.paths import scene_file
+    from tribocosim.paths import scene_file
     from tribocosim.cosim.api import run
     from tribocosim.cosim.sweep import is_sweep_file
 

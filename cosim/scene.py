@@ -50,7 +50,7 @@ settings and the outputs to record; nothing else is loaded, computed or written.
 
 :func:`parse_scene` checks the structure (keys, types, ranges) and returns every problem it
 found together with whatever could be parsed; :mod:`tribocosim.cosim.validate` then checks the scene
-against the FMUs' model descriptions and raises one :class:`~tribocosim.components.errors.SceneError`
+against the FMUs' model descriptions and raises one :class:`~tribocosim.errors.SceneError`
 listing all problems, each with the file and the key (:mod:`tribocosim.cosim.problems`).
 """
 

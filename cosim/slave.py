@@ -8,7 +8,7 @@ loaded functions, without fmpy's per-call Python wrapper.
 
 Every FMI status is checked in one place, :meth:`FmpySlave._check`: ``fmi2Discard`` from
 ``doStep`` comes back as :data:`DISCARD` (the master may roll back and shrink the step); any
-other failure raises :class:`~tribocosim.components.errors.CosimStepError` naming the instance, the FMI
+other failure raises :class:`~tribocosim.errors.CosimStepError` naming the instance, the FMI
 function, the time and the FMU's last log messages.
 
 Wall time spent inside each slave's FMI calls is accumulated in ``slave.wall_time`` so that the
@@ -43,7 +43,7 @@ from fmpy.fmi2 import (
     free,
 )
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 
 LOG = logging.getLogger("tribocosim.cosim")
 

@@ -157,8 +157,8 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim ssp``."""
     args = _parser().parse_args(argv)
-    from tribocosim.components.errors import SceneError, TribocosimError
-    from tribocosim.components.paths import scene_file
+    from tribocosim.errors import SceneError, TribocosimError
+    from tribocosim.paths import scene_file
     from tribocosim.cosim.run_cli import _overrides
     from tribocosim.cosim.ssp_export import export_ssp
 

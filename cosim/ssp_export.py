@@ -50,7 +50,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 from tribocosim.cosim.scene import apply_overrides
 from tribocosim.cosim.ssp import (FMU_TYPE, NS, OMS_ANNOTATION, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION,
                                   SCENE_TABLES, SSD_NAME, q, toml_text)

@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-from tribocosim.components.errors import Problem, RunFailed, SceneError
+from tribocosim.errors import Problem, RunFailed, SceneError
 from tribocosim.cosim.problems import Problems
 from tribocosim.cosim.ssp import (FMU_TYPE, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES, SSD_NAME,
                                   prefixed, q, toml_text)

@@ -66,7 +66,7 @@ from typing import Any
 
 import numpy as np
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 
 _SWEEP_KEYS = ("scene", "title", "passes", "field_instance", "field_interval", "workers", "variables", "set",
                "summary", "plot")

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 from tribocosim.cosim.extrapolation import History, StepPolynomial
 from tribocosim.cosim.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.slave import Slave

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 #: a fixed macro step is 2**FIXED_SUBDIVISION ticks (room for this many halvings)
 FIXED_SUBDIVISION = 10

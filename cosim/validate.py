@@ -12,7 +12,7 @@ description of every FMU it names (no shared library is loaded), and checks
 - master settings against FMU capabilities (schemes that roll back need
   ``canGetAndSetFMUstate``), Gauss-Seidel order, power bonds.
 
-All problems are collected and raised in one :class:`~tribocosim.components.errors.SceneError`, each
+All problems are collected and raised in one :class:`~tribocosim.errors.SceneError`, each
 line naming the file and the key. Unconnected inputs are warnings that give the start value
 used. The result, :class:`Plan`, holds everything the master needs with value references
 resolved.
@@ -26,7 +26,7 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim.algorithms import ALGORITHMS
 from tribocosim.cosim.problems import Problems, known
 from tribocosim.cosim.stepcontrol import ESTIMATORS

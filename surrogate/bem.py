@@ -79,7 +79,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from tribocosim.components.errors import ConvergenceError, ParameterError, check_range
+from tribocosim.errors import ConvergenceError, ParameterError, check_range
 
 from .fft import rfft2_pair
 from .surfaces import validate_height_map

@@ -72,7 +72,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import ndimage
 
-from tribocosim.components.errors import ConvergenceError
+from tribocosim.errors import ConvergenceError
 
 from . import dem
 from .flakes import Footprint, footprints, random_placement

@@ -113,7 +113,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TribocosimError, check_range
+from tribocosim.errors import ParameterError, TribocosimError, check_range
 
 from . import dem_kernels as _k
 from .slide_config import DEFAULT_OIL_VISCOSITY

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 from .dem import FlakeShape, face_samples
 

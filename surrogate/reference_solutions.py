@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError, ParameterError, check_range
+from tribocosim.errors import ConvergenceError, ParameterError, check_range
 
 
 def westergaard_full_contact_pressure(e_star: float, amplitude: float, wavelength: float) -> float:

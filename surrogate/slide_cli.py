@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 UNITS = {"slide_distance": "m", "contact_fraction": "1", "particle_fraction": "1",
          "particle_fraction_clusters": "1", "n_blocked": "1", "n_blocked_clusters": "1",

@@ -26,7 +26,7 @@ import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-from tribocosim.components.errors import ParameterError, check_range
+from tribocosim.errors import ParameterError, check_range
 
 #: dynamic viscosity [Pa s] of the oil when neither oil_viscosity nor damping_rate is given: ISO 3448
 #: grade VG 32 (32 mm^2/s at 40 C) x a mineral-oil density of 870 kg/m^3 (surrogate.dem docstring)

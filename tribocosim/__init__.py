@@ -20,7 +20,7 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
 
 from __future__ import annotations
 
-from tribocosim.components.lazy import lazy_exports
+from tribocosim.lazy import lazy_exports
 
 __getattr__, __all__ = lazy_exports(__name__, {
     "run": "tribocosim.cosim.api",
@@ -32,7 +32,7 @@ __getattr__, __all__ = lazy_exports(__name__, {
     "FrictionTable": "tribocosim.components.stripdraw.table",
     "read_table": "tribocosim.components.stripdraw.table",
     "write_table": "tribocosim.components.stripdraw.table",
-    "DEFAULT_TABLE": "tribocosim.components.paths",
-    "scene_file": "tribocosim.components.paths",
-    "TribocosimError": "tribocosim.components.errors",
+    "DEFAULT_TABLE": "tribocosim.paths",
+    "scene_file": "tribocosim.paths",
+    "TribocosimError": "tribocosim.errors",
 })

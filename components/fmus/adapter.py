@@ -99,7 +99,7 @@ from pythonfmu.enums import Fmi2Status
 from tribocosim.components.description import Component
 from tribocosim.components.fmus.modeldescription import describe, unit_definitions
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 from tribocosim.components.fmus import statecodec
 from tribocosim.components.fmus.exitguard import guard_pythonfmu_exit
 

@@ -24,8 +24,8 @@ missing file fails the whole build without leaving some of the FMUs built.
 The models are bindings over the native core (:mod:`tribocosim.components.native.toolchain.library`): an FMU carries
 the core library compiled for the machine that builds it, beside the binding (the FMU runs on that platform).
 
-An FMU's ``resources/`` then holds its script, ``tribocosim/__init__.py``,
-``tribocosim/components/__init__.py``, ``errors.py``, ``description.py``, ``params.py``, the shared
+An FMU's ``resources/`` then holds its script, ``tribocosim/__init__.py``, ``tribocosim/errors.py``,
+``tribocosim/lazy.py``, ``tribocosim/components/__init__.py``, ``description.py``, ``params.py``, the shared
 plumbing ``tribocosim/components/fmus/{adapter,statecodec,exitguard}.py``, the component's folder
 modules that the model imports (StripDraw: ``stripdraw/*`` and ``friction_table.npz``; Press: ``press/*``;
 DrawingMachine: ``machine/*``; all: the native binding and its library), plus the copy of
@@ -48,7 +48,7 @@ from pathlib import Path
 
 from tribocosim.components import registry
 from tribocosim.components.description import Component
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 #: the project's package: every FMU bundles what it needs of it
 PACKAGE = "tribocosim"

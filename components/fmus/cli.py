@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     from tribocosim.components.fmus.native import PLATFORMS, build_native_fmus
 
     if args.command == "table-resource":
-        from tribocosim.components.errors import TribocosimError
+        from tribocosim.errors import TribocosimError
         from tribocosim.components.stripdraw.table import write_table_resource
 
         try:

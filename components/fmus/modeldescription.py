@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from xml.etree.ElementTree import Element, SubElement
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 #: SI base-unit exponents of every unit the variables may use (FMI 2.0 UnitDefinitions)
 BASE_UNITS = {

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tribocosim.components.description import ArraySize, Built, Component, Native, Port
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TableDomainError
+from tribocosim.errors import ParameterError, TableDomainError
 from tribocosim.components.native.toolchain.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import AREAS, FrictionTable

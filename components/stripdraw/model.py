@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError, ParameterError, TableDomainError
+from tribocosim.errors import ConvergenceError, ParameterError, TableDomainError
 from tribocosim.components.native.toolchain.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 

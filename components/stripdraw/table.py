@@ -42,7 +42,7 @@ The native code reads the table in its resource form (:func:`write_table_resourc
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
-caller can report them) or ``"error"`` (raise :class:`~tribocosim.components.errors.TableDomainError`).
+caller can report them) or ``"error"`` (raise :class:`~tribocosim.errors.TableDomainError`).
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TableDomainError, TableError
+from tribocosim.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
 FORMAT_VERSION = 3  # written when the table carries the version 3 arrays; 1 and 2 are still read and written

@@ -137,7 +137,7 @@ def oscillator(settings: Settings) -> Family:
 
 
 def demo_scene_path() -> Path | None:
-    from tribocosim.components.paths import MODELS_DIR
+    from tribocosim.paths import MODELS_DIR
 
     p = MODELS_DIR / "scenes" / "demo.toml"
     return p if p.is_file() else None

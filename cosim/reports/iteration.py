@@ -54,7 +54,7 @@ def _overrides(strip: str, press: str, area: float, stop: float) -> dict:
 
 def _run_row(plan, setting: str, iterative: dict, t_ref, refs: dict) -> tuple[dict, float]:
     """Run one setting; the row and the contraction the run observed."""
-    from tribocosim.components.errors import RunFailed
+    from tribocosim.errors import RunFailed
     from tribocosim.cosim.api import run
 
     t0 = time.perf_counter()

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 from tribocosim.cosim.stripdraw_test import V0, Point, draw, run_points
 
 PAPER_DROP_1PASS = 0.35  # Sec. 2.1: 35 % at 25 MPa after one pass, 35 x 35 mm pad
@@ -373,7 +373,7 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
                      f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
                      f"{cal.stderr_ensemble:.3g}); drop reached {_pct(cal.drop)} in {cal.evaluations} strip-draw "
                      "tests.")
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
 
     shipped = Path(table_path).resolve() == Path(DEFAULT_TABLE).resolve()
     table_text = "`models/friction_table.npz` (the shipped one)" if shipped else f"`{table_path}`"
@@ -421,8 +421,8 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv and the figures."""
     import csv
 
-    from tribocosim.components.errors import ParameterError
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.errors import ParameterError
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table
 
     grid = QUICK if quick else FULL

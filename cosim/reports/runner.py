@@ -6,7 +6,7 @@ reads the recorded outputs and stops early when one is non-finite or beyond the 
 run would otherwise grow until the FMUs slow down or fail), or when the wall-time budget is
 spent (the verdict is then taken on the part run, and says so). The verdict is
 :func:`tribocosim.cosim.reports.stability.classify` on the recorded outputs; a master error
-(:class:`~tribocosim.components.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
+(:class:`~tribocosim.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
 A fixed-step run in which the master had to halve a step (a discarded step or a non-finite output,
 retried by rollback) is unstable at the requested step, whatever the outputs.
 """

@@ -198,7 +198,7 @@ def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget)
 
 
 def stiff_drive_path() -> Path | None:
-    from tribocosim.components.paths import MODELS_DIR
+    from tribocosim.paths import MODELS_DIR
 
     p = MODELS_DIR / "scenes" / "stiff_drive.toml"
     return p if p.is_file() else None
@@ -326,7 +326,7 @@ def pull_force_scale(p, normal_force: float, velocity: float = 0.08) -> float:
 def strip_run(params: dict, pressure: float, profile: str, draw: float, integrator: str, step: float,
               budget: float = 120.0):
     """Run the pure model; return (verdict, info). ``step`` is the model step (the whole draw allowed)."""
-    from tribocosim.components.errors import TribocosimError
+    from tribocosim.errors import TribocosimError
     from tribocosim.components.stripdraw.component import COMPONENT
 
     v0, ramp_time = 0.08, 0.01

@@ -13,7 +13,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 
 
 def _scene(folder, tau=0.01, gain=2.0, step=1e-3):

@@ -22,7 +22,7 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
     must = {
         "tribocosim",
         "tribocosim.components",
-        "tribocosim.components.errors",
+        "tribocosim.errors",
         "tribocosim.components.fmus",
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.stripdraw",
@@ -35,7 +35,7 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
     assert must <= mods, sorted(must - mods)
     assert all(m.startswith("tribocosim") for m in mods), sorted(mods)
     assert not mods & {"tribocosim.components.fmus.build", "tribocosim.components.fmus.cli",
-                       "tribocosim.components.paths", "tribocosim.cosim", "tribocosim.surrogate"}
+                       "tribocosim.paths", "tribocosim.cosim", "tribocosim.surrogate"}
     files = build.runtime_files("StripDraw")
     assert all(f.suffix == ".py" and f.is_file() for f in files)
 
@@ -45,7 +45,7 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
     assert _modules(name) == {
         "tribocosim",
         "tribocosim.components",
-        "tribocosim.components.errors",
+        "tribocosim.errors",
         "tribocosim.components.params",
         "tribocosim.components.description",
         "tribocosim.components.native",  # the binding of the native core (built by the FMU's builder)
@@ -64,7 +64,7 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.fmus.exitguard",
         "tribocosim.components.fmus.modeldescription",
-        "tribocosim.components.lazy",
+        "tribocosim.lazy",
     }
     assert build.component(name).resources == (), "no friction table"
     assert "tribocosim.components.fmus.adapter" in _modules("StripDraw"), "StripDraw uses the same adapter plumbing"

@@ -64,7 +64,7 @@ def test_a_step_whose_newton_iteration_stalls_is_halved(few_newton_iterations, m
 
 
 def test_a_step_that_cannot_converge_is_refused_with_the_state_unchanged(few_newton_iterations, monkeypatch):
-    from tribocosim.components.errors import ConvergenceError
+    from tribocosim.errors import ConvergenceError
 
     m2, _ = _draw_on(few_newton_iterations(0), monkeypatch, 0)  # no iteration allowed: it fails after 12 halvings
     before = m2.get_state()

@@ -13,7 +13,7 @@ rho >= 1.
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ConvergenceError, RunFailed
+from tribocosim.errors import ConvergenceError, RunFailed
 from tribocosim.cosim import run
 
 

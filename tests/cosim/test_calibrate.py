@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, write_table

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.paths import MODELS_DIR
+from tribocosim.paths import MODELS_DIR
 from tribocosim.cosim.reports.coupling_order import fitted_order
 from tribocosim.cosim.reports.metrics import max_relative_error
 from tribocosim.cosim.reports.runner import run_plan

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from fmpy.util import read_csv
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim import fmucache
 
 ROOT = Path(__file__).resolve().parents[2]

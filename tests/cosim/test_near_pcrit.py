@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ConvergenceError, RunFailed
-from tribocosim.components.paths import scene_file
+from tribocosim.errors import ConvergenceError, RunFailed
+from tribocosim.paths import scene_file
 from tribocosim.cosim.api import run
 from tribocosim.cosim.reference_components import reference_for_scene
 from tribocosim.cosim.validate import load_scene

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.table import FrictionTable, write_table
 from tribocosim.cosim.report_cli import main as report_main

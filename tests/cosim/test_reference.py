@@ -80,7 +80,7 @@ def test_coupling_tolerance_is_relative_to_the_values_magnitude_over_the_run():
     alternation of a value that was never larger than 1 is not, and the run says so."""
     import pytest
 
-    from tribocosim.components.errors import ConvergenceError
+    from tribocosim.errors import ConvergenceError
 
     def run(first):
         ref = CoupledModels({"a": _Quantized(1e-8, first), "b": _Follower()}, [("a.y", "b.y"), ("b.x", "a.x")],

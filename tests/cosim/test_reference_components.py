@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import SceneError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cosim.reference_components import (

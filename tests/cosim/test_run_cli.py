@@ -88,8 +88,8 @@ def test_run_of_fmu_files_imports_neither_numba_nor_the_mesoscale_code(tmp_path,
 
 
 def test_packaged_scenes_resolve_by_name_and_write_to_the_working_directory(tmp_path, monkeypatch):
-    from tribocosim.components.errors import SceneError
-    from tribocosim.components.paths import SCENES_DIR, packaged_scenes, scene_file
+    from tribocosim.errors import SceneError
+    from tribocosim.paths import SCENES_DIR, packaged_scenes, scene_file
     from tribocosim.cosim.api import default_out_dir
 
     assert {"demo", "pressure_sweep", "multipass"} <= set(packaged_scenes())

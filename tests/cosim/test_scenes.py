@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import SceneError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
@@ -301,7 +301,7 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
 def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(tmp_path):
     """The case key covers the bytes of the files the scene's parameters name (here a friction
     table) and of the FMUs: a changed table runs the case again."""
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table, write_table
 
     table = tmp_path / "my_table.npz"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 from tribocosim.cosim.api import extracted_fmu
 from tribocosim.cosim.slave import DISCARD, OK, FmpySlave, Slave
 

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from tribocosim.cli import main as tribocosim
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim import run
 from tribocosim.cosim.ssp import toml_text
 from tribocosim.cosim.ssp_import import load_ssp, run_ssp

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 from tribocosim.cosim import run
 from tribocosim.cosim.reference import TwoMassOscillator, coupling_error
 
@@ -181,7 +181,7 @@ def test_a_rejected_step_shrinks_by_a_quantum_at_least():
 
 
 def test_step_quantum_is_checked_against_the_grid(tmp_path, osc_scene):
-    from tribocosim.components.errors import SceneError
+    from tribocosim.errors import SceneError
 
     bad = {"1.5e-7": "whole number of grid ticks", "0.6": "exceed max_step"}
     for quantum, words in bad.items():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.cosim.timegrid import FIXED_SUBDIVISION, TimeGrid
 
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim import load_scene
 
 

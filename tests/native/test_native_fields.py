@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.native.toolchain import compiler
 from tribocosim.components.native.resource_io.field_file import FieldRecorder, read_fields, read_initial_beta
 

@@ -17,11 +17,11 @@ import sys
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.native.resource_io import array_file as arrays
 from tribocosim.components.native.toolchain import compiler
 from tribocosim.components.native.toolchain.library import VP, core, ptr
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import closed_form_table, make_friction_law
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, resource_entries, write_table, write_table_resource

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ConvergenceError, ParameterError
+from tribocosim.errors import ConvergenceError, ParameterError
 from tribocosim.surrogate.bem import ContactResult, ContactSolver, gap_against_flat
 from tribocosim.surrogate.fft import RFFT2Pair, export_wisdom, import_wisdom
 from tribocosim.surrogate.reference_solutions import (hertz_contact_radius, hertz_peak_pressure,

@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 from tribocosim.surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
                                 modified_tool, particle_area_fraction, run_slide)
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate.dem import DemState, FlakeShape
 from tribocosim.surrogate.flakes import Footprint, footprints

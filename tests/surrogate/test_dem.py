@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate import dem_kernels as kernels
 from tribocosim.surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape

@@ -12,7 +12,7 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import quad
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate.campaign import case_id
 from tribocosim.surrogate.coupling import SlideSimulation, run_slide

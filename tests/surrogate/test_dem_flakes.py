@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.dem import FlakeShape
 from tribocosim.surrogate.flakes import (axis_angle_quaternion, footprints, random_placement,
                               rotation_matrices)

@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.surrogate.campaign import expand_cases, run_case
 from tribocosim.surrogate.sweep import load_preset

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.coupling import _generate_surfaces
 from tribocosim.surrogate.slide_config import SlideConfig
 from tribocosim.surrogate.surfaces import (MIN_PIXELS_PER_WAVELENGTH, load_height_map,

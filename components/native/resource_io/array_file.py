@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 MAGIC = b"TCARRAYS"
 VERSION = 1

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.native.toolchain.library import VP, core, ptr
 
 HEADER = "# tribocosim strip-draw nodal fields, format 1"

@@ -31,7 +31,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 #: platform -> (zig target, or the targets of a universal Mach-O's slices; shared-library suffix)
 PLATFORMS = {

@@ -28,7 +28,7 @@ import math
 from pathlib import Path
 
 from tribocosim.components.description import Component
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 
 def _c_string(text: str) -> str:

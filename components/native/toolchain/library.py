@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TribocosimError
+from tribocosim.errors import ParameterError, TribocosimError
 
 #: the C sources of the core library (the models and what they read and write; not the FMI layer)
 SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "core/tc_friction.c",

@@ -10,7 +10,7 @@ from __future__ import annotations
 from importlib.resources import files
 from pathlib import Path
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 
 MODELS_DIR = Path(str(files("tribocosim.models")))
 DEFAULT_TABLE = MODELS_DIR / "friction_table.npz"
