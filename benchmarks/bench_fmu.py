@@ -165,7 +165,7 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
 def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
     """The C host of tests/native/host (compiled into ``tmp``) running the default draw (``steps`` steps of 1 ms at
     10 MPa and 0.08 m/s) on the extracted StripDraw FMU, without printing: the command line."""
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
     from tribocosim.components.native.toolchain.compiler import compile_executable
 
     host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
@@ -186,7 +186,7 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     """The native FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import build_native_fmus
+    from tribocosim.components.fmus.native_build import build_native_fmus
 
     fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
     md = read_model_description(str(fmu))
@@ -231,7 +231,7 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         fmu = args.fmu
         if fmu is None:
-            from tribocosim.components.fmus.build import build_fmus
+            from tribocosim.components.fmus.python_build import build_fmus
 
             fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))

@@ -25,7 +25,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("accuracy", "stability"))
     args = ap.parse_args(argv)
-    from tribocosim.cosim.report_cli import main as report
+    from tribocosim.cosim.apps.report_cli import main as report
 
     for kind in ([args.only] if args.only else ["accuracy", "stability"]):
         load0 = os.getloadavg()

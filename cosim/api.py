@@ -1,7 +1,7 @@
 """Python API: ``tribocosim.cosim.run(scene) -> Result``, and the assembly of a master from a scene.
 
-:func:`build` turns a validated :class:`~tribocosim.cosim.validate.Plan` into a ready
-:class:`~tribocosim.cosim.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.slave.FmpySlave`,
+:func:`build` turns a validated :class:`~tribocosim.cosim.scene.validate.Plan` into a ready
+:class:`~tribocosim.cosim.engine.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.engine.slave.FmpySlave`,
 links, algorithm, step controller, recorder); :func:`run` loads a scene, runs it, and writes
 the CSV and the metadata JSON. The command line (``tribocosim run``) is a thin layer over
 :func:`run`.
@@ -23,15 +23,15 @@ from typing import Any
 import numpy as np
 
 from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
-from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
-from tribocosim.cosim.graph import gauss_seidel_order
-from tribocosim.cosim.master import Master
-from tribocosim.cosim.recorder import Progress, Recorder
-from tribocosim.cosim.slave import FmpySlave
-from tribocosim.cosim.stepcontrol import ESTIMATORS, FixedStep
-from tribocosim.cosim.system import CoupledSystem, LinkSpec
-from tribocosim.cosim.timegrid import TimeGrid
-from tribocosim.cosim.validate import Plan
+from tribocosim.cosim.engine.algorithms import ALGORITHMS, GaussSeidel
+from tribocosim.cosim.engine.graph import gauss_seidel_order
+from tribocosim.cosim.engine.master import Master
+from tribocosim.cosim.engine.recorder import Progress, Recorder
+from tribocosim.cosim.engine.slave import FmpySlave
+from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
+from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.engine.timegrid import TimeGrid
+from tribocosim.cosim.scene.validate import Plan
 
 
 @dataclass
@@ -118,7 +118,7 @@ def build(plan: Plan) -> Build:
     Parameters
     ----------
     plan : Plan
-        From :func:`tribocosim.cosim.validate.load_scene`.
+        From :func:`tribocosim.cosim.scene.validate.load_scene`.
     """
     scene = plan.scene
     names = list(plan.fmus)
@@ -203,7 +203,7 @@ def native_resource(spec, name: str, value):
     source = Path(value)
     if not source.is_absolute() or not source.is_file():  # a file in the FMU's resources: converted by its build
         return value
-    from tribocosim.cosim.fmucache import cache_dir
+    from tribocosim.cosim.scene.fmucache import cache_dir
 
     folder = cache_dir() / "resources" / hashlib.sha256(source.read_bytes()).hexdigest()[:20]
     converted = folder / f"{source.stem}.tca"
@@ -239,7 +239,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     """
     if not isinstance(scene, Plan):
         from tribocosim.paths import scene_file
-        from tribocosim.cosim.reference_components import load_component_scene
+        from tribocosim.cosim.scene.component_checks import load_component_scene
 
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
         scene = load_component_scene(scene_file(scene), overrides)

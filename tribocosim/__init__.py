@@ -25,7 +25,7 @@ from tribocosim.lazy import lazy_exports
 __getattr__, __all__ = lazy_exports(__name__, {
     "run": "tribocosim.cosim.api",
     "Result": "tribocosim.cosim.api",
-    "load_scene": "tribocosim.cosim.validate",
+    "load_scene": "tribocosim.cosim.scene.validate",
     "StripDrawModel": "tribocosim.components.stripdraw.model",
     "StripDrawParameters": "tribocosim.components.stripdraw.parameters",
     "make_friction_law": "tribocosim.components.stripdraw.friction",

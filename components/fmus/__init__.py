@@ -5,8 +5,8 @@
   the adapters (each bundled into the FMU of its name);
 - :mod:`tribocosim.components.fmus.statecodec`: FMU-state bytes that carry numpy arrays (bundled);
 - :mod:`tribocosim.components.fmus.exitguard`: work-around for pythonfmu 0.7.0's crash at exit (bundled);
-- :mod:`tribocosim.components.fmus.build`: ``build_fmus(out_dir, names=None)``, a subprocess per FMU;
-- :mod:`tribocosim.components.fmus.cli`: ``tribocosim fmu build [--out DIR]`` (all three FMUs).
+- :mod:`tribocosim.components.fmus.python_build`: ``build_fmus(out_dir, names=None)``, a subprocess per FMU;
+- :mod:`tribocosim.components.fmus.fmu_cli`: ``tribocosim fmu build [--out DIR]`` (all three FMUs).
 
 This ``__init__`` imports nothing: it is bundled into every FMU, which needs only numpy.
 """

@@ -4,7 +4,7 @@
 :data:`INTERNAL_STEP`): friction, contact overlaps and debris are updated every internal step, also within
 a communication step H, and the native StripDraw FMU takes its inputs' time derivatives
 (``canInterpolateInputs``; the master passes the extrapolation polynomial's Taylor coefficients through
-``fmi2SetRealInputDerivatives``, :mod:`tribocosim.cosim.system`). The press and the drawing machine hold
+``fmi2SetRealInputDerivatives``, :mod:`tribocosim.cosim.engine.system`). The press and the drawing machine hold
 their inputs at the polynomial's mean over the step. The strip's own time discretization is then the same
 for every H, so what changes with H is the coupling alone, and its error is
 
@@ -55,7 +55,7 @@ def coupling_order(settings: Settings) -> Family:
     from tribocosim.cosim.reports.accuracy import _failed_row, _master_row, demo_scene_path
     from tribocosim.cosim.reports.metrics import max_relative_error
     from tribocosim.cosim.reports.runner import run_plan
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Demo rig, strip on its internal grid: coupling error against the communication step (order)"
     path = demo_scene_path()

@@ -1,8 +1,8 @@
 """Stability families of ``tribocosim report stability``: a matrix of cases x schemes, one function per family.
 
 Every cell runs the case with the scheme at its nominal step and judges the run with the
-criterion of :mod:`tribocosim.cosim.reports.stability` (stable / unstable with the reason / error with the
-message), and finds the largest stable step by bisection (:func:`~tribocosim.cosim.reports.stability.largest_stable_step`).
+criterion of :mod:`tribocosim.cosim.reports.stability_criterion` (stable / unstable with the reason / error with the
+message), and finds the largest stable step by bisection (:func:`~tribocosim.cosim.reports.stability_criterion.largest_stable_step`).
 
 ``oscillator``
     The linear two-mass oscillator (FMUs of the tests), coupling stiffness k2 from 10 to 1e7 N/m;
@@ -35,7 +35,7 @@ import numpy as np
 
 from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
-from tribocosim.cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
+from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
 
 CRITERION = Criterion()
 #: a bisection through the master never tries steps longer than the run / MIN_STEPS (fewer points cannot show growth)
@@ -76,7 +76,7 @@ def _cell_row(case: str, scheme: str, verdict: Verdict, limit, **extra) -> dict:
 
 # --------------------------------------------------------------------------- oscillator
 def _fast_period(k2: float) -> float:
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
 
     lam = np.linalg.eigvals(TwoMassOscillator(k2=k2).matrix())
     return 2 * math.pi / float(np.max(np.abs(lam.imag)))
@@ -85,10 +85,10 @@ def _fast_period(k2: float) -> float:
 @timed
 def oscillator(settings: Settings) -> Family:
     """Two-mass oscillator, k2 = 10 ... 1e7: schemes x stiffness."""
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.monodromy import jacobi0_limit
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Two-mass oscillator: coupling stiffness k2 x scheme"
     try:
@@ -143,7 +143,7 @@ def _component_scales(plan) -> dict[str, float]:
     spring the carriage (mass m) forward with the pull force F it held, which near p_crit is far above the
     set-point (measured: the monolithic reference reaches 13 x the set-point at 0.99 p_crit; F / sqrt(k_d m)
     there is 15 x). Set-point and parameters from the scene or the defaults."""
-    from tribocosim.cosim.reference_components import component_of
+    from tribocosim.cosim.scene.component_checks import component_of
 
     found = {name: comp for name, spec in plan.scene.fmus.items() if (comp := component_of(spec)) is not None}
     params = {name: comp.split(plan.scene.fmus[name].parameters)[0] for name, comp in found.items()}
@@ -164,7 +164,7 @@ def _component_scales(plan) -> dict[str, float]:
 
 
 def _instance(plan, component: str) -> str | None:
-    from tribocosim.cosim.reference_components import component_of
+    from tribocosim.cosim.scene.component_checks import component_of
 
     return next((n for n, s in plan.scene.fmus.items() if getattr(component_of(s), "name", None) == component), None)
 
@@ -172,7 +172,7 @@ def _instance(plan, component: str) -> str | None:
 def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget):
     """Run each (case overrides) x scheme at the scene step, bisect the step; append rows."""
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     for case, over, step in cases:
         for alg, q in schemes:
@@ -207,7 +207,7 @@ def stiff_drive_path() -> Path | None:
 @timed
 def stiff_drive(settings: Settings) -> Family:
     """stiff_drive.toml: drive stiffness 1e4 ... 1e9 N/m x scheme."""
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Stiff drive: drivetrain stiffness x scheme (stiff_drive.toml)"
     path = stiff_drive_path()
@@ -240,7 +240,7 @@ def stiff_drive(settings: Settings) -> Family:
 def demo(settings: Settings) -> Family:
     """demo.toml through the master: nominal, P_N near p_crit, grip velocity 0, one step for the whole draw."""
     from tribocosim.cosim.reports.accuracy import demo_scene_path
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Demo scene through the master: extreme inputs x scheme"
     path = demo_scene_path()

@@ -128,7 +128,7 @@ def test_variables_follow_the_parameter_dataclass(stripdraw_fmu_description):
 def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     import zipfile
 
-    from tribocosim.components.fmus.build import resource_paths
+    from tribocosim.components.fmus.python_build import resource_paths
 
     with zipfile.ZipFile(stripdraw_fmu_file) as z:
         names = set(z.namelist())

@@ -20,7 +20,7 @@ from tribocosim.paths import MODELS_DIR
 from tribocosim.cosim.reports.coupling_order import fitted_order
 from tribocosim.cosim.reports.metrics import max_relative_error
 from tribocosim.cosim.reports.runner import run_plan
-from tribocosim.cosim.validate import load_scene
+from tribocosim.cosim.scene.validate import load_scene
 
 TAU = 1e-4
 STOP = 0.25

@@ -32,8 +32,8 @@ import pytest
 from tribocosim.errors import ConvergenceError, RunFailed
 from tribocosim.paths import scene_file
 from tribocosim.cosim.api import run
-from tribocosim.cosim.reference_components import reference_for_scene
-from tribocosim.cosim.validate import load_scene
+from tribocosim.cosim.scene.component_checks import reference_for_scene
+from tribocosim.cosim.scene.validate import load_scene
 
 P_CRIT = 340e6
 STOP = 0.02
@@ -124,7 +124,7 @@ def test_the_stability_report_cells_carry_the_observed_contraction():
     """judged_run (the stability report's runs) puts the master's contraction on the verdict, also when the
     iteration stopped the run."""
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.reports.stability import ERROR
+    from tribocosim.cosim.reports.stability_criterion import ERROR
     from tribocosim.cosim.reports.stability_report import _cell_row, _component_scales
 
     plan = load_scene(scene_file("demo"), _iterative("quasi-newton"))

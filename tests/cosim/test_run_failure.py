@@ -12,7 +12,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from tribocosim.cosim.run_cli import main as run_main
+from tribocosim.cosim.apps.run_cli import main as run_main
 
 
 def _scene(folder, body: str, variables: list[str]):

@@ -5,7 +5,7 @@ Cheap settings (a 50 mm draw on a 100-element bar, 2.5 ms communication step) ke
 the trends are those of the paper (Sec. 2.1, 7; Fig. 2, 17-19): mu_bar falls with P_N and with pad
 length; more debris sticking to the tool (zeta) and more wear (K) lower it, saturating at large K
 (beta at its cap under the whole pad); a second and a third pass over the same strip lower it.
-Sweeps run in parallel processes (cosim.sweep), every case written to its own folder.
+Sweeps run in parallel processes (cosim.apps.scene_sweep), every case written to its own folder.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.reference_components import load_component_scene, steady_ratio
-from tribocosim.cosim.sweep import load_sweep, run_sweep
+from tribocosim.cosim.scene.component_checks import load_component_scene, steady_ratio
+from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
 DEMO = SCENES / "demo.toml"

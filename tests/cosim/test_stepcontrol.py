@@ -1,11 +1,11 @@
-"""Tests of cosim.stepcontrol: step doubling, the energy (ECCO) estimator, rejection and rollback."""
+"""Tests of cosim.engine.stepcontrol: step doubling, the energy (ECCO) estimator, rejection and rollback."""
 
 import numpy as np
 import pytest
 
 from tribocosim.errors import CosimStepError
 from tribocosim.cosim import run
-from tribocosim.cosim.reference import TwoMassOscillator, coupling_error
+from tribocosim.cosim.apps.monolithic import TwoMassOscillator, coupling_error
 
 BOND = """
 [[power_bonds]]
@@ -164,8 +164,8 @@ class _FakeMaster:
 def test_a_rejected_step_shrinks_by_a_quantum_at_least():
     """A rejection whose smaller step rounds back to the same whole number of double quanta (err = 1.05 at four:
     0.9 x 4 / sqrt(1.05) = 3.5 rounds to 4) must still shrink the step, not retry it for ever."""
-    from tribocosim.cosim.stepcontrol import Adaptive, StepDoubling
-    from tribocosim.cosim.timegrid import TimeGrid
+    from tribocosim.cosim.engine.stepcontrol import Adaptive, StepDoubling
+    from tribocosim.cosim.engine.timegrid import TimeGrid
 
     q, tol = 1e-3, 1e-3
     grid = TimeGrid.variable(0.0, 1.0, 2 * q)  # 32 ticks per quantum

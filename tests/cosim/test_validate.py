@@ -1,4 +1,4 @@
-"""Tests of scene validation (cosim.scene + cosim.validate): every problem, one message, file and key."""
+"""Tests of scene validation (cosim.scene.schema + cosim.scene.validate): every problem, one message, file and key."""
 
 import pytest
 

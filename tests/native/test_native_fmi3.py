@@ -47,7 +47,7 @@ def _fmi3_functions() -> set[str]:
     fmi3FullName)."""
     import re
 
-    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.fmus.native_build import fmi3_headers
 
     text = (fmi3_headers() / "fmi3Functions.h").read_text()
     return set(re.findall(r"#define (fmi3\w+)\s+fmi3FullName\(", text))
@@ -65,7 +65,7 @@ def exported_functions(path):
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> dict[int, dict[str, Path]]:
     """``{2: FMI 2.0 FMUs, 3: FMI 3.0 FMUs}`` of the three components, linux64, from the same tree."""
-    from tribocosim.components.fmus.native import build_native_fmus
+    from tribocosim.components.fmus.native_build import build_native_fmus
 
     return {v: build_native_fmus(tmp_path_factory.mktemp(f"fmi{v}"), platforms=["linux64"], fmi_version=v)
             for v in (2, 3)}
@@ -89,7 +89,7 @@ def md(built):
 @pytest.fixture(scope="module")
 def hosts(tmp_path_factory) -> dict[int, Path]:
     """The C hosts of both versions (linux64 executables, no Python)."""
-    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.fmus.native_build import fmi3_headers
     from tribocosim.components.native.toolchain.compiler import compile_executable
 
     folder = tmp_path_factory.mktemp("hosts")

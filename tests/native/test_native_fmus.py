@@ -41,7 +41,7 @@ def _fmi2_functions() -> set[str]:
     fmi2FullName)."""
     import re
 
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
 
     text = (fmi2_headers() / "fmi2Functions.h").read_text()
     return set(re.findall(r"#define (fmi2\w+)\s+fmi2FullName\(", text))
@@ -80,7 +80,7 @@ def descriptions(native_fmus):
 @pytest.fixture(scope="session")
 def fmi2_host(tmp_path_factory) -> Path:
     """The C host, compiled with the project's toolchain (a linux64 executable, no Python)."""
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
     from tribocosim.components.native.toolchain.compiler import compile_executable
 
     out = tmp_path_factory.mktemp("host") / "fmi2_host"
@@ -119,7 +119,7 @@ def run_host(host, unzipped, description, tmp_path, steps, *, inputs=(), outputs
 def test_model_descriptions_are_the_python_variants(descriptions, tmp_path_factory):
     from fmpy import read_model_description
 
-    from tribocosim.components.fmus.build import build_fmus
+    from tribocosim.components.fmus.python_build import build_fmus
 
     python = build_fmus(tmp_path_factory.mktemp("python_fmus"))
     for name in NAMES:
@@ -508,7 +508,7 @@ def test_outputs_at_the_start_report_the_inputs_set_during_initialization(unzipp
 
 
 def test_the_demo_scene_has_no_algebraic_loop_for_an_importer_that_reads_the_dependencies():
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     plan = load_scene(Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml")
     for name, model in plan.fmus.items():

@@ -44,7 +44,7 @@ def _exports():
 
 def _functions(version: int) -> set[str]:
     """Every function of the FMI standard, from the header fmpy ships."""
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
 
     text = (fmi2_headers() / f"fmi{version}Functions.h").read_text()
     return set(re.findall(rf"#define (fmi{version}\w+)\s+fmi{version}FullName\(", text))
@@ -133,7 +133,7 @@ def _run_host(host: Path, folder: Path, md, steps, prefix=()) -> np.ndarray:
 def test_the_aarch64_linux_binary_under_qemu_draws_as_the_x86_64_one(every_platform, tmp_path):
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.fmus.native_build import fmi3_headers
 
     qemu = shutil.which("qemu-aarch64")
     assert qemu, "qemu-aarch64 (Debian: apt-get install qemu-user) runs the aarch64 binary"

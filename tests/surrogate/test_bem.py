@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 from tribocosim.errors import ConvergenceError, ParameterError
 from tribocosim.surrogate.bem import ContactResult, ContactSolver, gap_against_flat
 from tribocosim.surrogate.fft import RFFT2Pair, export_wisdom, import_wisdom
-from tribocosim.surrogate.reference_solutions import (hertz_contact_radius, hertz_peak_pressure,
+from tribocosim.surrogate.contact_solutions import (hertz_contact_radius, hertz_peak_pressure,
                                            projected_gradient_contact, rigid_plastic_paraboloid,
                                            westergaard_full_contact_pressure,
                                            westergaard_half_width, westergaard_traction)

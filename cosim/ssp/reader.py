@@ -3,7 +3,7 @@
 :func:`load_ssp` extracts the package into a temporary folder (removed when the process ends),
 reads ``SystemStructure.ssd``, translates the system into a scene, written next to the SSD as
 ``<package name>.toml`` with the FMU paths relative to it, and validates that scene as any other
-(:func:`tribocosim.cosim.validate.load_scene`, ``--set`` overrides applied on top).
+(:func:`tribocosim.cosim.scene.validate.load_scene`, ``--set`` overrides applied on top).
 :func:`run_ssp` runs it and records the package in the run's metadata.
 
 What is read:
@@ -19,7 +19,7 @@ What is read:
   and listed in the scene's header);
 - ``ssd:DefaultExperiment`` start and stop, and the step from the OSP annotation
   ``osp:FixedStepAlgorithm baseStepSize`` (else ``--set experiment.step=...``);
-- the ``org.tribocosim.scene`` annotation written by :mod:`tribocosim.cosim.ssp_export` (master
+- the ``org.tribocosim.scene`` annotation written by :mod:`tribocosim.cosim.ssp.export` (master
   settings, power bonds, recorded outputs), on the ``ssd:System`` or at the top level of the SSD (the
   system's wins). Without it: the default master (Jacobi, no
   extrapolation) and every output connector recorded, in document order, to ``<name>.csv``.
@@ -50,10 +50,10 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 from tribocosim.errors import Problem, RunFailed, SceneError
-from tribocosim.cosim.problems import Problems
-from tribocosim.cosim.ssp import (FMU_TYPE, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES, SSD_NAME,
+from tribocosim.cosim.scene.problems import Problems
+from tribocosim.cosim.ssp.names import (FMU_TYPE, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES, SSD_NAME,
                                   prefixed, q, toml_text)
-from tribocosim.cosim.validate import unit_of
+from tribocosim.cosim.scene.validate import unit_of
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +79,7 @@ class _Component:
 
 
 def load_ssp(path: str | Path, overrides: dict | None = None):
-    """Read an SSP package as a validated scene (a :class:`tribocosim.cosim.validate.Plan`).
+    """Read an SSP package as a validated scene (a :class:`tribocosim.cosim.scene.validate.Plan`).
 
     Parameters
     ----------
@@ -94,7 +94,7 @@ def load_ssp(path: str | Path, overrides: dict | None = None):
         Listing every unsupported element and every problem of the translated scene, each with the
         package's path and the element (or the scene key).
     """
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     ssp = Path(path).resolve()
     folder = _extract(ssp)
@@ -102,7 +102,7 @@ def load_ssp(path: str | Path, overrides: dict | None = None):
     doc = reader.read()
     reader.problems.raise_if_any()
     scene = folder / f"{ssp.stem}.toml"
-    header = [f"# {ssp.name} (SSP 1.0) as a tribocosim scene, written by tribocosim.cosim.ssp_import"]
+    header = [f"# {ssp.name} (SSP 1.0) as a tribocosim scene, written by tribocosim.cosim.ssp.reader"]
     header += [f"# ignored (no such variable): {w}" for w in reader.ignored]
     scene.write_text("\n".join(header) + "\n\n" + toml_text(doc), encoding="utf-8")
     try:

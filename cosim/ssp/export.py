@@ -15,7 +15,7 @@ The zip holds
     sets of the one name it is given (``EcosSimulation.init(parameter_set="demo")``); libcosim and
     OMSimulator apply the component bindings as they are; fmpy 0.3's ``simulate_ssp`` applies only
     the one ``parameter_set`` it is given, with ``component.variable`` names
-    (:func:`tribocosim.cosim.ssp.fmpy_parameter_set` gathers the bindings into one);
+    (:func:`tribocosim.cosim.ssp.names.fmpy_parameter_set` gathers the bindings into one);
   - the connections, in scene order;
   - ``ssd:Annotations``, last: first OMSimulator's (``org.openmodelica``: ``oms:SimulationInformation``
     with an ``oms:FixedStepMaster`` of the scene's step; OMSimulator reads the first annotation only,
@@ -51,10 +51,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tribocosim.errors import TribocosimError
-from tribocosim.cosim.scene import apply_overrides
-from tribocosim.cosim.ssp import (FMU_TYPE, NS, OMS_ANNOTATION, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION,
+from tribocosim.cosim.scene.schema import apply_overrides
+from tribocosim.cosim.ssp.names import (FMU_TYPE, NS, OMS_ANNOTATION, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION,
                                   SCENE_TABLES, SSD_NAME, q, toml_text)
-from tribocosim.cosim.validate import unit_of
+from tribocosim.cosim.scene.validate import unit_of
 
 _CONNECTOR_TYPES = ("Real", "Integer", "Boolean", "Enumeration")
 _BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
@@ -105,7 +105,7 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
     TribocosimError
         If two FMUs define the same unit name differently.
     """
-    from tribocosim.cosim.reference_components import load_component_scene
+    from tribocosim.cosim.scene.component_checks import load_component_scene
 
     plan = load_component_scene(scene, overrides)
     sc = plan.scene

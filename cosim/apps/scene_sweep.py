@@ -198,7 +198,7 @@ def is_sweep_file(path: str | Path) -> bool:
 
 def load_sweep(path: str | Path) -> Sweep:
     """Parse and check a sweep file; raise one SceneError listing every problem (file: key: message)."""
-    from tribocosim.cosim.problems import Problems
+    from tribocosim.cosim.scene.problems import Problems
 
     path = Path(path).resolve()
     problems = Problems(path, "sweep")
@@ -348,7 +348,7 @@ def pass_overrides(sweep: Sweep, case: Case, folder: Path, k: int) -> dict:
 def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
     """Run every pass of one case in this process; write and return its summary rows."""
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.reference_components import load_component_scene
+    from tribocosim.cosim.scene.component_checks import load_component_scene
 
     folder = out / "cases" / case.name
     done = folder / "summary.json"
@@ -419,8 +419,8 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     SceneError
         For problems in the sweep file or in the scene of any case (all checked before running).
     """
-    from tribocosim.cosim.problems import Problems
-    from tribocosim.cosim.reference_components import load_component_scene
+    from tribocosim.cosim.scene.problems import Problems
+    from tribocosim.cosim.scene.component_checks import load_component_scene
 
     sweep = load_sweep(path)
     out = Path(out) if out is not None else Path.cwd() / sweep.path.stem
@@ -467,7 +467,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                     indent=2, default=str), encoding="utf-8")
     result = SweepResult(sweep, rows, csv_path, json_path, wall)
     if plot:
-        from tribocosim.cosim.plotting import plot_beta_maps, plot_sweep
+        from tribocosim.cosim.apps.plotting import plot_beta_maps, plot_sweep
 
         result.plots.append(plot_sweep(result, out / "sweep.png"))
         maps = sweep.plot.get("maps")
@@ -495,7 +495,7 @@ def _same(a, b) -> bool:
 
 
 def main(args) -> int:
-    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`tribocosim.cosim.run_cli`)."""
+    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`tribocosim.cosim.apps.run_cli`)."""
     import sys
 
     def progress(done, total, rows):

@@ -5,7 +5,7 @@ A scene FMU given as ``component = "<name>"`` is the FMU of a component of
 (:class:`~tribocosim.components.description.Component`) this module reads to
 
 - check the parameters before anything runs (:func:`component_problems`): the FMUs declare
-  min/max for Reals, which :mod:`tribocosim.cosim.validate` checks, but no choices for Strings
+  min/max for Reals, which :mod:`tribocosim.cosim.scene.validate` checks, but no choices for Strings
   (``friction_model = "tabel"``), no cross-field rules (a malformed press ``setpoint_table``) and
   nothing that spans instances. Each parameter is checked against its dataclass, then the
   component's own ``check`` runs (e.g. the strip's table and field file, the cap of beta), and
@@ -17,10 +17,10 @@ A scene FMU given as ``component = "<name>"`` is the FMU of a component of
   its pure model (``Component.make``, the same function the FMU calls) with the scene's
   parameters, connected as the scene connects the FMUs, unconnected inputs held at their scene
   value (a parameter of the input's name) or else the FMU's start value, stepped by
-  :class:`tribocosim.cosim.reference.CoupledModels` with a tiny step and the coupling solved every
+  :class:`tribocosim.cosim.apps.monolithic.CoupledModels` with a tiny step and the coupling solved every
   step. Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
 
-This is, with :mod:`tribocosim.cosim.fmucache`, where :mod:`tribocosim.cosim` imports
+This is, with :mod:`tribocosim.cosim.scene.fmucache`, where :mod:`tribocosim.cosim` imports
 :mod:`tribocosim.components`; the imports are lazy, and a scene of FMU files imports none of it.
 """
 
@@ -73,9 +73,9 @@ def _split(comp, given: dict, add, key: str):
 def component_problems(scene) -> list[Problem]:
     """Problems of the component parameters of a scene.
 
-    ``scene`` is a :class:`tribocosim.cosim.scene.Scene` (parsed, not necessarily valid) or a validated plan.
+    ``scene`` is a :class:`tribocosim.cosim.scene.schema.Scene` (parsed, not necessarily valid) or a validated plan.
     """
-    from tribocosim.cosim.problems import Problems
+    from tribocosim.cosim.scene.problems import Problems
 
     scene = getattr(scene, "scene", scene)
     problems = Problems(scene.path)
@@ -140,14 +140,14 @@ def _outside_port(comp, values: dict, port, value: float, label: str, where: str
 
 
 def load_component_scene(path, overrides: dict | None = None):
-    """:func:`tribocosim.cosim.validate.load_scene` plus :func:`component_problems`, all problems in one SceneError.
+    """:func:`tribocosim.cosim.scene.validate.load_scene` plus :func:`component_problems`, all problems in one SceneError.
 
     (The component checks run on the parsed scene even when the FMU-level validation fails, and
     a key that both report is listed once.)
     """
-    from tribocosim.cosim.problems import Problems
-    from tribocosim.cosim.scene import parse_scene
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.problems import Problems
+    from tribocosim.cosim.scene.schema import parse_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     scene, _ = parse_scene(path, overrides)
     extra = component_problems(scene) if scene is not None else []
@@ -201,16 +201,16 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
 
     Parameters
     ----------
-    scene : str, Path, cosim.validate.Plan or cosim.scene.Scene
+    scene : str, Path, cosim.scene.validate.Plan or cosim.scene.schema.Scene
         The scene (a file is loaded and validated, FMUs built on demand).
     dt : float
         The tiny step of the reference [s].
     tol, max_iterations : float, int
-        Convergence of the coupling values per step (:class:`tribocosim.cosim.reference.CoupledModels`).
+        Convergence of the coupling values per step (:class:`tribocosim.cosim.apps.monolithic.CoupledModels`).
 
     Returns
     -------
-    cosim.reference.CoupledModels
+    cosim.apps.monolithic.CoupledModels
         ``solve(times)`` gives every output of every instance, named ``instance.output``.
 
     Raises
@@ -219,10 +219,10 @@ def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations:
         If an FMU of the scene is not one of this project's components.
     """
     from tribocosim.components import registry
-    from tribocosim.cosim.reference import CoupledModels
+    from tribocosim.cosim.apps.monolithic import CoupledModels
 
     if isinstance(scene, (str, Path)):
-        from tribocosim.cosim.validate import load_scene
+        from tribocosim.cosim.scene.validate import load_scene
 
         scene = load_scene(scene)
     plan = scene if hasattr(scene, "scene") else None

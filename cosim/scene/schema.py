@@ -14,7 +14,7 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     # output_update = "propagate"   # or "none": outputs read right after doStep (as libcosim)
     # order = ["press", "strip"]    # Gauss-Seidel order (default: from the connection graph)
 
-    # [master.adaptive]            # tribocosim.cosim.stepcontrol.Adaptive
+    # [master.adaptive]            # tribocosim.cosim.engine.stepcontrol.Adaptive
     # tolerance = 1e-4
     # min_step = 1e-7
     # max_step = 1e-2
@@ -22,7 +22,7 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     # step_quantum = 2.5e-5         # step doubling: steps are multiples of 2 x this (an FMU's internal step,
                                     # e.g. the strip's internal_step), min_step = 2 x it
 
-    # [master.iterative]           # settings of the algorithm of that name (tribocosim.cosim.algorithms)
+    # [master.iterative]           # settings of the algorithm of that name (tribocosim.cosim.engine.algorithms)
     # method = "quasi-newton"       # or "fixed-point"
     # relaxation = 1.0              # fixed-point relaxation factor, or "aitken"
     # tolerance = 1e-8
@@ -49,9 +49,9 @@ settings and the outputs to record; nothing else is loaded, computed or written.
     variables = ["strip.pull_force", "strip.mu_mean"]
 
 :func:`parse_scene` checks the structure (keys, types, ranges) and returns every problem it
-found together with whatever could be parsed; :mod:`tribocosim.cosim.validate` then checks the scene
+found together with whatever could be parsed; :mod:`tribocosim.cosim.scene.validate` then checks the scene
 against the FMUs' model descriptions and raises one :class:`~tribocosim.errors.SceneError`
-listing all problems, each with the file and the key (:mod:`tribocosim.cosim.problems`).
+listing all problems, each with the file and the key (:mod:`tribocosim.cosim.scene.problems`).
 """
 
 from __future__ import annotations
@@ -61,9 +61,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tribocosim.cosim.algorithms import ALGORITHMS
-from tribocosim.cosim.problems import Problems
-from tribocosim.cosim.stepcontrol import ESTIMATORS, Adaptive
+from tribocosim.cosim.engine.algorithms import ALGORITHMS
+from tribocosim.cosim.scene.problems import Problems
+from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, Adaptive
 
 OUTPUT_UPDATES = ("propagate", "none")
 
@@ -89,7 +89,7 @@ class Experiment:
 
 @dataclass(frozen=True)
 class MasterSettings:
-    """[master]: the algorithm (a name of :data:`tribocosim.cosim.algorithms.ALGORITHMS`) and its
+    """[master]: the algorithm (a name of :data:`tribocosim.cosim.engine.algorithms.ALGORITHMS`) and its
     settings (its ``[master.<name>]`` table), the input extrapolation, and the step control."""
 
     algorithm: str = "jacobi"

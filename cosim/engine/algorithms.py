@@ -1,11 +1,11 @@
-"""Coupling algorithms: one macro step from t to t + h on a :class:`~tribocosim.cosim.system.CoupledSystem`.
+"""Coupling algorithms: one macro step from t to t + h on a :class:`~tribocosim.cosim.engine.system.CoupledSystem`.
 
 Jacobi
     Every slave gets the extrapolated inputs (polynomial of degree q through the last q + 1
     communication points), all slaves step, then the outputs are refreshed in feedthrough order.
 Gauss-Seidel
     Slaves step one after the other in an order from the instance graph
-    (:func:`tribocosim.cosim.graph.gauss_seidel_order`); a slave whose input comes from a slave already
+    (:func:`tribocosim.cosim.engine.graph.gauss_seidel_order`); a slave whose input comes from a slave already
     stepped gets the *interpolation* through that slave's new output, other inputs are
     extrapolated. Same order of accuracy as Jacobi, smaller error constant, and better stability
     for stiff couplings when the "soft" subsystem goes first (Busch 2016,
@@ -42,9 +42,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tribocosim.errors import ConvergenceError
-from tribocosim.cosim.extrapolation import StepPolynomial
-from tribocosim.cosim.slave import DISCARD
-from tribocosim.cosim.system import CoupledSystem
+from tribocosim.cosim.engine.extrapolation import StepPolynomial
+from tribocosim.cosim.engine.slave import DISCARD
+from tribocosim.cosim.engine.system import CoupledSystem
 
 ITERATION_METHODS = ("fixed-point", "quasi-newton")
 

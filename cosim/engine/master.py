@@ -1,7 +1,7 @@
 """The execution: initialization, the time loop, rejection and rollback, statistics.
 
-:class:`Master` owns a :class:`~tribocosim.cosim.system.CoupledSystem`, a coupling algorithm
-(:mod:`tribocosim.cosim.algorithms`), a step controller (:mod:`tribocosim.cosim.stepcontrol`), the integer time
+:class:`Master` owns a :class:`~tribocosim.cosim.engine.system.CoupledSystem`, a coupling algorithm
+(:mod:`tribocosim.cosim.engine.algorithms`), a step controller (:mod:`tribocosim.cosim.engine.stepcontrol`), the integer time
 grid and the recorder. Its primitives are what the controllers use:
 
 - ``attempt(n, k)``: one macro step from tick n over k ticks; False if an FMU discarded the
@@ -9,7 +9,7 @@ grid and the recorder. Its primitives are what the controllers use:
 - ``snapshot()`` / ``restore()`` / ``release()``: FMU states, coupling values, history and
   the observers' positions (recorded rows), for rollback;
 - ``accept(n)``: the step ending at tick n is final: push the coupling values into the
-  history and notify the observers (:class:`~tribocosim.cosim.recorder.Observer`: the recorder,
+  history and notify the observers (:class:`~tribocosim.cosim.engine.recorder.Observer`: the recorder,
   a progress bar).
 
 Initialization follows FMI 2.0: instantiate, set parameters, set up the experiment, enter
@@ -26,10 +26,10 @@ import time
 from dataclasses import dataclass, field
 
 from tribocosim.errors import ConvergenceError, CosimStepError
-from tribocosim.cosim.algorithms import ALGORITHMS, Algorithm
-from tribocosim.cosim.recorder import Observer, Recorder
-from tribocosim.cosim.system import CoupledSystem, NonFiniteOutput
-from tribocosim.cosim.timegrid import TimeGrid
+from tribocosim.cosim.engine.algorithms import ALGORITHMS, Algorithm
+from tribocosim.cosim.engine.recorder import Observer, Recorder
+from tribocosim.cosim.engine.system import CoupledSystem, NonFiniteOutput
+from tribocosim.cosim.engine.timegrid import TimeGrid
 
 LOG = logging.getLogger("tribocosim.cosim")
 

@@ -3,8 +3,8 @@ the ``tribocosim ssp`` command.
 
 An SSP package is a zip with ``SystemStructure.ssd`` (the system: components, connectors,
 connections, parameter bindings, default experiment) and, under ``resources/``, the FMUs and the
-parameter sets (``.ssv``). :mod:`tribocosim.cosim.ssp_export` writes a scene as one;
-:mod:`tribocosim.cosim.ssp_import` reads one back as a scene for our master (``tribocosim run RIG.ssp``).
+parameter sets (``.ssv``). :mod:`tribocosim.cosim.ssp.export` writes a scene as one;
+:mod:`tribocosim.cosim.ssp.reader` reads one back as a scene for our master (``tribocosim run RIG.ssp``).
 
 The fixed master step is not part of SSP 1.0: it travels in the Open Simulation Platform's
 annotation of ``ssd:DefaultExperiment`` (``osp:FixedStepAlgorithm baseStepSize``), which libcosim
@@ -159,8 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     from tribocosim.errors import SceneError, TribocosimError
     from tribocosim.paths import scene_file
-    from tribocosim.cosim.run_cli import _overrides
-    from tribocosim.cosim.ssp_export import export_ssp
+    from tribocosim.cosim.apps.run_cli import _overrides
+    from tribocosim.cosim.ssp.export import export_ssp
 
     try:
         scene = scene_file(args.scene)

@@ -3,7 +3,7 @@
 ``models/scenes/demo.toml`` with the press set to 0.99 x 340 MPa on the 35 x 35 mm pad (412335 N) and the
 strip on the closed-form friction law (Eq. 9; the shipped table's pressure axis does not reach 337 MPa),
 iterative coupling with extrapolation 0 at h = 1 ms, one row per update of the iteration
-(:class:`tribocosim.cosim.algorithms.Iterative`):
+(:class:`tribocosim.cosim.engine.algorithms.Iterative`):
 
 - quasi-Newton (IQN-ILS, the default);
 - fixed point, relaxation w = 1;
@@ -15,7 +15,7 @@ iterative coupling with extrapolation 0 at h = 1 ms, one row per update of the i
   :data:`RELAXED_MAX_ITERATIONS`.
 
 Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the monolithic reference
-(:func:`tribocosim.cosim.reference_components.reference_for_scene`) with the same step, 1 ms, the coupling
+(:func:`tribocosim.cosim.scene.component_checks.reference_for_scene`) with the same step, 1 ms, the coupling
 solved by the reference's own fixed point to :data:`REFERENCE_TOL` every step: the same implicit coupling
 (inputs held at their end values), so the error is how far the iteration stopped from it.
 ``error_vs_fine``: the same against the reference with dt = :data:`FINE_DT` (interpolated), which adds the
@@ -84,10 +84,10 @@ def _run_row(plan, setting: str, iterative: dict, t_ref, refs: dict) -> tuple[di
 @timed
 def near_pcrit(settings: Settings) -> Family:
     """demo.toml at 0.99 p_crit: iterative coupling by quasi-Newton, fixed point (w = 1, Aitken, w from rho)."""
-    from tribocosim.cosim.reference_components import reference_for_scene
+    from tribocosim.cosim.scene.component_checks import reference_for_scene
     from tribocosim.cosim.reports.stability_report import _instance
     from tribocosim.cosim.reports.accuracy import demo_scene_path
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = f"Demo scene at {FRACTION:g} p_crit: iterative coupling, quasi-Newton against fixed point"
     path = demo_scene_path()

@@ -4,7 +4,7 @@ The paper's macro experiment (Sec. 2.1, 7): the strip pulled at V0 = 0.08 m/s (v
 10 ms) for 140 mm under a constant normal force F_N = P_N L_T w_T on each pad; mu(t) = pull_force /
 (2 F_N) (Eq. 1) and mu_bar its mean over the last 20 % of the draw, the steady-state region. A later
 pass starts from the debris field the previous one left (paper Fig. 2b), with the strip's mechanics
-afresh. Used by the calibration (:mod:`tribocosim.cosim.calibrate`) and the paper report; runs in
+afresh. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
 worker processes (:func:`run_points`).
 """
 

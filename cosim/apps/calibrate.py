@@ -13,7 +13,7 @@ What the mesoscale campaign does not pin down is one scalar: the load share of b
 test's 0.08 m/s, far below the campaign's velocities (docs/model.md section 4). The fit scales the
 table's A_p by ``particle_area_scale`` s (mu = mu0 (1 - s A_p / A_c)); with ``--fit ... zeta`` also
 the fraction of debris carried by the tool. Every point is simulated with the pure strip-draw model
-(:mod:`tribocosim.cosim.stripdraw_test`, in parallel processes) and the parameters are fitted by
+(:mod:`tribocosim.cosim.apps.stripdraw_experiment`, in parallel processes) and the parameters are fitted by
 Gauss-Newton least squares with a finite-difference Jacobian, within their ranges (s >= 0,
 0 <= zeta <= 1). Standard errors: sqrt(diag((J^T J)^-1)), scaled by the residual variance
 chi^2 / (N - n) when the data give no mu_bar_std.
@@ -145,7 +145,7 @@ def calibrate(data: list[Measurement], parameters: dict, fit: tuple[str, ...] = 
         docstring) passed before.
     """
     from tribocosim.components.stripdraw.component import COMPONENT
-    from tribocosim.cosim.stripdraw_test import Point, run_points
+    from tribocosim.cosim.apps.stripdraw_experiment import Point, run_points
 
     unknown = [f for f in fit if f not in FITTABLE]
     if unknown or not fit:

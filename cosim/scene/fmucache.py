@@ -10,7 +10,7 @@ does. The build goes to a temporary folder that is renamed into place, so concur
 see a half-written FMU.
 
 This is one of the two places where :mod:`tribocosim.cosim` imports :mod:`tribocosim.components`
-(the other is :mod:`tribocosim.cosim.reference_components`), and it does so lazily: a scene that
+(the other is :mod:`tribocosim.cosim.scene.component_checks`), and it does so lazily: a scene that
 names only ``path = ...`` FMUs never imports the builder.
 """
 
@@ -51,7 +51,7 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         If the component is unknown or the build fails (with the builder's message).
     """
     from tribocosim.components import registry
-    from tribocosim.components.fmus import build, native
+    from tribocosim.components.fmus import native_build, python_build
 
     comp = registry.find(component)
     if comp is None:
@@ -63,7 +63,7 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         raise SceneError(f"component {component!r} has no native implementation; use variant = \"python\"")
     root = Path(cache) if cache is not None else cache_dir()
     try:
-        digest = build.source_digest(name) if variant == "python" else native.source_digest(name)
+        digest = python_build.source_digest(name) if variant == "python" else native_build.source_digest(name)
     except TribocosimError as exc:
         raise SceneError(f"component {component!r}: {exc}") from exc
     entry = root / f"{name}-{variant}-{digest[:16]}"
@@ -74,9 +74,9 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
         if variant == "python":
-            build.build_fmus(tmp, names=[name])
+            python_build.build_fmus(tmp, names=[name])
         else:
-            native.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
+            native_build.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
         try:
             os.rename(tmp, entry)
         except OSError:

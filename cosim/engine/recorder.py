@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.scene import VariableRef
-from tribocosim.cosim.slave import Slave
+from tribocosim.cosim.scene.schema import VariableRef
+from tribocosim.cosim.engine.slave import Slave
 
 
 class Observer:

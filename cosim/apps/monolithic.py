@@ -23,7 +23,7 @@ Implementations
     (implicit coupling, no delay; the remaining error is O(dt)). Tested against
     :class:`TwoMassOscillator` with the pure parts :class:`MassPart` and :class:`MassCouplingPart`.
 
-The strip-draw scenes: :func:`tribocosim.cosim.reference_components.reference_for_scene` maps each
+The strip-draw scenes: :func:`tribocosim.cosim.scene.component_checks.reference_for_scene` maps each
 ``component = ...`` FMU to its model (the bindings of the native core, the FMUs' own code) and couples them
 with :class:`CoupledModels`.
 """

@@ -3,7 +3,7 @@
 The demo runs ``models/scenes/demo.toml`` (paper Sec. 2.1, 7): the press FMU holds F_N = 10 MPa on
 the 35 x 35 mm pad, the drawing-machine FMU pulls at 0.08 m/s for 140 mm, the strip-draw FMU
 (shipped friction table, implicit bar integrator) returns the pull force. The FMUs are built into
-the FMU cache (:mod:`tribocosim.cosim.fmucache`) when missing; a failed build stops the demo with the
+the FMU cache (:mod:`tribocosim.cosim.scene.fmucache`) when missing; a failed build stops the demo with the
 builder's message. It writes the results (CSV + JSON), the strip's beta field (``field_output``)
 and three figures: mu against sliding distance, the beta(X, t) map (like Fig. 17a), and the
 press and drive signals; it prints mu_bar, the mean of mu(t) = pull_force / (2 F_N) (Eq. 1) over
@@ -90,8 +90,8 @@ def ensure_fmus(components=None, echo=print) -> dict[str, Path]:
     SceneError
         Saying which FMU could not be built and why (the builder's message).
     """
-    from tribocosim.cosim.fmucache import cache_dir, component_fmu
-    from tribocosim.cosim.scene import parse_scene
+    from tribocosim.cosim.scene.fmucache import cache_dir, component_fmu
+    from tribocosim.cosim.scene.schema import parse_scene
 
     if components is None:
         components = [s.component for s in parse_scene(demo_scene())[0].fmus.values() if s.component]
@@ -122,8 +122,8 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     the figure files.
     """
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.plotting import plot_demo
-    from tribocosim.cosim.reference_components import load_component_scene, steady_ratio
+    from tribocosim.cosim.apps.plotting import plot_demo
+    from tribocosim.cosim.scene.component_checks import load_component_scene, steady_ratio
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -133,7 +133,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     if tool_length is not None:
         over["fmus.strip.parameters.tool_length"] = tool_length
     if pressure is not None or tool_length is not None:
-        from tribocosim.cosim.scene import parse_scene
+        from tribocosim.cosim.scene.schema import parse_scene
 
         base, _ = parse_scene(demo_scene())
         p = pressure if pressure is not None else strip_parameters(base).pressure(

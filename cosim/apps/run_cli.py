@@ -3,13 +3,13 @@
 A thin layer over :func:`tribocosim.cosim.api.run`: validates the scene (all problems at once), runs it
 with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
 JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
-base scene, :mod:`tribocosim.cosim.sweep`) runs its cases in parallel processes instead.
+base scene, :mod:`tribocosim.cosim.apps.scene_sweep`) runs its cases in parallel processes instead.
 
 Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
 smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
 was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems.
 
-An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp_import`) runs with its default experiment and
+An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp.reader`) runs with its default experiment and
 our master; ``--set`` overrides the keys of the scene it is read as (``master.*``, ``experiment.*``, ...).
 """
 
@@ -36,7 +36,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scene key, e.g. --set master.extrapolation=1 (TOML value syntax)")
     p.add_argument("--workers", type=int, default=None,
-                   help="sweep files ([sweep] table, cosim.sweep): parallel processes (default: the file's, else one per CPU)")
+                   help="sweep files ([sweep] table, cosim.apps.scene_sweep): parallel processes (default: the file's, else one per CPU)")
     return p
 
 
@@ -61,22 +61,22 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
     from tribocosim.paths import scene_file
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.sweep import is_sweep_file
+    from tribocosim.cosim.apps.scene_sweep import is_sweep_file
 
     try:
         args.scene = scene_file(args.scene)
-        if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp_import)
-            from tribocosim.cosim.ssp_import import run_ssp
+        if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
+            from tribocosim.cosim.ssp.reader import run_ssp
 
             result = run_ssp(args.scene, args.out, _overrides(args.set), progress=not args.quiet)
         elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
-            from tribocosim.cosim.sweep import main as sweep_main
+            from tribocosim.cosim.apps.scene_sweep import main as sweep_main
 
             return sweep_main(args)
         else:
-            from tribocosim.cosim.reference_components import load_component_scene
+            from tribocosim.cosim.scene.component_checks import load_component_scene
 
             # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
             plan = load_component_scene(args.scene, _overrides(args.set))
@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     meta = result.metadata
     if args.plot and result.csv_path is not None:
-        from tribocosim.cosim.plotting import plot_result
+        from tribocosim.cosim.apps.plotting import plot_result
 
         png = plot_result(result, result.csv_path.with_suffix(".png"))
         if not args.quiet:

@@ -51,8 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim fmu``; returns the exit code."""
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     from tribocosim.components import registry
-    from tribocosim.components.fmus.build import FmuBuildError, build_fmus, fmus
-    from tribocosim.components.fmus.native import PLATFORMS, build_native_fmus
+    from tribocosim.components.fmus.python_build import FmuBuildError, build_fmus, fmus
+    from tribocosim.components.fmus.native_build import PLATFORMS, build_native_fmus
 
     if args.command == "table-resource":
         from tribocosim.errors import TribocosimError

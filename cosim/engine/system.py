@@ -2,7 +2,7 @@
 
 :class:`CoupledSystem` is what the algorithms operate on. It owns
 
-- the slaves (anything implementing :class:`tribocosim.cosim.slave.Slave`) in scene order;
+- the slaves (anything implementing :class:`tribocosim.cosim.engine.slave.Slave`) in scene order;
 - the links (output -> input) as index arrays, and ``y``, the current value of every link's
   source output at the current communication point;
 - the history of ``y`` at the last accepted communication points (for extrapolation);
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from tribocosim.errors import CosimStepError
-from tribocosim.cosim.extrapolation import History, StepPolynomial
-from tribocosim.cosim.graph import algebraic_loops, evaluation_order
-from tribocosim.cosim.slave import Slave
+from tribocosim.cosim.engine.extrapolation import History, StepPolynomial
+from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
+from tribocosim.cosim.engine.slave import Slave
 
 
 @dataclass(frozen=True)

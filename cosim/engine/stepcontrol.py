@@ -89,7 +89,7 @@ class Adaptive:
         if safety >= 1.0:
             p.add(f"{key}.safety", f"must be in (0, 1), got {safety!r}")
         if quantum is not None:
-            from tribocosim.cosim.timegrid import VARIABLE_SUBDIVISION
+            from tribocosim.cosim.engine.timegrid import VARIABLE_SUBDIVISION
 
             tick = hmin / 2**VARIABLE_SUBDIVISION
             ratio = quantum / tick

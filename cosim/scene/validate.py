@@ -1,6 +1,6 @@
 """Second validation pass: the scene against the FMUs' model descriptions.
 
-:func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.parse_scene`), reads the model
+:func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.schema.parse_scene`), reads the model
 description of every FMU it names (no shared library is loaded), and checks
 
 - FMU files: present, FMI 2.0, co-simulation;
@@ -27,10 +27,10 @@ from pathlib import Path
 from fmpy import read_model_description
 
 from tribocosim.errors import SceneError
-from tribocosim.cosim.algorithms import ALGORITHMS
-from tribocosim.cosim.problems import Problems, known
-from tribocosim.cosim.stepcontrol import ESTIMATORS
-from tribocosim.cosim.scene import Scene, VariableRef, parse_scene
+from tribocosim.cosim.engine.algorithms import ALGORITHMS
+from tribocosim.cosim.scene.problems import Problems, known
+from tribocosim.cosim.engine.stepcontrol import ESTIMATORS
+from tribocosim.cosim.scene.schema import Scene, VariableRef, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
 _DER = re.compile(r"^der\((?P<name>.+?)(?:,\s*(?P<order>\d+))?\)$")
@@ -116,7 +116,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     path : str or Path
         The scene file.
     overrides : dict, optional
-        Dotted keys to set before validation (see :func:`tribocosim.cosim.scene.apply_overrides`).
+        Dotted keys to set before validation (see :func:`tribocosim.cosim.scene.schema.apply_overrides`).
 
     Returns
     -------
@@ -140,7 +140,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
         key = f"fmus.{name}"
         fmu_path = spec.path
         if spec.component is not None:
-            from tribocosim.cosim.fmucache import component_fmu
+            from tribocosim.cosim.scene.fmucache import component_fmu
 
             try:
                 fmu_path = component_fmu(spec.component, variant=spec.variant)

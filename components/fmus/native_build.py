@@ -37,7 +37,7 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from tribocosim.components import registry
 from tribocosim.components.description import Component
-from tribocosim.components.fmus.build import FmuBuildError, _validate_and_place
+from tribocosim.components.fmus.python_build import FmuBuildError, _validate_and_place
 from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
