@@ -32,6 +32,7 @@ from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
 from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
 from tribocosim.cosim.engine.timegrid import TimeGrid
 from tribocosim.cosim.scene.validate import Plan
+from tribocosim.cosim.ssp.reader import load_ssp
 
 
 @dataclass
@@ -290,6 +291,34 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
 
 #: the output through which a strip-draw FMU counts its friction-table lookups outside the simulated range
 CLAMP_OUTPUT = "table_clamp_count"
+
+
+def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict | None = None, *,
+            progress: bool = False, write: bool = True):
+    """Run an SSP package with our master; as :func:`run`, output by default next to the package.
+
+    The metadata names the package as the scene (``scene``, ``scene_sha256``) and keeps the
+    translated scene's text under ``ssp.scene_toml``.
+    """
+    ssp = Path(path).resolve()
+    plan = load_ssp(ssp, overrides)
+    try:
+        result = run(plan, Path(out_dir) if out_dir is not None else ssp.parent, progress=progress, write=write)
+    except RunFailed as exc:
+        _note_package(exc.result, ssp, plan.scene.path)
+        raise
+    _note_package(result, ssp, plan.scene.path)
+    return result
+
+
+def _note_package(result, ssp: Path, scene: Path) -> None:
+    note = {"scene": str(ssp), "scene_sha256": hashlib.sha256(ssp.read_bytes()).hexdigest(),
+            "ssp": {"scene_toml": scene.read_text(encoding="utf-8")}}
+    result.metadata.update(note)
+    if result.metadata_path is not None and result.metadata_path.is_file():
+        meta = json.loads(result.metadata_path.read_text(encoding="utf-8"))
+        meta.update(note)
+        result.metadata_path.write_text(json.dumps(meta, indent=2), encoding="utf-8")
 
 
 def _outside_table_warnings(b: Build) -> list[str]:

@@ -15,7 +15,7 @@ import sys
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("tribocosim.cosim.apps.demo", "run the default strip-draw case and print mu_bar"),
     "run": ("tribocosim.cosim.apps.run_cli", "run a co-simulation scene (TOML) or SSP package (.ssp)"),
-    "ssp": ("tribocosim.cosim.ssp.names", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
+    "ssp": ("tribocosim.cosim.apps.ssp_cli", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
     "report": ("tribocosim.cosim.apps.report_cli", "error-vs-run-time, stability and paper-figure reports"),
     "calibrate": ("tribocosim.cosim.apps.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
     "fmu": ("tribocosim.components.fmus.fmu_cli", "build the project's FMUs"),

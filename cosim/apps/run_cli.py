@@ -40,35 +40,19 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _overrides(items: list[str]) -> dict:
-    import tomllib
-
-    out = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise SceneError(f"--set {item!r}: expected KEY=VALUE")
-        try:
-            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
-            out[key.strip()] = value.strip()
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim run``."""
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
-    from tribocosim.paths import scene_file
-    from tribocosim.cosim.api import run
+    from tribocosim.cosim.api import run, run_ssp
     from tribocosim.cosim.apps.scene_sweep import is_sweep_file
+    from tribocosim.cosim.scene.schema import parse_overrides
+    from tribocosim.paths import scene_file
 
     try:
         args.scene = scene_file(args.scene)
         if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
-            from tribocosim.cosim.ssp.reader import run_ssp
-
-            result = run_ssp(args.scene, args.out, _overrides(args.set), progress=not args.quiet)
+            result = run_ssp(args.scene, args.out, parse_overrides(args.set), progress=not args.quiet)
         elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
@@ -79,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
             from tribocosim.cosim.scene.component_checks import load_component_scene
 
             # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
-            plan = load_component_scene(args.scene, _overrides(args.set))
+            plan = load_component_scene(args.scene, parse_overrides(args.set))
             result = run(plan, args.out, progress=not args.quiet)
     except SceneError as exc:
         print(f"tribocosim run: {exc}", file=sys.stderr)

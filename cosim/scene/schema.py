@@ -62,8 +62,9 @@ from pathlib import Path
 from typing import Any
 
 from tribocosim.cosim.engine.algorithms import ALGORITHMS
-from tribocosim.cosim.scene.problems import Problems
 from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, Adaptive
+from tribocosim.cosim.scene.problems import Problems
+from tribocosim.errors import SceneError
 
 OUTPUT_UPDATES = ("propagate", "none")
 
@@ -173,6 +174,21 @@ def parse_ref(p: Problems, text: Any, key: str) -> VariableRef | None:
         return None
     inst, var = text.split(".", 1)
     return VariableRef(inst, var)
+
+
+def parse_overrides(items: list[str]) -> dict[str, Any]:
+    """``--set KEY=VALUE`` items as ``{dotted key: value}``: the value in TOML syntax (``1e-3``, ``"jacobi"``,
+    ``[1, 2]``), else the text as it is; SceneError for an item that is not ``KEY=VALUE``."""
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise SceneError(f"--set {item!r}: expected KEY=VALUE")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()
+    return out
 
 
 def apply_overrides(doc: dict, overrides: dict[str, Any]) -> dict:

@@ -1,5 +1,5 @@
-"""SSP 1.0 packages (System Structure and Parameterization, Modelica Association, 2019): shared names and
-the ``tribocosim ssp`` command.
+"""SSP 1.0 packages (System Structure and Parameterization, Modelica Association, 2019): the names both
+directions share.
 
 An SSP package is a zip with ``SystemStructure.ssd`` (the system: components, connectors,
 connections, parameter bindings, default experiment) and, under ``resources/``, the FMUs and the
@@ -13,17 +13,16 @@ OMSimulator needs to make the system at all. Our master's settings and the recor
 scene's ``[master]``, ``[[power_bonds]]`` and ``[output]`` tables, as TOML text) travel in a
 ``org.tribocosim.scene`` annotation of the ``ssd:System``, which other tools ignore.
 
-This module holds the namespaces, the small TOML writer both directions use, and ``main`` of
-``tribocosim ssp export SCENE -o RIG.ssp``.
+This module holds the namespaces, the small TOML writer both directions use, and the parameter set FMPy applies
+(:func:`fmpy_parameter_set`). The command ``tribocosim ssp export SCENE -o RIG.ssp`` is
+:mod:`tribocosim.cosim.apps.ssp_cli`.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import re
-import sys
 from pathlib import Path
 
 #: the SSP 1.0 namespaces by their customary prefixes (libcosim's parser matches the prefixes literally)
@@ -137,46 +136,3 @@ def _value(v) -> str:
     if isinstance(v, dict):
         return "{ " + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + " }"
     raise TypeError(f"no TOML value for {v!r} ({type(v).__name__})")
-
-
-# ------------------------------------------------------------------ command line
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="tribocosim ssp", description="SSP 1.0 packages of co-simulation scenes.")
-    sub = p.add_subparsers(dest="action", required=True)
-    ex = sub.add_parser("export", help="write a scene as an SSP package (SystemStructure.ssd + FMUs + .ssv)",
-                        description="Write a scene as an SSP 1.0 package: the system, its FMUs (from the FMU cache "
-                                    "for component = \"...\" FMUs), the parameters as .ssv parameter sets and the "
-                                    "default experiment. Run it with 'tribocosim run RIG.ssp', fmpy or libcosim.")
-    ex.add_argument("scene", help="scene file (TOML), or the name of a packaged scene (e.g. demo)")
-    ex.add_argument("-o", "--output", type=Path, default=None, help="the .ssp file (default: ./SCENE.ssp)")
-    ex.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                    help="override a scene key first, e.g. --set experiment.stop=0.5 (TOML value syntax)")
-    return p
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of ``tribocosim ssp``."""
-    args = _parser().parse_args(argv)
-    from tribocosim.errors import SceneError, TribocosimError
-    from tribocosim.paths import scene_file
-    from tribocosim.cosim.apps.run_cli import _overrides
-    from tribocosim.cosim.ssp.export import export_ssp
-
-    try:
-        scene = scene_file(args.scene)
-        out = args.output if args.output is not None else Path.cwd() / f"{scene.stem}.ssp"
-        package = export_ssp(scene, out, _overrides(args.set))
-    except SceneError as exc:
-        print(f"tribocosim ssp export: {exc}", file=sys.stderr)
-        return 2
-    except (TribocosimError, OSError) as exc:
-        print(f"tribocosim ssp export: {exc}", file=sys.stderr)
-        return 1
-    print(f"wrote {package.path}: {len(package.components)} components ({', '.join(package.components)}), "
-          f"{package.connections} connections, {package.parameters} parameter values, "
-          f"resources {', '.join(package.resources)}")
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -4,7 +4,7 @@
 reads ``SystemStructure.ssd``, translates the system into a scene, written next to the SSD as
 ``<package name>.toml`` with the FMU paths relative to it, and validates that scene as any other
 (:func:`tribocosim.cosim.scene.validate.load_scene`, ``--set`` overrides applied on top).
-:func:`run_ssp` runs it and records the package in the run's metadata.
+:func:`tribocosim.cosim.api.run_ssp` runs it and records the package in the run's metadata.
 
 What is read:
 
@@ -36,8 +36,6 @@ connections. Geometry, graphical elements and other tools' annotations are ignor
 from __future__ import annotations
 
 import atexit
-import hashlib
-import json
 import logging
 import posixpath
 import shutil
@@ -49,7 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-from tribocosim.errors import Problem, RunFailed, SceneError
+from tribocosim.errors import Problem, SceneError
 from tribocosim.cosim.scene.problems import Problems
 from tribocosim.cosim.ssp.names import (FMU_TYPE, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES, SSD_NAME,
                                   prefixed, q, toml_text)
@@ -110,36 +108,6 @@ def load_ssp(path: str | Path, overrides: dict | None = None):
     except SceneError as exc:
         raise SceneError([Problem(str(ssp), p.key, p.message) for p in exc.problems],
                          f"SSP {ssp} (read as the scene {scene.name})") from None
-
-
-def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict | None = None, *,
-            progress: bool = False, write: bool = True):
-    """Run an SSP package with our master; as :func:`tribocosim.cosim.api.run`, output by default next to the package.
-
-    The metadata names the package as the scene (``scene``, ``scene_sha256``) and keeps the
-    translated scene's text under ``ssp.scene_toml``.
-    """
-    from tribocosim.cosim.api import run
-
-    ssp = Path(path).resolve()
-    plan = load_ssp(ssp, overrides)
-    try:
-        result = run(plan, Path(out_dir) if out_dir is not None else ssp.parent, progress=progress, write=write)
-    except RunFailed as exc:
-        _note_package(exc.result, ssp, plan.scene.path)
-        raise
-    _note_package(result, ssp, plan.scene.path)
-    return result
-
-
-def _note_package(result, ssp: Path, scene: Path) -> None:
-    note = {"scene": str(ssp), "scene_sha256": hashlib.sha256(ssp.read_bytes()).hexdigest(),
-            "ssp": {"scene_toml": scene.read_text(encoding="utf-8")}}
-    result.metadata.update(note)
-    if result.metadata_path is not None and result.metadata_path.is_file():
-        meta = json.loads(result.metadata_path.read_text(encoding="utf-8"))
-        meta.update(note)
-        result.metadata_path.write_text(json.dumps(meta, indent=2), encoding="utf-8")
 
 
 def _extract(ssp: Path) -> Path:

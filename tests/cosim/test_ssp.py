@@ -26,7 +26,8 @@ from tribocosim.cli import main as tribocosim
 from tribocosim.errors import SceneError
 from tribocosim.cosim import run
 from tribocosim.cosim.ssp.names import toml_text
-from tribocosim.cosim.ssp.reader import load_ssp, run_ssp
+from tribocosim.cosim.api import run_ssp
+from tribocosim.cosim.ssp.reader import load_ssp
 
 #: the short demo rig: scene keys set on models/scenes/demo.toml
 RIG = {"experiment.stop": 0.4, "fmus.press.parameters.force_setpoint": 9800.0, "fmus.strip.parameters.tool_width": 0.03,
