@@ -123,7 +123,8 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     """
     from tribocosim.cosim.api import run
     from tribocosim.cosim.apps.plotting import plot_demo
-    from tribocosim.cosim.scene.component_checks import load_component_scene, steady_ratio
+    from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
+    from tribocosim.cosim.scene.component_checks import load_component_scene
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)

@@ -23,19 +23,22 @@ Implementations
     (implicit coupling, no delay; the remaining error is O(dt)). Tested against
     :class:`TwoMassOscillator` with the pure parts :class:`MassPart` and :class:`MassCouplingPart`.
 
-The strip-draw scenes: :func:`tribocosim.cosim.scene.component_checks.reference_for_scene` maps each
-``component = ...`` FMU to its model (the bindings of the native core, the FMUs' own code) and couples them
-with :class:`CoupledModels`.
+The strip-draw scenes: :func:`reference_for_scene` maps each ``component = ...`` FMU of a scene to its model
+(``Component.make``, the same function the FMU calls: the bindings of the native core, the FMUs' own code) with the
+scene's parameters, connected as the scene connects the FMUs, unconnected inputs held at their scene value (a
+parameter of the input's name) or else the FMU's start value, and couples them with :class:`CoupledModels`.
+Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 
-from tribocosim.errors import ConvergenceError
+from tribocosim.errors import ConvergenceError, SceneError
 
 
 class Reference(Protocol):
@@ -249,3 +252,95 @@ def _propagator(cache: dict, a: np.ndarray, dt: float) -> np.ndarray:
 
         e = cache[dt] = expm(a * dt)
     return e
+
+
+# ------------------------------------------------------------------ scenes of components
+class ComponentModel:
+    """A pure model seen through its FMU's names: fixed (unconnected) inputs merged in, outputs renamed."""
+
+    def __init__(self, model, fixed_inputs: dict[str, float], outputs: dict[str, str]):
+        self.model = model
+        self.fixed = dict(fixed_inputs)
+        self.names = dict(outputs)
+
+    def step(self, dt: float, inputs: dict[str, float]) -> dict[str, float]:
+        out = self.model.step(dt, {**self.fixed, **inputs})
+        return {fmu: float(out[key]) for fmu, key in self.names.items()}
+
+    def outputs(self) -> dict[str, float]:
+        out = self.model.outputs()
+        return {fmu: float(out[key]) for fmu, key in self.names.items()}
+
+    def get_state(self):
+        return self.model.get_state()
+
+    def set_state(self, state) -> None:
+        self.model.set_state(state)
+
+
+def make_model(component: str, parameters: dict[str, Any]):
+    """The pure model of ``component`` for scene parameters (the FMU's files included), as its FMU makes it."""
+    from tribocosim.components import registry
+
+    return registry.get(component).make(parameters).model
+
+
+def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations: int = 100):
+    """The monolithic reference of a scene whose FMUs are all components.
+
+    Parameters
+    ----------
+    scene : str, Path, cosim.scene.validate.Plan or cosim.scene.schema.Scene
+        The scene (a file is loaded and validated, FMUs built on demand).
+    dt : float
+        The tiny step of the reference [s].
+    tol, max_iterations : float, int
+        Convergence of the coupling values per step (:class:`CoupledModels`).
+
+    Returns
+    -------
+    CoupledModels
+        ``solve(times)`` gives every output of every instance, named ``instance.output``.
+
+    Raises
+    ------
+    SceneError
+        If an FMU of the scene is not one of this project's components.
+    """
+    from tribocosim.components import registry
+    from tribocosim.cosim.scene.component_checks import component_of
+
+    if isinstance(scene, (str, Path)):
+        from tribocosim.cosim.scene.validate import load_scene
+
+        scene = load_scene(scene)
+    plan = scene if hasattr(scene, "scene") else None
+    sc = plan.scene if plan is not None else scene
+    others = [n for n, s in sc.fmus.items() if component_of(s) is None]
+    if others:
+        raise SceneError(f"scene {sc.path}: no monolithic reference for {', '.join(others)}: only component = "
+                         f"\"{'|'.join(registry.components())}\" FMUs map to pure models")
+    connected = {(c.target.instance, c.target.variable) for c in sc.connections}
+    models, initial = {}, {}
+    for name, spec in sc.fmus.items():
+        comp = component_of(spec)
+        fixed = {}
+        for port in comp.inputs:
+            if (name, port.name) in connected:
+                continue
+            fixed[port.model_key] = float(spec.parameters.get(port.name, _fmu_start(plan, name, port)))
+        outputs = {p.name: p.model_key for p in comp.outputs}
+        model = ComponentModel(comp.make(spec.parameters).model, fixed, outputs)
+        models[name] = model
+        initial.update({f"{name}.{k}": v for k, v in model.outputs().items()})
+    pairs = [(str(c.source), str(c.target)) for c in sc.connections]
+    return CoupledModels(models, pairs, initial, dt, tol=tol, max_iterations=max_iterations)
+
+
+def _fmu_start(plan, instance: str, port) -> float:
+    """Start value of an FMU input: from the model description if the plan has it, else the description's."""
+    if plan is not None and instance in plan.fmus:
+        var = plan.fmus[instance].variables.get(port.name)
+        if var is not None and var.start is not None:
+            return float(var.start)
+    return float(port.start)

@@ -62,6 +62,14 @@ def draw(point: Point) -> list[dict]:
     return out
 
 
+def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
+    """mu_bar of recorded signals: the mean of pull_force / (2 normal_force) (Eq. 1) over the last fraction of the
+    run (where the normal force is positive)."""
+    t = np.asarray(time)
+    sel = (t >= t[-1] - last * (t[-1] - t[0]) - 1e-12) & (np.asarray(normal_force) > 0)
+    return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
+
+
 def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
     """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
     per point)."""

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.scene.schema import VariableRef
+from tribocosim.cosim.engine.system import VariableRef
 from tribocosim.cosim.engine.slave import Slave
 
 

@@ -28,6 +28,17 @@ from tribocosim.cosim.engine.slave import Slave
 
 
 @dataclass(frozen=True)
+class VariableRef:
+    """``instance.variable`` (the instance name is everything before the first dot)."""
+
+    instance: str
+    variable: str
+
+    def __str__(self) -> str:
+        return f"{self.instance}.{self.variable}"
+
+
+@dataclass(frozen=True)
 class LinkSpec:
     """One link in index form (what the system needs from a validated connection)."""
 

@@ -14,7 +14,7 @@ included).
 ``demo``
     ``models/scenes/demo.toml`` (press + strip + drawing machine) shortened in quick mode; the
     same settings. Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the
-    monolithic reference (:func:`tribocosim.cosim.scene.component_checks.reference_for_scene`, the pure
+    monolithic reference (:func:`tribocosim.cosim.apps.monolithic.reference_for_scene`, the pure
     models coupled implicitly with a tiny step ``dt_ref``), interpolated linearly onto the
     communication points. The step-doubling rows run the strip on its internal time grid
     (``internal_step`` = :data:`DEMO_INTERNAL_STEP`, with ``step_quantum`` the same and ``min_step``
@@ -48,9 +48,12 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, scratch, timed
+from tribocosim.cosim.reports.coupling_order import coupling_order
 from tribocosim.cosim.reports.metrics import max_relative_error, relative_difference
+from tribocosim.cosim.reports.near_pcrit import near_pcrit
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
+from tribocosim.cosim.reports.runner import failed_row, master_row
 
 TARGETS = (1e-2, 1e-3, 1e-4)
 #: demo: the errors after the ramps are measured from this time on [s]
@@ -66,20 +69,6 @@ DEMO_REFERENCE_TOL = 1e-9
 #: demo: finer fixed steps of Jacobi with extrapolation 1 (the adaptive rows' scheme) [s]
 DEMO_FINE_STEPS = (2e-4, 1e-4, 5e-5)
 SCHEMES = [(a, q) for a in ("jacobi", "gauss-seidel", "iterative") for q in (0, 1, 2)]
-
-
-def _master_row(curve, setting, res, err, **extra) -> dict:
-    """A row from :func:`tribocosim.cosim.reports.runner.run_plan`'s dict."""
-    status = "ok" if not res["stopped"] else res["stopped"]
-    return {"curve": curve, "setting": setting, "error": err if not res["stopped"] else math.inf,
-            "wall_time": res["wall_time"], "do_steps": res["do_steps"], "steps": res["steps"],
-            "rejected": res["rejected"], "iterations": res["iterations"], "status": status, **extra}
-
-
-def _failed_row(curve, setting, exc, **extra) -> dict:
-    msg = " ".join(str(exc).split())[:200]
-    return {"curve": curve, "setting": setting, "error": math.inf, "wall_time": math.nan, "do_steps": 0,
-            "steps": 0, "rejected": 0, "iterations": 0, "status": f"error: {type(exc).__name__}: {msg}", **extra}
 
 
 def _master_settings(quick: bool, steps_quick, steps_full, tols_quick, tols_full, estimators):
@@ -129,46 +118,24 @@ def oscillator(settings: Settings) -> Family:
             res = run_plan(load_scene(scene), budget=budget)
             t = res["time"]
             err = max_relative_error(t, res["columns"]["a.x1"], t, ref.solve(t)["a.x1"])
-            fam.rows.append(_master_row(curve, setting, res, err))
+            fam.rows.append(master_row(curve, setting, res, err))
         except Exception as exc:  # an unstable or failing setting is a data point, not a crash
-            fam.rows.append(_failed_row(curve, setting, exc))
+            fam.rows.append(failed_row(curve, setting, exc))
         settings.log(f"  oscillator {setting}: error {fam.rows[-1]['error']:.3g}")
     return fam
-
-
-def demo_scene_path() -> Path | None:
-    from tribocosim.paths import MODELS_DIR
-
-    p = MODELS_DIR / "scenes" / "demo.toml"
-    return p if p.is_file() else None
-
-
-def reference_factory():
-    """``reference_for_scene`` of issue 8, or raise Unavailable saying what is missing."""
-    try:
-        from tribocosim.cosim.scene.component_checks import reference_for_scene
-    except ImportError as exc:
-        raise Unavailable(f"the monolithic reference of our components (cosim.scene.component_checks, issue 8) "
-                          f"cannot be imported: {exc}") from None
-    return reference_for_scene
 
 
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml: master settings vs the monolithic reference."""
+    from tribocosim.cosim.apps.monolithic import reference_for_scene
     from tribocosim.cosim.reports.runner import run_plan
     from tribocosim.cosim.scene.validate import load_scene
 
     quick = settings.quick
     budget = 20.0 if quick else 60.0
     title = "Demo scene (press + strip + drawing machine): error of pull_force against wall time"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("demo", title, "models/scenes/demo.toml (issue 8) is missing")
-    try:
-        reference_for_scene = reference_factory()
-    except Unavailable as exc:
-        return Family.unavailable("demo", title, str(exc))
+    path = packaged_scene("demo")
     stop = 0.3 if quick else 1.76
     # 5e-5 s in both modes: at 1e-4 s the reference is itself ~6e-4 off at the start of the draw, and at
     # dt_ref = DEMO_INTERNAL_STEP the step-doubling rows' reference is the same run (computed once)
@@ -202,7 +169,7 @@ def demo(settings: Settings) -> Family:
                  summary_curves=("jacobi/1", "adaptive step-doubling", "adaptive energy"))
     fam.note = (f"demo.toml with stop = {stop} s{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
                 f"Error: max |F - F_ref| / max |F_ref| of strip.pull_force over the communication points; F_ref is the "
-                f"monolithic reference (cosim.scene.component_checks.reference_for_scene: pure models, coupling solved every "
+                f"monolithic reference (cosim.apps.monolithic.reference_for_scene: pure models, coupling solved every "
                 f"step to {DEMO_REFERENCE_TOL:g}, dt_ref = {dt_ref:g} s, {ref_time:.1f} s to compute), interpolated linearly (the "
                 f"reference's own error at the start of the draw, measured against dt_ref = 2.5e-5 s: about 2e-4 at "
                 f"dt_ref = 5e-5 s, 6e-4 at 1e-4 s, so errors below 2e-4 are not resolved); error_after_ramps: the same "
@@ -247,10 +214,10 @@ def demo(settings: Settings) -> Family:
             late = t >= T_STEADY
             err_late = (max_relative_error(t[late], f[late], t_ref, f_ref, scale=float(np.max(np.abs(f_ref))))
                         if late.any() else math.nan)
-            fam.rows.append(_master_row(curve, setting, res, err, error_after_ramps=err_late if not res["stopped"]
+            fam.rows.append(master_row(curve, setting, res, err, error_after_ramps=err_late if not res["stopped"]
                                         else math.inf, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
         except Exception as exc:
-            fam.rows.append(_failed_row(curve, setting, exc, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
+            fam.rows.append(failed_row(curve, setting, exc, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
         settings.log(f"  demo {setting}: error {fam.rows[-1]['error']:.3g} in {fam.rows[-1]['wall_time']:.2f} s")
     return fam
 
@@ -379,9 +346,6 @@ def bem(settings: Settings) -> Family:
                      "iterations": r.iterations, "contact_area_fraction": r.contact_area_fraction, "error": math.nan})
     return fam
 
-
-from tribocosim.cosim.reports.coupling_order import coupling_order  # noqa: E402 (issue 18, item 2; imports this lazily)
-from tribocosim.cosim.reports.near_pcrit import near_pcrit  # noqa: E402 (issue 18, item 3; it imports this module lazily)
 
 #: report order: name -> family function
 FAMILIES = {"oscillator": oscillator, "demo": demo, "coupling_order": coupling_order, "near_pcrit": near_pcrit,

@@ -15,7 +15,7 @@ iterative coupling with extrapolation 0 at h = 1 ms, one row per update of the i
   :data:`RELAXED_MAX_ITERATIONS`.
 
 Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the monolithic reference
-(:func:`tribocosim.cosim.scene.component_checks.reference_for_scene`) with the same step, 1 ms, the coupling
+(:func:`tribocosim.cosim.apps.monolithic.reference_for_scene`) with the same step, 1 ms, the coupling
 solved by the reference's own fixed point to :data:`REFERENCE_TOL` every step: the same implicit coupling
 (inputs held at their end values), so the error is how far the iteration stopped from it.
 ``error_vs_fine``: the same against the reference with dt = :data:`FINE_DT` (interpolated), which adds the
@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, timed
+from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, timed
 from tribocosim.cosim.reports.metrics import max_relative_error
 
 P_CRIT = 340e6
@@ -84,18 +84,14 @@ def _run_row(plan, setting: str, iterative: dict, t_ref, refs: dict) -> tuple[di
 @timed
 def near_pcrit(settings: Settings) -> Family:
     """demo.toml at 0.99 p_crit: iterative coupling by quasi-Newton, fixed point (w = 1, Aitken, w from rho)."""
-    from tribocosim.cosim.scene.component_checks import reference_for_scene
-    from tribocosim.cosim.reports.stability_report import _instance
-    from tribocosim.cosim.reports.accuracy import demo_scene_path
+    from tribocosim.cosim.apps.monolithic import reference_for_scene
     from tribocosim.cosim.scene.validate import load_scene
 
     title = f"Demo scene at {FRACTION:g} p_crit: iterative coupling, quasi-Newton against fixed point"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("near_pcrit", title, "models/scenes/demo.toml (issue 8) is missing")
+    path = packaged_scene("demo")
     try:
         plan = load_scene(path, {"experiment.stop": STEP})
-        press, strip = _instance(plan, "press"), _instance(plan, "stripdraw")
+        press, strip = instance_of(plan, "press"), instance_of(plan, "stripdraw")
         if press is None or strip is None:
             raise LookupError("no press or no stripdraw instance")
     except Exception as exc:

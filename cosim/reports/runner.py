@@ -21,6 +21,21 @@ import numpy as np
 from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify
 
 
+def master_row(curve, setting, res, err, **extra) -> dict:
+    """A report row from :func:`run_plan`'s dict and the run's error."""
+    status = "ok" if not res["stopped"] else res["stopped"]
+    return {"curve": curve, "setting": setting, "error": err if not res["stopped"] else math.inf,
+            "wall_time": res["wall_time"], "do_steps": res["do_steps"], "steps": res["steps"],
+            "rejected": res["rejected"], "iterations": res["iterations"], "status": status, **extra}
+
+
+def failed_row(curve, setting, exc, **extra) -> dict:
+    """The report row of a run that raised ``exc``."""
+    msg = " ".join(str(exc).split())[:200]
+    return {"curve": curve, "setting": setting, "error": math.inf, "wall_time": math.nan, "do_steps": 0,
+            "steps": 0, "rejected": 0, "iterations": 0, "status": f"error: {type(exc).__name__}: {msg}", **extra}
+
+
 def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int = 10) -> dict:
     """Run a validated plan like :func:`tribocosim.cosim.run` (no files), with a wall-time budget.
 

@@ -29,11 +29,10 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, scratch, timed
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
 from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
 
@@ -163,12 +162,6 @@ def _component_scales(plan) -> dict[str, float]:
     return scales
 
 
-def _instance(plan, component: str) -> str | None:
-    from tribocosim.cosim.scene.component_checks import component_of
-
-    return next((n for n, s in plan.scene.fmus.items() if getattr(component_of(s), "name", None) == component), None)
-
-
 def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget):
     """Run each (case overrides) x scheme at the scene step, bisect the step; append rows."""
     from tribocosim.cosim.reports.runner import judged_run
@@ -197,25 +190,16 @@ def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget)
                          + (f"; limit {lim.describe()}" if lim else "") + f" ({time.perf_counter() - t0:.1f} s)")
 
 
-def stiff_drive_path() -> Path | None:
-    from tribocosim.paths import MODELS_DIR
-
-    p = MODELS_DIR / "scenes" / "stiff_drive.toml"
-    return p if p.is_file() else None
-
-
 @timed
 def stiff_drive(settings: Settings) -> Family:
     """stiff_drive.toml: drive stiffness 1e4 ... 1e9 N/m x scheme."""
     from tribocosim.cosim.scene.validate import load_scene
 
     title = "Stiff drive: drivetrain stiffness x scheme (stiff_drive.toml)"
-    path = stiff_drive_path()
-    if path is None:
-        return Family.unavailable("stiff_drive", title, "models/scenes/stiff_drive.toml (issue 8) is missing")
+    path = packaged_scene("stiff_drive")
     try:
         plan = load_scene(path)
-        drive = _instance(plan, "drawingmachine")
+        drive = instance_of(plan, "drawingmachine")
     except Exception as exc:
         return Family.unavailable("stiff_drive", title, f"stiff_drive.toml does not load: {exc}")
     if drive is None:
@@ -239,16 +223,13 @@ def stiff_drive(settings: Settings) -> Family:
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml through the master: nominal, P_N near p_crit, grip velocity 0, one step for the whole draw."""
-    from tribocosim.cosim.reports.accuracy import demo_scene_path
     from tribocosim.cosim.scene.validate import load_scene
 
     title = "Demo scene through the master: extreme inputs x scheme"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("demo", title, "models/scenes/demo.toml (issue 8) is missing")
+    path = packaged_scene("demo")
     try:
         plan = load_scene(path)
-        press, strip, drive = (_instance(plan, c) for c in ("press", "stripdraw", "drawingmachine"))
+        press, strip, drive = (instance_of(plan, c) for c in ("press", "stripdraw", "drawingmachine"))
     except Exception as exc:
         return Family.unavailable("demo", title, f"demo.toml does not load: {exc}")
     if None in (press, strip, drive):

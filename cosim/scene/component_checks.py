@@ -1,4 +1,4 @@
-"""Scenes built from this project's components: parameter checks and the monolithic reference.
+"""Scenes built from this project's components: their parameters checked against the component descriptions.
 
 A scene FMU given as ``component = "<name>"`` is the FMU of a component of
 :mod:`tribocosim.components.registry`, whose description
@@ -12,13 +12,9 @@ A scene FMU given as ``component = "<name>"`` is the FMU of a component of
   every connection from an output with known set-points (``setpoints``: the press's force, the
   drive's velocity) to an input is matched against the range the input's port declares (``low``,
   ``high``: the strip is pulled, grip_velocity >= 0) and the limits of ``check`` (the strip's table
-  axes);
-- build the monolithic reference (:func:`reference_for_scene`): each component instance becomes
-  its pure model (``Component.make``, the same function the FMU calls) with the scene's
-  parameters, connected as the scene connects the FMUs, unconnected inputs held at their scene
-  value (a parameter of the input's name) or else the FMU's start value, stepped by
-  :class:`tribocosim.cosim.apps.monolithic.CoupledModels` with a tiny step and the coupling solved every
-  step. Variables are named like the FMUs' (``press.force_reference``, ``drive.velocity_reference``).
+  axes).
+
+The monolithic reference of such a scene is :func:`tribocosim.cosim.apps.monolithic.reference_for_scene`.
 
 This is, with :mod:`tribocosim.cosim.scene.fmucache`, where :mod:`tribocosim.cosim` imports
 :mod:`tribocosim.components`; the imports are lazy, and a scene of FMU files imports none of it.
@@ -27,8 +23,6 @@ This is, with :mod:`tribocosim.cosim.scene.fmucache`, where :mod:`tribocosim.cos
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
-from typing import Any
 
 from tribocosim.errors import ParameterError, Problem, SceneError
 
@@ -165,106 +159,4 @@ def load_component_scene(path, overrides: dict | None = None):
     return plan
 
 
-# ------------------------------------------------------------------ monolithic reference
-class ComponentModel:
-    """A pure model seen through its FMU's names: fixed (unconnected) inputs merged in, outputs renamed."""
-
-    def __init__(self, model, fixed_inputs: dict[str, float], outputs: dict[str, str]):
-        self.model = model
-        self.fixed = dict(fixed_inputs)
-        self.names = dict(outputs)
-
-    def step(self, dt: float, inputs: dict[str, float]) -> dict[str, float]:
-        out = self.model.step(dt, {**self.fixed, **inputs})
-        return {fmu: float(out[key]) for fmu, key in self.names.items()}
-
-    def outputs(self) -> dict[str, float]:
-        out = self.model.outputs()
-        return {fmu: float(out[key]) for fmu, key in self.names.items()}
-
-    def get_state(self):
-        return self.model.get_state()
-
-    def set_state(self, state) -> None:
-        self.model.set_state(state)
-
-
-def make_model(component: str, parameters: dict[str, Any]):
-    """The pure model of ``component`` for scene parameters (the FMU's files included), as its FMU makes it."""
-    from tribocosim.components import registry
-
-    return registry.get(component).make(parameters).model
-
-
-def reference_for_scene(scene, dt: float, *, tol: float = 1e-10, max_iterations: int = 100):
-    """The monolithic reference of a scene whose FMUs are all components.
-
-    Parameters
-    ----------
-    scene : str, Path, cosim.scene.validate.Plan or cosim.scene.schema.Scene
-        The scene (a file is loaded and validated, FMUs built on demand).
-    dt : float
-        The tiny step of the reference [s].
-    tol, max_iterations : float, int
-        Convergence of the coupling values per step (:class:`tribocosim.cosim.apps.monolithic.CoupledModels`).
-
-    Returns
-    -------
-    cosim.apps.monolithic.CoupledModels
-        ``solve(times)`` gives every output of every instance, named ``instance.output``.
-
-    Raises
-    ------
-    SceneError
-        If an FMU of the scene is not one of this project's components.
-    """
-    from tribocosim.components import registry
-    from tribocosim.cosim.apps.monolithic import CoupledModels
-
-    if isinstance(scene, (str, Path)):
-        from tribocosim.cosim.scene.validate import load_scene
-
-        scene = load_scene(scene)
-    plan = scene if hasattr(scene, "scene") else None
-    sc = plan.scene if plan is not None else scene
-    others = [n for n, s in sc.fmus.items() if component_of(s) is None]
-    if others:
-        raise SceneError(f"scene {sc.path}: no monolithic reference for {', '.join(others)}: only component = "
-                         f"\"{'|'.join(registry.components())}\" FMUs map to pure models")
-    connected = {(c.target.instance, c.target.variable) for c in sc.connections}
-    models, initial = {}, {}
-    for name, spec in sc.fmus.items():
-        comp = component_of(spec)
-        fixed = {}
-        for port in comp.inputs:
-            if (name, port.name) in connected:
-                continue
-            fixed[port.model_key] = float(spec.parameters.get(port.name, _fmu_start(plan, name, port)))
-        outputs = {p.name: p.model_key for p in comp.outputs}
-        model = ComponentModel(comp.make(spec.parameters).model, fixed, outputs)
-        models[name] = model
-        initial.update({f"{name}.{k}": v for k, v in model.outputs().items()})
-    pairs = [(str(c.source), str(c.target)) for c in sc.connections]
-    return CoupledModels(models, pairs, initial, dt, tol=tol, max_iterations=max_iterations)
-
-
-def _fmu_start(plan, instance: str, port) -> float:
-    """Start value of an FMU input: from the model description if the plan has it, else the description's."""
-    if plan is not None and instance in plan.fmus:
-        var = plan.fmus[instance].variables.get(port.name)
-        if var is not None and var.start is not None:
-            return float(var.start)
-    return float(port.start)
-
-
-def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
-    """Mean of pull_force / (2 normal_force) (Eq. 1) over the last fraction of the run."""
-    import numpy as np
-
-    t = np.asarray(time)
-    sel = (t >= t[-1] - last * (t[-1] - t[0]) - 1e-12) & (np.asarray(normal_force) > 0)
-    return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
-
-
-__all__ = ["ComponentModel", "component_of", "component_problems", "load_component_scene", "make_model",
-           "reference_for_scene", "steady_ratio"]
+__all__ = ["component_of", "component_problems", "load_component_scene"]

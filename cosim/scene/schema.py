@@ -63,6 +63,7 @@ from typing import Any
 
 from tribocosim.cosim.engine.algorithms import ALGORITHMS
 from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, Adaptive
+from tribocosim.cosim.engine.system import VariableRef
 from tribocosim.cosim.scene.problems import Problems
 from tribocosim.errors import SceneError
 
@@ -111,17 +112,6 @@ class FmuSpec:
     parameters: dict[str, Any] = field(default_factory=dict)
     feedthrough: bool | None = None
     variant: str | None = None  # of a component's FMU: native (C; the default when there is one) or python
-
-
-@dataclass(frozen=True)
-class VariableRef:
-    """``instance.variable`` (the instance name is everything before the first dot)."""
-
-    instance: str
-    variable: str
-
-    def __str__(self) -> str:
-        return f"{self.instance}.{self.variable}"
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,8 @@ from tribocosim.errors import SceneError
 from tribocosim.cosim.engine.algorithms import ALGORITHMS
 from tribocosim.cosim.scene.problems import Problems, known
 from tribocosim.cosim.engine.stepcontrol import ESTIMATORS
-from tribocosim.cosim.scene.schema import Scene, VariableRef, parse_scene
+from tribocosim.cosim.engine.system import VariableRef
+from tribocosim.cosim.scene.schema import Scene, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
 _DER = re.compile(r"^der\((?P<name>.+?)(?:,\s*(?P<order>\d+))?\)$")

@@ -16,7 +16,7 @@ from tribocosim.cosim.engine.algorithms import GaussSeidel, IterativeCoupling, J
 from tribocosim.cosim.engine.master import Master
 from tribocosim.cosim.engine.recorder import Recorder
 from tribocosim.cosim.engine.algorithms import Iterative
-from tribocosim.cosim.scene.schema import VariableRef
+from tribocosim.cosim.engine.system import VariableRef
 from tribocosim.cosim.engine.slave import OK
 from tribocosim.cosim.engine.stepcontrol import FixedStep
 from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec

@@ -18,13 +18,8 @@ from tribocosim.errors import SceneError
 from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
-from tribocosim.cosim.scene.component_checks import (
-    ComponentModel,
-    component_problems,
-    load_component_scene,
-    make_model,
-    reference_for_scene,
-)
+from tribocosim.cosim.apps.monolithic import ComponentModel, make_model, reference_for_scene
+from tribocosim.cosim.scene.component_checks import component_problems, load_component_scene
 from tribocosim.cosim.scene.schema import parse_scene
 
 DEMO = Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml"

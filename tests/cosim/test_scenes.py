@@ -23,7 +23,8 @@ from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.scene.component_checks import load_component_scene, steady_ratio
+from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
+from tribocosim.cosim.scene.component_checks import load_component_scene
 from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
