@@ -76,7 +76,7 @@ def plot_result(result, out: Path) -> list[Path]:
     import matplotlib.pyplot as plt
     from matplotlib.patches import Ellipse
 
-    from .flakes import rotation_matrices
+    from .flake_body import rotation_matrices
 
     c = result.config
     keys = sorted(result.snapshots)

@@ -28,9 +28,8 @@ from pathlib import Path
 
 from tribocosim.errors import ParameterError, check_range
 
-#: dynamic viscosity [Pa s] of the oil when neither oil_viscosity nor damping_rate is given: ISO 3448
-#: grade VG 32 (32 mm^2/s at 40 C) x a mineral-oil density of 870 kg/m^3 (surrogate.dem docstring)
-DEFAULT_OIL_VISCOSITY = 32e-6 * 870.0
+from .flake_body import DEFAULT_OIL_VISCOSITY, DampingRates
+
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
                  "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds")
@@ -283,16 +282,12 @@ class SlideConfig:
     def damping(self, shape):
         """The DEM damping for flakes of ``shape`` (a :class:`~tribocosim.surrogate.dem.FlakeShape`):
         the rate ``damping_rate`` [1/s], or the Stokes-drag rates of ``oil_viscosity``."""
-        from .dem import DampingRates
-
         if self.oil_viscosity is not None:
             return DampingRates.from_viscosity(shape, self.oil_viscosity)
         return self.damping_rate
 
     def run_damping(self, shape):
         """:meth:`damping` scaled by :attr:`damping_scale` (the rates the DEM runs with)."""
-        from .dem import DampingRates
-
         rates = self.damping(shape)
         k = self.damping_scale
         if isinstance(rates, DampingRates):

@@ -257,7 +257,7 @@ def test_all_flakes_at_once_classify_and_pinch_as_one_at_a_time():
     """classify() labels every flake's window in one call and pinched() takes every flake's maxima
     at once (issue 17, item 4): the same counts and flags as flake by flake."""
     from tribocosim.surrogate.coupling import overlap_clusters, pinched
-    from tribocosim.surrogate.flakes import axis_angle_quaternion
+    from tribocosim.surrogate.flake_body import axis_angle_quaternion
 
     rng = np.random.default_rng(6)
     n, size = 64, 64e-6

@@ -12,7 +12,7 @@ from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate import dem_kernels as kernels
 from tribocosim.surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape
-from tribocosim.surrogate.flakes import axis_angle_quaternion, rotation_matrices
+from tribocosim.surrogate.flake_body import axis_angle_quaternion, rotation_matrices
 
 L = 100e-6
 N = 32

@@ -10,8 +10,8 @@ from numpy.testing import assert_allclose
 
 from tribocosim.errors import ParameterError
 from tribocosim.surrogate.dem import FlakeShape
-from tribocosim.surrogate.flakes import (axis_angle_quaternion, footprints, random_placement,
-                              rotation_matrices)
+from tribocosim.surrogate.flake_body import axis_angle_quaternion, rotation_matrices
+from tribocosim.surrogate.flakes import footprints, random_placement
 
 SHAPE = FlakeShape(12e-6, 0.5e-6)
 N, L = 64, 64e-6  # dx = 1 um
