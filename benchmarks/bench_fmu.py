@@ -2,7 +2,7 @@
 
 Measures, for the default parameters (table friction, implicit integrator, 150 elements):
 
-0. the native FMU (issue 13): per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
+0. the native FMU: per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
    pythonfmu FMU through the same loop (both run the native core: the difference is the FMI layer, C against
    pythonfmu), and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
@@ -19,7 +19,7 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    that imports the model and runs the same draw.
 
 In this process the FMU reuses the already imported ``components`` package (see
-components/fmus/StripDraw.py), so (1) and (2) measure the FMI layer, not a second compilation.
+components/fmus/adapter.py), so (1) and (2) measure the FMI layer, not a second compilation.
 
     python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold]
 

@@ -1,4 +1,4 @@
-"""Benchmark: the full accuracy and stability reports (issue 9), written to docs/reports/.
+"""Benchmark: the full accuracy and stability reports, written to docs/reports/.
 
 Runs ``tribocosim report accuracy --out docs/reports/accuracy`` and ``tribocosim report stability
 --out docs/reports/stability`` (full sweeps, not ``--quick``), printing the wall time and the load

@@ -14,7 +14,7 @@ Equations of motion (Eq. 15-16), with the damping written as a rate gamma [1/s]
 L = I omega the angular momentum in the space frame. Gravity is neglected (it is ~1e-9 of the
 contact forces).
 
-Damping from the lubricant (the default since issue 17, :meth:`DampingRates.from_viscosity`). The paper's single eta for
+Damping from the lubricant (the default, :meth:`DampingRates.from_viscosity`). The paper's single eta for
 translation and rotation cannot be one physical coefficient (a force per velocity and a torque per
 angular velocity differ by a length squared); the flakes move in the oil film, so the damping can
 instead be the quasi-steady Stokes drag of a thin disc of radius a (thickness << a) in a Newtonian

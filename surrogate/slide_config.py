@@ -14,9 +14,9 @@ The roll-off wavelengths (``sheet_rolloff_wavelength``, ``tool_rolloff_wavelengt
 a pure power law, and :meth:`SlideConfig.to_dict` leaves them out while they are None; so is
 ``oil_viscosity`` when the expert override ``damping_rate`` is given instead.
 
-Damping (issue 17): by default the flakes are damped by the Stokes drag of the oil they move in,
+Damping: by default the flakes are damped by the Stokes drag of the oil they move in,
 ``oil_viscosity`` = :data:`DEFAULT_OIL_VISCOSITY` (ISO VG 32 at 40 C); the one rate ``damping_rate``
-[1/s] of earlier campaigns (5e7) is an expert override. docs/physics/alpha_velocity.md gives the study
+[1/s] (e.g. 5e7) is an expert override. docs/physics/alpha_velocity.md gives the study
 behind the default.
 """
 
@@ -80,7 +80,7 @@ class SlideConfig:
         with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
     damping_rate : float or None
         gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I), one rate for translation and rotation: an
-        expert override of ``oil_viscosity`` (campaigns before issue 17 used 5e7); giving both is an
+        expert override of ``oil_viscosity`` (e.g. 5e7); giving both is an
         error. None (default): the damping of ``oil_viscosity``.
     oil_viscosity : float or None
         Dynamic viscosity eta of the lubricant [Pa s] (>= 0): the flakes are damped by the Stokes drag

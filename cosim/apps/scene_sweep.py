@@ -427,8 +427,8 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     out.mkdir(parents=True, exist_ok=True)
     cases = sweep.cases()
     problems = Problems(sweep.path, "sweep")
-    for case in cases:  # every case checked before any runs (the first builds the FMUs; field_input files
-        try:            # do not exist yet)
+    for case in cases:  # every case checked before any runs (the first builds the FMUs); a later pass's
+        try:            # field_input is the file its previous pass writes
             load_component_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
         except SceneError as exc:
             for p in exc.problems or [None]:

@@ -18,7 +18,8 @@ included).
     models coupled implicitly with a tiny step ``dt_ref``), interpolated linearly onto the
     communication points. The step-doubling rows run the strip on its internal time grid
     (``internal_step`` = :data:`DEMO_INTERNAL_STEP`, with ``step_quantum`` the same and ``min_step``
-    twice it, issue 18) and are measured against a reference with the same ``internal_step``; the
+    twice it: without the grid the strip's outputs are first order in its own step and the step collapses to
+    min_step) and are measured against a reference with the same ``internal_step``; the
     other rows keep the scene's strip (no grid) and its reference.
 ``stripdraw``
     The pure strip-draw model (no FMI), explicit central difference vs generalized-alpha
@@ -28,7 +29,7 @@ included).
     reference's material coordinates).
 ``surrogate``
     Friction-table grid density x interpolation error at held-out mesoscale points x build cost,
-    read from the result file of ``benchmarks/bench_table.py`` (issue 6); the report does not run
+    read from the result file of ``benchmarks/bench_table.py``; the report does not run
     mesoscale campaigns.
 ``bem``
     The Fourier-BEM contact solver on one band-limited self-affine surface sampled on n x n grids:
@@ -60,7 +61,7 @@ TARGETS = (1e-2, 1e-3, 1e-4)
 T_STEADY = 0.1
 #: demo, step-doubling rows: the strip's internal_step [s], also the controller's step_quantum (min_step twice it).
 #: Without the grid the strip's outputs are first order in its own step, the error per unit step that step
-#: doubling controls does not fall as the step shrinks and the step collapses to min_step (issue 18).
+#: doubling controls does not fall as the step shrinks and the step collapses to min_step.
 DEMO_INTERNAL_STEP = 5e-5
 #: demo: convergence of the reference's coupling per step (relative). The strip's Newton solve stops at 1e-10 of its
 #: force scale, so its pull force is defined to a few 1e-10 only; at 1e-10 the fixed point can cycle between two
@@ -182,7 +183,7 @@ def demo(settings: Settings) -> Family:
                 f"strip on its internal time grid, internal_step = {DEMO_INTERNAL_STEP:g} s, step_quantum the same, "
                 f"min_step {2 * DEMO_INTERNAL_STEP:g} s, so that one step H and two steps H/2 take the same strip intervals "
                 f"and the estimate sees the coupling error alone (without the grid the strip's first-order lag holds the "
-                f"error per unit step constant and the step collapses to min_step, issue 18); its error is against a "
+                f"error per unit step constant and the step collapses to min_step); its error is against a "
                 f"reference with the same internal_step ({grid_ref_note}). A run is stopped after {budget:g} s of wall "
                 f"time (error reported as inf, the status says so).")
     run_plan(load_scene(path, {"experiment.stop": 0.01}))  # warm-up: FMU extraction, imports, compilation
@@ -281,8 +282,8 @@ def surrogate(settings: Settings, result_file: str | Path | None = None) -> Fami
     cands = [Path(result_file)] if result_file else [root / c for c in SURROGATE_RESULTS]
     found = next((c for c in cands if c.is_file()), None)
     if found is None:
-        return Family.unavailable("surrogate", title, "no result of the hold-out measurement (benchmarks/bench_table.py, "
-                                  "issue 6) was found at " + ", ".join(_rel(c, root) for c in cands) + "; produce it with "
+        return Family.unavailable("surrogate", title, "no result of the hold-out measurement (benchmarks/bench_table.py) "
+                                  "was found at " + ", ".join(_rel(c, root) for c in cands) + "; produce it with "
                                   "`python benchmarks/bench_table.py --json docs/reports/bench_table.json` and rerun")
     data = json.loads(found.read_text())
     fam = Family("surrogate", title, curve="curve", error="error", cost="build_core_seconds", label="setting")

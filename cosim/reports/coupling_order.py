@@ -1,4 +1,4 @@
-"""Accuracy-report family ``coupling_order``: the order of the coupling error on the demo rig (issue 18, item 2).
+"""Accuracy-report family ``coupling_order``: the order of the coupling error on the demo rig.
 
 ``models/scenes/demo.toml`` with the strip on its internal time grid (``internal_step`` =
 :data:`INTERNAL_STEP`): friction, contact overlaps and debris are updated every internal step, also within

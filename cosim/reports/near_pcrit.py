@@ -1,4 +1,4 @@
-"""Accuracy-report family ``near_pcrit``: iterative coupling of the demo rig at 0.99 p_crit (issue 18, item 3).
+"""Accuracy-report family ``near_pcrit``: iterative coupling of the demo rig at 0.99 p_crit.
 
 ``models/scenes/demo.toml`` with the press set to 0.99 x 340 MPa on the 35 x 35 mm pad (412335 N) and the
 strip on the closed-form friction law (Eq. 9; the shipped table's pressure axis does not reach 337 MPa),

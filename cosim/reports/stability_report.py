@@ -11,7 +11,7 @@ message), and finds the largest stable step by bisection (:func:`~tribocosim.cos
     The Jacobi/0 column also shows the limit predicted from the exact one-step map
     (:mod:`tribocosim.cosim.reports.monodromy`).
 ``stiff_drive``
-    ``models/scenes/stiff_drive.toml`` (issue 8) with the drawing machine's drive stiffness
+    ``models/scenes/stiff_drive.toml`` with the drawing machine's drive stiffness
     from 1e4 to 1e9 N/m. Bound: |pull_force| <= 10 x (2 mu0 F_N + 2 rho c A V0) (friction capacity plus the
     force of the elastic wave a velocity step launches) and |grip_velocity| <= 10 x the set-point.
 ``demo``

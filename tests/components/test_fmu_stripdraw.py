@@ -336,7 +336,7 @@ def test_bad_input_discards_the_step_and_keeps_the_state(stripdraw_fmu_instance,
 )
 def test_bad_parameter_makes_the_instance_refuse_to_step_and_names_it(stripdraw_fmu_instance, name, value, shown):
     """pythonfmu 0.7.0 cannot fail fmi2ExitInitializationMode without breaking the process
-    (see components/fmus/StripDraw.py), so the error is logged there and every doStep is
+    (see components/fmus/adapter.py), so the error is logged there and every doStep is
     discarded with the same message."""
     inst = stripdraw_fmu_instance("bad-parameter", {name: value})
     inst.initialize()

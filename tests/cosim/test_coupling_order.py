@@ -1,4 +1,4 @@
-"""Second-order coupling on a stripped-down demo rig (issue 18, item 2), through the native FMUs and the master.
+"""Second-order coupling on a stripped-down demo rig, through the native FMUs and the master.
 
 The demo scene shortened to 0.25 s with a coarse strip (80 elements) on its internal grid (internal_step =
 1e-4 s): friction, contact and debris follow the inputs within a communication step H, and the strip takes

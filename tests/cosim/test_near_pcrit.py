@@ -1,4 +1,4 @@
-"""Iterative coupling of the demo rig at 0.99 p_crit (issue 18, item 3), through the native FMUs.
+"""Iterative coupling of the demo rig at 0.99 p_crit, through the native FMUs.
 
 The press closes the pads with 0.99 x 340 MPa x 35 mm x 35 mm = 412335 N; the strip takes the closed-form
 friction law (Eq. 9), because the shipped friction table's pressure axis does not reach 337 MPa (the scene

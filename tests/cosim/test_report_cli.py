@@ -87,7 +87,7 @@ def test_every_family_is_a_function_of_the_settings_alone():
 
 
 def test_surrogate_family_reads_the_hold_out_result_of_bench_table(tmp_path):
-    """The JSON format written by benchmarks/bench_table.py (issue 6): one row per grid."""
+    """The JSON format written by benchmarks/bench_table.py: one row per grid."""
     from pathlib import Path
 
     from tribocosim.cosim.reports.common import Settings

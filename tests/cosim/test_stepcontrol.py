@@ -109,7 +109,7 @@ def test_step_doubling_shrinks_on_discard(tmp_path, make_scene, fmu_dir):
     assert res.metadata["steps"]["rejected_failure"] > 0
 
 
-# ------------------------------------------------------------------ step_quantum (issue 18)
+# ------------------------------------------------------------------ step_quantum
 def test_step_quantum_puts_every_step_and_half_step_on_its_grid(tmp_path, osc_scene):
     """step_quantum q: every step is a multiple of 2 q (and at least 2 q), so every communication point, the
     half steps included, lies on the grid k q; the tolerance is still met."""
@@ -198,7 +198,7 @@ def test_step_quantum_is_checked_against_the_grid(tmp_path, osc_scene):
 
 
 def test_step_doubling_on_the_strips_internal_grid_does_not_collapse():
-    """Issue 18 on the demo (press + strip + drive, first 0.2 s): without the strip's internal grid its own
+    """Step doubling on the demo (press + strip + drive, first 0.2 s): without the strip's internal grid its own
     first-order lag keeps the error per unit step above the tolerance and every step is the smallest allowed;
     with internal_step = step_quantum the estimate sees the coupling alone and the step grows after the ramps."""
     ad = {"tolerance": 1e-2, "min_step": 1e-4, "max_step": 0.05, "estimator": "step-doubling"}

@@ -1,4 +1,4 @@
-"""The FMI 3.0 variants of the native FMUs (issue 19, item 1): ``tribocosim fmu build --fmi 3``.
+"""The FMI 3.0 variants of the native FMUs: ``tribocosim fmu build --fmi 3``.
 
 - the model descriptions have the FMI 2.0 variables (names, value references, units, descriptions, starts,
   ranges), plus ``time``, and for StripDraw the structural parameter ``n_nodes = n_elements + 1`` and the

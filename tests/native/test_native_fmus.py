@@ -1,4 +1,4 @@
-"""The native FMUs (issue 13): built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
+"""The native FMUs: built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
 and libcosimpy, and held against the Python models.
 
 - the model descriptions are the Python variants' (names, value references, causality, units, descriptions,

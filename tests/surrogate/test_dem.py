@@ -358,7 +358,7 @@ def test_bad_parameters_are_rejected():
 
 
 # ------------------------------------------------------------------------------------------
-# clearance records and pair candidates (issue 17, item 4): faces, points and flake pairs that are
+# clearance records and pair candidates: faces, points and flake pairs that are
 # provably out of contact are not read; the numbers do not change, bit for bit
 # ------------------------------------------------------------------------------------------
 def slope_bound_ref(h, dh, w, ic, jc, half, dx):

@@ -1,4 +1,4 @@
-"""Damping of the flakes by the lubricant (issue 17, item 1): the thin-disc Stokes resistances against the
+"""Damping of the flakes by the lubricant: the thin-disc Stokes resistances against the
 ellipsoid integrals, exact exponential decay of a free flake at the four principal rates, the kernel's
 principal-axis damping against NumPy, bad input, and the default (one rate gamma = 5e7 1/s) unchanged."""
 
@@ -258,7 +258,7 @@ def test_bad_rates_are_refused():
 
 
 # ------------------------------------------------------------------------------------------
-# the default: the oil's viscosity (issue 17); gamma an expert override
+# the default: the oil's viscosity; gamma an expert override
 # ------------------------------------------------------------------------------------------
 def test_default_configuration_is_vg32_oil_and_gamma_an_override_with_its_own_case_id():
     default, explicit = SlideConfig(), SlideConfig(oil_viscosity=ETA)

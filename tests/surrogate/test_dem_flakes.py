@@ -109,7 +109,7 @@ def footprint_ref(r, R, shape, n, size):
 
 
 def test_footprints_of_all_flakes_at_once_equal_one_at_a_time_bit_for_bit():
-    """footprints() rasterises every flake in one set of array operations (issue 17, item 4)."""
+    """footprints() rasterises every flake in one set of array operations."""
     rng = np.random.default_rng(4)
     pos = np.column_stack([rng.uniform(-2e-6, L, 30), rng.uniform(0, L, 30),
                            rng.uniform(-1e-6, 1e-6, 30)])

@@ -1,6 +1,6 @@
 /* The nodal-field file of the strip (field_output / field_input): a CSV file, written and read in C.
  *
- * The format is documented, and read in Python, by components/stripdraw/fields.py:
+ * The format is documented, and read in Python, by components/native/resource_io/field_file.py:
  *
  *     # tribocosim strip-draw nodal fields, format 1
  *     # X [m]: X_0,X_1,...,X_M                     (material coordinates of the nodes)
