@@ -24,8 +24,9 @@ Variables
     When ``field_output`` names a file (relative: to the importer's working directory), the FMU
     records the nodal fields at initialization and then after every step that ends at least
     ``field_output_interval`` seconds after the last recorded row (0: every step), and writes them
-    at ``fmi2Terminate`` (:mod:`.fields`: the format, atomically, the final state always
-    included); a rolled-back step drops the rows after the restored time. ``field_input`` names such
+    at ``fmi2Terminate`` (atomically, the final state always included; the format:
+    :mod:`tribocosim.components.native.resource_io.field_file`); a rolled-back step drops the rows after the
+    restored time. ``field_input`` names such
     a file: the strip starts from its last ``beta`` row (a later pass over the same strip without
     cleaning, paper Fig. 2b); it must have been written for this mesh.
 
