@@ -10,6 +10,7 @@ loop.
 from __future__ import annotations
 
 import ast
+import graphlib
 import subprocess
 import sys
 import tomllib
@@ -92,42 +93,13 @@ def graph(modules) -> dict[str, dict[str, int]]:
     return {name: imports(name, path, modules) for name, path in modules.items()}
 
 
-def loops(edges) -> list[list[str]]:
-    """The strongly connected components of more than one module (Tarjan, iterative)."""
-    index, low, on, stack, out = {}, {}, set(), [], []
-    for start in sorted(edges):
-        if start in index:
-            continue
-        work = [(start, iter(sorted(edges.get(start, ()))))]
-        index[start] = low[start] = len(index)
-        stack.append(start)
-        on.add(start)
-        while work:
-            v, children = work[-1]
-            w = next(children, None)
-            if w is not None:
-                if w not in index:
-                    index[w] = low[w] = len(index)
-                    stack.append(w)
-                    on.add(w)
-                    work.append((w, iter(sorted(edges.get(w, ())))))
-                elif w in on:
-                    low[v] = min(low[v], index[w])
-                continue
-            work.pop()
-            if work:
-                low[work[-1][0]] = min(low[work[-1][0]], low[v])
-            if low[v] == index[v]:
-                comp = []
-                while True:
-                    w = stack.pop()
-                    on.discard(w)
-                    comp.append(w)
-                    if w == v:
-                        break
-                if len(comp) > 1:
-                    out.append(sorted(comp))
-    return out
+def loop(edges) -> list[str]:
+    """An import loop (its modules, the first repeated at the end), or [] when there is none."""
+    try:
+        graphlib.TopologicalSorter(edges).prepare()
+    except graphlib.CycleError as exc:
+        return list(exc.args[1])
+    return []
 
 
 def layer(name: str) -> int | None:
@@ -160,10 +132,9 @@ def test_every_module_of_the_package_imports(modules):
 
 def test_no_module_is_part_of_an_import_loop(modules):
     edges = graph(modules)
-    found = loops(edges)
-    detail = [f"{a} -> {b} (line {edges[a][b]})" for comp in found for a in comp for b in sorted(edges[a])
-              if b in comp]
-    assert not found, "import loops:\n" + "\n".join(detail)
+    found = loop(edges)
+    detail = [f"{b} imports {a} (line {edges[b][a]})" for a, b in zip(found, found[1:])]
+    assert not found, "an import loop (fix it and run again: there may be more):\n" + "\n".join(detail)
 
 
 def test_layers_import_only_downwards(modules):
@@ -203,5 +174,6 @@ def test_the_checks_find_a_loop_hidden_in_a_function(tmp_path):
     assert sorted(mods) == ["pkg", "pkg.a", "pkg.b", "pkg.c"]
     edges = graph(mods)
     assert edges["pkg.b"] == {"pkg.a": 2} and edges["pkg.a"] == {"pkg.b": 1}
-    assert loops(edges) == [["pkg.a", "pkg.b"]]
-    assert loops({"x": {"y": 1}, "y": {}}) == []
+    found = loop(edges)
+    assert found[0] == found[-1] and sorted(found[:-1]) == ["pkg.a", "pkg.b"]
+    assert loop({"x": {"y": 1}, "y": {}}) == []
