@@ -1,4 +1,4 @@
-"""Benchmark of the Fourier-BEM contact solver (issue 4).
+"""Benchmark of the Fourier-BEM contact solver.
 
 For each grid n (default 256, 512, 1024, 2048) a self-affine surface (L = 500 um, H = 0.8,
 RMS slope 0.34, PSD between q_roll = 2 (2 pi / L) and q_cut = 50 (2 pi / L), i.e. wavelengths

@@ -1,4 +1,4 @@
-"""Is the friction table's extrapolation in beta within the mesoscale ensemble's noise? (issue 16, item 4)
+"""Is the friction table's extrapolation in beta within the mesoscale ensemble's noise?
 
 The quick preset simulates debris levels up to beta = 0.048 (7 flakes of 12 um on the 128 um domain);
 above that the table's nodes are extrapolated with A_p linear in beta and A_c held (surrogate/
@@ -66,7 +66,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default="bench_beta_extrapolation.json")
     args = ap.parse_args(argv)
 
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table
     from tribocosim.surrogate.campaign import CampaignStore, expand_cases, run_campaign
     from tribocosim.surrogate.executors import ProcessPoolCaseExecutor

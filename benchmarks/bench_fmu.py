@@ -2,7 +2,7 @@
 
 Measures, for the default parameters (table friction, implicit integrator, 150 elements):
 
-0. the native FMU (issue 13): per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
+0. the native FMU: per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
    pythonfmu FMU through the same loop (both run the native core: the difference is the FMI layer, C against
    pythonfmu), and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
@@ -19,7 +19,7 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    that imports the model and runs the same draw.
 
 In this process the FMU reuses the already imported ``components`` package (see
-components/fmus/StripDraw.py), so (1) and (2) measure the FMI layer, not a second compilation.
+components/fmus/adapter.py), so (1) and (2) measure the FMI layer, not a second compilation.
 
     python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold]
 
@@ -165,8 +165,8 @@ def cold(fmu: Path, tmp: Path) -> tuple[float, float, float]:
 def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
     """The C host of tests/native/host (compiled into ``tmp``) running the default draw (``steps`` steps of 1 ms at
     10 MPa and 0.08 m/s) on the extracted StripDraw FMU, without printing: the command line."""
-    from tribocosim.components.fmus.native import fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.fmus.native_build import fmi2_headers
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     host = compile_executable([PROJECT_ROOT / "tests" / "native" / "host" / "fmi2_host.c"], tmp / "fmi2_host",
                               include_dirs=[fmi2_headers()], libs=["-ldl"])
@@ -186,7 +186,7 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     """The native FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import build_native_fmus
+    from tribocosim.components.fmus.native_build import build_native_fmus
 
     fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
     md = read_model_description(str(fmu))
@@ -231,7 +231,7 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         fmu = args.fmu
         if fmu is None:
-            from tribocosim.components.fmus.build import build_fmus
+            from tribocosim.components.fmus.python_build import build_fmus
 
             fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
         md = read_model_description(str(fmu))

@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters

@@ -1,4 +1,4 @@
-"""Benchmark: the full accuracy and stability reports (issue 9), written to docs/reports/.
+"""Benchmark: the full accuracy and stability reports, written to docs/reports/.
 
 Runs ``tribocosim report accuracy --out docs/reports/accuracy`` and ``tribocosim report stability
 --out docs/reports/stability`` (full sweeps, not ``--quick``), printing the wall time and the load
@@ -25,7 +25,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("accuracy", "stability"))
     args = ap.parse_args(argv)
-    from tribocosim.cosim.report_cli import main as report
+    from tribocosim.cosim.apps.report_cli import main as report
 
     for kind in ([args.only] if args.only else ["accuracy", "stability"]):
         load0 = os.getloadavg()

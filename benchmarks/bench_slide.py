@@ -1,12 +1,12 @@
-"""Benchmarks of the BEM-DEM sliding loop (issue 5).
+"""Benchmarks of the BEM-DEM sliding loop.
 
 ``perf``: one full 2L slide for each grid size (default 256 and 512) with 20 flakes of 12 um at
 v0 = 50 m/s and p = 10 MPa, split into DEM, BEM, classification and the rest (set-up: surfaces, first
 solve, placement), with the DEM's cost per pixel and per substep and the load average before and
 after. It only reads ``SlideResult.timings`` and ``info``, so the same script times an older checkout:
-``PYTHONPATH=<a package tree of that checkout> python benchmarks/bench_slide.py perf`` (issue 17, item
-4; set ``TRIBOCOSIM_FFTW_WISDOM`` to one file for both runs so that they use the same FFT plans, and
-so the same numbers).
+``PYTHONPATH=<a package tree of that checkout> python benchmarks/bench_slide.py perf`` (set
+``TRIBOCOSIM_FFTW_WISDOM`` to one file for both runs so that they use the same FFT plans, and so the same
+numbers).
 
 ``deposit``: the shipped table's slides (surrogate/presets/quick.toml: 256^2 pixels of 1 um, roll-off
 surfaces, flakes deposited in the 1 MPa gap, the DEM at 10 m/s for the test's 0.08 m/s) at 30 MPa for the

@@ -1,4 +1,4 @@
-"""Benchmark (issue 18, item 1): the strip-draw model's own step-doubling difference, with and without its
+"""Benchmark: the strip-draw model's own step-doubling difference, with and without its
 internal time grid.
 
 The strip alone (default parameters, shipped friction table, F_N = 12250 N, grip speed ramped to 0.08 m/s
@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters

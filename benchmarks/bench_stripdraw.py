@@ -6,7 +6,7 @@ the draw) of each integrator, and the relative mu_bar difference between them. W
 the best of 3 runs for the implicit integrator (one run for the explicit one), after a warm-up
 run that loads the native core (built on first use).
 
-Targets (issue 2): implicit >= 50x faster than real time; explicit finishes the 35 mm case in under
+Targets: implicit >= 50x faster than real time; explicit finishes the 35 mm case in under
 5 minutes; mu_bar of the two agree within 1 %.
 
 Usage: python benchmarks/bench_stripdraw.py [--pads 0.035 0.07 0.14] [--no-explicit]
@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from tribocosim.cosim.demo import run_strip_draw, steady_mean
+from tribocosim.cosim.apps.demo import run_strip_draw, steady_mean
 
 
 def one(tool_length: float, integrator: str, step: float, repeats: int):

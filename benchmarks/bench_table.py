@@ -1,4 +1,4 @@
-"""Friction-table accuracy vs cost (issue 6, item 5): interpolation error at held-out meso points.
+"""Friction-table accuracy vs cost: interpolation error at held-out meso points.
 
 Three nested grids in (P, v) on the quick preset's slide settings (64^2, 128 um, the same two
 debris levels, 3 placements, particle-free cases):

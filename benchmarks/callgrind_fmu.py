@@ -32,7 +32,7 @@ def count(steps: int, n_elements: int | None, keep: Path | None = None) -> tuple
 
     from bench_fmu import host_command  # the same host and draw as the wall-clock figure
 
-    from tribocosim.components.fmus.native import build_native_fmus
+    from tribocosim.components.fmus.native_build import build_native_fmus
 
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not on the PATH")

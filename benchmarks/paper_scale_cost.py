@@ -1,4 +1,4 @@
-"""Cost of the paper-scale campaign (issue 17, item 5): the ``rolloff`` preset, 512^2 on 500 um.
+"""Cost of the paper-scale campaign: the ``rolloff`` preset, 512^2 on 500 um.
 
 A case slides 2L = 1024 pixels; each pixel is one contact solve (BEM) and one DEM phase of
 n_sub = ceil(dx / (v0 dt)) substeps, so the DEM's cost per pixel grows with 1/v0 and with the

@@ -1,4 +1,4 @@
-"""Generated surface statistics next to the measured targets (issue 17, item 2; docs/physics/surfaces.md).
+"""Generated surface statistics next to the measured targets (docs/physics/surfaces.md).
 
 For every surface pair of the given presets (default: ``rolloff`` and, for contrast, ``paper``, whose
 surfaces are pure power laws from the domain size) the sheet and the tool are generated as the slide

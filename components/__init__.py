@@ -1,5 +1,7 @@
-"""Runtime components of tribocosim: pure physics models and their thin FMI adapters.
+"""Runtime components of tribocosim: the strip draw, the press and the drawing machine.
 
-Everything in this package imports numpy only (numba is optional and guarded), so that a
-built FMU runs in an environment that has nothing but numpy.
+A component is declared once (``<name>/component.py``: variables, units, ranges, resources; found by
+:mod:`.registry`), and its model is a thin Python binding (``<name>/model.py``, :mod:`.linear_model`) over the one
+C core in :mod:`.native`, which the FMUs run too; :mod:`.fmus` builds the FMUs (native C, or pythonfmu for a
+component written in Python). Nothing here imports the co-simulation or the mesoscale code.
 """

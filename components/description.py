@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 
 @dataclass(frozen=True)

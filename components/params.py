@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import field
 
-from tribocosim.components.errors import ParameterError, check_range
+from tribocosim.errors import ParameterError, check_range
 
 
 def param(default, unit: str, description: str, low=None, high=None, low_inclusive=True, **extra):

@@ -16,7 +16,7 @@ import importlib
 import pkgutil
 
 from tribocosim.components.description import Component
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 
 _REGISTERED: dict[str, Component] = {}
 _FOUND: dict[str, Component] | None = None

@@ -18,7 +18,7 @@ def __getattr__(name: str):
 
         return getattr(api, name)
     if name == "load_scene":
-        from tribocosim.cosim.validate import load_scene
+        from tribocosim.cosim.scene.validate import load_scene
 
         return load_scene
     raise AttributeError(f"module 'cosim' has no attribute {name!r}")

@@ -1,7 +1,7 @@
 """Python API: ``tribocosim.cosim.run(scene) -> Result``, and the assembly of a master from a scene.
 
-:func:`build` turns a validated :class:`~tribocosim.cosim.validate.Plan` into a ready
-:class:`~tribocosim.cosim.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.slave.FmpySlave`,
+:func:`build` turns a validated :class:`~tribocosim.cosim.scene.validate.Plan` into a ready
+:class:`~tribocosim.cosim.engine.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.engine.slave.FmpySlave`,
 links, algorithm, step controller, recorder); :func:`run` loads a scene, runs it, and writes
 the CSV and the metadata JSON. The command line (``tribocosim run``) is a thin layer over
 :func:`run`.
@@ -22,16 +22,17 @@ from typing import Any
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError, CosimStepError, RunFailed
-from tribocosim.cosim.algorithms import ALGORITHMS, GaussSeidel
-from tribocosim.cosim.graph import gauss_seidel_order
-from tribocosim.cosim.master import Master
-from tribocosim.cosim.recorder import Progress, Recorder
-from tribocosim.cosim.slave import FmpySlave
-from tribocosim.cosim.stepcontrol import ESTIMATORS, FixedStep
-from tribocosim.cosim.system import CoupledSystem, LinkSpec
-from tribocosim.cosim.timegrid import TimeGrid
-from tribocosim.cosim.validate import Plan
+from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
+from tribocosim.cosim.engine.algorithms import ALGORITHMS, GaussSeidel
+from tribocosim.cosim.engine.graph import gauss_seidel_order
+from tribocosim.cosim.engine.master import Master
+from tribocosim.cosim.engine.recorder import Progress, Recorder
+from tribocosim.cosim.engine.slave import FmpySlave
+from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
+from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.engine.timegrid import TimeGrid
+from tribocosim.cosim.scene.validate import Plan
+from tribocosim.cosim.ssp.reader import load_ssp
 
 
 @dataclass
@@ -118,7 +119,7 @@ def build(plan: Plan) -> Build:
     Parameters
     ----------
     plan : Plan
-        From :func:`tribocosim.cosim.validate.load_scene`.
+        From :func:`tribocosim.cosim.scene.validate.load_scene`.
     """
     scene = plan.scene
     names = list(plan.fmus)
@@ -203,7 +204,7 @@ def native_resource(spec, name: str, value):
     source = Path(value)
     if not source.is_absolute() or not source.is_file():  # a file in the FMU's resources: converted by its build
         return value
-    from tribocosim.cosim.fmucache import cache_dir
+    from tribocosim.cosim.scene.fmucache import cache_dir
 
     folder = cache_dir() / "resources" / hashlib.sha256(source.read_bytes()).hexdigest()[:20]
     converted = folder / f"{source.stem}.tca"
@@ -221,7 +222,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     ----------
     scene : str, Path or Plan
         A scene file, the name of a packaged scene (``"demo"``, see
-        :func:`tribocosim.components.paths.scene_file`), or an already validated plan.
+        :func:`tribocosim.paths.scene_file`), or an already validated plan.
     out_dir : str or Path, optional
         Folder for the output files; default: the scene file's folder, or ``./<scene name>`` for
         a packaged scene. ``[output] file`` is relative to it; the metadata JSON goes next to the
@@ -238,8 +239,8 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     Result
     """
     if not isinstance(scene, Plan):
-        from tribocosim.components.paths import scene_file
-        from tribocosim.cosim.reference_components import load_component_scene
+        from tribocosim.paths import scene_file
+        from tribocosim.cosim.scene.component_checks import load_component_scene
 
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
         scene = load_component_scene(scene_file(scene), overrides)
@@ -292,6 +293,34 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
 CLAMP_OUTPUT = "table_clamp_count"
 
 
+def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict | None = None, *,
+            progress: bool = False, write: bool = True):
+    """Run an SSP package with our master; as :func:`run`, output by default next to the package.
+
+    The metadata names the package as the scene (``scene``, ``scene_sha256``) and keeps the
+    translated scene's text under ``ssp.scene_toml``.
+    """
+    ssp = Path(path).resolve()
+    plan = load_ssp(ssp, overrides)
+    try:
+        result = run(plan, Path(out_dir) if out_dir is not None else ssp.parent, progress=progress, write=write)
+    except RunFailed as exc:
+        _note_package(exc.result, ssp, plan.scene.path)
+        raise
+    _note_package(result, ssp, plan.scene.path)
+    return result
+
+
+def _note_package(result, ssp: Path, scene: Path) -> None:
+    note = {"scene": str(ssp), "scene_sha256": hashlib.sha256(ssp.read_bytes()).hexdigest(),
+            "ssp": {"scene_toml": scene.read_text(encoding="utf-8")}}
+    result.metadata.update(note)
+    if result.metadata_path is not None and result.metadata_path.is_file():
+        meta = json.loads(result.metadata_path.read_text(encoding="utf-8"))
+        meta.update(note)
+        result.metadata_path.write_text(json.dumps(meta, indent=2), encoding="utf-8")
+
+
 def _outside_table_warnings(b: Build) -> list[str]:
     """A warning for every FMU whose ``table_clamp_count`` output ended above 0 (read at the end of the run)."""
     out = []
@@ -315,7 +344,7 @@ def _outside_table_warnings(b: Build) -> list[str]:
 def default_out_dir(scene_path: Path) -> Path:
     """Where a run writes when no folder is given: the scene's folder, or ``./<stem>`` for a packaged scene
     (an installed package's folder is no place for results)."""
-    from tribocosim.components.paths import is_packaged
+    from tribocosim.paths import is_packaged
 
     return Path.cwd() / scene_path.stem if is_packaged(scene_path) else scene_path.parent
 

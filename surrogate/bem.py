@@ -38,7 +38,7 @@ Almqvist et al. and Weber et al., Nat. Commun. 9 (2018) 888, doi:10.1038/s41467-
    contact points cannot carry p even at p_crit, a shift t = clip(y - lambda, 0, p_crit) over the
    whole grid brings in the zero points closest to contact. CG restarts unless only a few points
    changed. If a kept direction is no longer a descent direction (r.d <= 0, conjugacy lost in a
-   kept active-set change), CG restarts with d = r (it used to stop there as if converged). The
+   kept active-set change), CG restarts with d = r instead of stopping there as if converged. The
    work of this step scales with |F| + |S| + #violators; the displacement is then
    corrected by direct summation of the real-space kernel when at most a dozen points changed,
    otherwise by one more FFT pair.
@@ -79,7 +79,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from tribocosim.components.errors import ConvergenceError, ParameterError, check_range
+from tribocosim.errors import ConvergenceError, ParameterError, check_range
 
 from .fft import rfft2_pair
 from .surfaces import validate_height_map

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 from .slide_config import SlideConfig
 from .sweep import Sweep

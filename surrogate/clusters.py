@@ -28,7 +28,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from tribocosim.components.errors import ParameterError, check_range
+from tribocosim.errors import ParameterError, check_range
 
 from .surfaces import validate_height_map
 

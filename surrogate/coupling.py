@@ -12,7 +12,7 @@ grid: h_tool0 rolled by k along x) the loop
    n_sub steps with n_sub v0 dt = dx;
 2. classifies each flake: *blocked* if the pixels of its footprint where its upper surface
    z_hi exceeds the tool h_top form >= 3 spatially distinct 8-connected clusters (Fig. 8), else
-   free. Our addition (docs/model.md section 7 leaves the criterion open; issue 17): a flake is also
+   free. Our addition (docs/model.md section 7 leaves the criterion open): a flake is also
    blocked when it is *pinched*, i.e. it does not fit between the sheet h_low and the tool's
    *envelope over the coming pixel*, h_env = min(h_top(k), h_top(k + 1)) (the lowest the tool comes
    at each pixel during the next DEM phase): the depths by which they cut into it, max(z_hi - h_env)
@@ -72,7 +72,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import ndimage
 
-from tribocosim.components.errors import ConvergenceError
+from tribocosim.errors import ConvergenceError
 
 from . import dem
 from .flakes import Footprint, footprints, random_placement

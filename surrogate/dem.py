@@ -14,7 +14,7 @@ Equations of motion (Eq. 15-16), with the damping written as a rate gamma [1/s]
 L = I omega the angular momentum in the space frame. Gravity is neglected (it is ~1e-9 of the
 contact forces).
 
-Damping from the lubricant (the default since issue 17, :meth:`DampingRates.from_viscosity`). The paper's single eta for
+Damping from the lubricant (the default, :meth:`DampingRates.from_viscosity`). The paper's single eta for
 translation and rotation cannot be one physical coefficient (a force per velocity and a torque per
 angular velocity differ by a length squared); the flakes move in the oil film, so the damping can
 instead be the quasi-steady Stokes drag of a thin disc of radius a (thickness << a) in a Newtonian
@@ -39,7 +39,7 @@ the components of v and L along n decaying at the axial rates, the rest at the o
 with I1 about a diameter, I3 about the axis). (The orientation-averaged translational resistance, the
 harmonic mean 12 eta a, would be the single coefficient of an isotropic model.) Reference viscosity
 (the default of a slide, ``SlideConfig.oil_viscosity``): ISO 3448 grade VG 32, 32 mm^2/s
-at 40 C, times a mineral-oil density of ~870 kg/m^3, is 0.028 Pa s (:data:`VG32_VISCOSITY_40C`);
+at 40 C, times a mineral-oil density of ~870 kg/m^3, is 0.028 Pa s (:data:`tribocosim.surrogate.flake_body.VG32_VISCOSITY_40C`);
 mineral oils span ~0.01-0.5 Pa s at 40 C (VG 10 to VG 460). For a 12 um flake in VG 32 the rates are
 1.8e7 (plane), 2.6e7 (axial), 8.7e7 (diameter) and 4.4e7 (axis) 1/s.
 
@@ -113,10 +113,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TribocosimError, check_range
+from tribocosim.errors import ParameterError, TribocosimError, check_range
 
 from . import dem_kernels as _k
-from .slide_config import DEFAULT_OIL_VISCOSITY
+from .flake_body import DampingRates, FlakeShape, check_nonnegative, rotation_matrices
 
 #: allowed overlap (fraction of h_p) at the Hertz-estimated peak force
 OVERLAP_FRACTION = 0.05
@@ -124,124 +124,10 @@ OVERLAP_FRACTION = 0.05
 BLOWUP_FRACTION = 0.5
 #: safety factor on the Verlet stability limit 2/omega_max
 DT_SAFETY = 0.1
-#: Stokes resistance coefficients of a thin disc (module docstring): force / (eta a v) broadside and
-#: edgewise, torque / (eta a^3 omega) about a diameter and about the axis
-DISC_BROADSIDE = 16.0
-DISC_EDGEWISE = 32.0 / 3.0
-DISC_ROTATION = 32.0 / 3.0
-#: reference dynamic viscosity [Pa s]: ISO 3448 VG 32 (32 mm^2/s at 40 C) x 870 kg/m^3
-VG32_VISCOSITY_40C = DEFAULT_OIL_VISCOSITY
 
 
 class DemBlowUpError(TribocosimError):
     """The DEM state became non-finite or an overlap exceeded 50 % of the flake thickness."""
-
-
-@dataclass(frozen=True)
-class FlakeShape:
-    """Shape and material of the (identical) flakes.
-
-    Attributes
-    ----------
-    diameter : float
-        In-plane diameter d_p [m].
-    thickness : float
-        Thickness h_p [m], smaller than the diameter.
-    density : float
-        Mass density [kg/m^3] (Al: 2700).
-    """
-
-    diameter: float = 12e-6
-    thickness: float = 0.5e-6
-    density: float = 2700.0
-
-    def __post_init__(self):
-        check_range("flake diameter d_p", self.diameter, 0.0, None, low_inclusive=False, unit="m")
-        check_range("flake thickness h_p", self.thickness, 0.0, self.diameter,
-                    low_inclusive=False, high_inclusive=False, unit="m")
-        check_range("flake density", self.density, 0.0, None, low_inclusive=False, unit="kg/m^3")
-
-    @property
-    def a(self) -> float:
-        """In-plane semi-axis [m]."""
-        return 0.5 * self.diameter
-
-    @property
-    def c(self) -> float:
-        """Half-thickness [m]."""
-        return 0.5 * self.thickness
-
-    @property
-    def area(self) -> float:
-        """Cross-section area a_p = pi a^2 [m^2]."""
-        return math.pi * self.a**2
-
-    @property
-    def mass(self) -> float:
-        """Mass [kg]."""
-        return self.density * 4.0 / 3.0 * math.pi * self.a**2 * self.c
-
-    @property
-    def inertia(self) -> tuple[float, float]:
-        """Principal moments (I1 = I2 in-plane axes, I3 symmetry axis) [kg m^2]."""
-        m = self.mass
-        return m * (self.a**2 + self.c**2) / 5.0, 2.0 * m * self.a**2 / 5.0
-
-
-@dataclass(frozen=True)
-class DampingRates:
-    """Damping rates [1/s] of a flake in its principal axes (module docstring).
-
-    Attributes
-    ----------
-    velocity_plane, velocity_axial : float
-        Rates of the velocity components in the flake's plane and along its symmetry axis.
-    angmom_diameter, angmom_axis : float
-        Rates of the angular-momentum components about a diameter and about the symmetry axis.
-    """
-
-    velocity_plane: float
-    velocity_axial: float
-    angmom_diameter: float
-    angmom_axis: float
-
-    def __post_init__(self):
-        for name in ("velocity_plane", "velocity_axial", "angmom_diameter", "angmom_axis"):
-            _check_number(f"damping rate {name}", getattr(self, name), "1/s")
-
-    @classmethod
-    def uniform(cls, gamma: float) -> "DampingRates":
-        """One rate for every component (the integrator of Eq. 15-16 with one gamma)."""
-        _check_number("damping rate gamma", gamma, "1/s")
-        return cls(gamma, gamma, gamma, gamma)
-
-    @classmethod
-    def from_viscosity(cls, shape: FlakeShape, viscosity: float) -> "DampingRates":
-        """Stokes drag of a thin disc of radius a = d_p/2 in an oil of dynamic viscosity ``viscosity``
-        [Pa s] (module docstring: formulas, validity, reference values)."""
-        eta = _check_number("oil viscosity eta", viscosity, "Pa s")
-        a, m = shape.a, shape.mass
-        i1, i3 = shape.inertia
-        return cls(DISC_EDGEWISE * eta * a / m, DISC_BROADSIDE * eta * a / m,
-                   DISC_ROTATION * eta * a**3 / i1, DISC_ROTATION * eta * a**3 / i3)
-
-    @property
-    def is_uniform(self) -> bool:
-        """True when all four rates are equal (the one-rate integrator)."""
-        return self.velocity_plane == self.velocity_axial == self.angmom_diameter == self.angmom_axis
-
-    def as_tuple(self) -> tuple[float, float, float, float]:
-        """(velocity_plane, velocity_axial, angmom_diameter, angmom_axis), the kernel's order."""
-        return (float(self.velocity_plane), float(self.velocity_axial), float(self.angmom_diameter),
-                float(self.angmom_axis))
-
-
-def _check_number(name: str, value, unit: str) -> float:
-    """A finite number >= 0, or ``ParameterError`` naming the quantity, the value and the range."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise ParameterError(f"{name} = {value!r} is not a number; allowed: a finite number in "
-                             f"[0, inf) {unit}")
-    return check_range(name, value, 0.0, None, unit=unit)
 
 
 def face_samples(shape: FlakeShape, spacing: float) -> tuple[np.ndarray, np.ndarray]:
@@ -372,7 +258,7 @@ class DemParams:
         check_range("pixel size dx", self.dx, 0.0, self.size, low_inclusive=False, unit="m")
         check_range("penalty k_A", self.k_area, 0.0, None, low_inclusive=False, unit="N/m^3")
         if not isinstance(self.damping, DampingRates):
-            _check_number("damping rate", self.damping, "1/s")
+            check_nonnegative("damping rate", self.damping, "1/s")
         check_range("DEM time step", self.dt, 0.0, None, low_inclusive=False, unit="s")
         if self.shape.diameter >= 0.5 * self.size:
             raise ParameterError(
@@ -427,8 +313,6 @@ class DemState:
 
 def angular_velocity(state: DemState, shape: FlakeShape) -> np.ndarray:
     """omega = L/I1 + (L.n)(1/I3 - 1/I1) n, n the body symmetry axis in space (nf, 3)."""
-    from .flakes import rotation_matrices
-
     i1, i3 = shape.inertia
     n = rotation_matrices(state.quat)[:, :, 2]
     l3 = np.sum(state.angmom * n, axis=1)

@@ -10,10 +10,10 @@ Two kernels (and their helpers), all ``njit(cache=True)`` with float64 arrays:
 Helpers with their own NumPy oracles: ``_slope_bound`` (the largest pixel difference of a field around
 a pixel), ``_face_modes`` (the clearance test below) and ``_pair_candidates``.
 
-What is not computed (issue 17, item 4; the results are bit for bit those of computing it: every
+What is not computed (the results are bit for bit those of computing it: every
 skipped term is provably zero and the others are summed in the same order):
 
-- Clearance records. Reading a face at every sample point and every step was ~95 % of a slide's DEM
+- Clearance records. Reading a face at every sample point and every step would be ~95 % of a slide's DEM
   time, and most faces touch nothing. When a face is read whole, the vertical gap g_k of each of its
   points to the surface is kept (for the sheet, to the highest the sheet gets there during the call:
   its weight only grows, from ``low_w`` to ``low_end``), with the flake's pose, the tool's shift and

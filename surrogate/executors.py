@@ -20,7 +20,7 @@ import re
 import uuid
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
-from tribocosim.components.errors import ParameterError, TribocosimError
+from tribocosim.errors import ParameterError, TribocosimError
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ws|wss)://[^\s:/]+(:\d+)?/?$")
 

@@ -27,7 +27,7 @@ import threading
 import numpy as np
 import pyfftw
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 #: environment variable naming an FFTW wisdom file (optional)
 WISDOM_ENV = "TRIBOCOSIM_FFTW_WISDOM"

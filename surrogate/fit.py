@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import curve_fit
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 
 @dataclass(frozen=True)

@@ -18,27 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
-from .dem import FlakeShape, face_samples
-
-
-def rotation_matrices(quat) -> np.ndarray:
-    """Rotation matrices (nf, 3, 3), body -> space, of unit quaternions (w, x, y, z)."""
-    q = np.asarray(quat, dtype=np.float64).reshape(-1, 4)
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], axis=1)
-
-
-def axis_angle_quaternion(axis, angle) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` [rad] about ``axis``."""
-    u = np.asarray(axis, dtype=np.float64)
-    u = u / np.linalg.norm(u)
-    return np.concatenate([[math.cos(0.5 * angle)], math.sin(0.5 * angle) * u])
+from .dem import face_samples
+from .flake_body import FlakeShape, rotation_matrices
 
 
 @dataclass(frozen=True)

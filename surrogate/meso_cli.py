@@ -24,7 +24,7 @@ import math
 import sys
 import time
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 _SUBCOMMANDS = {"surface": "generate a periodic self-affine rough surface (.npy)",
                 "contact": "BEM contact of a rough surface against a flat at given pressures",

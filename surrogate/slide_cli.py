@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 UNITS = {"slide_distance": "m", "contact_fraction": "1", "particle_fraction": "1",
          "particle_fraction_clusters": "1", "n_blocked": "1", "n_blocked_clusters": "1",
@@ -76,7 +76,7 @@ def plot_result(result, out: Path) -> list[Path]:
     import matplotlib.pyplot as plt
     from matplotlib.patches import Ellipse
 
-    from .flakes import rotation_matrices
+    from .flake_body import rotation_matrices
 
     c = result.config
     keys = sorted(result.snapshots)

@@ -14,9 +14,9 @@ The roll-off wavelengths (``sheet_rolloff_wavelength``, ``tool_rolloff_wavelengt
 a pure power law, and :meth:`SlideConfig.to_dict` leaves them out while they are None; so is
 ``oil_viscosity`` when the expert override ``damping_rate`` is given instead.
 
-Damping (issue 17): by default the flakes are damped by the Stokes drag of the oil they move in,
+Damping: by default the flakes are damped by the Stokes drag of the oil they move in,
 ``oil_viscosity`` = :data:`DEFAULT_OIL_VISCOSITY` (ISO VG 32 at 40 C); the one rate ``damping_rate``
-[1/s] of earlier campaigns (5e7) is an expert override. docs/physics/alpha_velocity.md gives the study
+[1/s] (e.g. 5e7) is an expert override. docs/physics/alpha_velocity.md gives the study
 behind the default.
 """
 
@@ -26,11 +26,10 @@ import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-from tribocosim.components.errors import ParameterError, check_range
+from tribocosim.errors import ParameterError, check_range
 
-#: dynamic viscosity [Pa s] of the oil when neither oil_viscosity nor damping_rate is given: ISO 3448
-#: grade VG 32 (32 mm^2/s at 40 C) x a mineral-oil density of 870 kg/m^3 (surrogate.dem docstring)
-DEFAULT_OIL_VISCOSITY = 32e-6 * 870.0
+from .flake_body import DEFAULT_OIL_VISCOSITY, DampingRates
+
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
                  "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds")
@@ -81,7 +80,7 @@ class SlideConfig:
         with the sliding speed (k_A ~ v0^1.2), and so would the overlaps the blocking rules read.
     damping_rate : float or None
         gamma [1/s] of Eq. 15-16 (eta = gamma m, gamma I), one rate for translation and rotation: an
-        expert override of ``oil_viscosity`` (campaigns before issue 17 used 5e7); giving both is an
+        expert override of ``oil_viscosity`` (e.g. 5e7); giving both is an
         error. None (default): the damping of ``oil_viscosity``.
     oil_viscosity : float or None
         Dynamic viscosity eta of the lubricant [Pa s] (>= 0): the flakes are damped by the Stokes drag
@@ -283,16 +282,12 @@ class SlideConfig:
     def damping(self, shape):
         """The DEM damping for flakes of ``shape`` (a :class:`~tribocosim.surrogate.dem.FlakeShape`):
         the rate ``damping_rate`` [1/s], or the Stokes-drag rates of ``oil_viscosity``."""
-        from .dem import DampingRates
-
         if self.oil_viscosity is not None:
             return DampingRates.from_viscosity(shape, self.oil_viscosity)
         return self.damping_rate
 
     def run_damping(self, shape):
         """:meth:`damping` scaled by :attr:`damping_scale` (the rates the DEM runs with)."""
-        from .dem import DampingRates
-
         rates = self.damping(shape)
         k = self.damping_scale
         if isinstance(rates, DampingRates):

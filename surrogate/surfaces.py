@@ -59,7 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from tribocosim.components.errors import ParameterError, check_range
+from tribocosim.errors import ParameterError, check_range
 
 #: the two RMS-slope definitions
 SLOPE_DEFINITIONS = ("spectral", "finite_difference")

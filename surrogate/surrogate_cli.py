@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 PROG = "tribocosim surrogate"
 

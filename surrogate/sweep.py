@@ -37,7 +37,7 @@ by every slide. Example (SI units everywhere)::
 
 The keys that the grid sweeps (``pressure``, ``v0``, ``n_flakes``, ``flake_diameter``,
 ``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
-as a :class:`~tribocosim.components.errors.ParameterError` naming the file, the line, the key, its value and
+as a :class:`~tribocosim.errors.ParameterError` naming the file, the line, the key, its value and
 what is allowed.
 
 Presets live in ``surrogate/presets/<name>.toml`` (:func:`preset_path`).
@@ -51,7 +51,7 @@ import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 
 from .slide_config import SlideConfig
 

@@ -35,7 +35,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from tribocosim.components.errors import TableError
+from tribocosim.errors import TableError
 from tribocosim.components.stripdraw.table import UNITS, FrictionTable
 
 from .fit import BETA_FORMS, BetaFit, _key, ensemble, fit_alpha, fit_beta_forms, fit_contact

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import TableError
+from tribocosim.errors import TableError
 
 from .campaign import make_case, run_case
 from .sweep import parse_sweep_dict

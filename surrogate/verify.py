@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from tribocosim.components.errors import TableError
+from tribocosim.errors import TableError
 
 from .campaign import Case, make_case, run_case
 from .sweep import parse_sweep_dict

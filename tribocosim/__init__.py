@@ -20,19 +20,19 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
 
 from __future__ import annotations
 
-from tribocosim.components.lazy import lazy_exports
+from tribocosim.lazy import lazy_exports
 
 __getattr__, __all__ = lazy_exports(__name__, {
     "run": "tribocosim.cosim.api",
     "Result": "tribocosim.cosim.api",
-    "load_scene": "tribocosim.cosim.validate",
+    "load_scene": "tribocosim.cosim.scene.validate",
     "StripDrawModel": "tribocosim.components.stripdraw.model",
     "StripDrawParameters": "tribocosim.components.stripdraw.parameters",
     "make_friction_law": "tribocosim.components.stripdraw.friction",
     "FrictionTable": "tribocosim.components.stripdraw.table",
     "read_table": "tribocosim.components.stripdraw.table",
     "write_table": "tribocosim.components.stripdraw.table",
-    "DEFAULT_TABLE": "tribocosim.components.paths",
-    "scene_file": "tribocosim.components.paths",
-    "TribocosimError": "tribocosim.components.errors",
+    "DEFAULT_TABLE": "tribocosim.paths",
+    "scene_file": "tribocosim.paths",
+    "TribocosimError": "tribocosim.errors",
 })

@@ -13,12 +13,12 @@ import sys
 
 #: subcommand -> (module providing ``main(argv)``, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("tribocosim.cosim.demo", "run the default strip-draw case and print mu_bar"),
-    "run": ("tribocosim.cosim.run_cli", "run a co-simulation scene (TOML) or SSP package (.ssp)"),
-    "ssp": ("tribocosim.cosim.ssp", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
-    "report": ("tribocosim.cosim.report_cli", "error-vs-run-time, stability and paper-figure reports"),
-    "calibrate": ("tribocosim.cosim.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
-    "fmu": ("tribocosim.components.fmus.cli", "build the project's FMUs"),
+    "demo": ("tribocosim.cosim.apps.demo", "run the default strip-draw case and print mu_bar"),
+    "run": ("tribocosim.cosim.apps.run_cli", "run a co-simulation scene (TOML) or SSP package (.ssp)"),
+    "ssp": ("tribocosim.cosim.apps.ssp_cli", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
+    "report": ("tribocosim.cosim.apps.report_cli", "error-vs-run-time, stability and paper-figure reports"),
+    "calibrate": ("tribocosim.cosim.apps.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
+    "fmu": ("tribocosim.components.fmus.fmu_cli", "build the project's FMUs"),
     "meso": ("tribocosim.surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
     "surrogate": ("tribocosim.surrogate.surrogate_cli", "campaigns and the friction table"),
 }
@@ -60,7 +60,7 @@ def console() -> None:
     as "corrupted double-linked list" after a report had written all its files), so then the process ends
     without that teardown (``os._exit``). What Python's exit does first, and what this process relies on, still
     happens before: the ``atexit`` handlers run, which remove the folders the FMUs and SSP packages were
-    extracted to (:mod:`tribocosim.cosim.api`, :mod:`tribocosim.cosim.ssp_import`), the temporary folders of
+    extracted to (:mod:`tribocosim.cosim.api`, :mod:`tribocosim.cosim.ssp.reader`), the temporary folders of
     ``weakref.finalize`` (``tempfile.TemporaryDirectory``) and the pythonfmu exit guard
     (:mod:`tribocosim.components.fmus.exitguard`); then every output is flushed. ``os._exit`` skips only the
     module and object teardown and the C library's exit, where the heap corruption happens."""

@@ -2,7 +2,7 @@
 
 The Python (pythonfmu) and native variants of a component's FMU declare the same variables with the
 same descriptions and units, both from the component's description; the native builder writes its
-whole model description from :func:`tribocosim.components.native.declarations.variables`, the
+whole model description from :func:`tribocosim.components.native.toolchain.declarations.variables`, the
 pythonfmu adapter lets pythonfmu write it and adds the unit definitions.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from xml.etree.ElementTree import Element, SubElement
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 
 #: SI base-unit exponents of every unit the variables may use (FMI 2.0 UnitDefinitions)
 BASE_UNITS = {
@@ -30,7 +30,7 @@ BASE_UNITS = {
 
 
 #: How a native FMU's outputs depend on its inputs, for the model descriptions' ModelStructure. The native FMI
-#: layer (components/native/tc_fmu_instance.c) computes the outputs in doStep and at the end of initialization
+#: layer (components/native/fmi/tc_fmu_instance.c) computes the outputs in doStep and at the end of initialization
 #: only; fmi2SetReal/fmi3SetFloat64 of an input changes no output until the next doStep. So no output has direct
 #: feedthrough (FMI 2.0 section 2.2.8 Outputs, FMI 3.0 section 2.4.8 Output: dependencies=""); at the end of
 #: initialization an output depends on the inputs its Port names in ``initial_inputs`` (the strip's

@@ -1,9 +1,9 @@
 """The FMI 3.0 model description of a native FMU, from the same component description as the FMI 2.0 one.
 
-Every variable of the FMI 2.0 model description (:func:`tribocosim.components.native.declarations.variables`)
+Every variable of the FMI 2.0 model description (:func:`tribocosim.components.native.toolchain.declarations.variables`)
 appears with the same name, value reference, causality, unit, description, start value and range: Real
 becomes ``<Float64>``, Integer ``<Int32>``, String ``<String>`` with a ``<Start value=...>`` element.
-After them (:func:`~tribocosim.components.native.declarations.fmi3_variables`) come the independent
+After them (:func:`~tribocosim.components.native.toolchain.declarations.fmi3_variables`) come the independent
 variable ``time`` and, for a component with array outputs (the strip's nodal fields ``beta``, ``U``,
 ``contact``), the UInt64 structural parameter of their length (``n_nodes``) and the arrays, each with a
 ``<Dimension valueReference=...>`` on it. The integer parameter the length derives from
@@ -20,7 +20,7 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 from tribocosim.components.description import Component
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
-from tribocosim.components.native import declarations
+from tribocosim.components.native.toolchain import declarations
 
 #: FMI 2.0 variable kinds -> FMI 3.0 element names
 _TYPES = {"real": "Float64", "integer": "Int32", "string": "String", "uint64": "UInt64"}

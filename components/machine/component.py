@@ -51,6 +51,6 @@ COMPONENT = Component(
     ),
     build=build,
     setpoints=setpoints,
-    native=Native(prefix="tc_machine", sources=("tc_machine.c", "tc_linear.c", "tc_machine_fmu.c"),
+    native=Native(prefix="tc_machine", sources=("core/tc_machine.c", "core/tc_linear.c", "fmi/tc_machine_fmu.c"),
                   params_header="tc_machine_params.h"),
 )

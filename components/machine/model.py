@@ -19,7 +19,7 @@ and the set-point affine (split at the ramp's end; ``tc_linear.h``).
 from __future__ import annotations
 
 from tribocosim.components.machine.parameters import MachineParameters
-from tribocosim.components.native.linear_model import NativeLinearModel
+from tribocosim.components.linear_model import NativeLinearModel
 
 
 class MachineModel(NativeLinearModel):

@@ -3,6 +3,6 @@
 ``PressParameters`` and ``PressModel`` are imported on first use.
 """
 
-from tribocosim.components.lazy import lazy_exports
+from tribocosim.lazy import lazy_exports
 
 __getattr__, __all__ = lazy_exports(__name__, {"PressParameters": ".parameters", "PressModel": ".model"})

@@ -55,6 +55,6 @@ COMPONENT = Component(
     ),
     build=build,
     setpoints=setpoints,
-    native=Native(prefix="tc_press", sources=("tc_press.c", "tc_linear.c", "tc_press_fmu.c"),
+    native=Native(prefix="tc_press", sources=("core/tc_press.c", "core/tc_linear.c", "fmi/tc_press_fmu.c"),
                   params_header="tc_press_params.h"),
 )

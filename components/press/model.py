@@ -17,7 +17,7 @@ system, split at the set-point's breakpoints; ``tc_linear.h``).
 
 from __future__ import annotations
 
-from tribocosim.components.native.linear_model import NativeLinearModel
+from tribocosim.components.linear_model import NativeLinearModel
 from tribocosim.components.press.parameters import PressParameters
 
 

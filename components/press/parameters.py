@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
 
 

@@ -7,7 +7,7 @@ The names below are imported on first use, so that importing a light module of t
 (``parameters``, ``table``) does not load the native library.
 """
 
-from tribocosim.components.lazy import lazy_exports
+from tribocosim.lazy import lazy_exports
 
 __getattr__, __all__ = lazy_exports(__name__, {
     "INPUT_NAMES": ".model",

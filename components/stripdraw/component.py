@@ -24,8 +24,9 @@ Variables
     When ``field_output`` names a file (relative: to the importer's working directory), the FMU
     records the nodal fields at initialization and then after every step that ends at least
     ``field_output_interval`` seconds after the last recorded row (0: every step), and writes them
-    at ``fmi2Terminate`` (:mod:`.fields`: the format, atomically, the final state always
-    included); a rolled-back step drops the rows after the restored time. ``field_input`` names such
+    at ``fmi2Terminate`` (atomically, the final state always included; the format:
+    :mod:`tribocosim.components.native.resource_io.field_file`); a rolled-back step drops the rows after the
+    restored time. ``field_input`` names such
     a file: the strip starts from its last ``beta`` row (a later pass over the same strip without
     cleaning, paper Fig. 2b); it must have been written for this mesh.
 
@@ -49,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tribocosim.components.description import ArraySize, Built, Component, Native, Port
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
@@ -125,7 +126,7 @@ def _table(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
 
 def build(params: StripDrawParameters, files: StripDrawFiles, resources: Path) -> Built:
     """The model: the table loaded (if used), the initial debris field read (if given)."""
-    from tribocosim.components.stripdraw.fields import read_initial_beta
+    from tribocosim.components.native.resource_io.field_file import read_initial_beta
     from tribocosim.components.stripdraw.friction import make_friction_law
     from tribocosim.components.stripdraw.model import StripDrawModel
 
@@ -200,7 +201,7 @@ def observer(model, files: StripDrawFiles, values: dict):
     """The field recorder when ``field_output`` names a file, else None."""
     if not files.field_output:
         return None
-    from tribocosim.components.stripdraw.fields import FieldRecorder
+    from tribocosim.components.native.resource_io.field_file import FieldRecorder
 
     return FieldRecorder.start(files.field_output, files.field_output_interval, model, values)
 
@@ -219,8 +220,9 @@ COMPONENT = Component(
     check=check,
     observer=observer,
     native=Native(prefix="tc_stripdraw",
-                  sources=("tc_stripdraw.c", "tc_galpha.c", "tc_friction.c", "tc_table.c", "tc_table_lookup.c",
-                           "tc_table_file.c", "tc_arrays.c", "tc_fields.c", "tc_stripdraw_fmu.c"),
+                  sources=("core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_friction.c",
+                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
+                           "resource_io/tc_arrays.c", "resource_io/tc_fields.c", "fmi/tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
                   interpolates_inputs=True, convert_resource=convert_resource,

@@ -1,5 +1,5 @@
 """Local friction laws mu(P, v, beta) (paper Sec. 4, Eq. 6-9, 23-24; docs/model.md section 4): a binding over the
-native law (``components/native/tc_friction.c``, the same code the strip-draw model and its FMU run).
+native law (``components/native/core/tc_friction.c``, the same code the strip-draw model and its FMU run).
 
 Bowden-Tabor with debris (Eq. 7): mu = tau0 (A_c - A_p) / (P A0), A_c the real contact area and A_p
 the part of it carried by blocked flakes. tau0 is set by the particle-free coefficient
@@ -45,8 +45,8 @@ import math
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TableDomainError
-from tribocosim.components.native.library import UBYTE_P, VP, core, ptr
+from tribocosim.errors import ParameterError, TableDomainError
+from tribocosim.components.native.toolchain.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import AREAS, FrictionTable
 

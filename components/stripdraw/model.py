@@ -1,5 +1,5 @@
 """The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law, a binding over the
-native core (``components/native/tc_stripdraw.c``, which states the equations; the same code as the FMU's).
+native core (``components/native/core/tc_stripdraw.c``, which states the equations; the same code as the FMU's).
 
 Physics (paper Sec. 3-4, App. B-C; docs/model.md sections 1-4): the bar rho U_tt = E U_XX (Eq. 2) with lumped
 masses, an elastic-perfectly-plastic Coulomb interface T_max = mu P (Eq. 4-5) under a uniform pressure, debris
@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.components.errors import ConvergenceError, ParameterError, TableDomainError
-from tribocosim.components.native.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
+from tribocosim.errors import ConvergenceError, ParameterError, TableDomainError
+from tribocosim.components.native.toolchain.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
 OUTPUT_NAMES = (

@@ -36,7 +36,7 @@ class StripDrawParameters:
 
     Each field's metadata holds ``unit``, ``description`` and the allowed range (``low``,
     ``high``); ``__post_init__`` checks every field against it and raises
-    :class:`~tribocosim.components.errors.ParameterError` naming the field, its value and the range.
+    :class:`~tribocosim.errors.ParameterError` naming the field, its value and the range.
     """
 
     # --- geometry -------------------------------------------------------------------------

@@ -36,13 +36,13 @@ of the axes and arrays (float64, little-endian, C order) and of the canonical JS
 metadata. A file whose hash or format version does not match is refused.
 
 The native code reads the table in its resource form (:func:`write_table_resource`): an array file
-(:mod:`tribocosim.components.native.arrays`) with the axes, mu, the areas (version 2), ``beta_threshold``,
+(:mod:`tribocosim.components.native.resource_io.array_file`) with the axes, mu, the areas (version 2), ``beta_threshold``,
 ``content_hash`` and ``provenance``, written from a verified table (the FMU build bundles it as
 ``friction_table.tca``; a table file ``X.npz`` has its resource at ``X.tca``).
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
-caller can report them) or ``"error"`` (raise :class:`~tribocosim.components.errors.TableDomainError`).
+caller can report them) or ``"error"`` (raise :class:`~tribocosim.errors.TableDomainError`).
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import ParameterError, TableDomainError, TableError
+from tribocosim.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
 FORMAT_VERSION = 3  # written when the table carries the version 3 arrays; 1 and 2 are still read and written
@@ -336,7 +336,7 @@ def resource_entries(table: FrictionTable) -> dict:
 def write_table_resource(table_path: str | os.PathLike, out: str | os.PathLike | None = None) -> Path:
     """Read and verify the table file ``table_path`` and write its resource form to ``out`` (default: beside it,
     with the suffix ``.tca``); returns the path written."""
-    from tribocosim.components.native.arrays import write_arrays
+    from tribocosim.components.native.resource_io.array_file import write_arrays
 
     table_path = Path(table_path)
     target = Path(out) if out is not None else table_path.with_suffix(RESOURCE_SUFFIX)

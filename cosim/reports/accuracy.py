@@ -10,15 +10,16 @@ included).
     The linear two-mass oscillator of the tests (k2 = 10, 10 s) split into two FMUs; every
     algorithm x extrapolation order x fixed step, and the two adaptive estimators x tolerance
     (Jacobi, extrapolation 1). Error: max |x1 - x1_exact| / max |x1_exact| against the closed
-    form (:class:`tribocosim.cosim.reference.TwoMassOscillator`).
+    form (:class:`tribocosim.cosim.apps.monolithic.TwoMassOscillator`).
 ``demo``
     ``models/scenes/demo.toml`` (press + strip + drawing machine) shortened in quick mode; the
     same settings. Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the
-    monolithic reference (:func:`tribocosim.cosim.reference_components.reference_for_scene`, the pure
+    monolithic reference (:func:`tribocosim.cosim.apps.monolithic.reference_for_scene`, the pure
     models coupled implicitly with a tiny step ``dt_ref``), interpolated linearly onto the
     communication points. The step-doubling rows run the strip on its internal time grid
     (``internal_step`` = :data:`DEMO_INTERNAL_STEP`, with ``step_quantum`` the same and ``min_step``
-    twice it, issue 18) and are measured against a reference with the same ``internal_step``; the
+    twice it: without the grid the strip's outputs are first order in its own step and the step collapses to
+    min_step) and are measured against a reference with the same ``internal_step``; the
     other rows keep the scene's strip (no grid) and its reference.
 ``stripdraw``
     The pure strip-draw model (no FMI), explicit central difference vs generalized-alpha
@@ -28,7 +29,7 @@ included).
     reference's material coordinates).
 ``surrogate``
     Friction-table grid density x interpolation error at held-out mesoscale points x build cost,
-    read from the result file of ``benchmarks/bench_table.py`` (issue 6); the report does not run
+    read from the result file of ``benchmarks/bench_table.py``; the report does not run
     mesoscale campaigns.
 ``bem``
     The Fourier-BEM contact solver on one band-limited self-affine surface sampled on n x n grids:
@@ -48,16 +49,19 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, scratch, timed
+from tribocosim.cosim.reports.coupling_order import coupling_order
 from tribocosim.cosim.reports.metrics import max_relative_error, relative_difference
+from tribocosim.cosim.reports.near_pcrit import near_pcrit
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
+from tribocosim.cosim.reports.runner import failed_row, master_row
 
 TARGETS = (1e-2, 1e-3, 1e-4)
 #: demo: the errors after the ramps are measured from this time on [s]
 T_STEADY = 0.1
 #: demo, step-doubling rows: the strip's internal_step [s], also the controller's step_quantum (min_step twice it).
 #: Without the grid the strip's outputs are first order in its own step, the error per unit step that step
-#: doubling controls does not fall as the step shrinks and the step collapses to min_step (issue 18).
+#: doubling controls does not fall as the step shrinks and the step collapses to min_step.
 DEMO_INTERNAL_STEP = 5e-5
 #: demo: convergence of the reference's coupling per step (relative). The strip's Newton solve stops at 1e-10 of its
 #: force scale, so its pull force is defined to a few 1e-10 only; at 1e-10 the fixed point can cycle between two
@@ -66,20 +70,6 @@ DEMO_REFERENCE_TOL = 1e-9
 #: demo: finer fixed steps of Jacobi with extrapolation 1 (the adaptive rows' scheme) [s]
 DEMO_FINE_STEPS = (2e-4, 1e-4, 5e-5)
 SCHEMES = [(a, q) for a in ("jacobi", "gauss-seidel", "iterative") for q in (0, 1, 2)]
-
-
-def _master_row(curve, setting, res, err, **extra) -> dict:
-    """A row from :func:`tribocosim.cosim.reports.runner.run_plan`'s dict."""
-    status = "ok" if not res["stopped"] else res["stopped"]
-    return {"curve": curve, "setting": setting, "error": err if not res["stopped"] else math.inf,
-            "wall_time": res["wall_time"], "do_steps": res["do_steps"], "steps": res["steps"],
-            "rejected": res["rejected"], "iterations": res["iterations"], "status": status, **extra}
-
-
-def _failed_row(curve, setting, exc, **extra) -> dict:
-    msg = " ".join(str(exc).split())[:200]
-    return {"curve": curve, "setting": setting, "error": math.inf, "wall_time": math.nan, "do_steps": 0,
-            "steps": 0, "rejected": 0, "iterations": 0, "status": f"error: {type(exc).__name__}: {msg}", **extra}
 
 
 def _master_settings(quick: bool, steps_quick, steps_full, tols_quick, tols_full, estimators):
@@ -96,9 +86,9 @@ def _master_settings(quick: bool, steps_quick, steps_full, tols_quick, tols_full
 @timed
 def oscillator(settings: Settings) -> Family:
     """The two-mass oscillator (k2 = 10): master settings vs the closed form."""
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.runner import run_plan
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Two-mass oscillator (k2 = 10 N/m, 10 s): error of x1 against wall time"
     try:
@@ -112,7 +102,7 @@ def oscillator(settings: Settings) -> Family:
     run_plan(load_scene(oscillator_scene(work, fmus, step=0.1, stop=0.2)))  # warm-up: extraction, imports
     fam = Family("oscillator", title, curve="curve", error="error", cost="wall_time", label="setting")
     fam.note = ("Error: max |x1 - x1_exact| / max |x1_exact| over the communication points (closed form: "
-                "tribocosim.cosim.reference.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
+                "tribocosim.cosim.apps.monolithic.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
                 "doStep calls of both FMUs. Adaptive runs: Jacobi with extrapolation 1, initial step 0.01 s, "
                 f"min_step 1e-6 s, max_step 1 s. A run is stopped after {budget:g} s of wall time.")
     for curve, setting, s in _master_settings(settings.quick, (0.1, 0.05, 0.02, 0.01),
@@ -129,46 +119,24 @@ def oscillator(settings: Settings) -> Family:
             res = run_plan(load_scene(scene), budget=budget)
             t = res["time"]
             err = max_relative_error(t, res["columns"]["a.x1"], t, ref.solve(t)["a.x1"])
-            fam.rows.append(_master_row(curve, setting, res, err))
+            fam.rows.append(master_row(curve, setting, res, err))
         except Exception as exc:  # an unstable or failing setting is a data point, not a crash
-            fam.rows.append(_failed_row(curve, setting, exc))
+            fam.rows.append(failed_row(curve, setting, exc))
         settings.log(f"  oscillator {setting}: error {fam.rows[-1]['error']:.3g}")
     return fam
-
-
-def demo_scene_path() -> Path | None:
-    from tribocosim.components.paths import MODELS_DIR
-
-    p = MODELS_DIR / "scenes" / "demo.toml"
-    return p if p.is_file() else None
-
-
-def reference_factory():
-    """``reference_for_scene`` of issue 8, or raise Unavailable saying what is missing."""
-    try:
-        from tribocosim.cosim.reference_components import reference_for_scene
-    except ImportError as exc:
-        raise Unavailable(f"the monolithic reference of our components (cosim.reference_components, issue 8) "
-                          f"cannot be imported: {exc}") from None
-    return reference_for_scene
 
 
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml: master settings vs the monolithic reference."""
+    from tribocosim.cosim.apps.monolithic import reference_for_scene
     from tribocosim.cosim.reports.runner import run_plan
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     quick = settings.quick
     budget = 20.0 if quick else 60.0
     title = "Demo scene (press + strip + drawing machine): error of pull_force against wall time"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("demo", title, "models/scenes/demo.toml (issue 8) is missing")
-    try:
-        reference_for_scene = reference_factory()
-    except Unavailable as exc:
-        return Family.unavailable("demo", title, str(exc))
+    path = packaged_scene("demo")
     stop = 0.3 if quick else 1.76
     # 5e-5 s in both modes: at 1e-4 s the reference is itself ~6e-4 off at the start of the draw, and at
     # dt_ref = DEMO_INTERNAL_STEP the step-doubling rows' reference is the same run (computed once)
@@ -202,7 +170,7 @@ def demo(settings: Settings) -> Family:
                  summary_curves=("jacobi/1", "adaptive step-doubling", "adaptive energy"))
     fam.note = (f"demo.toml with stop = {stop} s{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
                 f"Error: max |F - F_ref| / max |F_ref| of strip.pull_force over the communication points; F_ref is the "
-                f"monolithic reference (cosim.reference_components.reference_for_scene: pure models, coupling solved every "
+                f"monolithic reference (cosim.apps.monolithic.reference_for_scene: pure models, coupling solved every "
                 f"step to {DEMO_REFERENCE_TOL:g}, dt_ref = {dt_ref:g} s, {ref_time:.1f} s to compute), interpolated linearly (the "
                 f"reference's own error at the start of the draw, measured against dt_ref = 2.5e-5 s: about 2e-4 at "
                 f"dt_ref = 5e-5 s, 6e-4 at 1e-4 s, so errors below 2e-4 are not resolved); error_after_ramps: the same "
@@ -215,7 +183,7 @@ def demo(settings: Settings) -> Family:
                 f"strip on its internal time grid, internal_step = {DEMO_INTERNAL_STEP:g} s, step_quantum the same, "
                 f"min_step {2 * DEMO_INTERNAL_STEP:g} s, so that one step H and two steps H/2 take the same strip intervals "
                 f"and the estimate sees the coupling error alone (without the grid the strip's first-order lag holds the "
-                f"error per unit step constant and the step collapses to min_step, issue 18); its error is against a "
+                f"error per unit step constant and the step collapses to min_step); its error is against a "
                 f"reference with the same internal_step ({grid_ref_note}). A run is stopped after {budget:g} s of wall "
                 f"time (error reported as inf, the status says so).")
     run_plan(load_scene(path, {"experiment.stop": 0.01}))  # warm-up: FMU extraction, imports, compilation
@@ -247,16 +215,16 @@ def demo(settings: Settings) -> Family:
             late = t >= T_STEADY
             err_late = (max_relative_error(t[late], f[late], t_ref, f_ref, scale=float(np.max(np.abs(f_ref))))
                         if late.any() else math.nan)
-            fam.rows.append(_master_row(curve, setting, res, err, error_after_ramps=err_late if not res["stopped"]
+            fam.rows.append(master_row(curve, setting, res, err, error_after_ramps=err_late if not res["stopped"]
                                         else math.inf, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
         except Exception as exc:
-            fam.rows.append(_failed_row(curve, setting, exc, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
+            fam.rows.append(failed_row(curve, setting, exc, internal_step=DEMO_INTERNAL_STEP if doubling else 0.0))
         settings.log(f"  demo {setting}: error {fam.rows[-1]['error']:.3g} in {fam.rows[-1]['wall_time']:.2f} s")
     return fam
 
 
 def _strip_run(integrator: str, n: int, draw: float, step: float = 1e-3):
-    from tribocosim.cosim.demo import run_strip_draw, steady_mean
+    from tribocosim.cosim.apps.demo import run_strip_draw, steady_mean
 
     t0 = time.perf_counter()
     _, outs, model = run_strip_draw(integrator=integrator, draw_length=draw, n_elements=n, step=step)
@@ -314,8 +282,8 @@ def surrogate(settings: Settings, result_file: str | Path | None = None) -> Fami
     cands = [Path(result_file)] if result_file else [root / c for c in SURROGATE_RESULTS]
     found = next((c for c in cands if c.is_file()), None)
     if found is None:
-        return Family.unavailable("surrogate", title, "no result of the hold-out measurement (benchmarks/bench_table.py, "
-                                  "issue 6) was found at " + ", ".join(_rel(c, root) for c in cands) + "; produce it with "
+        return Family.unavailable("surrogate", title, "no result of the hold-out measurement (benchmarks/bench_table.py) "
+                                  "was found at " + ", ".join(_rel(c, root) for c in cands) + "; produce it with "
                                   "`python benchmarks/bench_table.py --json docs/reports/bench_table.json` and rerun")
     data = json.loads(found.read_text())
     fam = Family("surrogate", title, curve="curve", error="error", cost="build_core_seconds", label="setting")
@@ -379,9 +347,6 @@ def bem(settings: Settings) -> Family:
                      "iterations": r.iterations, "contact_area_fraction": r.contact_area_fraction, "error": math.nan})
     return fam
 
-
-from tribocosim.cosim.reports.coupling_order import coupling_order  # noqa: E402 (issue 18, item 2; imports this lazily)
-from tribocosim.cosim.reports.iteration import near_pcrit  # noqa: E402 (issue 18, item 3; it imports this module lazily)
 
 #: report order: name -> family function
 FAMILIES = {"oscillator": oscillator, "demo": demo, "coupling_order": coupling_order, "near_pcrit": near_pcrit,

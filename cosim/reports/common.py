@@ -14,6 +14,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
+def packaged_scene(name: str) -> Path:
+    """A scene shipped with the package, ``models/scenes/<name>.toml``."""
+    from tribocosim.paths import SCENES_DIR
+
+    return SCENES_DIR / f"{name}.toml"
+
+
+def instance_of(plan, component: str) -> str | None:
+    """The first FMU instance of a validated plan whose scene names it ``component = "<component>"``, or None."""
+    from tribocosim.cosim.scene.component_checks import component_of
+
+    return next((n for n, s in plan.scene.fmus.items() if getattr(component_of(s), "name", None) == component), None)
+
+
 @dataclass(frozen=True)
 class Settings:
     """Settings shared by the families of one report run.

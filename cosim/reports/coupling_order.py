@@ -1,10 +1,10 @@
-"""Accuracy-report family ``coupling_order``: the order of the coupling error on the demo rig (issue 18, item 2).
+"""Accuracy-report family ``coupling_order``: the order of the coupling error on the demo rig.
 
 ``models/scenes/demo.toml`` with the strip on its internal time grid (``internal_step`` =
 :data:`INTERNAL_STEP`): friction, contact overlaps and debris are updated every internal step, also within
 a communication step H, and the native StripDraw FMU takes its inputs' time derivatives
 (``canInterpolateInputs``; the master passes the extrapolation polynomial's Taylor coefficients through
-``fmi2SetRealInputDerivatives``, :mod:`tribocosim.cosim.system`). The press and the drawing machine hold
+``fmi2SetRealInputDerivatives``, :mod:`tribocosim.cosim.engine.system`). The press and the drawing machine hold
 their inputs at the polynomial's mean over the step. The strip's own time discretization is then the same
 for every H, so what changes with H is the coupling alone, and its error is
 
@@ -27,7 +27,8 @@ import math
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, timed
+from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, timed
+from tribocosim.cosim.reports.runner import failed_row, master_row, run_plan
 
 #: the strip's internal step [s] (as the demo family's step-doubling rows)
 INTERNAL_STEP = 5e-5
@@ -52,15 +53,11 @@ def fitted_order(steps, errors) -> float:
 @timed
 def coupling_order(settings: Settings) -> Family:
     """The demo rig on the strip's internal grid: coupling error against the communication step, fitted order."""
-    from tribocosim.cosim.reports.accuracy import _failed_row, _master_row, demo_scene_path
     from tribocosim.cosim.reports.metrics import max_relative_error
-    from tribocosim.cosim.reports.runner import run_plan
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Demo rig, strip on its internal grid: coupling error against the communication step (order)"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("coupling_order", title, "models/scenes/demo.toml (issue 8) is missing")
+    path = packaged_scene("demo")
     steps = STEPS_QUICK if settings.quick else STEPS_FULL
     base = {"experiment.stop": STOP, "fmus.strip.parameters.internal_step": INTERNAL_STEP}
     fam = Family("coupling_order", title, curve="curve", error="error", cost="wall_time", label="setting")
@@ -75,7 +72,7 @@ def coupling_order(settings: Settings) -> Family:
         try:
             ref = run(INTERNAL_STEP)
         except Exception as exc:  # noqa: BLE001 - one failed curve is a row, not the end of the report
-            fam.rows.append(_failed_row(curve, f"{algorithm} q={q} h={INTERNAL_STEP:g} (reference)", exc))
+            fam.rows.append(failed_row(curve, f"{algorithm} q={q} h={INTERNAL_STEP:g} (reference)", exc))
             continue
         t_ref, f_ref = ref["time"], ref["columns"]["strip.pull_force"]
         late_ref = t_ref >= T_STEADY
@@ -88,10 +85,10 @@ def coupling_order(settings: Settings) -> Family:
                 t, f = res["time"], res["columns"]["strip.pull_force"]
                 late = t >= T_STEADY
                 err = max_relative_error(t[late], f[late], t_ref[late_ref], f_ref[late_ref], scale=scale)
-                fam.rows.append(_master_row(curve, setting, res, err, step=h,
-                                            error_whole_run=max_relative_error(t, f, t_ref, f_ref)))
+                fam.rows.append(master_row(curve, setting, res, err, step=h,
+                                           error_whole_run=max_relative_error(t, f, t_ref, f_ref)))
             except Exception as exc:  # noqa: BLE001
-                fam.rows.append(_failed_row(curve, setting, exc, step=h))
+                fam.rows.append(failed_row(curve, setting, exc, step=h))
             errors.append(fam.rows[-1]["error"])
             settings.log(f"  coupling_order {setting}: error {errors[-1]:.3g}")
         orders[curve] = fitted_order(steps, errors)

@@ -2,7 +2,7 @@
 
 ``tribocosim report paper --out DIR [--quick] [--table T] [--workers N]``
 
-Every figure is a set of strip-draw tests (:mod:`tribocosim.cosim.stripdraw_test`: V0 = 0.08 m/s,
+Every figure is a set of strip-draw tests (:mod:`tribocosim.cosim.apps.stripdraw_experiment`: V0 = 0.08 m/s,
 140 mm draw, mu_bar the mean of mu = pull_force / (2 F_N) (Eq. 1) over the last 20 %) with the pure
 model and the friction law mu = mu0 (1 - s A_p / A_c) (Eq. 7 with Eq. 6; docs/model.md section 4):
 
@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.components.errors import TribocosimError
-from tribocosim.cosim.stripdraw_test import V0, Point, draw, run_points
+from tribocosim.errors import TribocosimError
+from tribocosim.cosim.apps.stripdraw_experiment import V0, Point, draw, run_points
 
 PAPER_DROP_1PASS = 0.35  # Sec. 2.1: 35 % at 25 MPa after one pass, 35 x 35 mm pad
 PAPER_DROP_3PASS = 0.72  # Sec. 2.1: "up to 72 % at 25 MPa" after three passes
@@ -373,7 +373,7 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
                      f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
                      f"{cal.stderr_ensemble:.3g}); drop reached {_pct(cal.drop)} in {cal.evaluations} strip-draw "
                      "tests.")
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
 
     shipped = Path(table_path).resolve() == Path(DEFAULT_TABLE).resolve()
     table_text = "`models/friction_table.npz` (the shipped one)" if shipped else f"`{table_path}`"
@@ -392,7 +392,7 @@ FIGURES = {  # name: (title, series key, legend label)
 
 def plot(results: dict, out: Path) -> list[str]:
     """One PNG per figure, one panel per configuration."""
-    from tribocosim.cosim.plotting import _pyplot
+    from tribocosim.cosim.apps.plotting import _pyplot
 
     plt = _pyplot()
     names = []
@@ -421,8 +421,8 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv and the figures."""
     import csv
 
-    from tribocosim.components.errors import ParameterError
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.errors import ParameterError
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table
 
     grid = QUICK if quick else FULL

@@ -1,12 +1,12 @@
 """Judged runs: a scene run through the master under the stability criterion, with early stops.
 
 :func:`judged_run` builds the master from a validated plan (:func:`tribocosim.cosim.api.build`) and advances
-it step by step like :meth:`tribocosim.cosim.master.Master.run`, but every ``check_every`` accepted steps it
+it step by step like :meth:`tribocosim.cosim.engine.master.Master.run`, but every ``check_every`` accepted steps it
 reads the recorded outputs and stops early when one is non-finite or beyond the bound (an unstable
 run would otherwise grow until the FMUs slow down or fail), or when the wall-time budget is
 spent (the verdict is then taken on the part run, and says so). The verdict is
-:func:`tribocosim.cosim.reports.stability.classify` on the recorded outputs; a master error
-(:class:`~tribocosim.components.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
+:func:`tribocosim.cosim.reports.stability_criterion.classify` on the recorded outputs; a master error
+(:class:`~tribocosim.errors.CosimStepError`, an FMU error) gives an "error" verdict with the message.
 A fixed-step run in which the master had to halve a step (a discarded step or a non-finite output,
 retried by rollback) is unstable at the requested step, whatever the outputs.
 """
@@ -18,7 +18,22 @@ import time
 
 import numpy as np
 
-from tribocosim.cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify
+from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify
+
+
+def master_row(curve, setting, res, err, **extra) -> dict:
+    """A report row from :func:`run_plan`'s dict and the run's error."""
+    status = "ok" if not res["stopped"] else res["stopped"]
+    return {"curve": curve, "setting": setting, "error": err if not res["stopped"] else math.inf,
+            "wall_time": res["wall_time"], "do_steps": res["do_steps"], "steps": res["steps"],
+            "rejected": res["rejected"], "iterations": res["iterations"], "status": status, **extra}
+
+
+def failed_row(curve, setting, exc, **extra) -> dict:
+    """The report row of a run that raised ``exc``."""
+    msg = " ".join(str(exc).split())[:200]
+    return {"curve": curve, "setting": setting, "error": math.inf, "wall_time": math.nan, "do_steps": 0,
+            "steps": 0, "rejected": 0, "iterations": 0, "status": f"error: {type(exc).__name__}: {msg}", **extra}
 
 
 def run_plan(plan, *, budget: float = math.inf, monitor=None, check_every: int = 10) -> dict:

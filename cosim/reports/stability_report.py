@@ -1,8 +1,8 @@
 """Stability families of ``tribocosim report stability``: a matrix of cases x schemes, one function per family.
 
 Every cell runs the case with the scheme at its nominal step and judges the run with the
-criterion of :mod:`tribocosim.cosim.reports.stability` (stable / unstable with the reason / error with the
-message), and finds the largest stable step by bisection (:func:`~tribocosim.cosim.reports.stability.largest_stable_step`).
+criterion of :mod:`tribocosim.cosim.reports.stability_criterion` (stable / unstable with the reason / error with the
+message), and finds the largest stable step by bisection (:func:`~tribocosim.cosim.reports.stability_criterion.largest_stable_step`).
 
 ``oscillator``
     The linear two-mass oscillator (FMUs of the tests), coupling stiffness k2 from 10 to 1e7 N/m;
@@ -11,7 +11,7 @@ message), and finds the largest stable step by bisection (:func:`~tribocosim.cos
     The Jacobi/0 column also shows the limit predicted from the exact one-step map
     (:mod:`tribocosim.cosim.reports.monodromy`).
 ``stiff_drive``
-    ``models/scenes/stiff_drive.toml`` (issue 8) with the drawing machine's drive stiffness
+    ``models/scenes/stiff_drive.toml`` with the drawing machine's drive stiffness
     from 1e4 to 1e9 N/m. Bound: |pull_force| <= 10 x (2 mu0 F_N + 2 rho c A V0) (friction capacity plus the
     force of the elastic wave a velocity step launches) and |grip_velocity| <= 10 x the set-point.
 ``demo``
@@ -29,13 +29,12 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, scratch, timed
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
-from tribocosim.cosim.reports.stability import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
+from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
 
 CRITERION = Criterion()
 #: a bisection through the master never tries steps longer than the run / MIN_STEPS (fewer points cannot show growth)
@@ -76,7 +75,7 @@ def _cell_row(case: str, scheme: str, verdict: Verdict, limit, **extra) -> dict:
 
 # --------------------------------------------------------------------------- oscillator
 def _fast_period(k2: float) -> float:
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
 
     lam = np.linalg.eigvals(TwoMassOscillator(k2=k2).matrix())
     return 2 * math.pi / float(np.max(np.abs(lam.imag)))
@@ -85,10 +84,10 @@ def _fast_period(k2: float) -> float:
 @timed
 def oscillator(settings: Settings) -> Family:
     """Two-mass oscillator, k2 = 10 ... 1e7: schemes x stiffness."""
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.monodromy import jacobi0_limit
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Two-mass oscillator: coupling stiffness k2 x scheme"
     try:
@@ -143,7 +142,7 @@ def _component_scales(plan) -> dict[str, float]:
     spring the carriage (mass m) forward with the pull force F it held, which near p_crit is far above the
     set-point (measured: the monolithic reference reaches 13 x the set-point at 0.99 p_crit; F / sqrt(k_d m)
     there is 15 x). Set-point and parameters from the scene or the defaults."""
-    from tribocosim.cosim.reference_components import component_of
+    from tribocosim.cosim.scene.component_checks import component_of
 
     found = {name: comp for name, spec in plan.scene.fmus.items() if (comp := component_of(spec)) is not None}
     params = {name: comp.split(plan.scene.fmus[name].parameters)[0] for name, comp in found.items()}
@@ -163,16 +162,10 @@ def _component_scales(plan) -> dict[str, float]:
     return scales
 
 
-def _instance(plan, component: str) -> str | None:
-    from tribocosim.cosim.reference_components import component_of
-
-    return next((n for n, s in plan.scene.fmus.items() if getattr(component_of(s), "name", None) == component), None)
-
-
 def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget):
     """Run each (case overrides) x scheme at the scene step, bisect the step; append rows."""
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     for case, over, step in cases:
         for alg, q in schemes:
@@ -197,25 +190,16 @@ def _scene_cells(settings, fam, path, cases, schemes, stop, lo, hi, rel, budget)
                          + (f"; limit {lim.describe()}" if lim else "") + f" ({time.perf_counter() - t0:.1f} s)")
 
 
-def stiff_drive_path() -> Path | None:
-    from tribocosim.components.paths import MODELS_DIR
-
-    p = MODELS_DIR / "scenes" / "stiff_drive.toml"
-    return p if p.is_file() else None
-
-
 @timed
 def stiff_drive(settings: Settings) -> Family:
     """stiff_drive.toml: drive stiffness 1e4 ... 1e9 N/m x scheme."""
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Stiff drive: drivetrain stiffness x scheme (stiff_drive.toml)"
-    path = stiff_drive_path()
-    if path is None:
-        return Family.unavailable("stiff_drive", title, "models/scenes/stiff_drive.toml (issue 8) is missing")
+    path = packaged_scene("stiff_drive")
     try:
         plan = load_scene(path)
-        drive = _instance(plan, "drawingmachine")
+        drive = instance_of(plan, "drawingmachine")
     except Exception as exc:
         return Family.unavailable("stiff_drive", title, f"stiff_drive.toml does not load: {exc}")
     if drive is None:
@@ -239,16 +223,13 @@ def stiff_drive(settings: Settings) -> Family:
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml through the master: nominal, P_N near p_crit, grip velocity 0, one step for the whole draw."""
-    from tribocosim.cosim.reports.accuracy import demo_scene_path
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     title = "Demo scene through the master: extreme inputs x scheme"
-    path = demo_scene_path()
-    if path is None:
-        return Family.unavailable("demo", title, "models/scenes/demo.toml (issue 8) is missing")
+    path = packaged_scene("demo")
     try:
         plan = load_scene(path)
-        press, strip, drive = (_instance(plan, c) for c in ("press", "stripdraw", "drawingmachine"))
+        press, strip, drive = (instance_of(plan, c) for c in ("press", "stripdraw", "drawingmachine"))
     except Exception as exc:
         return Family.unavailable("demo", title, f"demo.toml does not load: {exc}")
     if None in (press, strip, drive):
@@ -326,7 +307,7 @@ def pull_force_scale(p, normal_force: float, velocity: float = 0.08) -> float:
 def strip_run(params: dict, pressure: float, profile: str, draw: float, integrator: str, step: float,
               budget: float = 120.0):
     """Run the pure model; return (verdict, info). ``step`` is the model step (the whole draw allowed)."""
-    from tribocosim.components.errors import TribocosimError
+    from tribocosim.errors import TribocosimError
     from tribocosim.components.stripdraw.component import COMPONENT
 
     v0, ramp_time = 0.08, 0.01

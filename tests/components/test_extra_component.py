@@ -13,7 +13,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 
 
 def _scene(folder, tau=0.01, gain=2.0, step=1e-3):
@@ -40,7 +40,8 @@ def _scene(folder, tau=0.01, gain=2.0, step=1e-3):
 
 def test_a_registered_component_builds_checks_runs_and_has_a_reference(tmp_path, lag_component, monkeypatch):
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.reference_components import load_component_scene, reference_for_scene
+    from tribocosim.cosim.apps.monolithic import reference_for_scene
+    from tribocosim.cosim.scene.component_checks import load_component_scene
 
     monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "cache"))
     # the scene checks know its parameters: a bad one is reported by name before anything runs

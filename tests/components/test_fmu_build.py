@@ -1,4 +1,4 @@
-"""tribocosim.components.fmus.build and ``tribocosim fmu``: what goes into an FMU, and the failures that name their cause."""
+"""tribocosim.components.fmus.python_build and ``tribocosim fmu``: what goes into an FMU, and the failures that name their cause."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from tribocosim.components.fmus import build, cli
+from tribocosim.components.fmus import fmu_cli, python_build
 
 
 
 def _modules(name: str) -> set[str]:
-    return set(build.runtime_modules(name))
+    return set(python_build.runtime_modules(name))
 
 
 def test_runtime_modules_are_the_import_closure_of_the_adapter():
@@ -22,7 +22,7 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
     must = {
         "tribocosim",
         "tribocosim.components",
-        "tribocosim.components.errors",
+        "tribocosim.errors",
         "tribocosim.components.fmus",
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.stripdraw",
@@ -30,13 +30,13 @@ def test_runtime_modules_are_the_import_closure_of_the_adapter():
         "tribocosim.components.stripdraw.friction",
         "tribocosim.components.stripdraw.table",
         "tribocosim.components.stripdraw.parameters",
-        "tribocosim.components.native.library",
+        "tribocosim.components.native.toolchain.library",
     }
     assert must <= mods, sorted(must - mods)
     assert all(m.startswith("tribocosim") for m in mods), sorted(mods)
-    assert not mods & {"tribocosim.components.fmus.build", "tribocosim.components.fmus.cli",
-                       "tribocosim.components.paths", "tribocosim.cosim", "tribocosim.surrogate"}
-    files = build.runtime_files("StripDraw")
+    assert not mods & {"tribocosim.components.fmus.python_build", "tribocosim.components.fmus.fmu_cli",
+                       "tribocosim.paths", "tribocosim.cosim", "tribocosim.surrogate"}
+    files = python_build.runtime_files("StripDraw")
     assert all(f.suffix == ".py" and f.is_file() for f in files)
 
 
@@ -45,14 +45,15 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
     assert _modules(name) == {
         "tribocosim",
         "tribocosim.components",
-        "tribocosim.components.errors",
+        "tribocosim.errors",
         "tribocosim.components.params",
         "tribocosim.components.description",
         "tribocosim.components.native",  # the binding of the native core (built by the FMU's builder)
-        "tribocosim.components.native.library",
-        "tribocosim.components.native.linear_model",
-        "tribocosim.components.native.declarations",
         "tribocosim.components.native.toolchain",
+        "tribocosim.components.native.toolchain.library",
+        "tribocosim.components.native.toolchain.compiler",
+        "tribocosim.components.native.toolchain.declarations",
+        "tribocosim.components.linear_model",
         "tribocosim.components.registry",
         f"tribocosim.components.{model}",
         f"tribocosim.components.{model}.component",
@@ -63,9 +64,9 @@ def test_press_and_machine_bundle_their_model_and_the_shared_plumbing_only(name,
         "tribocosim.components.fmus.statecodec",
         "tribocosim.components.fmus.exitguard",
         "tribocosim.components.fmus.modeldescription",
-        "tribocosim.components.lazy",
+        "tribocosim.lazy",
     }
-    assert build.component(name).resources == (), "no friction table"
+    assert python_build.component(name).resources == (), "no friction table"
     assert "tribocosim.components.fmus.adapter" in _modules("StripDraw"), "StripDraw uses the same adapter plumbing"
 
 
@@ -73,7 +74,7 @@ EXTRA = Path(__file__).resolve().parent / "extra"
 
 
 def test_a_registered_component_is_an_fmu_with_its_own_modules_bundled(lag_component):
-    assert build.fmus()["Lag"] is lag_component
+    assert python_build.fmus()["Lag"] is lag_component
     mods = _modules("Lag")
     assert {"lagcomponent", "lagcomponent.component", "lagcomponent.model",
             "tribocosim.components.fmus.adapter", "tribocosim.components.description"} <= mods
@@ -104,26 +105,26 @@ def _lag_copy(tmp_path, monkeypatch, name: str, resources: str = "", solver: boo
 
 def test_missing_module_or_data_file_fails_the_build_naming_it(tmp_path, monkeypatch):
     _lag_copy(tmp_path, monkeypatch, "lagnodata", resources='(("lagnodata", "absent.npz"),)')
-    with pytest.raises(build.FmuBuildError, match=r"FMU Lag: required file .*absent\.npz is missing"):
-        build.build_fmus(tmp_path / "out", names=["Lag"])
+    with pytest.raises(python_build.FmuBuildError, match=r"FMU Lag: required file .*absent\.npz is missing"):
+        python_build.build_fmus(tmp_path / "out", names=["Lag"])
     _lag_copy(tmp_path, monkeypatch, "lagnomodel", solver=True)
-    with pytest.raises(build.FmuBuildError, match=r"missing modules: lagnomodel\.solver"):
-        build.build_fmus(tmp_path / "out", names=["Lag"])
+    with pytest.raises(python_build.FmuBuildError, match=r"missing modules: lagnomodel\.solver"):
+        python_build.build_fmus(tmp_path / "out", names=["Lag"])
     assert not list((tmp_path / "out").glob("*.fmu")), "a failed build left an FMU behind"
 
 
 def test_every_fmu_is_checked_before_any_is_built(tmp_path, monkeypatch):
     _lag_copy(tmp_path, monkeypatch, "lagcheck", solver=True)
     missing = r"FMU Lag: the adapter imports missing modules: lagcheck\.solver"
-    with pytest.raises(build.FmuBuildError, match=missing):
-        build.build_fmus(tmp_path / "out", names=["Press", "Lag"])
+    with pytest.raises(python_build.FmuBuildError, match=missing):
+        python_build.build_fmus(tmp_path / "out", names=["Press", "Lag"])
     assert not list((tmp_path / "out").glob("*.fmu")), "Press was built although the build failed"
 
 
 def test_unknown_fmu_name_is_refused_before_building(tmp_path):
     known = "DrawingMachine, Press, StripDraw"
-    with pytest.raises(build.FmuBuildError, match=f"unknown FMU 'Nope'; this project builds: {known}"):
-        build.build_fmus(tmp_path, names=["StripDraw", "Nope"])
+    with pytest.raises(python_build.FmuBuildError, match=f"unknown FMU 'Nope'; this project builds: {known}"):
+        python_build.build_fmus(tmp_path, names=["StripDraw", "Nope"])
     assert list(tmp_path.iterdir()) == []
 
 
@@ -131,26 +132,26 @@ def test_build_record_holds_the_source_digest(built_fmus):
     for name, fmu in built_fmus.items():
         record = json.loads(Path(f"{fmu}.json").read_text())
         assert record["name"] == name
-        assert record["source_digest"] == build.source_digest(name)
+        assert record["source_digest"] == python_build.source_digest(name)
     assert not list(fmu.parent.glob(".*partial*")), "partial files left behind"
 
 
 def test_source_digest_changes_with_any_bundled_file(tmp_path, monkeypatch):
     pkg, _ = _lag_copy(tmp_path, monkeypatch, "lagdigest", resources='(("lagdigest", "data.bin"),)')
     (pkg / "data.bin").write_bytes(b"first")
-    before = build.source_digest("Lag")
+    before = python_build.source_digest("Lag")
     (pkg / "data.bin").write_bytes(b"second")
-    assert build.source_digest("Lag") != before, "the resource file is covered"
-    before = build.source_digest("Lag")
+    assert python_build.source_digest("Lag") != before, "the resource file is covered"
+    before = python_build.source_digest("Lag")
     (pkg / "model.py").write_text((pkg / "model.py").read_text() + "\n# edited\n")
-    assert build.source_digest("Lag") != before, "the model module is covered"
-    press = build.source_digest("Press")
-    assert build.source_digest("Press") == press and press != build.source_digest("StripDraw")
+    assert python_build.source_digest("Lag") != before, "the model module is covered"
+    press = python_build.source_digest("Press")
+    assert python_build.source_digest("Press") == press and press != python_build.source_digest("StripDraw")
 
 
 def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert cli.main(["build", "--python", "--out", "rel/fmus"]) == 0
+    assert fmu_cli.main(["build", "--python", "--out", "rel/fmus"]) == 0
     printed = capsys.readouterr().out.split()
     names = ("DrawingMachine", "Press", "StripDraw")
     assert printed == [str(tmp_path / "rel" / "fmus" / f"{name}.fmu") for name in names]
@@ -158,11 +159,11 @@ def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
 
 
 def test_cli_lists_and_reports_errors(capsys, tmp_path):
-    assert cli.main(["list"]) == 0
+    assert fmu_cli.main(["list"]) == 0
     assert capsys.readouterr().out.split() == [
         "DrawingMachine", "tribocosim.components.machine.component",
         "Press", "tribocosim.components.press.component",
         "StripDraw", "tribocosim.components.stripdraw.component",
     ]  # fmt: skip
-    assert cli.main(["build", "--python", "--out", str(tmp_path), "--only", "Nope"]) == 1
+    assert fmu_cli.main(["build", "--python", "--out", str(tmp_path), "--only", "Nope"]) == 1
     assert "unknown FMU 'Nope'" in capsys.readouterr().err

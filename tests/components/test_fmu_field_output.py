@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from tribocosim.components.stripdraw.fields import read_fields
+from tribocosim.components.native.resource_io.field_file import read_fields
 import pytest
 from fmpy.fmi1 import FMICallException
 from numpy.testing import assert_array_equal
 
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 
 CHEAP = {"n_elements": 60, "draw_length": 0.02, "tool_length": 0.035}
 F10 = 10e6 * 0.035 * 0.035

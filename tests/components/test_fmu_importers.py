@@ -67,7 +67,7 @@ _VENV_SCRIPT = textwrap.dedent(
         results.append(rows)
         s.terminate()
         s.freeInstance()
-    import tribocosim.components.native.library as library
+    import tribocosim.components.native.toolchain.library as library
     print(json.dumps({
         "results": results,
         "unzipped": str(unzipped),

@@ -175,7 +175,7 @@ def test_every_unit_is_defined_with_its_si_base_units(fmu_description, fmu):
 
 @pytest.mark.parametrize("fmu", SPECS)
 def test_fmu_bundles_only_its_import_closure(built_fmus, fmu):
-    from tribocosim.components.fmus.build import resource_paths
+    from tribocosim.components.fmus.python_build import resource_paths
 
     with zipfile.ZipFile(built_fmus[fmu]) as z:
         names = set(z.namelist())

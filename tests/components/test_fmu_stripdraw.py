@@ -128,7 +128,7 @@ def test_variables_follow_the_parameter_dataclass(stripdraw_fmu_description):
 def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     import zipfile
 
-    from tribocosim.components.fmus.build import resource_paths
+    from tribocosim.components.fmus.python_build import resource_paths
 
     with zipfile.ZipFile(stripdraw_fmu_file) as z:
         names = set(z.namelist())
@@ -136,8 +136,9 @@ def test_fmu_bundles_only_the_runtime_files(stripdraw_fmu_file):
     ours = {n for n in names if n.startswith("resources/") and not n.startswith("resources/pythonfmu/")}
     closure = {"resources/" + p for p in resource_paths("StripDraw")}
     assert ours == closure | {"resources/StripDraw.py", "resources/friction_table.npz", "resources/slavemodule.txt"}
-    assert "resources/tribocosim/components/native/libtc_core.so" in ours, "the native core it binds"
-    for module in ("errors", "fmus/statecodec", "stripdraw/model", "stripdraw/friction", "stripdraw/table"):
+    assert "resources/tribocosim/components/native/toolchain/libtc_core.so" in ours, "the native core it binds"
+    assert "resources/tribocosim/errors.py" in ours
+    for module in ("fmus/statecodec", "stripdraw/model", "stripdraw/friction", "stripdraw/table"):
         assert f"resources/tribocosim/components/{module}.py" in ours, module
     assert bundled_table == TABLE.read_bytes()
     assert read_table(TABLE).provenance == "mesoscale"
@@ -335,7 +336,7 @@ def test_bad_input_discards_the_step_and_keeps_the_state(stripdraw_fmu_instance,
 )
 def test_bad_parameter_makes_the_instance_refuse_to_step_and_names_it(stripdraw_fmu_instance, name, value, shown):
     """pythonfmu 0.7.0 cannot fail fmi2ExitInitializationMode without breaking the process
-    (see components/fmus/StripDraw.py), so the error is logged there and every doStep is
+    (see components/fmus/adapter.py), so the error is logged there and every doStep is
     discarded with the same message."""
     inst = stripdraw_fmu_instance("bad-parameter", {name: value})
     inst.initialize()

@@ -1,18 +1,18 @@
-"""The native core library behind the Python models (components/native/library.py): built from the FMUs' sources
+"""The native core library behind the Python models (components/native/toolchain/library.py): built from the FMUs' sources
 into the cache, found there by a digest of what it is made of, and a clear error when it cannot be built."""
 
 from __future__ import annotations
 
 import pytest
 
-from tribocosim.components.native import library, toolchain
+from tribocosim.components.native.toolchain import compiler, library
 
 
 def test_a_library_that_cannot_be_built_says_what_failed(tmp_path, monkeypatch):
     def no_compiler():
-        raise toolchain.CompileError("the C compiler package 'ziglang' is not installed (pip install ziglang)")
+        raise compiler.CompileError("the C compiler package 'ziglang' is not installed (pip install ziglang)")
 
-    monkeypatch.setattr(toolchain, "zig_command", no_compiler)
+    monkeypatch.setattr(compiler, "zig_command", no_compiler)
     with pytest.raises(library.CoreBuildError, match="native core library cannot be built: the C compiler package "
                                                      "'ziglang' is not installed"):
         library.build(tmp_path / "libtc_core.so")
@@ -64,7 +64,7 @@ def test_a_step_whose_newton_iteration_stalls_is_halved(few_newton_iterations, m
 
 
 def test_a_step_that_cannot_converge_is_refused_with_the_state_unchanged(few_newton_iterations, monkeypatch):
-    from tribocosim.components.errors import ConvergenceError
+    from tribocosim.errors import ConvergenceError
 
     m2, _ = _draw_on(few_newton_iterations(0), monkeypatch, 0)  # no iteration allowed: it fails after 12 halvings
     before = m2.get_state()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.machine import MachineModel, MachineParameters
 from tribocosim.components.press import PressModel, PressParameters
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw.friction import closed_form_law, closed_form_table, make_friction_law
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
@@ -100,7 +100,7 @@ def test_closed_form_without_a_velocity_law_uses_alpha_b_and_its_cap():
 
 
 def test_closed_form_default_alpha_is_the_shipped_campaigns_at_its_slowest_velocity():
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table
 
     fit = read_table(DEFAULT_TABLE).metadata["fits"]["alpha_per_velocity"][0]

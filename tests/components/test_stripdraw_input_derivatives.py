@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters

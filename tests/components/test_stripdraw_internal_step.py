@@ -13,8 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import ParameterError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import make_friction_law
 from tribocosim.components.stripdraw.model import StripDrawModel
 from tribocosim.components.stripdraw.parameters import StripDrawParameters

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
 
 PAD = 0.035

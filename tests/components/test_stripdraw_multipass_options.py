@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import ParameterError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 from tribocosim.components.stripdraw.table import FrictionTable
 

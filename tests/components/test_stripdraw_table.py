@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError, TableDomainError, TableError
+from tribocosim.errors import ParameterError, TableDomainError, TableError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
@@ -115,7 +115,7 @@ def test_closed_form_table_says_where_it_comes_from():
 
 
 def test_make_table_writes_the_closed_form_but_never_over_the_shipped_table(tmp_path, capsys):
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw import make_table
 
     shipped = DEFAULT_TABLE.read_bytes()

@@ -4,7 +4,7 @@ advection speed zeta U_dot, no flux across the pad's edges."""
 import numpy as np
 from numpy.testing import assert_allclose
 
-from tribocosim.components.native.library import core, ptr
+from tribocosim.components.native.toolchain.library import core, ptr
 
 
 def advect_implicit(beta, dU, weight, zeta, element_length):

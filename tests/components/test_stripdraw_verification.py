@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 
 P = 1e7  # Pa

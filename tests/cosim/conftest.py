@@ -21,7 +21,7 @@ SCRIPTS = HERE / "fmus"
 NAMES = ("OscMassA", "OscMassB", "LoopGain", "Fragile")
 NOSTATE = ("OscMassA", "OscMassB", "Fragile")
 
-#: the exact solution of the reference two-mass oscillator at t = 10 s (issue 7)
+#: the exact solution of the reference two-mass oscillator at t = 10 s
 X1_EXACT = 0.051040814057
 X2_EXACT = 0.031641338373
 

@@ -13,7 +13,7 @@ rho >= 1.
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ConvergenceError, RunFailed
+from tribocosim.errors import ConvergenceError, RunFailed
 from tribocosim.cosim import run
 
 
@@ -83,7 +83,7 @@ def test_fixed_point_iteration_converges_where_the_loop_contracts(tmp_path, make
 
 
 def test_fixed_point_iteration_reports_divergence_without_contraction(tmp_path, make_scene, fmu_dir):
-    with pytest.raises(RunFailed) as info:  # the run stops and keeps its work (issue 18, item 4)
+    with pytest.raises(RunFailed) as info:  # the run stops and keeps its work
         run(loop_scene(make_scene, tmp_path, fmu_dir, 2.0), write=False)
     assert isinstance(info.value.__cause__, ConvergenceError)
     msg = str(info.value)

@@ -1,4 +1,4 @@
-"""Tests of cosim.algorithms.
+"""Tests of cosim.engine.algorithms.
 
 - with the real test FMUs: the two-mass oscillator split into two FMUs (force-displacement
   coupling); the error at t = 10 against the exact solution falls at order q + 1 for
@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 
 from tribocosim.cosim import run
-from tribocosim.cosim.algorithms import GaussSeidel, IterativeCoupling, Jacobi
-from tribocosim.cosim.master import Master
-from tribocosim.cosim.recorder import Recorder
-from tribocosim.cosim.algorithms import Iterative
-from tribocosim.cosim.scene import VariableRef
-from tribocosim.cosim.slave import OK
-from tribocosim.cosim.stepcontrol import FixedStep
-from tribocosim.cosim.system import CoupledSystem, LinkSpec
-from tribocosim.cosim.timegrid import TimeGrid
+from tribocosim.cosim.engine.algorithms import GaussSeidel, IterativeCoupling, Jacobi
+from tribocosim.cosim.engine.master import Master
+from tribocosim.cosim.engine.recorder import Recorder
+from tribocosim.cosim.engine.algorithms import Iterative
+from tribocosim.cosim.engine.system import VariableRef
+from tribocosim.cosim.engine.slave import OK
+from tribocosim.cosim.engine.stepcontrol import FixedStep
+from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.engine.timegrid import TimeGrid
 
 SWEEPS = {0: [0.01, 0.005, 0.0025], 1: [0.02, 0.01, 0.005], 2: [0.04, 0.02, 0.01]}
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, write_table
-from tribocosim.cosim.calibrate import main, read_measurements
-from tribocosim.cosim.stripdraw_test import Point, run_points
+from tribocosim.cosim.apps.calibrate import main, read_measurements
+from tribocosim.cosim.apps.stripdraw_experiment import Point, run_points
 
 #: a coarse strip (fast) with enough debris for a visible effect; Eq. 23 with alpha = 40
 FAST = {"n_elements": 60, "draw_length": 0.02, "archard_k": 5e-4, "contact_area": "eq8"}

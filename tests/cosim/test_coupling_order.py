@@ -1,4 +1,4 @@
-"""Second-order coupling on a stripped-down demo rig (issue 18, item 2), through the native FMUs and the master.
+"""Second-order coupling on a stripped-down demo rig, through the native FMUs and the master.
 
 The demo scene shortened to 0.25 s with a coarse strip (80 elements) on its internal grid (internal_step =
 1e-4 s): friction, contact and debris follow the inputs within a communication step H, and the strip takes
@@ -16,11 +16,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.paths import MODELS_DIR
+from tribocosim.paths import MODELS_DIR
 from tribocosim.cosim.reports.coupling_order import fitted_order
 from tribocosim.cosim.reports.metrics import max_relative_error
 from tribocosim.cosim.reports.runner import run_plan
-from tribocosim.cosim.validate import load_scene
+from tribocosim.cosim.scene.validate import load_scene
 
 TAU = 1e-4
 STOP = 0.25

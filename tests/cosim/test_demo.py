@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from fmpy.util import read_csv
 
-from tribocosim.cosim import demo
+from tribocosim.cosim.apps import demo
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -47,7 +47,7 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
         f = tmp_path / "demo" / name
         assert f.is_file() and f.stat().st_size > 20_000, name
         assert str(f) in out, f"{name} location printed"
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     field = read_fields(tmp_path / "demo" / "beta_field.csv")
     assert field["beta"].shape == (177, field["X"].size), "rows every 10 ms (+ t = 0)"
@@ -61,12 +61,12 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
 def test_demo_says_why_when_the_fmus_cannot_be_built(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "empty"))
 
-    from tribocosim.components.fmus import build, native
+    from tribocosim.components.fmus import native_build, python_build
 
     def build_native_fmus(out_dir, names=None, platforms=None):
-        raise build.FmuBuildError("compiling Press.so for linux64 failed (exit 1): no C compiler found")
+        raise python_build.FmuBuildError("compiling Press.so for linux64 failed (exit 1): no C compiler found")
 
-    monkeypatch.setattr(native, "build_native_fmus", build_native_fmus)
+    monkeypatch.setattr(native_build, "build_native_fmus", build_native_fmus)
     assert demo.main(["--out", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err
     assert "the FMUs could not be built" in err and "no C compiler found" in err and "Press.fmu" in err, err

@@ -1,9 +1,9 @@
-"""Tests of cosim.extrapolation against numpy.polyfit (oracle) and exact integrals."""
+"""Tests of cosim.engine.extrapolation against numpy.polyfit (oracle) and exact integrals."""
 
 import numpy as np
 import pytest
 
-from tribocosim.cosim.extrapolation import History, StepPolynomial, taylor_coefficients
+from tribocosim.cosim.engine.extrapolation import History, StepPolynomial, taylor_coefficients
 
 
 @pytest.mark.parametrize("taus", [[0.0], [0.0, -0.1], [0.0, -0.1, -0.25], [0.3, 0.0, -0.05]])

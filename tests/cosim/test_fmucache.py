@@ -1,4 +1,4 @@
-"""Tests of cosim.fmucache (``component = "..."`` scenes) and of a StripDraw scene end to end.
+"""Tests of cosim.scene.fmucache (``component = "..."`` scenes) and of a StripDraw scene end to end.
 
 The cache logic is tested with the test component ``lag`` (tests/components/extra); the
 StripDraw path builds the project's StripDraw FMU and runs ``tribocosim run`` on it in a subprocess.
@@ -13,14 +13,14 @@ from pathlib import Path
 import pytest
 from fmpy.util import read_csv
 
-from tribocosim.components.errors import SceneError
-from tribocosim.cosim import fmucache
+from tribocosim.errors import SceneError
+from tribocosim.cosim.scene import fmucache
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_component_is_built_once_and_cached(tmp_path, lag_component):
-    from tribocosim.components.fmus import build
+    from tribocosim.components.fmus import python_build
 
     cache = tmp_path / "cache"
     first = fmucache.component_fmu("lag", cache=cache)
@@ -28,7 +28,7 @@ def test_component_is_built_once_and_cached(tmp_path, lag_component):
     second = fmucache.component_fmu("LAG", cache=cache)
     assert first == second and first.is_file() and first.parent.parent == cache
     assert second.stat().st_mtime_ns == stamp, "the second request uses the cache"
-    assert first.parent.name == f"Lag-python-{build.source_digest('Lag')[:16]}", "keyed by the source digest"
+    assert first.parent.name == f"Lag-python-{python_build.source_digest('Lag')[:16]}", "keyed by the source digest"
     assert not [p for p in cache.iterdir() if p.name.startswith(".")], "no temporary folders left"
 
 

@@ -1,10 +1,10 @@
-"""Tests of cosim.graph: SCCs against a reachability oracle, Gauss-Seidel order, algebraic loops."""
+"""Tests of cosim.engine.graph: SCCs against a reachability oracle, Gauss-Seidel order, algebraic loops."""
 
 import itertools
 
 import numpy as np
 
-from tribocosim.cosim.graph import algebraic_loops, evaluation_order, gauss_seidel_order, strongly_connected
+from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order, gauss_seidel_order, strongly_connected
 
 
 def _reach(n, edges):

@@ -1,4 +1,4 @@
-"""Iterative coupling of the demo rig at 0.99 p_crit (issue 18, item 3), through the native FMUs.
+"""Iterative coupling of the demo rig at 0.99 p_crit, through the native FMUs.
 
 The press closes the pads with 0.99 x 340 MPa x 35 mm x 35 mm = 412335 N; the strip takes the closed-form
 friction law (Eq. 9), because the shipped friction table's pressure axis does not reach 337 MPa (the scene
@@ -29,11 +29,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ConvergenceError, RunFailed
-from tribocosim.components.paths import scene_file
+from tribocosim.errors import ConvergenceError, RunFailed
+from tribocosim.paths import scene_file
 from tribocosim.cosim.api import run
-from tribocosim.cosim.reference_components import reference_for_scene
-from tribocosim.cosim.validate import load_scene
+from tribocosim.cosim.apps.monolithic import reference_for_scene
+from tribocosim.cosim.scene.validate import load_scene
 
 P_CRIT = 340e6
 STOP = 0.02
@@ -124,7 +124,7 @@ def test_the_stability_report_cells_carry_the_observed_contraction():
     """judged_run (the stability report's runs) puts the master's contraction on the verdict, also when the
     iteration stopped the run."""
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.reports.stability import ERROR
+    from tribocosim.cosim.reports.stability_criterion import ERROR
     from tribocosim.cosim.reports.stability_report import _cell_row, _component_scales
 
     plan = load_scene(scene_file("demo"), _iterative("quasi-newton"))

@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import TribocosimError
+from tribocosim.errors import TribocosimError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.table import FrictionTable, write_table
-from tribocosim.cosim.report_cli import main as report_main
+from tribocosim.cosim.apps.report_cli import main as report_main
 from tribocosim.cosim.reports import paper
-from tribocosim.cosim.stripdraw_test import Point, mu_bar
+from tribocosim.cosim.apps.stripdraw_experiment import Point, mu_bar
 
 
 @pytest.mark.parametrize("rate, start", [(1.0, 1.0), (100.0, 1.0), (0.01, 1.0), (3.0, 1e-3)])

@@ -1,9 +1,9 @@
-"""Tests of cosim.reference: the closed form against scipy, the monolithic runner against the closed form."""
+"""Tests of cosim.apps.monolithic: the closed form against scipy, the monolithic runner against the closed form."""
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from tribocosim.cosim.reference import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
+from tribocosim.cosim.apps.monolithic import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
 
 
 def test_closed_form_matches_scipy_and_the_issue_values(exact_t10):
@@ -13,7 +13,7 @@ def test_closed_form_matches_scipy_and_the_issue_values(exact_t10):
     z = osc.states([10.0])[0]
     np.testing.assert_allclose(z, sol.y[:, -1], rtol=0, atol=1e-11, err_msg="closed form vs DOP853 at t = 10")
     np.testing.assert_allclose([z[0], z[2]], exact_t10, rtol=0, atol=5e-13,
-                               err_msg="x1, x2 at t = 10 against the values given in issue 7")
+                               err_msg="x1, x2 at t = 10 against the stored exact values")
     # the coupling force is what FMU b outputs
     f = osc.solve([0.0])["b.force"][0]
     np.testing.assert_allclose(f, 10.0 * 0.5, rtol=1e-15, err_msg="F(0) = k2 (x2 - x1)")
@@ -80,7 +80,7 @@ def test_coupling_tolerance_is_relative_to_the_values_magnitude_over_the_run():
     alternation of a value that was never larger than 1 is not, and the run says so."""
     import pytest
 
-    from tribocosim.components.errors import ConvergenceError
+    from tribocosim.errors import ConvergenceError
 
     def run(first):
         ref = CoupledModels({"a": _Quantized(1e-8, first), "b": _Follower()}, [("a.y", "b.y"), ("b.x", "a.x")],

@@ -1,4 +1,4 @@
-"""tribocosim.cosim.reference_components: the monolithic reference of component scenes, and the parameter checks.
+"""tribocosim.cosim.scene.component_checks: the monolithic reference of component scenes, and the parameter checks.
 
 The reference couples the pure models (StripDrawModel with the shipped table, PressModel,
 MachineModel) with a tiny step and the coupling solved every step; the co-simulation of the same
@@ -14,18 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import SceneError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
-from tribocosim.cosim.reference_components import (
-    ComponentModel,
-    component_problems,
-    load_component_scene,
-    make_model,
-    reference_for_scene,
-)
-from tribocosim.cosim.scene import parse_scene
+from tribocosim.cosim.apps.monolithic import ComponentModel, make_model, reference_for_scene
+from tribocosim.cosim.scene.component_checks import component_problems, load_component_scene
+from tribocosim.cosim.scene.schema import parse_scene
 
 DEMO = Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml"
 

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from tribocosim.cosim import report_cli
+from tribocosim.cosim.apps import report_cli
 from tribocosim.cosim.reports import accuracy, stability_report
 from tribocosim.cosim.reports.common import Family, timed
 
@@ -29,7 +29,7 @@ def test_accuracy_report_writes_markdown_csv_png_and_names_missing_pieces(tmp_pa
 
 def test_stability_report_matrix_with_reasons(tmp_path, monkeypatch):
     """The matrix, the verdict notes and the bisection lines, on a family with known content."""
-    from tribocosim.cosim.reports.stability import StepLimit, Verdict
+    from tribocosim.cosim.reports.stability_criterion import StepLimit, Verdict
 
     @timed
     def fake(settings):
@@ -54,7 +54,7 @@ def test_stability_report_matrix_with_reasons(tmp_path, monkeypatch):
 
 
 def test_stability_cells_of_iterative_coupling_show_the_observed_contraction(tmp_path, monkeypatch):
-    from tribocosim.cosim.reports.stability import Verdict
+    from tribocosim.cosim.reports.stability_criterion import Verdict
 
     @timed
     def fake(settings):
@@ -87,7 +87,7 @@ def test_every_family_is_a_function_of_the_settings_alone():
 
 
 def test_surrogate_family_reads_the_hold_out_result_of_bench_table(tmp_path):
-    """The JSON format written by benchmarks/bench_table.py (issue 6): one row per grid."""
+    """The JSON format written by benchmarks/bench_table.py: one row per grid."""
     from pathlib import Path
 
     from tribocosim.cosim.reports.common import Settings

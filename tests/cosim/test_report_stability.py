@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.cosim.reports.stability import (ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, growth_bounds,
+from tribocosim.cosim.reports.stability_criterion import (ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, growth_bounds,
                                      growth_factor, largest_stable_step, swings)
 
 
@@ -151,10 +151,10 @@ def test_monodromy_of_the_report_agrees_with_this_derivation():
 
 
 def test_jacobi_stability_limit_through_the_master_matches_the_exact_one_step_map(tmp_path, fmu_dir):
-    from tribocosim.cosim.reference import TwoMassOscillator
+    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.oscfmus import oscillator_scene
     from tribocosim.cosim.reports.runner import judged_run
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     h_exact = exact_limit()
     assert 1.5e-4 < h_exact < 1.8e-4, h_exact  # ~1.667 / k2

@@ -1,4 +1,4 @@
-"""Tests of ``tribocosim run`` (cosim.run_cli) and of the result files (cosim.api, cosim.recorder)."""
+"""Tests of ``tribocosim run`` (cosim.apps.run_cli) and of the result files (cosim.api, cosim.engine.recorder)."""
 
 import io
 import json
@@ -8,7 +8,7 @@ from fmpy.util import read_csv
 
 from tribocosim.cosim import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.recorder import Progress
+from tribocosim.cosim.engine.recorder import Progress
 
 
 def test_run_writes_csv_readable_by_fmpy_and_metadata(tmp_path, osc_scene, capsys):
@@ -88,8 +88,8 @@ def test_run_of_fmu_files_imports_neither_numba_nor_the_mesoscale_code(tmp_path,
 
 
 def test_packaged_scenes_resolve_by_name_and_write_to_the_working_directory(tmp_path, monkeypatch):
-    from tribocosim.components.errors import SceneError
-    from tribocosim.components.paths import SCENES_DIR, packaged_scenes, scene_file
+    from tribocosim.errors import SceneError
+    from tribocosim.paths import SCENES_DIR, packaged_scenes, scene_file
     from tribocosim.cosim.api import default_out_dir
 
     assert {"demo", "pressure_sweep", "multipass"} <= set(packaged_scenes())

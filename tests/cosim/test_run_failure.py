@@ -1,4 +1,4 @@
-"""A run that meets a step it cannot recover stops (issue 18, item 4): ``tribocosim run`` exits 1 with a
+"""A run that meets a step it cannot recover stops: ``tribocosim run`` exits 1 with a
 message naming the FMU, the variable, the time and the step, and writes what was accepted up to then (CSV
 without a NaN, JSON with a ``failure`` entry and the rejected attempts). Real FMUs: the test component
 ``lag`` (pythonfmu) whose output turns NaN at a set time, and the native strip-draw FMU refusing a negative
@@ -12,7 +12,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from tribocosim.cosim.run_cli import main as run_main
+from tribocosim.cosim.apps.run_cli import main as run_main
 
 
 def _scene(folder, body: str, variables: list[str]):

@@ -5,7 +5,7 @@ Cheap settings (a 50 mm draw on a 100-element bar, 2.5 ms communication step) ke
 the trends are those of the paper (Sec. 2.1, 7; Fig. 2, 17-19): mu_bar falls with P_N and with pad
 length; more debris sticking to the tool (zeta) and more wear (K) lower it, saturating at large K
 (beta at its cap under the whole pad); a second and a third pass over the same strip lower it.
-Sweeps run in parallel processes (cosim.sweep), every case written to its own folder.
+Sweeps run in parallel processes (cosim.apps.scene_sweep), every case written to its own folder.
 """
 
 from __future__ import annotations
@@ -18,13 +18,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import SceneError
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import SceneError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.reference_components import load_component_scene, steady_ratio
-from tribocosim.cosim.sweep import load_sweep, run_sweep
+from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
+from tribocosim.cosim.scene.component_checks import load_component_scene
+from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
 DEMO = SCENES / "demo.toml"
@@ -176,7 +177,7 @@ def test_each_later_pass_has_lower_mu_bar(tmp_path):
     assert mu[0] > mu[1] > mu[2], f"mu_bar per pass: {mu}"
     # pass k + 1 really started from what pass k left: its field file's first row is pass k's last
     folder = tmp_path / "out" / "cases" / "case-000"
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     for k in (1, 2):
         a, b = read_fields(folder / f"pass-{k}.field.csv"), read_fields(folder / f"pass-{k + 1}.field.csv")
@@ -301,7 +302,7 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
 def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(tmp_path):
     """The case key covers the bytes of the files the scene's parameters name (here a friction
     table) and of the FMUs: a changed table runs the case again."""
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table, write_table
 
     table = tmp_path / "my_table.npz"

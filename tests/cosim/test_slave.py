@@ -1,12 +1,12 @@
-"""Tests of cosim.slave.FmpySlave on real FMUs: values, steps, state round trip, statuses."""
+"""Tests of cosim.engine.slave.FmpySlave on real FMUs: values, steps, state round trip, statuses."""
 
 import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 from tribocosim.cosim.api import extracted_fmu
-from tribocosim.cosim.slave import DISCARD, OK, FmpySlave, Slave
+from tribocosim.cosim.engine.slave import DISCARD, OK, FmpySlave, Slave
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""Tests of SSP 1.0 packages: export (cosim.ssp_export), import (cosim.ssp_import), the TOML writer (cosim.ssp).
+"""Tests of SSP 1.0 packages: export (cosim.ssp.export), import (cosim.ssp.reader), the TOML writer (cosim.ssp.names).
 
 The rig is the demo scene (press + strip draw + drawing machine, component FMUs from the cache) cut to
 400 steps of 1 ms, with a press force (9800 N), a pad width (30 mm) and a drive ramp (30 ms) that are
@@ -23,10 +23,11 @@ import numpy as np
 import pytest
 
 from tribocosim.cli import main as tribocosim
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim import run
-from tribocosim.cosim.ssp import toml_text
-from tribocosim.cosim.ssp_import import load_ssp, run_ssp
+from tribocosim.cosim.ssp.names import toml_text
+from tribocosim.cosim.api import run_ssp
+from tribocosim.cosim.ssp.reader import load_ssp
 
 #: the short demo rig: scene keys set on models/scenes/demo.toml
 RIG = {"experiment.stop": 0.4, "fmus.press.parameters.force_setpoint": 9800.0, "fmus.strip.parameters.tool_width": 0.03,
@@ -143,7 +144,7 @@ def test_export_of_a_scene_with_problems_exits_2(tmp_path, capsys):
 def test_fmpy_simulate_ssp_gives_our_jacobi_pull_force(rig, scene_run):
     from fmpy.ssp.simulation import simulate_ssp
 
-    from tribocosim.cosim.ssp import fmpy_parameter_set
+    from tribocosim.cosim.ssp.names import fmpy_parameter_set
 
     # fmpy 0.3's simulate_ssp applies one parameter set of "component.variable" names, not the SSD's
     # bindings: fmpy_parameter_set gathers the components' bindings into one
@@ -247,7 +248,7 @@ def test_the_package_is_what_omsimulator_s_ssp_reader_requires(rig):
       ssd:Connectors, ssd:Elements (ssd:Component, ssd:System) and ssd:Annotations, nothing else."""
     import xml.etree.ElementTree as ET
 
-    from tribocosim.cosim.ssp import NS, prefixed
+    from tribocosim.cosim.ssp.names import NS, prefixed
 
     with zipfile.ZipFile(rig) as zf:
         root = ET.fromstring(zf.read("SystemStructure.ssd"))
@@ -343,7 +344,7 @@ FOREIGN = """<?xml version="1.0" encoding="UTF-8"?>
 
 
 def test_a_foreign_package_runs_with_bindings_and_default_outputs(tmp_path):
-    from tribocosim.cosim.fmucache import component_fmu
+    from tribocosim.cosim.scene.fmucache import component_fmu
 
     ssp = _package(tmp_path / "foreign.ssp", FOREIGN, {"resources/P ress.fmu": component_fmu("press"),
                                                        "resources/StripDraw.fmu": component_fmu("stripdraw")})
@@ -406,7 +407,7 @@ UNSUPPORTED = """<?xml version="1.0" encoding="UTF-8"?>
 
 
 def test_unsupported_elements_are_refused_each_by_name(tmp_path, capsys):
-    from tribocosim.cosim.fmucache import component_fmu
+    from tribocosim.cosim.scene.fmucache import component_fmu
 
     ssp = _package(tmp_path / "unsupported.ssp", UNSUPPORTED, {"resources/Press.fmu": component_fmu("press"),
                                                                "resources/StripDraw.fmu": component_fmu("stripdraw")})

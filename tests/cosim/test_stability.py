@@ -22,9 +22,9 @@ from scipy.linalg import expm
 
 from tribocosim.cosim import run
 from tribocosim.cosim.api import build
-from tribocosim.cosim.extrapolation import History
+from tribocosim.cosim.engine.extrapolation import History
 from tribocosim.cosim.reports.oscfmus import CONNECTIONS
-from tribocosim.cosim.validate import load_scene
+from tribocosim.cosim.scene.validate import load_scene
 
 K2 = 1e5
 STATE = ("a.x1", "a.v1", "b.x2", "b.v2")

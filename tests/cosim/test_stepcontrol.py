@@ -1,11 +1,11 @@
-"""Tests of cosim.stepcontrol: step doubling, the energy (ECCO) estimator, rejection and rollback."""
+"""Tests of cosim.engine.stepcontrol: step doubling, the energy (ECCO) estimator, rejection and rollback."""
 
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import CosimStepError
+from tribocosim.errors import CosimStepError
 from tribocosim.cosim import run
-from tribocosim.cosim.reference import TwoMassOscillator, coupling_error
+from tribocosim.cosim.apps.monolithic import TwoMassOscillator, coupling_error
 
 BOND = """
 [[power_bonds]]
@@ -109,7 +109,7 @@ def test_step_doubling_shrinks_on_discard(tmp_path, make_scene, fmu_dir):
     assert res.metadata["steps"]["rejected_failure"] > 0
 
 
-# ------------------------------------------------------------------ step_quantum (issue 18)
+# ------------------------------------------------------------------ step_quantum
 def test_step_quantum_puts_every_step_and_half_step_on_its_grid(tmp_path, osc_scene):
     """step_quantum q: every step is a multiple of 2 q (and at least 2 q), so every communication point, the
     half steps included, lies on the grid k q; the tolerance is still met."""
@@ -164,8 +164,8 @@ class _FakeMaster:
 def test_a_rejected_step_shrinks_by_a_quantum_at_least():
     """A rejection whose smaller step rounds back to the same whole number of double quanta (err = 1.05 at four:
     0.9 x 4 / sqrt(1.05) = 3.5 rounds to 4) must still shrink the step, not retry it for ever."""
-    from tribocosim.cosim.stepcontrol import Adaptive, StepDoubling
-    from tribocosim.cosim.timegrid import TimeGrid
+    from tribocosim.cosim.engine.stepcontrol import Adaptive, StepDoubling
+    from tribocosim.cosim.engine.timegrid import TimeGrid
 
     q, tol = 1e-3, 1e-3
     grid = TimeGrid.variable(0.0, 1.0, 2 * q)  # 32 ticks per quantum
@@ -181,7 +181,7 @@ def test_a_rejected_step_shrinks_by_a_quantum_at_least():
 
 
 def test_step_quantum_is_checked_against_the_grid(tmp_path, osc_scene):
-    from tribocosim.components.errors import SceneError
+    from tribocosim.errors import SceneError
 
     bad = {"1.5e-7": "whole number of grid ticks", "0.6": "exceed max_step"}
     for quantum, words in bad.items():
@@ -198,7 +198,7 @@ def test_step_quantum_is_checked_against_the_grid(tmp_path, osc_scene):
 
 
 def test_step_doubling_on_the_strips_internal_grid_does_not_collapse():
-    """Issue 18 on the demo (press + strip + drive, first 0.2 s): without the strip's internal grid its own
+    """Step doubling on the demo (press + strip + drive, first 0.2 s): without the strip's internal grid its own
     first-order lag keeps the error per unit step above the tolerance and every step is the smallest allowed;
     with internal_step = step_quantum the estimate sees the coupling alone and the step grows after the ramps."""
     ad = {"tolerance": 1e-2, "min_step": 1e-4, "max_step": 0.05, "estimator": "step-doubling"}

@@ -1,10 +1,10 @@
-"""Tests of cosim.timegrid: communication points are t0 + n*h exactly, never accumulated."""
+"""Tests of cosim.engine.timegrid: communication points are t0 + n*h exactly, never accumulated."""
 
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.cosim.timegrid import FIXED_SUBDIVISION, TimeGrid
+from tribocosim.errors import ParameterError
+from tribocosim.cosim.engine.timegrid import FIXED_SUBDIVISION, TimeGrid
 
 
 def test_fixed_grid_hits_multiples_of_the_step_exactly():

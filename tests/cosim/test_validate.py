@@ -1,8 +1,8 @@
-"""Tests of scene validation (cosim.scene + cosim.validate): every problem, one message, file and key."""
+"""Tests of scene validation (cosim.scene.schema + cosim.scene.validate): every problem, one message, file and key."""
 
 import pytest
 
-from tribocosim.components.errors import SceneError
+from tribocosim.errors import SceneError
 from tribocosim.cosim import load_scene
 
 

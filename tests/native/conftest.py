@@ -1,6 +1,6 @@
 """Fixtures of the native (C) tests: a build of chosen C sources with undefined behaviour trapping and an
 allocation-counting shim, so that tests can check that nothing leaks on any path. The models themselves are
-tested through their bindings (the package's core library, :mod:`tribocosim.components.native.library`).
+tested through their bindings (the package's core library, :mod:`tribocosim.components.native.toolchain.library`).
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from tribocosim.components.native.toolchain import SOURCE_DIR, compile_shared
+from tribocosim.components.native.toolchain.compiler import compile_shared, source
 
 TC_OK, TC_DISCARD, TC_ERROR, TC_NOMEM = 0, 1, 2, 3
 
@@ -18,7 +18,7 @@ TC_OK, TC_DISCARD, TC_ERROR, TC_NOMEM = 0, 1, 2, 3
 def native_headers(tmp_path_factory) -> Path:
     """A folder with the parameter headers generated from the component descriptions (as the FMU build does)."""
     from tribocosim.components import registry
-    from tribocosim.components.native.declarations import write_params_headers
+    from tribocosim.components.native.toolchain.declarations import write_params_headers
 
     folder = tmp_path_factory.mktemp("native_headers")
     write_params_headers(folder, registry.components().values())
@@ -71,7 +71,7 @@ def native_checked_compile():
     def build(sources, folder: Path, name: str, defines=(), include_dirs=()) -> Path:
         (folder / "tc_count.h").write_text(_COUNT_H)
         (folder / "tc_count.c").write_text(_COUNT_C)
-        return compile_shared([*(SOURCE_DIR / s for s in sources), folder / "tc_count.c"], folder / name, "linux64",
+        return compile_shared([*map(source, sources), folder / "tc_count.c"], folder / name, "linux64",
                               defines=["TC_EXPORT_CORE", *defines], include_dirs=include_dirs,
                               extra_flags=["-include", str(folder / "tc_count.h"), "-fsanitize=undefined",
                                            "-fsanitize-trap=undefined"])

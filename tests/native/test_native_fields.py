@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.components.native import toolchain
-from tribocosim.components.stripdraw.fields import FieldRecorder, read_fields, read_initial_beta
+from tribocosim.errors import ParameterError
+from tribocosim.components.native.toolchain import compiler
+from tribocosim.components.native.resource_io.field_file import FieldRecorder, read_fields, read_initial_beta
 
-SOURCES = ("tc_common.c", "tc_fields.c")
+SOURCES = ("core/tc_common.c", "resource_io/tc_fields.c")
 
 
 @dataclass
@@ -136,7 +136,7 @@ def test_allocation_failures_leak_nothing(tmp_path, native_checked_compile):
 @pytest.mark.slow
 @pytest.mark.parametrize("platform", ["win64", "darwin64"])
 def test_builds_clean_for_windows_and_macos(tmp_path, platform):
-    suffix = toolchain.PLATFORMS[platform][1]
-    out = toolchain.compile_shared([toolchain.SOURCE_DIR / s for s in SOURCES], tmp_path / f"tc_fields{suffix}",
+    suffix = compiler.PLATFORMS[platform][1]
+    out = compiler.compile_shared(list(map(compiler.source, SOURCES)), tmp_path / f"tc_fields{suffix}",
                                    platform, defines=["TC_EXPORT_CORE"])
     assert out.stat().st_size > 0

@@ -1,9 +1,10 @@
-"""The FMI 3.0 variants of the native FMUs (issue 19, item 1): ``tribocosim fmu build --fmi 3``.
+"""The FMI 3.0 variants of the native FMUs: ``tribocosim fmu build --fmi 3``.
 
 - the model descriptions have the FMI 2.0 variables (names, value references, units, descriptions, starts,
   ranges), plus ``time``, and for StripDraw the structural parameter ``n_nodes = n_elements + 1`` and the
   nodal fields ``beta``, ``U``, ``contact`` as arrays of that length; ``fmpy validate`` is clean; the CLI
-  writes the same file names for linux64, win64 and darwin64, every binary exporting every fmi3 function;
+  writes the same file names, the binary exporting every fmi3 function (every platform's binaries:
+  tests/native/test_native_platforms.py, slow);
 - run through fmpy's FMI 3 API and through a C host with no Python (tests/native/host/fmi3_host.c), the
   outputs are those of the FMI 2.0 FMUs to the last bit (StripDraw on a short draw, Press, DrawingMachine),
   and the arrays are the FMI 2.0 FMU's field_output rows to the last bit (and the Python model's fields);
@@ -11,7 +12,7 @@
   at initialization naming it; a negative normal force is fmi3Discard with the state unchanged (its
   serialized image byte for byte); what does not apply is fmi3Error naming the function; nothing leaks.
 
-The FMUs are built for linux64 only, except Press through the command line for all three platforms.
+The FMUs are built for linux64 only.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ def _fmi3_functions() -> set[str]:
     fmi3FullName)."""
     import re
 
-    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.fmus.native_build import fmi3_headers
 
     text = (fmi3_headers() / "fmi3Functions.h").read_text()
     return set(re.findall(r"#define (fmi3\w+)\s+fmi3FullName\(", text))
@@ -65,7 +66,7 @@ def exported_functions(path):
 @pytest.fixture(scope="module")
 def built(tmp_path_factory) -> dict[int, dict[str, Path]]:
     """``{2: FMI 2.0 FMUs, 3: FMI 3.0 FMUs}`` of the three components, linux64, from the same tree."""
-    from tribocosim.components.fmus.native import build_native_fmus
+    from tribocosim.components.fmus.native_build import build_native_fmus
 
     return {v: build_native_fmus(tmp_path_factory.mktemp(f"fmi{v}"), platforms=["linux64"], fmi_version=v)
             for v in (2, 3)}
@@ -89,8 +90,8 @@ def md(built):
 @pytest.fixture(scope="module")
 def hosts(tmp_path_factory) -> dict[int, Path]:
     """The C hosts of both versions (linux64 executables, no Python)."""
-    from tribocosim.components.fmus.native import fmi3_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.fmus.native_build import fmi3_headers
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     folder = tmp_path_factory.mktemp("hosts")
     flags = ["-isystem", str(fmi3_headers())]  # fmi3FunctionTypes.h has prototype-less callbacks
@@ -146,12 +147,13 @@ def _run_host(host, folder, description, tmp_path, steps, *, inputs=(), outputs=
 
 
 # ----------------------------------------------------------------------------------- the FMUs as files
-def test_cli_builds_fmi3_fmus_for_three_platforms_exporting_every_function(tmp_path, hosts):
+def test_cli_builds_fmi3_fmus_exporting_every_function(tmp_path, hosts):
     from fmpy import read_model_description
     from fmpy.validation import validate_fmu
 
     proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", "3", "--only", "Press",
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=900)
+                           "--platform", "linux64", "--out", str(tmp_path)], capture_output=True, text=True,
+                          timeout=900)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     fmu = tmp_path.resolve() / "Press.fmu"
     assert [Path(p) for p in proc.stdout.split()] == [fmu]
@@ -164,10 +166,10 @@ def test_cli_builds_fmi3_fmus_for_three_platforms_exporting_every_function(tmp_p
         assert not [f for f in z.namelist() if f.endswith((".py", ".pyc"))]
     functions = _fmi3_functions()
     assert len(functions) == 75
-    for platform, ext in (("x86_64-linux", ".so"), ("x86_64-windows", ".dll"), ("x86_64-darwin", ".dylib")):
-        exported = exported_functions(folder / "binaries" / platform / f"Press{ext}")
-        assert functions <= exported, (platform, sorted(functions - exported))
-        assert not [f for f in exported if f.startswith(("tc_", "fmi2"))], "internal and FMI 2.0 functions stay out"
+    assert sorted(p.name for p in (folder / "binaries").iterdir()) == ["x86_64-linux"]
+    exported = exported_functions(folder / "binaries" / "x86_64-linux" / "Press.so")
+    assert functions <= exported, sorted(functions - exported)
+    assert not [f for f in exported if f.startswith(("tc_", "fmi2"))], "internal and FMI 2.0 functions stay out"
     symbols = subprocess.run([str(hosts[3]), str(folder), "Press", "x", "--symbols"], capture_output=True, text=True)
     assert symbols.stdout.strip() == "75 functions exported", symbols.stderr
     bad = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", "3", "--python"],
@@ -214,7 +216,7 @@ def test_stripdraw_through_fmpy_equals_the_fmi2_fmu_and_its_field_output_to_the_
     from fmpy.fmi2 import FMU2Slave
 
     from tribocosim.components.stripdraw.component import COMPONENT
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     schedule = _schedule(60)
     m2, m3 = md[2, "StripDraw"], md[3, "StripDraw"]
@@ -293,7 +295,7 @@ def test_c_hosts_give_the_same_outputs_to_the_bit_and_replay_a_serialized_state(
         fuzz = [line for line in proc.stderr.splitlines() if "fuzz:" in line][-1]
         assert int(fuzz.split()[-5]) > 0 and int(fuzz.split()[-2]) > 0, fuzz
         if name == "StripDraw":
-            from tribocosim.components.stripdraw.fields import read_fields
+            from tribocosim.components.native.resource_io.field_file import read_fields
 
             recorded = read_fields(field)
             arrays = got3[:, 1 + len(outputs):].reshape(len(steps), 3, _default_nodes())

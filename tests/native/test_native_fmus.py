@@ -1,9 +1,10 @@
-"""The native FMUs (issue 13): built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
+"""The native FMUs: built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
 and libcosimpy, and held against the Python models.
 
 - the model descriptions are the Python variants' (names, value references, causality, units, descriptions,
   start values), both generated from the component descriptions; ``fmpy validate`` is clean;
-- linux64, win64 and darwin64 binaries export every fmi2 function; the FMU holds no ``.py`` file;
+- the linux64 binary exports every fmi2 function and no internal one; the FMU holds no ``.py`` file (the binaries
+  of the other platforms: tests/native/test_native_platforms.py, slow);
 - a C host (tests/native/host/fmi2_host.c, compiled here) loads each FMU with dlopen in a process without
   Python and runs it; its outputs agree with the Python models (StripDraw: the demo draw and a pressure ramp
   with a reversing grip, both integrators, all three friction laws; also the beta field of field_output);
@@ -41,7 +42,7 @@ def _fmi2_functions() -> set[str]:
     fmi2FullName)."""
     import re
 
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
 
     text = (fmi2_headers() / "fmi2Functions.h").read_text()
     return set(re.findall(r"#define (fmi2\w+)\s+fmi2FullName\(", text))
@@ -54,9 +55,10 @@ STRIP_OUTPUTS = ("pull_force", "mu_mean", "beta_max", "friction_force", "beta_me
 
 @pytest.fixture(scope="session")
 def native_fmus(tmp_path_factory) -> dict[str, Path]:
-    """``tribocosim fmu build --out TMP`` (the command line: native, all three platforms)."""
+    """``tribocosim fmu build --platform linux64 --out TMP`` (the command line: native, this machine's binary)."""
     out = tmp_path_factory.mktemp("native_fmus")
-    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--platform", "linux64", "--out",
+                           str(out)],
                           capture_output=True, text=True, timeout=1800)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert [Path(p) for p in proc.stdout.split()] == [out.resolve() / f"{n}.fmu" for n in NAMES]
@@ -80,8 +82,8 @@ def descriptions(native_fmus):
 @pytest.fixture(scope="session")
 def fmi2_host(tmp_path_factory) -> Path:
     """The C host, compiled with the project's toolchain (a linux64 executable, no Python)."""
-    from tribocosim.components.fmus.native import fmi2_headers
-    from tribocosim.components.native.toolchain import compile_executable
+    from tribocosim.components.fmus.native_build import fmi2_headers
+    from tribocosim.components.native.toolchain.compiler import compile_executable
 
     out = tmp_path_factory.mktemp("host") / "fmi2_host"
     return compile_executable([HERE / "host" / "fmi2_host.c"], out, include_dirs=[fmi2_headers()], libs=["-ldl"])
@@ -119,7 +121,7 @@ def run_host(host, unzipped, description, tmp_path, steps, *, inputs=(), outputs
 def test_model_descriptions_are_the_python_variants(descriptions, tmp_path_factory):
     from fmpy import read_model_description
 
-    from tribocosim.components.fmus.build import build_fmus
+    from tribocosim.components.fmus.python_build import build_fmus
 
     python = build_fmus(tmp_path_factory.mktemp("python_fmus"))
     for name in NAMES:
@@ -149,12 +151,12 @@ def test_fmpy_validate_is_clean_and_no_python_file_is_inside(native_fmus):
         assert ("resources/friction_table.tca" in files) == (name == "StripDraw"), "the table in its resource form"
 
 
-def test_every_platform_binary_exports_every_fmi2_function(unzipped, fmi2_host, descriptions):
+def test_the_binary_exports_every_fmi2_function_and_no_internal_one(unzipped, fmi2_host, descriptions):
     for name, folder in unzipped.items():
-        for platform, ext in (("linux64", ".so"), ("win64", ".dll"), ("darwin64", ".dylib")):
-            exported = exported_functions(folder / "binaries" / platform / f"{name}{ext}")
-            assert FMI2_FUNCTIONS <= exported, (name, platform, sorted(FMI2_FUNCTIONS - exported))
-            assert not [f for f in exported if f.startswith("tc_")], "internal functions stay hidden"
+        assert sorted(p.name for p in (folder / "binaries").iterdir()) == ["linux64"]
+        exported = exported_functions(folder / "binaries" / "linux64" / f"{name}.so")
+        assert FMI2_FUNCTIONS <= exported, (name, sorted(FMI2_FUNCTIONS - exported))
+        assert not [f for f in exported if f.startswith("tc_")], "internal functions stay hidden"
         md = descriptions[name]
         proc = subprocess.run([str(fmi2_host), str(folder), name, md.guid, "--symbols"], capture_output=True, text=True)
         assert proc.stdout.strip() == f"{len(FMI2_FUNCTIONS)} functions exported", proc.stderr
@@ -206,7 +208,7 @@ def test_c_host_without_python_equals_the_binding_bit_for_bit(fmi2_host, unzippe
     for j, name in enumerate(STRIP_OUTPUTS):
         scale = max(np.abs(want[:, j]).max(), 1e-300)
         worst[name] = float(np.abs(got[:, j + 1] - want[:, j]).max() / scale)
-    from tribocosim.components.stripdraw.fields import read_fields
+    from tribocosim.components.native.resource_io.field_file import read_fields
 
     beta = read_fields(field)["beta"][-1]
     worst["beta field"] = float(np.abs(beta - model.beta).max() / max(model.beta.max(), 1e-300))
@@ -508,7 +510,7 @@ def test_outputs_at_the_start_report_the_inputs_set_during_initialization(unzipp
 
 
 def test_the_demo_scene_has_no_algebraic_loop_for_an_importer_that_reads_the_dependencies():
-    from tribocosim.cosim.validate import load_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     plan = load_scene(Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml")
     for name, model in plan.fmus.items():

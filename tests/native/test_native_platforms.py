@@ -1,4 +1,4 @@
-"""The native FMUs' binaries for every platform (toolchain.PLATFORMS): what each is built for and what it exports,
+"""The native FMUs' binaries for every platform (compiler.PLATFORMS): what each is built for and what it exports,
 read from the files, and the aarch64-linux one run under qemu-user against the x86_64 one.
 
 - FMI 2.0: linux64 and win64 x86_64, darwin64 a universal Mach-O with an x86_64 and an arm64 slice (Intel and
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.native import toolchain
+from tribocosim.components.native.toolchain import compiler
 
 HERE = Path(__file__).resolve().parent
 NAMES = ("DrawingMachine", "Press", "StripDraw")
@@ -44,7 +44,7 @@ def _exports():
 
 def _functions(version: int) -> set[str]:
     """Every function of the FMI standard, from the header fmpy ships."""
-    from tribocosim.components.fmus.native import fmi2_headers
+    from tribocosim.components.fmus.native_build import fmi2_headers
 
     text = (fmi2_headers() / f"fmi{version}Functions.h").read_text()
     return set(re.findall(rf"#define (fmi{version}\w+)\s+fmi{version}FullName\(", text))
@@ -62,7 +62,7 @@ def test_write_universal_joins_slices_as_lipo_does(tmp_path):
     x86, arm = tmp_path / "x86", tmp_path / "arm"
     x86.write_bytes(_macho(0x01000007, 5000))
     arm.write_bytes(_macho(0x0100000C, 70000))
-    out = toolchain.write_universal([x86, arm], tmp_path / "fat.dylib")
+    out = compiler.write_universal([x86, arm], tmp_path / "fat.dylib")
     data = out.read_bytes()
     assert struct.unpack_from(">II", data, 0) == (0xCAFEBABE, 2)
     arches = [struct.unpack_from(">iiIII", data, 8 + 20 * k) for k in range(2)]
@@ -70,10 +70,10 @@ def test_write_universal_joins_slices_as_lipo_does(tmp_path):
     assert all(a[2] % 16384 == 0 for a in arches) and arches[1][2] >= arches[0][2] + arches[0][3]
     assert [part for _, part in ex.fat_slices(data)] == [x86.read_bytes(), arm.read_bytes()]
     assert ex.architectures(out) == ["x86_64", "arm64"]
-    with pytest.raises(toolchain.CompileError, match="same CPU type"):
-        toolchain.write_universal([x86, x86], tmp_path / "bad.dylib")
-    with pytest.raises(toolchain.CompileError, match="not a 64-bit little-endian Mach-O"):
-        toolchain.write_universal([tmp_path / "fat.dylib"], tmp_path / "bad.dylib")
+    with pytest.raises(compiler.CompileError, match="same CPU type"):
+        compiler.write_universal([x86, x86], tmp_path / "bad.dylib")
+    with pytest.raises(compiler.CompileError, match="not a 64-bit little-endian Mach-O"):
+        compiler.write_universal([tmp_path / "fat.dylib"], tmp_path / "bad.dylib")
 
 
 @pytest.fixture(scope="module")
@@ -133,7 +133,7 @@ def _run_host(host: Path, folder: Path, md, steps, prefix=()) -> np.ndarray:
 def test_the_aarch64_linux_binary_under_qemu_draws_as_the_x86_64_one(every_platform, tmp_path):
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native import fmi3_headers
+    from tribocosim.components.fmus.native_build import fmi3_headers
 
     qemu = shutil.which("qemu-aarch64")
     assert qemu, "qemu-aarch64 (Debian: apt-get install qemu-user) runs the aarch64 binary"
@@ -143,7 +143,7 @@ def test_the_aarch64_linux_binary_under_qemu_draws_as_the_x86_64_one(every_platf
     folder = Path(extract(str(fmu), str(tmp_path / "StripDraw")))
     md = read_model_description(str(fmu))
     flags = ["-isystem", str(fmi3_headers())]
-    hosts = {p: toolchain.compile_executable([HERE / "host" / "fmi3_host.c"], tmp_path / p / "fmi3_host",
+    hosts = {p: compiler.compile_executable([HERE / "host" / "fmi3_host.c"], tmp_path / p / "fmi3_host",
                                              extra_flags=flags, libs=["-ldl"], platform=p)
              for p in ("linux64", "aarch64-linux")}
     ex = _exports()

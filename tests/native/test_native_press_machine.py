@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.components.machine import MachineModel, MachineParameters
-from tribocosim.components.native.library import VP, core
-from tribocosim.components.native.linear_model import expm
+from tribocosim.components.native.toolchain.library import VP, core
+from tribocosim.components.linear_model import expm
 from tribocosim.components.press import PressModel, PressParameters
 
 

@@ -1,4 +1,4 @@
-"""The friction table's resource form: the array file (components/native/arrays.py, tc_arrays.c) and the table
+"""The friction table's resource form: the array file (components/native/resource_io/array_file.py, tc_arrays.c) and the table
 reader on it (tc_table_file.c).
 
 The resource written from a table file reads back into the same table: every lookup of the strip-draw law on the
@@ -17,15 +17,17 @@ import sys
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.components.native import arrays, toolchain
-from tribocosim.components.native.library import VP, core, ptr
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.errors import ParameterError
+from tribocosim.components.native.resource_io import array_file as arrays
+from tribocosim.components.native.toolchain import compiler
+from tribocosim.components.native.toolchain.library import VP, core, ptr
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.friction import closed_form_table, make_friction_law
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, resource_entries, write_table, write_table_resource
 
-SOURCES = ("tc_common.c", "tc_table.c", "tc_table_lookup.c", "tc_table_file.c", "tc_arrays.c")
+SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
+           "resource_io/tc_arrays.c")
 
 
 def read_resource(path):
@@ -233,7 +235,7 @@ def test_fuzzed_resources_are_refused_or_read_never_crash(folder, checked):
 @pytest.mark.slow
 @pytest.mark.parametrize("platform", ["win64", "darwin64"])
 def test_builds_clean_for_windows_and_macos(tmp_path, platform, native_headers):
-    suffix = toolchain.PLATFORMS[platform][1]
-    out = toolchain.compile_shared([toolchain.SOURCE_DIR / s for s in SOURCES], tmp_path / f"tc_table{suffix}",
+    suffix = compiler.PLATFORMS[platform][1]
+    out = compiler.compile_shared(list(map(compiler.source, SOURCES)), tmp_path / f"tc_table{suffix}",
                                    platform, defines=["TC_EXPORT_CORE"], include_dirs=[native_headers])
     assert out.stat().st_size > 0

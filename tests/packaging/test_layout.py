@@ -30,7 +30,7 @@ def test_every_source_folder_with_an_init_is_a_listed_package():
 
 
 def test_package_data_is_found_through_the_package():
-    from tribocosim.components.paths import DEFAULT_TABLE, SCENES_DIR
+    from tribocosim.paths import DEFAULT_TABLE, SCENES_DIR
 
     assert DEFAULT_TABLE.is_file() and (SCENES_DIR / "demo.toml").is_file()
     table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)
@@ -40,7 +40,7 @@ def test_package_data_is_found_through_the_package():
 def test_import_tribocosim_is_lazy_and_offers_the_public_api():
     script = ("import sys, tribocosim\n"
               "loaded = {m for m in sys.modules if m.startswith('tribocosim.')}\n"
-              "assert loaded <= {'tribocosim.components', 'tribocosim.components.lazy'}, sorted(loaded)\n"
+              "assert loaded <= {'tribocosim.lazy'}, sorted(loaded)\n"
               "print(tribocosim.run.__module__, tribocosim.StripDrawModel.__module__)\n"
               "p = tribocosim.StripDrawParameters(friction_model='closed_form')\n"
               "tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p)).step(1e-3, {'normal_force': 1e4, "

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ConvergenceError, ParameterError
+from tribocosim.errors import ConvergenceError, ParameterError
 from tribocosim.surrogate.bem import ContactResult, ContactSolver, gap_against_flat
 from tribocosim.surrogate.fft import RFFT2Pair, export_wisdom, import_wisdom
-from tribocosim.surrogate.reference_solutions import (hertz_contact_radius, hertz_peak_pressure,
+from tribocosim.surrogate.contact_solutions import (hertz_contact_radius, hertz_peak_pressure,
                                            projected_gradient_contact, rigid_plastic_paraboloid,
                                            westergaard_full_contact_pressure,
                                            westergaard_half_width, westergaard_traction)
@@ -336,7 +336,7 @@ def test_stalled_cg_hands_over_to_the_projected_gradient_and_matches_the_referen
     solver = ContactSolver(64, 128e-6, 55e9, p_crit=340e6, tol=1e-11)
     res = solver.solve(gap, p, u_plastic=up)
     assert res.converged and res.residual <= 1e-11
-    assert res.fallback, "the CG no longer stalls here: keep the test, drop this line"
+    assert res.fallback, "the CG does not stall here: keep the test, drop this line"
     assert res.iterations < 1000
     ref = projected_gradient_contact(gap, 128e-6, 55e9, p, p_crit=340e6, u_plastic=up, tol=1e-12)
     assert_allclose(res.traction, ref["traction"], rtol=0, atol=1e-5 * p)

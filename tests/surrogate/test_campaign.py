@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.campaign import (Case, CampaignStore, Progress, case_id, expand_cases, load_records,
                                 run_campaign)
 from tribocosim.surrogate.executors import ProcessPoolCaseExecutor

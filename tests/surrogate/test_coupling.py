@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 from tribocosim.surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
                                 modified_tool, particle_area_fraction, run_slide)
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate.dem import DemState, FlakeShape
 from tribocosim.surrogate.flakes import Footprint, footprints
@@ -184,7 +184,7 @@ def test_sliding_faster_than_the_penalty_velocity_is_refused():
 
 
 # ------------------------------------------------------------------------------------------
-# integration with the real contact solver (issue 4)
+# integration with the real contact solver
 # ------------------------------------------------------------------------------------------
 
 
@@ -255,9 +255,9 @@ def test_pinched_flake_is_one_that_does_not_fit_between_the_surfaces():
 
 def test_all_flakes_at_once_classify_and_pinch_as_one_at_a_time():
     """classify() labels every flake's window in one call and pinched() takes every flake's maxima
-    at once (issue 17, item 4): the same counts and flags as flake by flake."""
+    at once: the same counts and flags as flake by flake."""
     from tribocosim.surrogate.coupling import overlap_clusters, pinched
-    from tribocosim.surrogate.flakes import axis_angle_quaternion
+    from tribocosim.surrogate.flake_body import axis_angle_quaternion
 
     rng = np.random.default_rng(6)
     n, size = 64, 64e-6
@@ -379,13 +379,12 @@ def test_tool_envelope_covers_the_tool_over_the_coming_pixel():
 
 @pytest.mark.parametrize("pressure, v0, steps", [(10e6, 50.0, 120), (2e6, 10.0, 110)])
 def test_no_flake_is_crushed_on_steep_surfaces(pressure, v0, steps):
-    """A flake must not pass through a surface (issue 17). On the roll-off surfaces a tool flank
-    closes the gap over a flake by up to ~slope x dx = 0.34 um (0.7 h_p) within one pixel, and at
-    2 MPa one load-bearing flake lifts the tool off itself by ~0.6 h_p. With the coupling of the
-    tables built before issue 17 (pinch test at the current pixel, 10 % threshold, no repeated solve)
-    these slides stopped with a crushed flake at sliding steps 87 and 60 (measured); with the
-    envelope but no repeated solve the second stopped at step 107 (a released flake, the solve
-    without it dropped the tool on it); both now run."""
+    """A flake must not pass through a surface. On the roll-off surfaces a tool flank closes the gap over a
+    flake by up to ~slope x dx = 0.34 um (0.7 h_p) within one pixel, and at 2 MPa one load-bearing flake lifts
+    the tool off itself by ~0.6 h_p. With a pinch test at the current pixel only, a 10 % threshold and no
+    repeated solve these slides stop with a crushed flake (at sliding steps 87 and 60, measured); with the
+    envelope but no repeated solve the second stops at step 107 (a released flake: the solve without it drops
+    the tool on it); with the envelope and the repeated solve both run to the end."""
     res = run_slide(_rolloff_config(n_slide_steps=steps, pressure=pressure, v0=v0))
     assert len(res.particle_fraction) == steps
     assert np.all(res.particle_fraction_clusters <= res.particle_fraction)

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
 from tribocosim.surrogate import dem_kernels as kernels
 from tribocosim.surrogate.dem import DemBlowUpError, DemParams, DemState, FlakeShape
-from tribocosim.surrogate.flakes import axis_angle_quaternion, rotation_matrices
+from tribocosim.surrogate.flake_body import axis_angle_quaternion, rotation_matrices
 
 L = 100e-6
 N = 32
@@ -358,7 +358,7 @@ def test_bad_parameters_are_rejected():
 
 
 # ------------------------------------------------------------------------------------------
-# clearance records and pair candidates (issue 17, item 4): faces, points and flake pairs that are
+# clearance records and pair candidates: faces, points and flake pairs that are
 # provably out of contact are not read; the numbers do not change, bit for bit
 # ------------------------------------------------------------------------------------------
 def slope_bound_ref(h, dh, w, ic, jc, half, dx):

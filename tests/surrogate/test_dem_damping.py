@@ -1,4 +1,4 @@
-"""Damping of the flakes by the lubricant (issue 17, item 1): the thin-disc Stokes resistances against the
+"""Damping of the flakes by the lubricant: the thin-disc Stokes resistances against the
 ellipsoid integrals, exact exponential decay of a free flake at the four principal rates, the kernel's
 principal-axis damping against NumPy, bad input, and the default (one rate gamma = 5e7 1/s) unchanged."""
 
@@ -12,12 +12,12 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import quad
 
-from tribocosim.components.errors import ParameterError
-from tribocosim.surrogate import dem
+from tribocosim.errors import ParameterError
+from tribocosim.surrogate import dem, flake_body
 from tribocosim.surrogate.campaign import case_id
 from tribocosim.surrogate.coupling import SlideSimulation, run_slide
 from tribocosim.surrogate.dem import DampingRates, DemParams, DemState, FlakeShape
-from tribocosim.surrogate.flakes import axis_angle_quaternion, rotation_matrices
+from tribocosim.surrogate.flake_body import axis_angle_quaternion, rotation_matrices
 from tribocosim.surrogate.slide_config import SlideConfig
 
 L = 100e-6
@@ -84,8 +84,8 @@ def test_disc_coefficients_are_the_thin_limit_of_the_oblate_spheroid():
     """F = 16 eta a v broadside, 32/3 eta a v edgewise, T = 32/3 eta a^3 omega about both axes: the
     spheroid's resistances converge to them linearly in c/a and, as the thicker body, exceed them (so
     the disc values are a lower bound for the flake)."""
-    expect_f = np.array([dem.DISC_EDGEWISE, dem.DISC_EDGEWISE, dem.DISC_BROADSIDE])
-    expect_t = np.full(3, dem.DISC_ROTATION)
+    expect_f = np.array([flake_body.DISC_EDGEWISE, flake_body.DISC_EDGEWISE, flake_body.DISC_BROADSIDE])
+    expect_t = np.full(3, flake_body.DISC_ROTATION)
     errors = []
     for ratio in (1e-2, 1e-3, 1e-4):
         force, torque = ellipsoid_resistances(1.0, 1.0, ratio)
@@ -105,7 +105,7 @@ def test_rates_from_viscosity_follow_the_disc_formulas():
     got = DampingRates.from_viscosity(SHAPE, ETA)
     for name, value in disc_rates(SHAPE, ETA).items():
         assert_allclose(getattr(got, name), value, rtol=1e-14, err_msg=name)
-    assert_allclose(dem.VG32_VISCOSITY_40C, ETA, rtol=1e-15)
+    assert_allclose(flake_body.VG32_VISCOSITY_40C, ETA, rtol=1e-15)
     assert not got.is_uniform and DampingRates.uniform(3.0).is_uniform
 
 
@@ -258,7 +258,7 @@ def test_bad_rates_are_refused():
 
 
 # ------------------------------------------------------------------------------------------
-# the default: the oil's viscosity (issue 17); gamma an expert override
+# the default: the oil's viscosity; gamma an expert override
 # ------------------------------------------------------------------------------------------
 def test_default_configuration_is_vg32_oil_and_gamma_an_override_with_its_own_case_id():
     default, explicit = SlideConfig(), SlideConfig(oil_viscosity=ETA)

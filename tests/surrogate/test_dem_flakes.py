@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.dem import FlakeShape
-from tribocosim.surrogate.flakes import (axis_angle_quaternion, footprints, random_placement,
-                              rotation_matrices)
+from tribocosim.surrogate.flake_body import axis_angle_quaternion, rotation_matrices
+from tribocosim.surrogate.flakes import footprints, random_placement
 
 SHAPE = FlakeShape(12e-6, 0.5e-6)
 N, L = 64, 64e-6  # dx = 1 um
@@ -109,7 +109,7 @@ def footprint_ref(r, R, shape, n, size):
 
 
 def test_footprints_of_all_flakes_at_once_equal_one_at_a_time_bit_for_bit():
-    """footprints() rasterises every flake in one set of array operations (issue 17, item 4)."""
+    """footprints() rasterises every flake in one set of array operations."""
     rng = np.random.default_rng(4)
     pos = np.column_stack([rng.uniform(-2e-6, L, 30), rng.uniform(0, L, 30),
                            rng.uniform(-1e-6, 1e-6, 30)])

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.campaign import expand_cases, load_records, run_campaign
 from tribocosim.surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, make_executor
 from tribocosim.surrogate.sweep import parse_sweep

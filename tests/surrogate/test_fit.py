@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.fit import (alpha_law, ensemble, fit_all, fit_alpha, fit_alpha_law, fit_contact,
                            fit_through_origin)
 

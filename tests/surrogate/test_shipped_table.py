@@ -15,7 +15,7 @@ import json
 import numpy as np
 import pytest
 
-from tribocosim.components.paths import DEFAULT_TABLE
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.surrogate.campaign import make_case, run_case
 from tribocosim.surrogate.sweep import load_preset, parse_sweep_dict

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate import slide_cli
 from tribocosim.surrogate.slide_config import SlideConfig
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import ParameterError
+from tribocosim.errors import ParameterError
 from tribocosim.surrogate.coupling import _generate_surfaces
 from tribocosim.surrogate.slide_config import SlideConfig
 from tribocosim.surrogate.surfaces import (MIN_PIXELS_PER_WAVELENGTH, load_height_map,
@@ -113,7 +113,7 @@ def test_bad_parameters_name_the_argument(kwargs, name):
 
 
 # ------------------------------------------------------------------------------------------
-# statistics and the roll-off wavelength (issue 17, item 2)
+# statistics and the roll-off wavelength
 # ------------------------------------------------------------------------------------------
 def test_summit_count_of_a_checkerboard_of_bumps():
     """cos(2 pi k i/n) cos(2 pi k j/n) has its strict 8-neighbour maxima where both factors are +1 or

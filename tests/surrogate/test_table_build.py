@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.components.errors import TableError
+from tribocosim.errors import TableError
 from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
 from tribocosim.surrogate.campaign import expand_cases
 from tribocosim.surrogate.fit import beta_form

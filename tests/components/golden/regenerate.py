@@ -23,7 +23,7 @@ V0 = 0.08  # m/s
 
 
 def _strip(**kw):
-    from tribocosim.components.paths import DEFAULT_TABLE
+    from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 
     p = StripDrawParameters(**kw)

@@ -14,7 +14,7 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
 from tribocosim.components.fmus.adapter import RealWithUnit, add_unit_definitions
-from tribocosim.components.native.linear_model import expm
+from tribocosim.components.linear_model import expm
 
 
 class OscMassA(Fmi2Slave):

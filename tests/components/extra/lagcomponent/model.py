@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from tribocosim.components.errors import ParameterError, check_finite
+from tribocosim.errors import ParameterError, check_finite
 from tribocosim.components.params import param, validate_fields
 
 

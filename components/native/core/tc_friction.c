@@ -1,0 +1,149 @@
+/* The local friction law (the equations are in tc_friction.h). */
+#include "tc_friction.h"
+
+#include <math.h>
+
+#include "tc_table_lookup.h"
+
+static const tc_msg NO_MSG = {NULL, 0}; /* lookups under the clamp policy cannot fail */
+
+static int with_areas(const tc_stripdraw_params *p, const tc_table *table) {
+    return p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE && table != NULL && table->format_version >= 2;
+}
+
+int tc_law_check(const tc_stripdraw_params *p, const tc_table *table, tc_msg msg) {
+    if (p->friction_model != TC_STRIPDRAW_FRICTION_MODEL_TABLE) return TC_OK;
+    if (table == NULL) return tc_fail(msg, TC_ERROR, "friction_model = 'table' needs a friction table; none was given");
+    if (p->particle_area_rule == TC_STRIPDRAW_PARTICLE_AREA_RULE_CLUSTERS && table->format_version < 3)
+        return tc_fail(msg, TC_ERROR,
+                       "particle_area_rule = 'clusters' needs a friction table of format version 3 (with the flake-borne "
+                       "area of the paper's cluster rule); this table is version %d: rebuild it with tribocosim "
+                       "surrogate table", table->format_version);
+    if (table->format_version < 2 &&
+        (p->contact_area != TC_STRIPDRAW_CONTACT_AREA_MESOSCALE || p->particle_area_scale != 1.0 ||
+         p->flake_shear_ratio != 0.0))
+        return tc_fail(msg, TC_ERROR,
+                       "contact_area = '%s' with particle_area_scale = %.17g and flake_shear_ratio = %.17g needs a "
+                       "friction table of format version 2 (with the contact areas); this table is version 1 (mu "
+                       "only): rebuild it with tribocosim surrogate table",
+                       p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8 ? "eq8" : "mesoscale", p->particle_area_scale,
+                       p->flake_shear_ratio);
+    return TC_OK;
+}
+
+double tc_law_alpha(const tc_stripdraw_params *p, double velocity) {
+    if (p->alpha_v_ref == 0) return p->alpha_b;
+    return p->alpha_b * -expm1(-fabs(velocity) / p->alpha_v_ref);
+}
+
+/* the table's A_p/A0 of the rule the parameters name: every load-bearing flake, or the paper's cluster rule alone
+ * (version 3 tables; a table without it has only the first) */
+static const double *particle_area(const tc_stripdraw_params *p, const tc_table *table) {
+    if (p->particle_area_rule == TC_STRIPDRAW_PARTICLE_AREA_RULE_CLUSTERS) return table->particle_area_clusters;
+    return table->particle_area;
+}
+
+/* the share of the particle-free shear that the flake-borne contact lacks: (1 - r) s, so that
+ * mu = mu0 [(1 - s A_p / A_c) + r s A_p / A_c] = mu0 (1 - (1 - r) s A_p / A_c) */
+static double shear_loss(const tc_stripdraw_params *p) {
+    return (1.0 - p->flake_shear_ratio) * p->particle_area_scale;
+}
+
+/* A_c/A0 at one pressure for n queries: Eq. 8, or the table's (clamped). */
+static void contact_area(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
+                         const double *velocity, const double *beta, double *ac) {
+    if (p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8) {
+        const double eq8 = p->kappa * pressure / (p->rms_slope * p->e_star);
+        for (size_t k = 0; k < n; ++k) ac[k] = eq8;
+        return;
+    }
+    (void)tc_table_lookup(table, table->contact_area, pressure, n, velocity, beta, TC_TABLE_CLAMP, ac, NULL, NO_MSG);
+}
+
+/* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */
+static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
+    const double *b = table->beta;
+    double d_prev = 0.0;
+    for (size_t k = 0; k < table->n_beta; ++k) {
+        double ap, ac;
+        (void)tc_table_lookup(table, particle_area(p, table), pressure, 1, &velocity, b + k, TC_TABLE_CLAMP, &ap, NULL,
+                              NO_MSG);
+        contact_area(p, table, pressure, 1, &velocity, b + k, &ac);
+        const double d = p->particle_area_scale * ap - ac;
+        if (d >= -TC_REACH_RTOL * ac) {
+            if (k == 0) return 0.0;
+            return fmin(1.0, b[k - 1] + (b[k] - b[k - 1]) * (-d_prev) / (d - d_prev));
+        }
+        d_prev = d;
+    }
+    return 1.0;
+}
+
+double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table) {
+    switch (p->friction_model) {
+    case TC_STRIPDRAW_FRICTION_MODEL_TABLE: {
+        if (!with_areas(p, table)) return table != NULL ? table->beta_threshold : 1.0;
+        double top = 1.0;
+        int first = 1;
+        for (size_t i = 0; i < table->n_pressure; ++i) {
+            if (!(table->pressure[i] > 0)) continue;
+            for (size_t j = 0; j < table->n_velocity; ++j) {
+                const double c = crossing(p, table, table->pressure[i], table->velocity[j]);
+                top = first || c > top ? c : top;
+                first = 0;
+            }
+        }
+        return top;
+    }
+    case TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM: {
+        const double top = p->particle_area_scale * p->alpha_b * p->rms_slope;
+        return top <= 0 ? 1.0 : fmin(1.0, p->kappa / top);
+    }
+    default:
+        return 1.0;
+    }
+}
+
+double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed) {
+    if (with_areas(p, table) && pressure > 0) return crossing(p, table, pressure, fabs(speed));
+    return tc_law_beta_threshold(p, table);
+}
+
+int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n, const double *velocity,
+              const double *beta, double *mu, unsigned char *clamped, double *ac_work, tc_msg msg) {
+    switch (p->friction_model) {
+    case TC_STRIPDRAW_FRICTION_MODEL_CONSTANT:
+        for (size_t k = 0; k < n; ++k) mu[k] = p->mu_const;
+        break;
+    case TC_STRIPDRAW_FRICTION_MODEL_CLOSED_FORM:
+        for (size_t k = 0; k < n; ++k) /* Eq. 9 with Eq. 23 */
+            mu[k] = p->mu0 * (1.0 - shear_loss(p) * tc_law_alpha(p, velocity[k]) * beta[k] * p->rms_slope / p->kappa);
+        break;
+    default: {
+        if (!with_areas(p, table))
+            return tc_table_lookup(table, table->mu, pressure, n, velocity, beta, p->table_policy, mu, clamped, msg);
+        /* mu = mu0 (1 - (1 - r) s A_p / A_c); A_p (and the table's A_c) located once per query */
+        const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
+        int rc = tc_table_lookup2(table, particle_area(p, table), eq8 ? NULL : table->contact_area, pressure, n,
+                                  velocity, beta, p->table_policy, mu, ac_work, clamped, msg);
+        if (rc != TC_OK) return rc;
+        if (clamped != NULL && table->unsimulated != NULL)
+            for (size_t k = 0; k < n; ++k) { /* a lookup that reads a node the campaign did not simulate counts too */
+                double off;
+                (void)tc_table_lookup(table, table->unsimulated, pressure, 1, velocity + k, beta + k, TC_TABLE_CLAMP,
+                                      &off, NULL, NO_MSG);
+                clamped[k] |= off > 0.0;
+            }
+        if (eq8) contact_area(p, table, pressure, n, velocity, beta, ac_work);
+        const double loss = shear_loss(p);
+        for (size_t k = 0; k < n; ++k) {
+            const double share = ac_work[k] > 0 ? mu[k] / ac_work[k] : 0.0;
+            mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * share);
+        }
+        return TC_OK;
+    }
+    }
+    if (clamped != NULL)
+        for (size_t k = 0; k < n; ++k) clamped[k] = 0;
+    return TC_OK;
+}

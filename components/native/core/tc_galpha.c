@@ -1,0 +1,361 @@
+/* One generalized-alpha step of the bar, with the free parts of the bar condensed onto the pad.
+ *
+ * The step (Chung & Hulbert 1993, doi:10.1115/1.2900803; force-averaged form, docs/model.md section 2)
+ * minimises the convex incremental potential of the free nodes 0..N-1 (node N is the grip, moved with the
+ * grip velocity):
+ *
+ *     Pi(u) = sum_i [ cm m_i / 2 (u_i - u~_i)^2 + lin_i (u_i - u0_i) ]
+ *           + (1 - af) [ 1/2 u^T K u + sum_i w_T ov_i phi_i(u_i - Up_i) ],
+ *
+ * with cm = (1 - am) / (b dt^2), the Newmark predictor u~ = u_n + dt v_n + dt^2 (1/2 - b) a_n,
+ * lin_i = am m_i a_n,i + af f_n,i, u0 = u_n + dt V0 (the strip following the grip rigidly: the initial
+ * guess) and phi the potential of the return-mapped interface spring (interface_law below; Eq. 4-5).
+ *
+ * Only the nodes under the pad (ov_i > 0) make Pi non-quadratic. The bar outside the pad, the *tail*
+ * (nodes 0..lo-1, not yet drawn in) and the *grip side* (hi+1..N-1), is a linear chain, so it is solved
+ * exactly for any position of the pad's end nodes (static condensation, a Schur complement): Gaussian
+ * elimination of the tail from node 0 towards lo and of the grip side from N-1 towards hi. What the
+ * elimination leaves on an end node is a spring of stiffness K_t (K_g) and a force s_t (s_g), so that
+ * the potential of the window [lo, hi],
+ *
+ *     Pi_W(d) = sum_{i in W} [ cm m_i / 2 (x_i + d_i)^2 + lin_i d_i + (1 - af) w_T ov_i phi_i(z_i + d_i) ]
+ *             + (1 - af) k_e / 2 sum_{e = lo}^{hi-1} (dU_e + d_{e+1} - d_e)^2
+ *             + s_t d_lo + K_t d_lo^2 / 2 + s_g d_hi + K_g d_hi^2 / 2,
+ *
+ * is Pi minimised over the free chains (up to a constant). The unknowns are the increments d = u - u0,
+ * with x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i, z_i = u0_i - Up_i and dU_e = U_e+1 - U_e:
+ * no difference of two displacements of the size of the draw is ever taken. The window is solved by
+ * Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by a
+ * backtracking (Armijo) line search on Pi_W; it is converged when a full Newton step lands on the set it
+ * was built from (the problem is linear on that set, so that step was exact), or when the window's
+ * residual is below ``rtol`` times the force scale (friction capacity + grip pull). The chains are then
+ * back-substituted and every free node gets its Newmark update.
+ *
+ * The elimination factors depend on the step length only (tc_sd_chain_factors; the model keeps them per
+ * step length). Written with c = (1 - af) k_e and the excess e_i = d'_i - c of the eliminated diagonal d'_i
+ * over c, the recurrences have no cancellation:
+ *
+ *     tail:       e_0 = cm m_0,              e_i = cm m_i + q_{i-1} e_{i-1},   q_i = c / (c + e_i),
+ *     grip side:  g_{N-1} = cm m_{N-1} + c,  g_j = cm m_j + q'_{j+1} g_{j+1}, q'_j = c / (c + g_j),
+ *
+ * and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
+ * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
+ * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
+ * Both chains are swept side by side (they are independent), with each node's residual and Newmark update
+ * computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
+ *
+ * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
+ * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
+ * bar and to the explicit scheme.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "tc_galpha.h"
+#include "tc_kernels.h"
+
+/* the interface law (Eq. 4-5) for one node: traction, slipping flag, and the potential phi of the return-mapped
+ * spring (k_s x^2 / 2 sticking, T_max |x| - T_max^2 / (2 k_s) slipping; its derivative is T) */
+static double interface_law(double x, double ks, double tmax, int *slipping, double *phi) {
+    const double trial = ks * x;
+    if (trial > tmax) {
+        *slipping = 1;
+        *phi = tmax * fabs(x) - 0.5 * tmax * tmax / ks;
+        return tmax;
+    }
+    if (trial < -tmax) {
+        *slipping = 1;
+        *phi = tmax * fabs(x) - 0.5 * tmax * tmax / ks;
+        return -tmax;
+    }
+    *slipping = 0;
+    *phi = 0.5 * ks * x * x;
+    return trial;
+}
+
+void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain) {
+    const size_t N = n - 1;
+    double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
+           *ig = chain + 5 * n;
+    memset(chain, 0, TC_SD_CHAIN(n) * sizeof *chain);
+    for (size_t i = 0; i + 1 < N; ++i) { /* the tail never reaches node N-1 */
+        const double e = i == 0 ? cm * m[i] : cm * m[i] + qt[i - 1] * et[i - 1];
+        et[i] = e;
+        it[i] = 1.0 / (c + e);
+        qt[i] = c * it[i];
+    }
+    for (size_t j = N - 1; j >= 1 && j < N; --j) { /* the grip side never reaches node 0 */
+        const double g = j == N - 1 ? cm * m[j] + c : cm * m[j] + qg[j + 1] * eg[j + 1];
+        eg[j] = g;
+        ig[j] = 1.0 / (c + g);
+        qg[j] = c * ig[j];
+    }
+}
+
+/* the window: the nodes with ov > 0 and the free nodes between them, free nodes only (<= N-1); node N-1 alone
+ * when no free node touches the pad. The nodes with ov > 0 lie in [first, last] (first > last: anywhere). */
+static void window(size_t n, const double *ov, size_t first, size_t last, size_t *lo_out, size_t *hi_out) {
+    const size_t N = n - 1;
+    size_t lo, hi;
+    int found;
+    if (first <= last && last < n) {
+        found = tc_sd_positive_range(last + 1 - first, ov + first, &lo, &hi);
+        lo += first;
+        hi += first;
+    } else {
+        found = tc_sd_positive_range(n, ov, &lo, &hi);
+    }
+    if (!found || lo > N - 1) {
+        *lo_out = *hi_out = N - 1;
+        return;
+    }
+    *lo_out = lo;
+    *hi_out = hi < N - 1 ? hi : N - 1;
+}
+
+/* the window's inputs and its boundary springs */
+typedef struct {
+    size_t lo, hi;
+    const double *x, *z, *dU, *lin, *ov, *m, *tmax;
+    double ke, ks, wT, af, cm, st, kt, sg, kg;
+} window_problem;
+
+/* Pi_W(d), the window residual r = dPi_W/dd and max |r|; tractions T and stick/slip states (0 off the pad,
+ * 1 stick, 2/3 slip +/-) and the nodal forces f (contact + elements inside the window) */
+static double window_eval(const window_problem *w, const double *d, double *T, signed char *state, double *f,
+                          double *r, double *rmax) {
+    const size_t lo = w->lo, hi = w->hi;
+    const double af = w->af, ke = w->ke, cm = w->cm;
+    double pot = 0.0;
+    for (size_t i = lo; i <= hi; ++i) {
+        T[i] = 0.0;
+        state[i] = 0;
+        if (w->ov[i] > 0.0) {
+            const double xs = w->z[i] + d[i];
+            int slipping;
+            double phi;
+            T[i] = interface_law(xs, w->ks, w->tmax[i], &slipping, &phi);
+            state[i] = (signed char)(!slipping ? 1 : (xs > 0 ? 2 : 3));
+            pot += (1.0 - af) * w->wT * w->ov[i] * phi;
+        }
+        f[i] = T[i] * w->wT * w->ov[i];
+    }
+    for (size_t e = lo; e < hi; ++e) {
+        const double s = w->dU[e] + (d[e + 1] - d[e]);
+        f[e] -= ke * s;
+        f[e + 1] += ke * s;
+        pot += (1.0 - af) * 0.5 * ke * s * s;
+    }
+    for (size_t i = lo; i <= hi; ++i) {
+        const double y = w->x[i] + d[i];
+        r[i] = cm * w->m[i] * y + w->lin[i] + (1.0 - af) * f[i];
+        pot += 0.5 * cm * w->m[i] * y * y + w->lin[i] * d[i];
+    }
+    r[lo] += w->st + w->kt * d[lo];
+    pot += (w->st + 0.5 * w->kt * d[lo]) * d[lo];
+    r[hi] += w->sg + w->kg * d[hi];
+    pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
+    double rm = 0.0;
+    for (size_t i = lo; i <= hi; ++i) rm = fabs(r[i]) > rm ? fabs(r[i]) : rm;
+    *rmax = rm;
+    return pot;
+}
+
+int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
+                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
+                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
+                 double rtol, const double *chain, double *fric, double *reaction, double *work,
+                 signed char *iwork) {
+    const size_t N = n - 1;
+    const double c = (1.0 - af) * ke;
+    const double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
+                 *ig = chain + 5 * n;
+    double *x = work, *lin = work + n, *dU = work + 2 * n, *z = work + 3 * n, *d = work + 4 * n;
+    double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
+    double *dtr = work + 10 * n, *sub = work + 11 * n, *dia = work + 12 * n, *sup = work + 13 * n;
+    double *rhs = work + 14 * n, *step = work + 15 * n, *tw = work + 16 * n; /* tw: 2 n for the Thomas solve */
+    signed char *state = iwork, *used = iwork + n;
+
+    /* a step whose square underflows cannot be taken */
+    if (beta * dt * dt == 0.0) return -2;
+    size_t lo, hi;
+    window(n, ov, first, last, &lo, &hi);
+    const double cm = (1.0 - am) / (beta * dt * dt);
+    const double cA = dt * dt * (0.5 - beta);
+    const double shift = dt * vg;
+    for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
+    for (size_t i = lo; i <= hi; ++i) {
+        x[i] = shift - dt * V[i] - cA * A[i];
+        lin[i] = am * m[i] * A[i] + af * fprev[i];
+        Upn[i] = Up[i];
+        d[i] = 0.0;
+        if (ov[i] > 0.0) {
+            if (contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
+            z[i] = (U[i] - Upn[i]) + shift;
+        }
+    }
+    Upn[N] = Up[N];
+    if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
+    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
+     * recurrences are independent, and each node's residual at d = 0 is computed on the way */
+    const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
+    double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
+    /* node k of the tail and node N-1-k of the grip side; the first of each has no carry (and node 0 no element
+     * on its left) */
+#define TAIL_NODE(i, carry)                                                                                     \
+    do {                                                                                                       \
+        x[i] = shift - dt * V[i] - cA * A[i];                                                                  \
+        const double fel = ((i) > 0 ? ke * dU[(i) - 1] : 0.0) - ke * dU[i];                                    \
+        double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);              \
+        if (carry) r0 += qt[(i) - 1] * rt;                                                                     \
+        rho[i] = rt = r0;                                                                                      \
+    } while (0)
+#define GRIP_NODE(j, carry)                                                                                     \
+    do {                                                                                                       \
+        x[j] = shift - dt * V[j] - cA * A[j];                                                                  \
+        const double fel = ke * dU[(j) - 1] - ke * dU[j];                                                      \
+        double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);              \
+        if (carry) r0 += qg[(j) + 1] * rg;                                                                     \
+        rho[j] = rg = r0;                                                                                      \
+    } while (0)
+    if (nt > 0) TAIL_NODE(0, 0);
+    if (ng > 0) GRIP_NODE(N - 1, 0);
+    size_t k = 1;
+    for (; k < both; ++k) { /* side by side, without tests in the loop */
+        TAIL_NODE(k, 1);
+        GRIP_NODE(N - 1 - k, 1);
+    }
+    for (size_t kt = k; kt < nt; ++kt) TAIL_NODE(kt, 1);
+    for (size_t kg = k; kg < ng; ++kg) GRIP_NODE(N - 1 - kg, 1);
+#undef TAIL_NODE
+#undef GRIP_NODE
+    window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
+    if (lo > 0) {
+        w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
+        w.kt = qt[lo - 1] * et[lo - 1];
+    }
+    if (hi < N - 1) {
+        w.sg = -c * dU[hi] - qg[hi + 1] * rho[hi + 1];
+        w.kg = qg[hi + 1] * eg[hi + 1];
+    } else { /* the element to the grip node, which does not move within the step */
+        w.sg = -c * dU[hi];
+        w.kg = c;
+    }
+    double fscale = ke * fabs(dt * vg) + 1e-300;
+    for (size_t i = lo; i <= hi; ++i) fscale += tmax[i] * wT * ov[i]; /* ov = 0 outside: those terms are +0 */
+    fscale += tmax[N] * wT * ov[N];
+
+    const size_t nw = hi - lo + 1;
+    double rmax, rmax_t;
+    double pot = window_eval(&w, d, T, state, f, r, &rmax);
+    int iters = 0;
+    while (rmax > rtol * fscale) {
+        if (iters >= max_iter) return -1;
+        for (size_t i = lo; i <= hi; ++i) {
+            const double kt_i = state[i] == 1 ? ks * wT * ov[i] : 0.0;
+            const double springs = (i > lo ? 1.0 : 0.0) + (i < hi ? 1.0 : 0.0);
+            dia[i - lo] = cm * m[i] + (1.0 - af) * (springs * ke + kt_i);
+            sub[i - lo] = -(1.0 - af) * ke;
+            sup[i - lo] = -(1.0 - af) * ke;
+            rhs[i - lo] = -r[i];
+            used[i] = state[i];
+        }
+        dia[0] += w.kt;
+        dia[nw - 1] += w.kg;
+        tc_thomas(nw, sub, dia, sup, rhs, step, tw);
+        double slope = 0.0;
+        for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
+        double alpha = 1.0, pot_t;
+        for (;;) { /* backtracking (Armijo) line search on Pi_W */
+            for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
+            pot_t = window_eval(&w, dtr, T, state, f, r, &rmax_t);
+            if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
+            alpha *= 0.5;
+        }
+        for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
+        pot = pot_t;
+        rmax = rmax_t;
+        iters += 1;
+        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
+            int same = 1;
+            for (size_t i = lo; i <= hi; ++i)
+                if (state[i] != used[i]) {
+                    same = 0;
+                    break;
+                }
+            if (same) break;
+        }
+    }
+    /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
+    const double bdt2 = beta * dt * dt;
+    double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
+#define NEWMARK(i, di)                                                                                          \
+    do {                                                                                                       \
+        const double anew = (x[i] + (di)) / bdt2;                                                              \
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);                                              \
+        A[i] = anew;                                                                                           \
+        U[i] = U[i] + (shift + (di));                                                                          \
+    } while (0)
+    size_t kb = 0;
+    for (; kb < both; ++kb) { /* side by side, without tests in the loop */
+        const size_t i = lo - 1 - kb, j = hi + 1 + kb;
+        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
+        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
+        NEWMARK(i, dt_t);
+        NEWMARK(j, dt_g);
+    }
+    for (size_t kt = kb; kt < nt; ++kt) {
+        const size_t i = lo - 1 - kt;
+        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
+        NEWMARK(i, dt_t);
+    }
+    for (size_t kg = kb; kg < ng; ++kg) {
+        const size_t j = hi + 1 + kg;
+        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
+        NEWMARK(j, dt_g);
+    }
+    for (size_t i = lo; i <= hi; ++i) NEWMARK(i, d[i]);
+#undef NEWMARK
+    U[N] = U[N] + shift;
+    V[N] = vg;
+    A[N] = 0.0;
+    /* forces at the new state: friction (the window's tractions, and the grip node's if it is under the pad) */
+    if (ov[N] > 0.0) {
+        int slipping;
+        double phi;
+        T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
+        state[N] = (signed char)(!slipping ? 1 : 2);
+    }
+    /* the elements' extensions at the new state from the increments (not from the updated U, whose rounding to
+     * draw-sized values would make the forces jump by ~k_e ulp(U) between nearby inputs), their
+     * forces at every node, then the friction of the nodes under the pad (window and grip node) */
+    d[N] = 0.0;
+    double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
+    dU[0] = left;
+    fprev[0] = -ke * left;
+    for (size_t i = 1; i < N; ++i) {
+        const double right = dU[i] + (d[i + 1] - d[i]);
+        dU[i] = right;
+        fprev[i] = ke * left - ke * right;
+        left = right;
+    }
+    fprev[N] = ke * left;
+    memset(contact, 0, n);
+    double fr = 0.0;
+    for (size_t kw = lo; kw <= hi + 1; ++kw) {
+        const size_t i = kw <= hi ? kw : N; /* the window, then the grip node (hi < N always) */
+        if (!(ov[i] > 0.0)) continue;
+        contact[i] = 1;
+        Up[i] = Upn[i];
+        if (state[i] != 1) Up[i] = U[i] - T[i] / ks;
+        const double fc = T[i] * wT * ov[i];
+        fr += fc;
+        double f_i = fc;
+        if (i > 0) f_i += ke * dU[i - 1];
+        if (i < N) f_i -= ke * dU[i];
+        fprev[i] = f_i;
+    }
+    *fric = fr;
+    *reaction = fprev[N];
+    return iters;
+}

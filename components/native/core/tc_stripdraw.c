@@ -1,0 +1,985 @@
+/* The strip-draw model: 1D bar under a pad + interface law + debris transport + friction law.
+ *
+ * Physics (paper Sec. 3-4, App. B-C; docs/model.md sections 1-4):
+ *
+ * - bar, half model (one pad, one face): rho U_tt = E U_XX (Eq. 2), linear elements of length l_e, lumped
+ *   masses m_i = rho A l_e (half at both ends), element stiffness k_e = E A / l_e (Eq. 29-30); the grip node
+ *   N moves with the grip velocity V0. L_B = lead + draw_length + L_T + free_length, pad over
+ *   [a, a + L_T] with a = lead + draw_length (lead = 5 mm);
+ * - contact weight of node i: overlap ov_i of its tributary segment [x_i - l_e/2, x_i + l_e/2] (one-sided at the
+ *   ends) at x_i = X_i + U_i with the pad, divided by l_e;
+ * - interface (Eq. 4-5), elastic-perfectly-plastic Coulomb with return mapping: trial T = k_s (U_i - Up_i),
+ *   |T| <= T_max,i = mu_i P with P = F_N / (L_T w_T); nodal force -T w_T ov_i; a node that enters the pad starts
+ *   stress-free (Up_i := U_i); k_s = shear_stiffness_factor E / h_B;
+ * - explicit integrator: central difference (App. B, Eq. 31-32) at cfl_safety x 2 / omega_max, with
+ *   omega_max^2 <= (4 k_e + k_s w_T l_e) / m_1 (Gershgorin), sub-cycled inside each coupling interval;
+ * - implicit integrator: generalized-alpha (Chung & Hulbert 1993), the bar outside the pad condensed onto it
+ *   (tc_galpha.c states the equations); a step that does not converge in 60 Newton iterations is halved, up
+ *   to 12 times;
+ * - friction mu(P, v, beta) (Eq. 6-9, 23): tc_friction.h; v is the grip speed |V0| or each node's slip rate of
+ *   the last interval (friction_velocity);
+ * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
+ *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
+ *   tridiagonal M-matrix with unit column sums: beta >= 0 and sum(beta) conserved for any step), then the cap
+ *   beta <= beta_thres (Eq. 24). With a debris sink (debris_sink_length lambda > 0: lateral ejection or
+ *   compaction into a transfer layer), source and sink are one local equation per unit slide s under the pad,
+ *   d beta / ds = q - beta / lambda (q = K P / (H h_p)), integrated exactly over the interval's slide
+ *   s_i = w_i |dU_i|: beta_i e^(-s_i/lambda) + q lambda (1 - e^(-s_i/lambda)), before the advection. What the sink
+ *   and the cap take is summed (beta_removed). Unless beta_threshold
+ *   is set, the cap is the law's at the interval's pressure and grip speed. A later pass starts from
+ *   debris_carry_over times the beta field the earlier one left (beta_field).
+ *
+ * Coupling: a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one piece, the step,
+ * when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max - 1e-9)) intervals with
+ * h_max = window_courant l_e / |V0| (the largest |V0| of the piece's ends and middle); the inputs are
+ * polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly) and each
+ * interval takes their means (input_mean); per interval mu is held on the nodes that can reach the pad (contact
+ * nodes +- ceil(window_courant) + 1), the bar advanced, then beta updated from the nodal slip increments with
+ * the contact weights averaged over the interval.
+ *
+ * Outputs are functions of the state at the communication point (a vanishing step changes them by a vanishing
+ * amount): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
+ * friction_force F_S = sum over the nodes under the pad of T_i w_T ov_i with T_i = k_s (U_i - Up_i) limited to
+ * mu(P, v, beta_i) P of the current debris (what the return mapping of a vanishing step gives), mu_mean =
+ * F_S / F_N (Eq. 28), contact-weighted means under the pad at the current displacements.
+ *
+ * A step that would need more than TC_STRIPDRAW_MAX_INTERVALS intervals or TC_STRIPDRAW_MAX_SUBSTEPS explicit
+ * steps is refused (TC_DISCARD, state unchanged) before any is taken.
+ */
+#include "tc_stripdraw.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tc_friction.h"
+#include "tc_galpha.h"
+#include "tc_kernels.h"
+
+#define LEAD_LENGTH 0.005 /* m of strip behind the material under the pad at the end of the draw */
+#define MAX_HALVINGS 12
+#define CHAIN_CACHE 4     /* step lengths whose elimination factors are kept */
+#ifndef TC_STRIPDRAW_NEWTON_MAX_ITER
+#define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* the tests build with fewer to exercise the halving */
+#endif
+#define NEWTON_RTOL 1e-10 /* residual relative to the friction capacity + grip pull */
+#define GRID_TOLERANCE 1e-6 /* a step's end this close to a grid point (in internal_step) is on it */
+#define STATE_MAGIC 0x44534354u /* "TCSD" in little-endian bytes */
+#define STATE_VERSION 2u
+#define STATE_HEADER 16
+#define N_STATE_ARRAYS 7
+#define N_STATE_DOUBLES 7
+#define N_STATE_INTS 2
+
+struct tc_stripdraw {
+    tc_stripdraw_params p;
+    const tc_table *table; /* borrowed; NULL unless the table law is used */
+    size_t n;              /* nodes; node n - 1 is the grip */
+    /* mesh and constants */
+    double le, half_le, a_lo, a_hi, ke, ks, wT, dt_explicit, pad_area;
+    double am, af, gamma, beta_nm; /* generalized-alpha */
+    double beta_cap;      /* params.beta_threshold if > 0, else the law's threshold */
+    long long reach;      /* ceil(window_courant) + 1 */
+    double *X, *mass, *minv;
+    /* state */
+    double *U, *V, *A, *Up, *beta, *slip_rate, *fprev;
+    signed char *contact;
+    double time, reaction, normal_force, grip_velocity, beta_removed, beta_produced;
+    long long n_steps, clamp_count;
+    /* derived from U: contact weights, and the first and last node where they are not 0 (w_first > w_last: none) */
+    double *w;
+    size_t w_first, w_last;
+    /* derived from the state: the friction limits mu P of the nodes that can reach the pad (tmax), at the
+     * state's pressure and velocity; the next interval reuses them when its pressure and speed are the same */
+    double *tmax;
+    double limit_pressure, limit_speed;
+    size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
+    int limit_clamped;         /* a lookup was outside the table */
+    /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
+    double slip_h, backup_slip_h;
+    /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
+    double beta_hi;
+    int refusal; /* enum tc_stripdraw_refusal of the last refused step */
+    /* work arrays */
+    double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
+    double *fwork;          /* explicit: nodal forces */
+    double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
+    double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
+    double chain_h[CHAIN_CACHE];
+    int chain_used, chain_next;
+    double cap_pressure, cap_speed, cap_value; /* tc_law_beta_cap of the last (P, |V0|), when cap_known */
+    int cap_known;
+    unsigned char *clamped; /* table lookups flagged as clamped */
+    signed char *giwork;
+    unsigned char *backup; /* the state before the current step */
+    size_t state_size;
+    double *pool;          /* every double array above, in one allocation */
+    unsigned char *bytes;  /* contact, clamped, giwork and backup, in one allocation */
+};
+
+/* ---------------------------------------------------------------------------------------------------
+ * kernels
+ * ------------------------------------------------------------------------------------------------- */
+
+void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                   double *ov) {
+    /* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
+     * positions are finite, and the compares vectorise) */
+#define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
+    if (n == 0) return;
+    for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
+        const double x = X[i] + U[i];
+        const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
+        ov[i] = d > 0.0 ? d : 0.0;
+    }
+    const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
+    const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
+    ov[0] = d0 > 0.0 ? d0 : 0.0;
+    if (n > 1) ov[n - 1] = dn > 0.0 ? dn : 0.0;
+#undef TC_SD_OVERLAP
+}
+
+/* The interface law (Eq. 4-5) on one node of elastic slip x: the traction limited to +-tmax; *slipping when
+ * the trial traction exceeds it. */
+static double traction(double x, double ks, double tmax, int *slipping) {
+    const double trial = ks * x;
+    *slipping = fabs(trial) > tmax;
+    return trial > tmax ? tmax : (trial < -tmax ? -tmax : trial);
+}
+
+void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
+                    signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
+                    double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
+                    double *reaction, double *f) {
+    const size_t N = n - 1;
+    double fr = 0.0;
+    for (size_t i = 0; i < n; ++i) f[i] = 0.0;
+    for (long long s = 0; s < n_sub; ++s) {
+        /* predictor: U += dt V + dt^2/2 A, V += dt/2 A; the grip follows V0 */
+        for (size_t i = 0; i < N; ++i) {
+            U[i] += dt * V[i] + 0.5 * dt * dt * A[i];
+            V[i] += 0.5 * dt * A[i];
+        }
+        U[N] += dt * vg;
+        V[N] = vg;
+        A[N] = 0.0;
+        for (size_t i = 0; i < n; ++i) f[i] = 0.0;
+        for (size_t e = 0; e < N; ++e) {
+            const double s_e = ke * (U[e + 1] - U[e]);
+            f[e] += s_e;
+            f[e + 1] -= s_e;
+        }
+        /* interface law with return mapping on the nodes under the pad */
+        fr = 0.0;
+        for (size_t i = 0; i < n; ++i) {
+            const double x = X[i] + U[i];
+            const double lo = i == 0 ? x : x - half_le;
+            const double hi = i == N ? x : x + half_le;
+            const double ov = fmin(hi, a_hi) - fmax(lo, a_lo);
+            if (ov > 0.0) {
+                if (contact[i] == 0) {
+                    Up[i] = U[i];
+                    contact[i] = 1;
+                }
+                int slipping;
+                const double T = traction(U[i] - Up[i], ks, tmax[i], &slipping);
+                if (slipping) Up[i] = U[i] - T / ks;
+                const double F = T * wT * ov;
+                f[i] -= F;
+                fr += F;
+            } else {
+                contact[i] = 0;
+            }
+        }
+        /* corrector: A = f / m, V += dt/2 A */
+        for (size_t i = 0; i < N; ++i) {
+            A[i] = f[i] * minv[i];
+            V[i] += 0.5 * dt * A[i];
+        }
+    }
+    *fric = fr;
+    *reaction = -f[N];
+}
+
+/* implicit upwind advection of beta under the pad (Eq. 13-14); work holds 5 n doubles */
+void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
+                  double element_length, double *out, double *work) {
+    memcpy(out, beta, n_all * sizeof *out);
+    size_t lo, last; /* the pad covers one contiguous run of nodes */
+    if (zeta == 0.0 || !tc_sd_positive_range(n_all, weight, &lo, &last) || last - lo < 1) return;
+    const size_t n = last + 1 - lo;
+    double *diag = work, *sub = work + n, *sup = work + 2 * n, *tw = work + 3 * n;
+    for (size_t k = 0; k < n; ++k) {
+        diag[k] = 1.0;
+        sub[k] = 0.0;
+        sup[k] = 0.0;
+    }
+    for (size_t k = 0; k + 1 < n; ++k) {
+        const size_t a = lo + k, b = a + 1;
+        if (weight[a] > 0.0 && weight[b] > 0.0) {
+            /* face Courant number; upwind: from node k+1 into k when c > 0, from k into k+1 otherwise */
+            const double c = zeta * 0.5 * (dU[a] + dU[b]) / element_length;
+            if (c > 0.0) {
+                diag[k + 1] += c;
+                sup[k] -= c;
+            } else {
+                diag[k] -= c;
+                sub[k + 1] += c;
+            }
+        }
+    }
+    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * the model
+ * ------------------------------------------------------------------------------------------------- */
+
+/* the contact weights of U (the overlap with the pad over l_e) and their nonzero range */
+static void update_weights(tc_stripdraw *m) {
+    double *w = m->w;
+    const size_t n = m->n;
+    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
+    size_t first = 0, last = n;
+    while (first < n && w[first] == 0.0) ++first;
+    while (last > first && w[last - 1] == 0.0) --last;
+    m->w_first = first < n ? first : 1;
+    m->w_last = first < n ? last - 1 : 0;
+    for (size_t i = first; i < last; ++i) w[i] = w[i] / m->le;
+}
+
+/* the slip rates of the last interval, |dU| / h, into slip_rate if they are not there */
+static void form_slip_rates(tc_stripdraw *m) {
+    if (!(m->slip_h > 0)) return;
+    for (size_t i = 0; i < m->n; ++i) m->slip_rate[i] = fabs(m->dU[i]) / m->slip_h;
+    m->slip_h = 0.0;
+}
+
+/* The friction limits mu P of the nodes that can reach the pad within an interval (contact nodes +- reach) at
+ * pressure P and grip speed (or the slip rates), into tmax (0 elsewhere), the clamped lookups flagged; the range
+ * and the key kept for reuse. */
+static int friction_limits(tc_stripdraw *m, double pressure, double speed, int policy, tc_msg msg) {
+    const size_t n = m->n;
+    for (size_t i = m->limit_lo; i < m->limit_hi; ++i) m->tmax[i] = 0.0; /* 0 elsewhere already */
+    m->limit_pressure = pressure;
+    m->limit_speed = speed;
+    m->limit_lo = m->limit_hi = 0;
+    m->limit_clamped = 0;
+    if (!(pressure > 0)) return TC_OK;
+    long long lo = 0, hi = (long long)n;
+    if (m->w_first <= m->w_last) {
+        const long long first = (long long)m->w_first, last = (long long)m->w_last;
+        lo = first - m->reach > 0 ? first - m->reach : 0;
+        hi = last + 1 + m->reach < (long long)n ? last + 1 + m->reach : (long long)n;
+    }
+    if (hi <= lo) return TC_OK;
+    const size_t l = (size_t)lo, cnt = (size_t)(hi - lo);
+    const double *v = m->vel;
+    if (m->p.friction_velocity == TC_STRIPDRAW_FRICTION_VELOCITY_GRIP) {
+        for (size_t k = 0; k < cnt; ++k) m->vel[k] = speed;
+    } else {
+        form_slip_rates(m);
+        v = m->slip_rate + l;
+    }
+    tc_stripdraw_params p = m->p;
+    p.table_policy = policy;
+    int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, msg);
+    if (rc != TC_OK) return rc;
+    for (size_t k = 0; k < cnt; ++k) {
+        m->tmax[l + k] = m->mu[k] * pressure;
+        m->limit_clamped |= m->clamped[k];
+    }
+    m->limit_lo = l;
+    m->limit_hi = l + cnt;
+    return TC_OK;
+}
+
+/* the limits of the state (its pressure and velocity), for the outputs and the next interval; they cannot fail */
+static void state_limits(tc_stripdraw *m) {
+    const tc_msg none = {NULL, 0};
+    (void)friction_limits(m, m->normal_force / m->pad_area, fabs(m->grip_velocity), TC_TABLE_CLAMP, none);
+}
+
+/* the elimination factors of the free bar for the step length h, kept for the last CHAIN_CACHE step lengths */
+static const double *chain_for(tc_stripdraw *m, double h) {
+    const size_t size = TC_SD_CHAIN(m->n);
+    for (int k = 0; k < m->chain_used; ++k)
+        if (m->chain_h[k] == h) return m->chain + (size_t)k * size;
+    int k;
+    if (m->chain_used < CHAIN_CACHE) {
+        k = m->chain_used++;
+    } else {
+        k = m->chain_next;
+        m->chain_next = (k + 1) % CHAIN_CACHE;
+    }
+    m->chain_h[k] = h;
+    const double cm = (1.0 - m->am) / (m->beta_nm * h * h);
+    tc_sd_chain_factors(m->n, cm, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
+    return m->chain + (size_t)k * size;
+}
+
+static int refuse(tc_stripdraw *m, int kind) {
+    m->refusal = kind;
+    return TC_DISCARD;
+}
+
+/* one implicit step of h from the overlaps ov (nonzero within [first, last]; first > last: not known), halved when
+ * its Newton iteration does not converge */
+static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t first, size_t last, double vg, int depth,
+                         tc_msg msg) {
+    const size_t n = m->n;
+    double fric, reaction;
+    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke, m->ks, m->wT,
+                          m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
+                          NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
+    if (it >= 0) {
+        m->reaction = reaction;
+        return TC_OK;
+    }
+    if (it == -2)
+        return tc_fail(msg, refuse(m, TC_REFUSED_SOLVER),
+                       "the implicit bar step of %.3g s is too short (its square underflows) at t = %.9g s", h,
+                       m->time);
+    if (depth >= MAX_HALVINGS)
+        return tc_fail(msg, refuse(m, TC_REFUSED_SOLVER),
+                       "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
+                       "the step halved %d times to %.3g s",
+                       m->time, depth, h);
+    int rc = implicit_step(m, 0.5 * h, ov, first, last, vg, depth + 1, msg);
+    if (rc != TC_OK) return rc;
+    double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
+    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
+    return implicit_step(m, 0.5 * h, ov_mid, 1, 0, vg, depth + 1, msg);
+}
+
+/* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
+static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
+    if (m->p.beta_threshold > 0) return m->beta_cap;
+    if (!(m->cap_known && pressure == m->cap_pressure && speed == m->cap_speed)) {
+        m->cap_value = tc_law_beta_cap(&m->p, m->table, pressure, speed);
+        m->cap_pressure = pressure;
+        m->cap_speed = speed;
+        m->cap_known = 1;
+    }
+    return fmin(m->beta_cap, m->cap_value);
+}
+
+/* whether every a[i] is finite (a sum in four lanes: inf or NaN anywhere makes it non-finite) */
+static int all_finite(const double *a, size_t n) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) s[k] += 0.0 * a[i + (size_t)k];
+    for (; i < n; ++i) s[0] += 0.0 * a[i];
+    return isfinite(s[0] + s[1] + s[2] + s[3]);
+}
+
+/* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
+static double largest(const double *a, size_t n) {
+    double mx[4] = {a[0], a[0], a[0], a[0]};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) mx[k] = a[i + (size_t)k] > mx[k] ? a[i + (size_t)k] : mx[k];
+    for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
+    const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
+    return m23 > m01 ? m23 : m01;
+}
+
+/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU, with
+ * the weights averaged over the interval. Only nodes where the weights of the start (w0, range [f0, l0]) or the
+ * end are not 0 change (the source and the flux are 0 elsewhere), unless the cap falls below beta elsewhere. */
+static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0) {
+    const tc_stripdraw_params *p = &m->p;
+    const size_t n = m->n;
+    const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
+    size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
+    if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
+    if (m->w_first > m->w_last) t0 = f0, t1 = l0;
+    const int windowed = isfinite(kp) && all_finite(m->dU, n) && m->beta_hi == m->beta_hi;
+    if (!windowed) t0 = 0, t1 = n - 1;
+    const double cap = interval_cap(m, pressure, speed);
+    if (t0 <= t1) {
+        double produced = 0.0, sunk = 0.0;
+        const double lambda = p->debris_sink_length;
+        for (size_t i = t0; i <= t1; ++i) {
+            m->weight[i] = 0.5 * (w0[i] + m->w[i]);
+            const double slide = m->weight[i] * fabs(m->dU[i]); /* s of the interval under the pad */
+            const double src = m->weight[i] == 0.0 ? 0.0 : kp * fabs(m->dU[i]) * m->weight[i] / hh;
+            m->bsrc[i] = m->beta[i] + src;
+            if (lambda > 0 && slide > 0) {
+                /* d beta / ds = q - beta / lambda (q = src / slide) integrated exactly over the slide */
+                const double decay = exp(-slide / lambda);
+                const double b = m->beta[i] * decay + (src == 0.0 ? 0.0 : src / slide * lambda * -expm1(-slide / lambda));
+                sunk += m->bsrc[i] - b;
+                m->bsrc[i] = b;
+            }
+            produced += src;
+        }
+        m->beta_produced += produced;
+        m->beta_removed += sunk;
+        tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
+    }
+    /* the cap: over every node unless it is >= every beta away from [t0, t1] */
+    size_t c0 = t0, c1 = t1;
+    if (!(windowed && cap >= m->beta_hi)) c0 = 0, c1 = n - 1;
+    double removed = 0.0;
+    int finite = 1;
+    for (size_t i = c0; i <= c1 && i < n; ++i) {
+        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i];
+        if (b > cap) removed += b - cap;
+        m->beta[i] = b > cap ? cap : b;
+        finite &= isfinite(b);
+    }
+    m->beta_hi = finite ? cap : NAN;
+    m->beta_removed += removed;
+}
+
+/* one coupling interval of length h at normal force fn (>= 0) and grip velocity vg */
+static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    const size_t n = m->n;
+    const double speed = fabs(vg), pressure = fn / m->pad_area; /* as state_limits computes it */
+    /* the limits of the state serve when the pressure and the speed are the same (and under the error policy
+     * when none was clamped); else they are looked up under the model's policy */
+    const int same = pressure == m->limit_pressure &&
+                     (p->friction_velocity != TC_STRIPDRAW_FRICTION_VELOCITY_GRIP || speed == m->limit_speed) &&
+                     (p->table_policy == TC_TABLE_CLAMP || !m->limit_clamped);
+    if (!same) {
+        int rc = friction_limits(m, pressure, speed, p->table_policy, msg);
+        if (rc != TC_OK) return rc == TC_DISCARD ? refuse(m, TC_REFUSED_TABLE) : rc;
+    }
+    for (size_t i = m->limit_lo; i < m->limit_hi; ++i)
+        if (m->clamped[i - m->limit_lo] && m->w[i] > 0) m->clamp_count += 1;
+    memcpy(m->U0, m->U, n * sizeof *m->U);
+    if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        double q = ceil(h / m->dt_explicit - 1e-9), fric;
+        long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
+        tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
+                       m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
+    } else {
+        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le;
+        int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
+        if (rc != TC_OK) return rc;
+    }
+    /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
+    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
+    m->slip_h = h;
+    m->normal_force = fn;
+    m->grip_velocity = vg;
+    double *w0 = m->w; /* the weights at the start of the interval */
+    const size_t f0 = m->w_first, l0 = m->w_last;
+    m->w = m->w0;
+    m->w0 = w0;
+    update_weights(m);
+    transport(m, pressure, speed, w0, f0, l0);
+    state_limits(m);
+    return TC_OK;
+}
+
+/* The pieces of the step [t, t + dt] cut at the grid points k tau strictly inside it, as at most three runs of
+ * len[j] x count[j] (counts as doubles: a step with more pieces than TC_STRIPDRAW_MAX_INTERVALS is refused
+ * before any is taken). An end within GRID_TOLERANCE tau of a grid point is on it; a piece between two grid
+ * points is tau exactly. Returns the number of runs; an infinite t / tau gives an infinite count. */
+static int grid_pieces(double t, double dt, double tau, double len[3], double count[3]) {
+    if (!(tau > 0)) {
+        len[0] = dt;
+        count[0] = 1.0;
+        return 1;
+    }
+    const double end = t + dt;
+    const double a = t / tau;
+    const double b = end / tau;
+    const double ka = nearbyint(a);
+    const double kb = nearbyint(b);
+    const int start_on = fabs(a - ka) <= GRID_TOLERANCE;
+    const int end_on = fabs(b - kb) <= GRID_TOLERANCE;
+    const double first = start_on ? ka + 1.0 : floor(a) + 1.0; /* first grid point inside */
+    const double last = end_on ? kb - 1.0 : ceil(b) - 1.0;     /* last grid point inside */
+    if (!isfinite(first) || !isfinite(last)) {
+        len[0] = dt;
+        count[0] = INFINITY;
+        return 1;
+    }
+    if (first > last) {
+        len[0] = start_on && end_on && kb == ka + 1.0 ? tau : dt;
+        count[0] = 1.0;
+        return 1;
+    }
+    int k = 0;
+    len[k] = start_on ? tau : first * tau - t;
+    count[k++] = 1.0;
+    if (last > first) {
+        len[k] = tau;
+        count[k++] = last - first;
+    }
+    len[k] = end_on ? tau : end - last * tau;
+    count[k++] = 1.0;
+    return k;
+}
+
+/* the mean over [a, b] of the input polynomial c[0] + c[1] s + c[2] s^2 (its value at a when a == b): the exact
+ * impulse of a force and the exact displacement of a velocity that vary so */
+static double input_mean(const double c[3], double a, double b) {
+    return c[0] + c[1] * 0.5 * (a + b) + c[2] * (a * a + a * b + b * b) / 3.0;
+}
+
+/* the number of coupling intervals of the piece [s, s + len] (at the largest grip speed of its ends and middle) */
+static double piece_intervals(const tc_stripdraw *m, const double vg[3], double s, double len) {
+    const double speed = fmax(fabs(input_mean(vg, s, s)),
+                              fmax(fabs(input_mean(vg, s + 0.5 * len, s + 0.5 * len)), fabs(input_mean(vg, s + len, s + len))));
+    const double h_max = speed != 0 ? m->p.window_courant * m->le / speed : INFINITY;
+    const double q = ceil(len / h_max - 1e-9);
+    return q > 1.0 ? q : 1.0;
+}
+
+/* cut the step on the internal grid, each piece into coupling intervals; the inputs are the polynomials fn, vg
+ * (Taylor coefficients at the step's start), each interval takes their means */
+static int advance(tc_stripdraw *m, double dt, const double fn[3], const double vg[3], tc_msg msg) {
+    const tc_stripdraw_params *p = &m->p;
+    const int held = fn[1] == 0.0 && fn[2] == 0.0 && vg[1] == 0.0 && vg[2] == 0.0;
+    double len[3], count[3];
+    const int runs = grid_pieces(m->time, dt, p->internal_step, len, count);
+    /* the refusals before any interval is taken: the intervals (and explicit steps) of the whole step */
+    double total = 0.0, total_sub = 0.0, pieces = 0.0;
+    for (int j = 0; j < runs; ++j) pieces += count[j];
+    if (!(pieces <= TC_STRIPDRAW_MAX_INTERVALS))
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT), "dt = %.17g s cuts into %.3g pieces of internal_step, so as "
+                       "many coupling intervals at least; at most %.0e are allowed", dt, pieces,
+                       TC_STRIPDRAW_MAX_INTERVALS);
+    double s = 0.0;
+    for (int j = 0; j < runs; ++j) {
+        const long long reps = held ? 1 : (long long)count[j];
+        for (long long k = 0; k < reps; ++k) {
+            const double n_int = piece_intervals(m, vg, s, len[j]);
+            const double times = held ? count[j] : 1.0;
+            total += times * n_int;
+            if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+                const double qs = ceil(len[j] / n_int / m->dt_explicit - 1e-9);
+                total_sub += times * n_int * (qs > 1.0 ? qs : 1.0);
+            }
+            s += len[j];
+        }
+    }
+    if (!(total <= TC_STRIPDRAW_MAX_INTERVALS))
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT),
+                       "dt = %.17g s at grip_velocity = %.17g m/s needs %.3g coupling intervals; at most %.0e are "
+                       "allowed", dt, vg[0], total, TC_STRIPDRAW_MAX_INTERVALS);
+    if (!(total_sub <= TC_STRIPDRAW_MAX_SUBSTEPS))
+        return tc_fail(msg, refuse(m, TC_REFUSED_INPUT),
+                       "dt = %.17g s needs %.3g explicit steps of %.3g s; at most %.0e are allowed per step", dt,
+                       total_sub, m->dt_explicit, TC_STRIPDRAW_MAX_SUBSTEPS);
+    s = 0.0;
+    for (int j = 0; j < runs; ++j) {
+        for (long long k = 0; k < (long long)count[j]; ++k) {
+            const double n_int = piece_intervals(m, vg, s, len[j]);
+            const double h = len[j] / n_int;
+            for (long long i = 0; i < (long long)n_int; ++i) {
+                const double a = s + (double)i * h, b = s + (double)(i + 1) * h;
+                /* a normal force interpolated below zero is a pad that lifts off: no pressure (no adhesion) */
+                int rc = interval(m, h, fmax(0.0, input_mean(fn, a, b)), input_mean(vg, a, b), msg);
+                if (rc != TC_OK) return rc;
+            }
+            s += len[j];
+        }
+    }
+    return TC_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * state image
+ * ------------------------------------------------------------------------------------------------- */
+
+static size_t state_size(size_t n) {
+    return STATE_HEADER + sizeof(double) * (N_STATE_ARRAYS * n + N_STATE_DOUBLES) + sizeof(int64_t) * N_STATE_INTS +
+           n;
+}
+
+/* the state image; its slip rates from slip, as they stand (h = 0) or as |slip[i]| / h */
+static void write_image(const tc_stripdraw *m, unsigned char *b, const double *slip, double h) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    const uint32_t head[2] = {STATE_MAGIC, STATE_VERSION};
+    const uint64_t nn = (uint64_t)n;
+    memcpy(b, head, sizeof head);
+    memcpy(b + 8, &nn, sizeof nn);
+    b += STATE_HEADER;
+    const double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, slip, m->fprev};
+    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) {
+        if (arrays[k] != slip || !(h > 0)) {
+            memcpy(b, arrays[k], nb);
+            continue;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const double rate = fabs(slip[i]) / h;
+            memcpy(b + i * sizeof rate, &rate, sizeof rate);
+        }
+    }
+    const double scalars[N_STATE_DOUBLES] = {m->time, m->reaction, m->normal_force, m->grip_velocity,
+                                             m->beta_removed, m->beta_produced, m->beta_hi};
+    memcpy(b, scalars, sizeof scalars);
+    b += sizeof scalars;
+    const int64_t counts[N_STATE_INTS] = {(int64_t)m->n_steps, (int64_t)m->clamp_count};
+    memcpy(b, counts, sizeof counts);
+    b += sizeof counts;
+    memcpy(b, m->contact, n);
+}
+
+static void read_state(tc_stripdraw *m, const unsigned char *b) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    b += STATE_HEADER;
+    double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, m->slip_rate, m->fprev};
+    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) memcpy(arrays[k], b, nb);
+    double scalars[N_STATE_DOUBLES];
+    memcpy(scalars, b, sizeof scalars);
+    b += sizeof scalars;
+    m->time = scalars[0];
+    m->reaction = scalars[1];
+    m->normal_force = scalars[2];
+    m->grip_velocity = scalars[3];
+    m->beta_removed = scalars[4];
+    m->beta_produced = scalars[5];
+    m->beta_hi = scalars[6];
+    int64_t counts[N_STATE_INTS];
+    memcpy(counts, b, sizeof counts);
+    b += sizeof counts;
+    m->n_steps = (long long)counts[0];
+    m->clamp_count = (long long)counts[1];
+    memcpy(m->contact, b, n);
+    m->slip_h = 0.0;
+    update_weights(m);
+    state_limits(m);
+}
+
+static void backup_state(tc_stripdraw *m) {
+    write_image(m, m->backup, m->slip_h > 0 ? m->dU : m->slip_rate, 0.0);
+    m->backup_slip_h = m->slip_h;
+}
+
+static void restore_state(tc_stripdraw *m) {
+    read_state(m, m->backup);
+    if (m->backup_slip_h > 0) { /* the image holds dU */
+        memcpy(m->dU, m->slip_rate, m->n * sizeof *m->dU);
+        m->slip_h = m->backup_slip_h;
+        state_limits(m); /* with the slip rates as they were */
+    }
+}
+
+size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
+
+void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) {
+    write_image(m, buf, m->slip_h > 0 ? m->dU : m->slip_rate, m->slip_h);
+}
+
+int tc_stripdraw_set_state(tc_stripdraw *m, const void *buf, size_t size, tc_msg msg) {
+    const unsigned char *b = buf;
+    if (b == NULL || size != m->state_size)
+        return tc_fail(msg, TC_ERROR, "strip-draw state image has %zu bytes; this model's has %zu",
+                       b == NULL ? (size_t)0 : size, m->state_size);
+    uint32_t head[2];
+    uint64_t nn;
+    memcpy(head, b, sizeof head);
+    memcpy(&nn, b + 8, sizeof nn);
+    if (head[0] != STATE_MAGIC || head[1] != STATE_VERSION)
+        return tc_fail(msg, TC_ERROR, "not a strip-draw state image (version %u of this format is read)",
+                       (unsigned)STATE_VERSION);
+    if (nn != (uint64_t)m->n)
+        return tc_fail(msg, TC_ERROR, "strip-draw state image has %llu nodes; this model has %zu",
+                       (unsigned long long)nn, m->n);
+    const unsigned char *contact = b + size - m->n;
+    for (size_t i = 0; i < m->n; ++i)
+        if (contact[i] > 1) return tc_fail(msg, TC_ERROR, "strip-draw state image has a contact flag that is not 0/1");
+    read_state(m, b);
+    return TC_OK;
+}
+
+/* ---------------------------------------------------------------------------------------------------
+ * public API
+ * ------------------------------------------------------------------------------------------------- */
+
+void tc_stripdraw_free(tc_stripdraw *m) {
+    if (m == NULL) return;
+    free(m->pool);
+    free(m->bytes);
+    free(m);
+}
+
+int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
+                        size_t n_beta, tc_stripdraw **out, tc_msg msg) {
+    if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no place for the model (out is NULL)");
+    *out = NULL;
+    if (p == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no parameters (p is NULL)");
+    if (p->friction_model < 0 || p->friction_model > 2)
+        return tc_fail(msg, TC_ERROR, "friction_model = %d is not allowed; choose 0 (table), 1 (closed_form) or 2 "
+                       "(constant)", p->friction_model);
+    if (p->friction_velocity < 0 || p->friction_velocity > 1)
+        return tc_fail(msg, TC_ERROR, "friction_velocity = %d is not allowed; choose 0 (grip) or 1 (slip_rate)",
+                       p->friction_velocity);
+    if (p->table_policy < 0 || p->table_policy > 1)
+        return tc_fail(msg, TC_ERROR, "table_policy = %d is not allowed; choose 0 (clamp) or 1 (error)",
+                       p->table_policy);
+    if (p->contact_area < 0 || p->contact_area > 1)
+        return tc_fail(msg, TC_ERROR, "contact_area = %d is not allowed; choose 0 (mesoscale) or 1 (eq8)",
+                       p->contact_area);
+    if (p->integrator < 0 || p->integrator > 1)
+        return tc_fail(msg, TC_ERROR, "integrator = %d is not allowed; choose 0 (explicit) or 1 (implicit)",
+                       p->integrator);
+    if (p->n_elements < 1 || p->n_elements > 100000000)
+        return tc_fail(msg, TC_ERROR, "n_elements = %d is out of range; allowed: [1, 100000000]", p->n_elements);
+    int rc = tc_law_check(p, table, msg);
+    if (rc != TC_OK) return rc;
+    const size_t n = (size_t)p->n_elements + 1;
+    const double cap = p->beta_threshold > 0 ? p->beta_threshold : tc_law_beta_threshold(p, table);
+    if (beta_field != NULL) {
+        int ok = n_beta == n;
+        for (size_t i = 0; ok && i < n; ++i) ok = isfinite(beta_field[i]) && !(beta_field[i] < 0);
+        if (!ok)
+            return tc_fail(msg, TC_ERROR,
+                           "beta_field must hold %zu finite values >= 0 (one per node); got shape (%zu,)", n, n_beta);
+    }
+    double bmax = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double b = beta_field != NULL ? p->debris_carry_over * beta_field[i] : p->beta_initial;
+        bmax = i == 0 || b > bmax ? b : bmax;
+    }
+    if (bmax > cap)
+        return tc_fail(msg, TC_ERROR, "initial beta = %.17g exceeds the cap beta_threshold = %g", bmax, cap);
+
+    tc_stripdraw *m = calloc(1, sizeof *m);
+    if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
+    const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, advection 5, then the
+     * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level and the cached
+     * elimination factors */
+    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 5 +
+                            (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
+                                      : 1);
+    m->state_size = state_size(n);
+    m->pool = calloc(n_arrays * n, sizeof *m->pool);
+    m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
+    if (m->pool == NULL || m->bytes == NULL) {
+        tc_stripdraw_free(m);
+        return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model (%zu nodes)", n);
+    }
+    double *q = m->pool;
+    double **arrays[] = {&m->X,     &m->mass, &m->minv,   &m->U,   &m->V,     &m->A,   &m->Up,
+                         &m->beta,  &m->slip_rate, &m->fprev, &m->w, &m->tmax,  &m->U0,  &m->w0,
+                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew};
+    for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
+    q += n; /* spare */
+    m->awork = q;
+    q += 5 * n;
+    if (implicit) {
+        m->gwork = q;
+        m->ov = q + TC_SD_GALPHA_WORK(n);
+        m->chain = m->ov + (MAX_HALVINGS + 1) * n;
+    } else {
+        m->fwork = q;
+    }
+    m->contact = (signed char *)m->bytes;
+    m->clamped = m->bytes + n;
+    m->giwork = (signed char *)(m->bytes + 2 * n);
+    m->backup = m->bytes + 4 * n;
+
+    m->p = *p;
+    m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
+    m->n = n;
+    m->beta_cap = cap;
+    /* the mesh */
+    const double length = LEAD_LENGTH + p->draw_length + p->tool_length + p->free_length;
+    const double le = length / (double)p->n_elements;
+    const double bar_area = p->sheet_width * (0.5 * p->sheet_thickness);
+    m->le = le;
+    m->half_le = 0.5 * le;
+    for (size_t i = 0; i < n; ++i) m->X[i] = (double)i * le;
+    m->X[n - 1] = length;
+    for (size_t i = 0; i < n; ++i) m->mass[i] = p->density * bar_area * le;
+    m->mass[0] *= 0.5;
+    m->mass[n - 1] *= 0.5;
+    m->a_lo = LEAD_LENGTH + p->draw_length;
+    m->a_hi = m->a_lo + p->tool_length;
+    m->ke = p->youngs_modulus * bar_area / le;
+    m->ks = p->shear_stiffness_factor * p->youngs_modulus / (0.5 * p->sheet_thickness);
+    m->wT = p->tool_width;
+    m->pad_area = p->tool_length * p->tool_width;
+    const double node_ks = m->ks * p->tool_width * le;
+    m->dt_explicit = p->cfl_safety * (2.0 / sqrt((4.0 * m->ke + node_ks) / m->mass[n > 2 ? 1 : 0]));
+    for (size_t i = 0; i < n; ++i) m->minv[i] = 1.0 / m->mass[i];
+    const double r = p->rho_inf;
+    m->am = (2.0 * r - 1.0) / (r + 1.0);
+    m->af = r / (r + 1.0);
+    m->gamma = 0.5 - m->am + m->af;
+    m->beta_nm = 0.25 * (1.0 - m->am + m->af) * (1.0 - m->am + m->af);
+    const double reach = ceil(p->window_courant) + 1.0; /* kept within [-n, n], where it acts as +-infinity */
+    m->reach = reach >= -(double)n && reach <= (double)n ? (long long)reach : (reach < 0 ? -(long long)n : (long long)n);
+    /* the state */
+    /* a later pass starts from the debris the earlier one left, the share debris_carry_over of it */
+    for (size_t i = 0; i < n; ++i) m->beta[i] = beta_field != NULL ? p->debris_carry_over * beta_field[i] : p->beta_initial;
+    m->beta_hi = NAN; /* the first interval caps every node */
+    update_weights(m);
+    state_limits(m);
+    *out = m;
+    return TC_OK;
+}
+
+int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double grip_velocity, tc_msg msg) {
+    const double none[2] = {0.0, 0.0};
+    return tc_stripdraw_step_poly(m, dt, normal_force, none, grip_velocity, none, msg);
+}
+
+/* TC_DISCARD naming the input when the inputs cannot be used (non-finite, a negative normal force) */
+static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
+    char r[TC_REPR_SIZE];
+    if (!isfinite(normal_force))
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
+                       tc_repr_double(normal_force, r));
+    if (normal_force < 0)
+        return tc_fail(msg, TC_DISCARD, "normal_force = %s N must be >= 0", tc_repr_double(normal_force, r));
+    if (!isfinite(grip_velocity))
+        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
+                       tc_repr_double(grip_velocity, r));
+    return TC_OK;
+}
+
+int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
+    int rc = check_inputs(normal_force, grip_velocity, msg);
+    if (rc != TC_OK) return rc;
+    m->normal_force = normal_force;
+    m->grip_velocity = grip_velocity;
+    state_limits(m);
+    return TC_OK;
+}
+
+int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, const double d_normal_force[2],
+                           double grip_velocity, const double d_grip_velocity[2], tc_msg msg) {
+    static const char *const names[4] = {"d(normal_force)/dt", "d2(normal_force)/dt2", "d(grip_velocity)/dt",
+                                         "d2(grip_velocity)/dt2"};
+    const double d[4] = {d_normal_force[0], d_normal_force[1], d_grip_velocity[0], d_grip_velocity[1]};
+    char r[TC_REPR_SIZE];
+    m->refusal = TC_REFUSED_INPUT;
+    if (!isfinite(dt))
+        return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r));
+    if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r));
+    int checked = check_inputs(normal_force, grip_velocity, msg);
+    if (checked != TC_OK) return checked;
+    for (int k = 0; k < 4; ++k)
+        if (!isfinite(d[k]))
+            return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
+                           tc_repr_double(d[k], r));
+    const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
+    backup_state(m);
+    int rc = advance(m, dt, fn, vg, msg);
+    if (rc == TC_OK) {
+        int finite = isfinite(m->reaction);
+        for (size_t i = 0; i < m->n && finite; ++i) finite = isfinite(m->U[i]);
+        if (!finite)
+            rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
+    }
+    if (rc != TC_OK) {
+        restore_state(m);
+        return rc;
+    }
+    m->time = m->time + dt;
+    m->n_steps += 1;
+    return TC_OK;
+}
+
+int tc_stripdraw_refusal(const tc_stripdraw *m) { return m->refusal; }
+
+/* friction force of the state: the return-mapped tractions of the nodes under the pad at the state's limits */
+static double friction_force(const tc_stripdraw *m) {
+    double fs = 0.0;
+    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
+        if (!(m->w[i] > 0.0) || !m->contact[i]) continue; /* a node entering the pad starts stress-free */
+        int slipping;
+        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (m->w[i] * m->le);
+    }
+    return fs;
+}
+
+void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
+    const size_t n = m->n;
+    const double fn = m->normal_force;
+    double wsum = 0.0, wu = 0.0, wb = 0.0;
+    for (size_t i = m->w_first; i <= m->w_last && i < n; ++i) {
+        wsum += m->w[i];
+        wu += m->w[i] * m->U[i];
+        wb += m->w[i] * m->beta[i];
+    }
+    const double bmax = largest(m->beta, n);
+    const double fs = friction_force(m);
+    out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
+    out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
+    out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? fs / fn : 0.0;
+    out[TC_STRIPDRAW_SLIDING_DISTANCE] = wsum > 0 ? wu / wsum : 0.0;
+    out[TC_STRIPDRAW_BETA_MEAN] = wsum > 0 ? wb / wsum : 0.0;
+    out[TC_STRIPDRAW_BETA_MAX] = bmax;
+    out[TC_STRIPDRAW_CONTACT_PRESSURE] = fn / m->pad_area;
+    out[TC_STRIPDRAW_GRIP_POSITION] = m->U[n - 1];
+    out[TC_STRIPDRAW_TABLE_CLAMP_COUNT] = (double)m->clamp_count;
+}
+
+size_t tc_stripdraw_n_nodes(const tc_stripdraw *m) { return m->n; }
+
+void tc_stripdraw_fields(const tc_stripdraw *m, double *X, double *U, double *beta, double *slip, double *contact) {
+    const size_t nb = m->n * sizeof(double);
+    if (X != NULL) memcpy(X, m->X, nb);
+    if (U != NULL) memcpy(U, m->U, nb);
+    if (beta != NULL) memcpy(beta, m->beta, nb);
+    if (slip != NULL) memcpy(slip, m->Up, nb);
+    if (contact != NULL) memcpy(contact, m->w, nb);
+}
+
+void tc_stripdraw_nodal(const tc_stripdraw *m, int which, double *out) {
+    const size_t n = m->n, nb = n * sizeof(double);
+    switch (which) {
+    case TC_SD_NODAL_X: memcpy(out, m->X, nb); break;
+    case TC_SD_NODAL_U: memcpy(out, m->U, nb); break;
+    case TC_SD_NODAL_V: memcpy(out, m->V, nb); break;
+    case TC_SD_NODAL_A: memcpy(out, m->A, nb); break;
+    case TC_SD_NODAL_UP: memcpy(out, m->Up, nb); break;
+    case TC_SD_NODAL_BETA: memcpy(out, m->beta, nb); break;
+    case TC_SD_NODAL_CONTACT_WEIGHT: memcpy(out, m->w, nb); break;
+    case TC_SD_NODAL_MASS: memcpy(out, m->mass, nb); break;
+    case TC_SD_NODAL_FRICTION_LIMIT: memcpy(out, m->tmax, nb); break;
+    case TC_SD_NODAL_SLIP_RATE:
+        if (m->slip_h > 0)
+            for (size_t i = 0; i < n; ++i) out[i] = fabs(m->dU[i]) / m->slip_h;
+        else
+            memcpy(out, m->slip_rate, nb);
+        break;
+    case TC_SD_NODAL_CONTACT:
+        for (size_t i = 0; i < n; ++i) out[i] = m->contact[i];
+        break;
+    default:
+        for (size_t i = 0; i < n; ++i) out[i] = NAN;
+    }
+}
+
+double tc_stripdraw_info(const tc_stripdraw *m, int which) {
+    switch (which) {
+    case TC_SD_INFO_TIME: return m->time;
+    case TC_SD_INFO_N_STEPS: return (double)m->n_steps;
+    case TC_SD_INFO_CLAMP_COUNT: return (double)m->clamp_count;
+    case TC_SD_INFO_BETA_REMOVED: return m->beta_removed;
+    case TC_SD_INFO_BETA_PRODUCED: return m->beta_produced;
+    case TC_SD_INFO_BETA_CAP: return m->beta_cap;
+    case TC_SD_INFO_EXPLICIT_TIME_STEP: return m->dt_explicit;
+    case TC_SD_INFO_ELEMENT_LENGTH: return m->le;
+    case TC_SD_INFO_WINDOW_LO: return m->a_lo;
+    case TC_SD_INFO_WINDOW_HI: return m->a_hi;
+    case TC_SD_INFO_ELEMENT_STIFFNESS: return m->ke;
+    case TC_SD_INFO_SHEAR_STIFFNESS: return m->ks;
+    case TC_SD_INFO_NORMAL_FORCE: return m->normal_force;
+    case TC_SD_INFO_GRIP_VELOCITY: return m->grip_velocity;
+    case TC_SD_INFO_REACTION: return m->reaction;
+    default: return NAN;
+    }
+}
+
+void tc_stripdraw_window(const tc_stripdraw *m, double window[2]) {
+    window[0] = m->a_lo;
+    window[1] = m->a_hi;
+}
+
+double tc_stripdraw_time(const tc_stripdraw *m) { return m->time; }

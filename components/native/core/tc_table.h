@@ -1,0 +1,54 @@
+/* The friction table mu(P, v, beta) in memory: its axes, value arrays and checks.
+ *
+ * The table's format is owned by components/stripdraw/table.py (its docstring); the native code reads the
+ * resource form the Python side converts it to (resource_io/tc_table_file.h). Lookups: tc_table_lookup.h. Axes
+ * pressure [Pa], velocity [m/s], beta [-], strictly increasing; mu[(ip * n_velocity + iv) * n_beta + ib]
+ * (C order of the (nP, nv, nb) array). Lookups outside the axes follow a policy: TC_TABLE_CLAMP
+ * (evaluate at the nearest edge and flag the lookup) or TC_TABLE_ERROR (refuse, naming the quantity,
+ * its value and the table's range).
+ */
+#ifndef TC_TABLE_H
+#define TC_TABLE_H
+
+#include <stddef.h>
+
+#include "tc_common.h"
+
+enum tc_table_policy { TC_TABLE_CLAMP = 0, TC_TABLE_ERROR = 1 };
+
+typedef struct tc_table {
+    size_t n_pressure, n_velocity, n_beta;
+    double *pressure; /* [n_pressure] */
+    double *velocity; /* [n_velocity] */
+    double *beta;     /* [n_beta] */
+    double *mu;       /* [n_pressure * n_velocity * n_beta] */
+    /* format version 2 (NULL in version 1): ensemble means of A_c/A0 and A_p/A0 and their member spreads,
+     * same layout as mu */
+    double *contact_area, *particle_area, *contact_area_std, *particle_area_std;
+    /* format version 3 (NULL before): 1 - simulated (1 where the node holds its row's fit, not slides), and A_p/A0
+     * of the paper's cluster rule alone, same layout as mu */
+    double *unsimulated, *particle_area_clusters;
+    double beta_threshold;  /* metadata "beta_threshold": the cap of beta (Eq. 24), in (0, 1] */
+    int format_version;     /* 3 with the version 3 arrays, 2 with the areas, else 1 */
+    char content_hash[65];  /* the table's content hash (SHA-256, lowercase hex), "" when not known */
+    char provenance[32];    /* where the values come from ("mesoscale", "closed_form", ...) */
+} tc_table;
+
+/* A table from arrays (copied), checked: non-empty strictly increasing finite axes (velocity and beta >= 0),
+ * finite mu >= 0, beta_threshold in (0, 1]; content_hash and provenance are left empty. */
+TC_API int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_beta, const double *pressure,
+                                const double *velocity, const double *beta, const double *mu,
+                                double beta_threshold, tc_table **out, tc_msg msg);
+
+/* Attach the version 2 arrays (copied; checked finite and >= 0) and make the table version 2. */
+TC_API int tc_table_set_areas(tc_table *table, const double *contact_area, const double *particle_area,
+                              const double *contact_area_std, const double *particle_area_std, tc_msg msg);
+
+/* Attach the version 3 arrays of a version 2 table (copied; simulated 0 or 1, the areas finite and >= 0) and make
+ * the table version 3. */
+TC_API int tc_table_set_extras(tc_table *table, const double *simulated, const double *particle_area_clusters,
+                               tc_msg msg);
+
+TC_API void tc_table_free(tc_table *table);
+
+#endif

@@ -1,0 +1,107 @@
+/* tc_table_read: the friction table resource, an array file (tc_arrays.h) that the Python side converts from the
+ * table's .npz (components/stripdraw/table.py, write_table_resource; the FMU build writes it into resources/).
+ *
+ * Entries used: the axes pressure, velocity, beta (1-D), mu (nP, nv, nb), the areas contact_area, particle_area,
+ * contact_area_std, particle_area_std (all four or none: format version 2 of the table), simulated and
+ * particle_area_clusters (both or none: version 3), the scalar beta_threshold and the texts content_hash and
+ * provenance. Other entries are ignored. The values are checked as
+ * tc_table_from_arrays checks them (increasing finite axes, finite values >= 0, the threshold in (0, 1]).
+ *
+ * A path ending in ".npz" names the table whose resource is the same path ending in ".tca" (so the FMU parameter
+ * table_file may name the table as the Python side does).
+ */
+#include "tc_table_file.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tc_arrays.h"
+
+static const char *const AREAS[4] = {"contact_area", "particle_area", "contact_area_std", "particle_area_std"};
+
+static int shape_is(const tc_array_entry *e, int ndim, const uint64_t *shape) {
+    if (e->ndim != ndim) return 0;
+    for (int d = 0; d < ndim; ++d)
+        if (e->shape[d] != shape[d]) return 0;
+    return 1;
+}
+
+static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_msg msg) {
+    static const char *const axes[3] = {"pressure", "velocity", "beta"};
+    const tc_array_entry *ax[3], *mu = tc_arrays_find(a, "mu"), *bt = tc_arrays_find(a, "beta_threshold");
+    uint64_t shape[3];
+    for (int k = 0; k < 3; ++k) {
+        ax[k] = tc_arrays_find(a, axes[k]);
+        if (ax[k] == NULL || ax[k]->kind != TC_ARRAY_FLOAT64 || ax[k]->ndim != 1 || ax[k]->count < 1)
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it has no non-empty 1-D array '%s'", path,
+                           axes[k]);
+        shape[k] = ax[k]->shape[0];
+    }
+    if (mu == NULL || mu->kind != TC_ARRAY_FLOAT64 || !shape_is(mu, 3, shape))
+        return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it has no array 'mu' of shape (%llu, %llu, %llu)",
+                       path, (unsigned long long)shape[0], (unsigned long long)shape[1], (unsigned long long)shape[2]);
+    if (bt == NULL || bt->kind != TC_ARRAY_FLOAT64 || bt->count != 1)
+        return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it has no scalar 'beta_threshold'", path);
+    const tc_array_entry *areas[4];
+    int n_areas = 0;
+    for (int k = 0; k < 4; ++k) {
+        areas[k] = tc_arrays_find(a, AREAS[k]);
+        if (areas[k] == NULL) continue;
+        if (areas[k]->kind != TC_ARRAY_FLOAT64 || !shape_is(areas[k], 3, shape))
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: '%s' is not an array of the shape of mu",
+                           path, AREAS[k]);
+        ++n_areas;
+    }
+    if (n_areas != 0 && n_areas != 4)
+        return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it has %d of the 4 area arrays", path, n_areas);
+    const tc_array_entry *extras[2] = {tc_arrays_find(a, "simulated"), tc_arrays_find(a, "particle_area_clusters")};
+    int n_extras = 0;
+    for (int k = 0; k < 2; ++k) {
+        if (extras[k] == NULL) continue;
+        if (extras[k]->kind != TC_ARRAY_FLOAT64 || !shape_is(extras[k], 3, shape))
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: '%s' is not an array of the shape of mu",
+                           path, k == 0 ? "simulated" : "particle_area_clusters");
+        ++n_extras;
+    }
+    if (n_extras == 1 || (n_extras == 2 && n_areas != 4))
+        return tc_fail(msg, TC_ERROR, "friction table %s is malformed: version 3 needs simulated, "
+                       "particle_area_clusters and the 4 area arrays", path);
+    char detail[300];
+    tc_msg d = {detail, sizeof detail};
+    tc_table *t = NULL;
+    int rc = tc_table_from_arrays(ax[0]->count, ax[1]->count, ax[2]->count, ax[0]->values, ax[1]->values,
+                                  ax[2]->values, mu->values, bt->values[0], &t, d);
+    if (rc == TC_OK && n_areas == 4)
+        rc = tc_table_set_areas(t, areas[0]->values, areas[1]->values, areas[2]->values, areas[3]->values, d);
+    if (rc == TC_OK && n_extras == 2) rc = tc_table_set_extras(t, extras[0]->values, extras[1]->values, d);
+    if (rc != TC_OK) {
+        tc_table_free(t);
+        return tc_fail(msg, rc, "friction table %s is malformed: %s", path, detail);
+    }
+    const tc_array_entry *hash = tc_arrays_find(a, "content_hash"), *prov = tc_arrays_find(a, "provenance");
+    snprintf(t->content_hash, sizeof t->content_hash, "%s", hash != NULL && hash->kind == TC_ARRAY_TEXT ? hash->text : "");
+    snprintf(t->provenance, sizeof t->provenance, "%s", prov != NULL && prov->kind == TC_ARRAY_TEXT ? prov->text : "unknown");
+    *out = t;
+    return TC_OK;
+}
+
+int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
+    if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_table_read needs somewhere to put the table");
+    *out = NULL;
+    if (path == NULL) return tc_fail(msg, TC_ERROR, "no friction table path given");
+    const size_t len = strlen(path);
+    char *file = malloc(len + 1);
+    if (file == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the table path");
+    memcpy(file, path, len + 1);
+    if (len >= 4 && strcmp(file + len - 4, ".npz") == 0) memcpy(file + len - 4, ".tca", 4);
+    tc_arrays *a = NULL;
+    int rc = tc_arrays_read(file, "friction table", &a, msg);
+    if (rc == TC_OK) rc = from_arrays(a, file, out, msg);
+    else if (rc == TC_ERROR && strcmp(file, path) != 0)
+        rc = tc_fail(msg, TC_ERROR, "friction table %s: the native model reads its resource form %s, which cannot be "
+                     "read (write it with: tribocosim fmu table-resource TABLE.npz)", path, file);
+    tc_arrays_free(a);
+    free(file);
+    return rc;
+}

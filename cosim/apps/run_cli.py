@@ -1,0 +1,108 @@
+"""``tribocosim run SCENE [--out DIR] [--plot]``: run a co-simulation scene, or an SSP package (``RIG.ssp``).
+
+A thin layer over :func:`tribocosim.cosim.api.run`: validates the scene (all problems at once), runs it
+with a progress bar on stderr for runs longer than two seconds, writes the CSV and the metadata
+JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
+base scene, :mod:`tribocosim.cosim.apps.scene_sweep`) runs its cases in parallel processes instead.
+
+Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
+smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
+was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems.
+
+An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp.reader`) runs with its default experiment and
+our master; ``--set`` overrides the keys of the scene it is read as (``master.*``, ``experiment.*``, ...).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from tribocosim.errors import RunFailed, SceneError, TribocosimError
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="tribocosim run",
+                                description="Run a co-simulation scene (TOML) or SSP package (.ssp).")
+    p.add_argument("scene", help="scene file (TOML), SSP 1.0 package (.ssp), or the name of a packaged scene "
+                                 "(e.g. demo, pressure_sweep)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output folder (default: the scene's or package's folder; ./NAME for a packaged scene); "
+                        "[output] file is written there")
+    p.add_argument("--plot", action="store_true", help="also write a PNG plot of the recorded variables")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key, e.g. --set master.extrapolation=1 (TOML value syntax)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="sweep files ([sweep] table, cosim.apps.scene_sweep): parallel processes (default: the file's, else one per CPU)")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``tribocosim run``."""
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
+    from tribocosim.cosim.api import run, run_ssp
+    from tribocosim.cosim.apps.scene_sweep import is_sweep_file
+    from tribocosim.cosim.scene.schema import parse_overrides
+    from tribocosim.paths import scene_file
+
+    try:
+        args.scene = scene_file(args.scene)
+        if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
+            result = run_ssp(args.scene, args.out, parse_overrides(args.set), progress=not args.quiet)
+        elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
+            if args.set:
+                raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
+            from tribocosim.cosim.apps.scene_sweep import main as sweep_main
+
+            return sweep_main(args)
+        else:
+            from tribocosim.cosim.scene.component_checks import load_component_scene
+
+            # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
+            plan = load_component_scene(args.scene, parse_overrides(args.set))
+            result = run(plan, args.out, progress=not args.quiet)
+    except SceneError as exc:
+        print(f"tribocosim run: {exc}", file=sys.stderr)
+        return 2
+    except RunFailed as exc:
+        r = exc.result
+        print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
+        kept = f"{len(r.time)} rows up to t = {r.time[-1]:.9g} s" if len(r.time) else "no rows"
+        where = ", ".join(str(p) for p in (r.csv_path, r.metadata_path) if p is not None)
+        print(f"tribocosim run: what was accepted is written ({kept}): {where}", file=sys.stderr)
+        return 1
+    except TribocosimError as exc:
+        print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
+        return 1
+    meta = result.metadata
+    if args.plot and result.csv_path is not None:
+        from tribocosim.cosim.apps.plotting import plot_result
+
+        png = plot_result(result, result.csv_path.with_suffix(".png"))
+        if not args.quiet:
+            print(f"plot:     {png}")
+    if not args.quiet:
+        st, wt = meta["steps"], meta["wall_time"]
+        for w in meta["warnings"]:
+            print(f"warning:  {w}", file=sys.stderr)
+        for n in meta["notes"]:
+            print(f"note:     {n}", file=sys.stderr)
+        print(f"scene:    {meta['scene']}")
+        print(f"master:   {meta['master']['algorithm']}, extrapolation {meta['master']['extrapolation']}, "
+              f"{meta['master']['step_control']} step")
+        print(f"steps:    {st['accepted']} accepted, {st['rejected_error']} rejected (error), "
+              f"{st['rejected_failure']} rejected (discard / non-finite)")
+        fmus = ", ".join(f"{n} {t:.3f} s" for n, t in wt["fmus"].items())
+        print(f"time:     {wt['total']:.3f} s (master {wt['master']:.3f} s; {fmus})")
+        if result.csv_path is not None:
+            print(f"results:  {result.csv_path}")
+        print(f"metadata: {result.metadata_path}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

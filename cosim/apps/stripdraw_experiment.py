@@ -1,0 +1,82 @@
+"""The strip-draw test with the pure model: one draw, or several passes over the same strip, and its mu_bar.
+
+The paper's macro experiment (Sec. 2.1, 7): the strip pulled at V0 = 0.08 m/s (velocity ramped over
+10 ms) for 140 mm under a constant normal force F_N = P_N L_T w_T on each pad; mu(t) = pull_force /
+(2 F_N) (Eq. 1) and mu_bar its mean over the last 20 % of the draw, the steady-state region. A later
+pass starts from the debris field the previous one left (paper Fig. 2b), with the strip's mechanics
+afresh. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
+worker processes (:func:`run_points`).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+
+V0 = 0.08  # m/s
+RAMP = 0.01  # s
+STEP = 1e-3  # s
+LAST = 0.2  # the steady-state fraction of the draw
+
+
+@dataclass(frozen=True)
+class Point:
+    """One strip-draw experiment: nominal pressure [Pa], pad length [m], passes, and the strip-draw
+    component's parameters (``table_file`` included) that differ from the defaults."""
+
+    pressure: float
+    tool_length: float
+    passes: int = 1
+    parameters: dict = field(default_factory=dict)
+
+
+def mu_bar(point: Point) -> list[float]:
+    """mu_bar of every pass of ``point`` (the last one is the measured value after ``passes`` passes)."""
+    return [p["mu_bar"] for p in draw(point)]
+
+
+def draw(point: Point) -> list[dict]:
+    """Every pass of ``point``: ``mu_bar``, ``beta_max`` (the largest debris fraction on the strip at the
+    end of the pass) and ``table_clamps`` (nodal table lookups outside the table's axes in the pass)."""
+    from tribocosim.components.stripdraw.component import COMPONENT
+    from tribocosim.components.stripdraw.model import StripDrawModel
+
+    first = COMPONENT.make({**point.parameters, "tool_length": point.tool_length}).model
+    out = []
+    beta = None
+    for _ in range(point.passes):
+        model = first if beta is None else StripDrawModel(first.params, first.law, beta_field=beta)
+        fn = model.params.normal_force(point.pressure)
+        draw = model.params.draw_length
+        n = int(round((draw / V0 + 0.5 * RAMP) / STEP))
+        mus = np.empty(n)
+        for k in range(n):
+            v = V0 * min(1.0, (k + 0.5) * STEP / RAMP)
+            mus[k] = model.step(STEP, {"normal_force": fn, "grip_velocity": v})["pull_force"] / (2.0 * fn)
+        out.append({"mu_bar": float(mus[int((1.0 - LAST) * n):].mean()), "beta_max": float(model.beta.max()),
+                    "table_clamps": int(model.clamp_count)})
+        beta = model.beta.copy()
+    return out
+
+
+def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
+    """mu_bar of recorded signals: the mean of pull_force / (2 normal_force) (Eq. 1) over the last fraction of the
+    run (where the normal force is positive)."""
+    t = np.asarray(time)
+    sel = (t >= t[-1] - last * (t[-1] - t[0]) - 1e-12) & (np.asarray(normal_force) > 0)
+    return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
+
+
+def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
+    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
+    per point)."""
+    n = max(1, min(workers or os.cpu_count() or 1, len(points)))
+    if n == 1:
+        return [fn(p) for p in points]
+    import multiprocessing
+
+    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return list(pool.map(fn, points))

@@ -1,0 +1,8 @@
+"""The co-simulation engine: the master and what it is made of, independent of where a scene comes from.
+
+:mod:`.master` (the time loop, rejection and rollback), :mod:`.algorithms` (Jacobi, Gauss-Seidel, iterative coupling),
+:mod:`.stepcontrol` (fixed step, step doubling, energy residual), :mod:`.slave` (one FMU instance as the master sees
+it, and its fmpy implementation), :mod:`.system` (slaves, links, coupling values), :mod:`.graph` (Gauss-Seidel order,
+algebraic loops), :mod:`.timegrid` (integer time ticks), :mod:`.extrapolation` (input polynomials) and
+:mod:`.recorder` (observers: the recorded outputs, progress). Nothing here reads a scene file.
+"""

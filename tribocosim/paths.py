@@ -1,0 +1,50 @@
+"""Where the shipped data lives: the package ``tribocosim.models`` (a wheel's or the source tree's).
+
+Found through :func:`importlib.resources.files`, so the same code works from a wheel installed in
+site-packages and from an editable install of the repository (where ``tribocosim.models`` is the
+``models/`` folder).
+"""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+from tribocosim.errors import SceneError
+
+MODELS_DIR = Path(str(files("tribocosim.models")))
+DEFAULT_TABLE = MODELS_DIR / "friction_table.npz"
+SCENES_DIR = MODELS_DIR / "scenes"
+
+
+def packaged_scenes() -> list[str]:
+    """Names (file stems) of the scenes shipped in ``tribocosim.models/scenes``."""
+    return sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+
+
+def scene_file(scene) -> Path:
+    """A scene argument as a file: an existing path, else a packaged scene's name (``"demo"`` or ``"demo.toml"``).
+
+    Raises
+    ------
+    SceneError
+        If ``scene`` is neither a file nor the name of a packaged scene; the message lists the
+        packaged scenes.
+    """
+    path = Path(scene)
+    if path.is_file():
+        return path
+    name = path.name if path.suffix == ".toml" else f"{path.name}.toml"
+    packaged = SCENES_DIR / name
+    if path.parent == Path(".") and packaged.is_file():
+        return packaged
+    raise SceneError(f"scene file not found: {scene} (and it is not one of the packaged scenes: "
+                     f"{', '.join(packaged_scenes())})")
+
+
+def is_packaged(path) -> bool:
+    """Whether ``path`` is one of the packaged scenes (their folder is no place for results)."""
+    try:
+        return Path(path).resolve().parent == SCENES_DIR.resolve()
+    except OSError:
+        return False
