@@ -127,7 +127,7 @@ def test_direct_slide_check_of_a_table(built):
     """surrogate.table_check on the tiny table: at a node with the table's own placements the direct slides are
     the members behind it, and with one debris level the fitted line passes through their mean: no difference,
     the check passes; a point outside the table's axes is refused."""
-    from tribocosim.components.errors import TableDomainError
+    from tribocosim.errors import TableDomainError
     from tribocosim.surrogate.executors import make_executor
     from tribocosim.surrogate.table_check import run_check
 
