@@ -1,10 +1,12 @@
 """The strip-draw test with the pure model: one draw, or several passes over the same strip, and its mu_bar.
 
 The paper's macro experiment (Sec. 2.1, 7): the strip pulled at V0 = 0.08 m/s (velocity ramped over
-10 ms) for 140 mm under a constant normal force F_N = P_N L_T w_T on each pad; mu(t) = pull_force /
-(2 F_N) (Eq. 1) and mu_bar its mean over the last 20 % of the draw, the steady-state region. A later
-pass starts from the debris field the previous one left (paper Fig. 2b), with the strip's mechanics
-afresh. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
+10 ms; another drawing speed by ``Point.velocity``) for 140 mm under a constant normal force
+F_N = P_N L_T w_T on each pad; mu(t) = pull_force / (2 F_N) (Eq. 1) and mu_bar its mean over the last 20 % of
+the draw, the steady-state region. A later pass starts from the debris field the previous one left (paper
+Fig. 2b; the share ``debris_carry_over`` of it), with the strip's mechanics afresh. After each pass the debris
+left on the strip is weighed: the mean of beta over the nodes that were under the pad in the pass, times
+h_p rho (flakes of Al, rho = 2700 kg/m^3) per unit area. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
 worker processes (:func:`run_points`).
 """
 
@@ -20,6 +22,7 @@ V0 = 0.08  # m/s
 RAMP = 0.01  # s
 STEP = 1e-3  # s
 LAST = 0.2  # the steady-state fraction of the draw
+FLAKE_DENSITY = 2700.0  # kg/m^3 (Al)
 
 
 @dataclass(frozen=True)
@@ -31,6 +34,7 @@ class Point:
     tool_length: float
     passes: int = 1
     parameters: dict = field(default_factory=dict)
+    velocity: float = V0  # drawing speed [m/s]
 
 
 def mu_bar(point: Point) -> list[float]:
@@ -40,7 +44,9 @@ def mu_bar(point: Point) -> list[float]:
 
 def draw(point: Point) -> list[dict]:
     """Every pass of ``point``: ``mu_bar``, ``beta_max`` (the largest debris fraction on the strip at the
-    end of the pass) and ``table_clamps`` (nodal table lookups outside the table's axes in the pass)."""
+    end of the pass), ``table_clamps`` (nodal table lookups outside the table's axes or its simulated range in
+    the pass), ``beta_left`` (the mean debris fraction on the strip that passed under the pad) and
+    ``debris_g_m2`` (that debris weighed: beta_left h_p rho [g/m^2])."""
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.model import StripDrawModel
 
@@ -51,13 +57,17 @@ def draw(point: Point) -> list[dict]:
         model = first if beta is None else StripDrawModel(first.params, first.law, beta_field=beta)
         fn = model.params.normal_force(point.pressure)
         draw = model.params.draw_length
-        n = int(round((draw / V0 + 0.5 * RAMP) / STEP))
+        n = int(round((draw / point.velocity + 0.5 * RAMP) / STEP))
         mus = np.empty(n)
+        before = model.mesh.X + model.U <= model.mesh.window_hi  # not yet past the pad's exit edge
         for k in range(n):
-            v = V0 * min(1.0, (k + 0.5) * STEP / RAMP)
+            v = point.velocity * min(1.0, (k + 0.5) * STEP / RAMP)
             mus[k] = model.step(STEP, {"normal_force": fn, "grip_velocity": v})["pull_force"] / (2.0 * fn)
+        passed = before & (model.mesh.X + model.U >= model.mesh.window_lo)  # was under the pad in this pass
+        left = float(model.beta[passed].mean()) if passed.any() else 0.0
         out.append({"mu_bar": float(mus[int((1.0 - LAST) * n):].mean()), "beta_max": float(model.beta.max()),
-                    "table_clamps": int(model.clamp_count)})
+                    "table_clamps": int(model.clamp_count), "beta_left": left,
+                    "debris_g_m2": 1e3 * left * model.params.particle_thickness * FLAKE_DENSITY})
         beta = model.beta.copy()
     return out
 

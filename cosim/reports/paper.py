@@ -1,4 +1,5 @@
-"""The paper's macro results (Sec. 2.1 and 7; Figs. 2b, 17b, 18b, 19b) for both contact-area conventions.
+"""The paper's macro results (Sec. 2.1 and 7; Figs. 2b, 17b, 18b, 19b), the multi-pass options, the uncertainty
+budget, the drawing-speed prediction and the friction table's checks.
 
 ``tribocosim report paper --out DIR [--quick] [--table T] [--workers N]``
 
@@ -16,16 +17,19 @@ The drop at a pressure is 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same 
 Calibration on one number of the paper's text (Sec. 2.1): after one pass on the 35 mm pad, mu_bar at
 25 MPa is 35 % below its 1 MPa value. The scale s of A_p (``particle_area_scale``) solves
 drop(s) = 0.35 (drop rises with s: blocked flakes carry more of the contact), by bracketing and false
-position (Illinois) to |drop - 0.35| < 1e-4. Its standard error combines in quadrature
+position (Illinois) to |drop - 0.35| < 1e-4. The columns:
 
-- the quote: "35 %" is rounded to a whole percent, a uniform error of +-0.5 points, standard deviation
-  0.005 / sqrt(3), carried to s by the slope d drop / d s (central difference at the solution);
-- the ensemble: s multiplies the table's A_p (and, with ``mesoscale``, divides by its A_c), so the
-  relative standard error of those ensemble means, std / sqrt(members), at 25 MPa and the test's
-  velocity, averaged over the measured debris levels, is that of s.
+- A_c from the table (``mesoscale``, the default), s fitted;
+- A_c from Eq. 8 (``eq8``), s fitted: the same model up to a constant factor on A_p / A_c (Eq. 8's area over the
+  table's), so its s is the other's times that factor and its predictions nearly the same: it confirms nothing
+  the first column does not;
+- A_c from the table with s = 1: A_p as the mesoscale campaign simulated it, with K, H and zeta as chosen (the
+  drop it gives rests on those choices: the uncertainty budget says how much).
 
-Nothing else is fitted: the 3-pass drop, the pad ordering and the zeta and K trends are predictions.
-The same runs are made with s = 1 (uncalibrated: A_p as the mesoscale campaign measured it).
+The standard error of s reported beside it combines the quote ("35 %" rounded to a whole percent: a uniform error
+of +-0.5 points, carried to s by d drop / d s) and the table's ensemble noise; the uncertainty budget
+(:mod:`tribocosim.cosim.reports.paper_physics`) adds every other chosen input. Nothing else is fitted: the
+3-pass drop, the pad ordering and the zeta and K trends are predictions.
 """
 
 from __future__ import annotations
@@ -75,10 +79,10 @@ class Config:
 
     @property
     def label(self) -> str:
-        return f"{self.contact_area}, {'calibrated' if self.calibrated else 'uncalibrated (s = 1)'}"
+        return f"A_c {self.contact_area}, {'s fitted' if self.calibrated else 's = 1'}"
 
 
-CONFIGS = (Config("eq8", True), Config("mesoscale", True), Config("mesoscale", False), Config("eq8", False))
+CONFIGS = (Config("mesoscale", True), Config("eq8", True), Config("mesoscale", False))
 
 
 @dataclasses.dataclass
@@ -107,7 +111,7 @@ class Runs:
 
     @staticmethod
     def _key(p: Point) -> tuple:
-        return (p.pressure, p.tool_length, tuple(sorted(p.parameters.items())))
+        return (p.pressure, p.tool_length, p.velocity, tuple(sorted(p.parameters.items())))
 
     def run(self, points: list[Point]) -> None:
         need: dict[tuple, Point] = {}  # per test, the point with the most passes
@@ -135,39 +139,58 @@ class Runs:
 
 def _params(base: dict, config: Config, scale: float, **extra) -> dict:
     """The strip-draw parameters of a test: the paper's zeta and K (Fig. 19) unless ``extra`` changes them."""
+    return {**config_params(base, config), "particle_area_scale": float(scale), **extra}
+
+
+def config_params(base: dict, config: Config) -> dict:
+    """The parameters of a configuration but its scale: the paper's zeta and K (Fig. 19) and the table law."""
     return {"zeta": PAPER_ZETA, "archard_k": PAPER_K, **base, "friction_model": "table",
-            "contact_area": config.contact_area, "particle_area_scale": float(scale), **extra}
+            "contact_area": config.contact_area}
 
 
-def _drop_points(base: dict, config: Config, scale: float) -> tuple[Point, Point]:
-    p = _params(base, config, scale)
+def _drop_points(params: dict, scale: float) -> tuple[Point, Point]:
+    p = {**params, "particle_area_scale": float(scale)}
     return Point(LOW_PRESSURE, CAL_PAD, 1, p), Point(CAL_PRESSURE, CAL_PAD, 1, p)
 
 
-def _drops(runs: Runs, base: dict, config: Config, scales: list[float]) -> list[float]:
-    pairs = [_drop_points(base, config, s) for s in scales]
+def _drops(runs: Runs, params: dict, scales: list[float]) -> list[float]:
+    pairs = [_drop_points(params, s) for s in scales]
     runs.run([p for pair in pairs for p in pair])
     return [1.0 - runs.mu(hi) / runs.mu(lo) for lo, hi in pairs]
 
 
 def ensemble_rel_stderr(table, contact_area: str) -> float:
-    """Relative standard error of the ensemble mean of A_p (and of A_c with ``mesoscale``) at 25 MPa and
-    the test's velocity, averaged over the measured debris levels (0 without member spreads)."""
-    members = np.asarray(table.metadata.get("ensemble", {}).get("n_members", np.zeros(table.mu.shape)), float)
-    if table.version != 2 or not np.any(members > 1):
-        return 0.0
-    measured_max = table.metadata.get("axes", {}).get("beta", {}).get("measured_max", float(table.beta[-1]))
-    betas = table.beta[(table.beta > 0) & (table.beta <= measured_max + 1e-12)]
-    if betas.size == 0:
+    """Relative standard error of the table's A_p (and A_c with ``mesoscale``) at 25 MPa and the test's velocity,
+    averaged over the debris levels simulated there: the tabulated values' standard errors (version 3), else the
+    member spread over the square root of the members (version 2); 0 without either."""
+    if table.version < 2:
         return 0.0
     names = ("particle_area", "contact_area") if contact_area == "mesoscale" else ("particle_area",)
+    if table.version >= 3:
+        sim, _ = table.interpolate_array(table.array("simulated"), CAL_PRESSURE, V0, table.beta)
+        betas = table.beta[(table.beta > 0) & (sim == 1.0)]
+        errors = {name: table.array(name + "_se") for name in names}
+        members = None
+    else:
+        members = np.asarray(table.metadata.get("ensemble", {}).get("n_members", np.zeros(table.mu.shape)), float)
+        if not np.any(members > 1):
+            return 0.0
+        top = table.metadata.get("axes", {}).get("beta", {}).get("measured_max", float(table.beta[-1]))
+        betas = table.beta[(table.beta > 0) & (table.beta <= top + 1e-12)]
+        errors = {name: getattr(table, name + "_std") for name in names}
+    if betas.size == 0:
+        return 0.0
     total = 0.0
     for name in names:
         mean, _ = table.interpolate_array(getattr(table, name), CAL_PRESSURE, V0, betas)
-        std, _ = table.interpolate_array(getattr(table, name + "_std"), CAL_PRESSURE, V0, betas)
-        n, _ = table.interpolate_array(members, CAL_PRESSURE, V0, betas)
-        ok = (mean > 0) & (n > 1)
-        total += float(np.mean((std[ok] / np.sqrt(n[ok]) / mean[ok]) ** 2)) if np.any(ok) else 0.0
+        err, _ = table.interpolate_array(errors[name], CAL_PRESSURE, V0, betas)
+        if members is not None:
+            n, _ = table.interpolate_array(members, CAL_PRESSURE, V0, betas)
+            ok = (mean > 0) & (n > 1)
+            err = err / np.sqrt(np.where(ok, n, 1.0))
+        else:
+            ok = mean > 0
+        total += float(np.mean((err[ok] / mean[ok]) ** 2)) if np.any(ok) else 0.0
     return math.sqrt(total)
 
 
@@ -210,29 +233,35 @@ def solve_increasing(f, target: float, tol: float, start: float = 1.0, limit: fl
     return x, fx + target
 
 
-def calibrate_drop(runs: Runs, base: dict, config: Config, table, target: float = PAPER_DROP_1PASS,
-                   log=None) -> Calibration:
-    """Solve drop(s) = ``target`` for the scale s of A_p (module docstring)."""
+def calibrate(runs: Runs, params: dict, table, target: float = PAPER_DROP_1PASS, log=None) -> Calibration:
+    """Solve drop(s) = ``target`` for the scale s of A_p with the strip-draw parameters ``params`` (module
+    docstring)."""
     start = runs.evaluations
     history = []
+    label = params.get("contact_area", "mesoscale")
 
     def drop(s: float) -> float:
-        d = _drops(runs, base, config, [s])[0]
+        d = _drops(runs, params, [s])[0]
         history.append((s, d))
         if log:
-            log(f"  {config.contact_area}: s = {s:.6g}: drop {100 * d:.3f} %")
+            log(f"  {label}: s = {s:.6g}: drop {100 * d:.3f} %")
         return d
 
     try:
         s, reached = solve_increasing(drop, target, DROP_TOL)
     except TribocosimError as exc:
-        raise TribocosimError(f"{config.contact_area}: the one-pass drop at 25 MPa cannot reach {target:.0%}: "
-                              f"{exc}") from None
+        raise TribocosimError(f"{label}: the one-pass drop at 25 MPa cannot reach {target:.0%}: {exc}") from None
     h = 0.02 * s
-    d_minus, d_plus = _drops(runs, base, config, [s - h, s + h])
+    d_minus, d_plus = _drops(runs, params, [s - h, s + h])
     slope = (d_plus - d_minus) / (2 * h)
     return Calibration(s, reached, slope, QUOTE_STD / abs(slope) if slope else math.inf,
-                       s * ensemble_rel_stderr(table, config.contact_area), runs.evaluations - start, history)
+                       s * ensemble_rel_stderr(table, label), runs.evaluations - start, history)
+
+
+def calibrate_drop(runs: Runs, base: dict, config: Config, table, target: float = PAPER_DROP_1PASS,
+                   log=None) -> Calibration:
+    """:func:`calibrate` for a configuration's parameters."""
+    return calibrate(runs, config_params(base, config), table, target, log)
 
 
 def figure_points(base: dict, config: Config, scale: float, grid: Grid) -> dict[str, list[tuple[dict, Point]]]:
@@ -306,7 +335,19 @@ def metrics(figures: dict, grid: Grid) -> dict:
         "beta_max_3pass": next(r["beta_max"] for r in figures["fig2b"]
                                if r["pass"] == grid.passes and r["pressure_mpa"] == at),
         "table_clamps": sum(r["table_clamps"] for rows in figures.values() for r in rows),
+        "table_clamps_by_scene": _clamps_by_scene(figures),
+        "mu_by_pad": pads,
     }
+
+
+def _clamps_by_scene(figures: dict) -> dict[str, int]:
+    """Clamped lookups (outside the table's axes or its simulated range) per figure and series."""
+    out = {}
+    for name, (_, key, label) in FIGURES.items():
+        for r in figures[name]:
+            scene = f"{name}: {label(r[key])}, {r['pressure_mpa']:g} MPa"
+            out[scene] = out.get(scene, 0) + int(r["table_clamps"])
+    return out
 
 
 # ---- the report ------------------------------------------------------------------------------------------
@@ -337,6 +378,15 @@ def _row_values(m: dict, cal: Calibration | None, grid: Grid) -> dict[str, str]:
     }
 
 
+def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_star: float = 55e9) -> float | None:
+    """A_c of Eq. 8 (kappa P / (h'_rms E*), the strip model's defaults) over the table's particle-free A_c at 25 MPa
+    and the test's velocity."""
+    if table.version < 2:
+        return None
+    ac, _ = table.interpolate_array(table.contact_area, CAL_PRESSURE, V0, 0.0)
+    return float(kappa * CAL_PRESSURE / (rms_slope * e_star) / ac) if ac > 0 else None
+
+
 def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, header: str, files: list[str]) -> str:
     """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
     configs = list(results)
@@ -356,18 +406,19 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
          "falls with K and saturates (Fig. 18b)", "k"),
         (f"mu_bar at {min(grid.pressures)} MPa, 35 mm pad", "-", "mu_low"),
         (f"largest beta after {grid.passes} passes at {at} MPa (in any test)", "-", "beta"),
-        ("table lookups outside the table's axes (clamped)", "-", "clamps"),
+        ("table lookups outside the table's axes or simulated range (clamped)", "-", "clamps"),
     ]
     lines = [header, "", "| quantity | paper | " + " | ".join(c.label for c in configs) + " |",
              "|---|---|" + "---|" * len(configs)]
     for title, paper, key in rows:
         lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
-    measured = table.metadata.get("axes", {}).get("beta", {}).get("measured_max")
+    ratio = table_contact_ratio(table)
     lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
               "one-pass drop at 25 MPa is fitted (by s, per convention); every other entry is a prediction. "
-              f"The table's beta axis ends at {table.beta[-1]:.3g}"
-              + (f"; its values are measured up to beta = {measured:.3g} and extrapolated beyond" if measured else "")
-              + ".", ""]
+              f"The table's beta axis ends at {table.beta[-1]:.4g}."
+              + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
+                 f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
+                 if ratio and "eq8" in cals and "mesoscale" in cals else ""), ""]
     for conv, cal in cals.items():
         lines.append(f"- `{conv}`: s = {cal.scale:.6g}, standard error {cal.stderr:.3g} (quote of the 35 %: "
                      f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
@@ -380,6 +431,111 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
     lines += ["", f"Friction table: {table_text}. Figures: " + ", ".join(f"[{f}]({f})" for f in files)
               + "; every test's mu_bar: [paper.csv](paper.csv), the numbers: [paper.json](paper.json).", ""]
     return "\n".join(lines)
+
+
+def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list[str]:
+    """The sections after the paper-vs-model table (paper_physics): options, budget, speed, alpha, checks."""
+    from tribocosim.cosim.reports import paper_physics as pp
+
+    lines = ["", "## Multi-pass options", "",
+             "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
+             "to 72 % after three. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
+             "drop, and the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
+             "pad).", "",
+             "| option | why these values | s | drop 1 / 2 / 3 passes at 25 MPa | 3-pass minus 2-pass | 140 mm pad, 1 pass "
+             "| debris after pass 1 / 2 / 3 [g/m^2] | clamped lookups |", "|---|---|---|---|---|---|---|---|"]
+    for opt in pp.OPTIONS:
+        r = extra["options"].get(opt.name, {})
+        if "error" in r:
+            lines.append(f"| {opt.label} | {opt.why} | cannot be calibrated: {r['error']} | | | | | |")
+            continue
+        lines.append(f"| {opt.label} | {opt.why} | {r['scale']:.4g} | " + " / ".join(_pct(d) for d in r["drops"])
+                     + f" | {100 * r['spacing_3_2']:.1f} points | {_pct(r['drop_140'])} | "
+                     + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
+    rows = extra["budget"]
+    nominal = extra["options"]["paper"]
+    cal = cals["mesoscale"]
+    lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
+              "Every chosen input varied over the range shown, s recalibrated on the 35 %, and the change of s and of "
+              "the predictions recorded (a two-sided range: half the difference of its ends). The quote of the 35 % "
+              f"alone gives s a standard error of {cal.stderr_quote:.2g}.", "",
+              "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['quantity']} | {r['range']} | {r['error']} | | |")
+        else:
+            lines.append(f"| {r['quantity']} | {r['range']} | {r['scale']:.3g} | {100 * r['drop3']:.1f} | "
+                         f"{100 * r['drop140']:.1f} |")
+    tot = extra["budget_total"]
+    lines += [f"| **total** (quadrature, with the quote) | | **{tot['scale']:.3g}** | **{100 * tot['drop3']:.1f}** | "
+              f"**{100 * tot['drop140']:.1f}** |", "",
+              f"So s = {cal.scale:.3g} +- {tot['scale']:.2g}, the 3-pass drop {_pct(nominal['drops'][2])} +- "
+              f"{100 * tot['drop3']:.1f} points (the paper: up to 72 %), the 140 mm pad's one-pass drop "
+              f"{_pct(nominal['drop_140'])} +- {100 * tot['drop140']:.1f} points.", ""]
+    lines += ["## Drawing speed", "",
+              f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g} +- {tot['scale']:.2g}: the range in brackets), "
+              "and the drop against 1 MPa at the same speed. The paper's alpha(v) (Fig. 15) rises with the sliding "
+              "speed, which would make the debris effect grow from 0.08 to 0.5 m/s; here A_p is simulated at 0.08 and "
+              "0.5 m/s (docs/physics/table_domain.md).", "",
+              "| V0 [m/s] | mu_bar, 1 pass | drop, 1 pass | mu_bar, 3 passes | drop, 3 passes |", "|---|---|---|---|---|"]
+    for r in extra["speed"]:
+        lines.append(f"| {r['velocity']:g} | {r['mu_1']:.4f} [{r['mu_1_band'][0]:.4f}, {r['mu_1_band'][1]:.4f}] | "
+                     f"{_pct(r['drop_1'])} | {r['mu_3']:.4f} [{r['mu_3_band'][0]:.4f}, {r['mu_3_band'][1]:.4f}] | "
+                     f"{_pct(r['drop_3'])} |")
+    by_v = {r["velocity"]: r for r in extra["speed"]}
+    if 0.08 in by_v and 0.5 in by_v and by_v[0.08]["drop_1"] > 0:
+        lines += ["", f"The one-pass drop at 0.5 m/s is {by_v[0.5]['drop_1'] / by_v[0.08]['drop_1']:.3f} times that at "
+                      f"0.08 m/s, the three-pass drop {by_v[0.5]['drop_3'] / by_v[0.08]['drop_3']:.3f} times."]
+    lines += ["", "## alpha of both observables", "",
+              "Eq. 23's alpha = A_p / A0 / (beta P / E*) at the table's first debris level, mean over the pressures "
+              "(+- standard error), for every load-bearing flake and for the paper's cluster rule alone:", "",
+              "| v [m/s] | every load-bearing flake | cluster rule alone |", "|---|---|---|"]
+    for a, c in zip(extra["alpha"]["load_bearing"], extra["alpha"]["clusters"]):
+        lines.append(f"| {a['velocity']:g} | {a['alpha']:.4g} +- {a['stderr']:.2g} | {c['alpha']:.3g} +- "
+                     f"{c['stderr']:.2g} |")
+    study = extra["alpha"].get("study")
+    if study:
+        lines += ["", f"The alpha(v) study ({study.get('source', 'docs/physics/alpha_velocity.md')}), 1-50 m/s, "
+                      "mean +- standard error:", "", "| setting | observable | " + " | ".join(
+                          f"{float(v):g} m/s" for v in study["velocities"]) + " | alpha(50)/alpha(1) |",
+                  "|---|---|" + "---|" * (len(study["velocities"]) + 1)]
+        for name, entry in study["settings"].items():
+            for key, label in (("all", "every load-bearing flake"), ("clusters", "cluster rule alone")):
+                cells = [f"{entry[key][str(v)][0]:.3g} +- {entry[key][str(v)][1]:.2g}" if str(v) in entry[key] else "-"
+                         for v in study["velocities"]]
+                ratio = entry["ratio_50_1"][key]
+                lines.append(f"| {entry['label']} | {label} | " + " | ".join(cells)
+                             + f" | {ratio[0]:.3g} +- {ratio[1]:.2g} |")
+    lines += ["", "## The friction table's checks", ""]
+    checks = extra.get("direct_slides", [])
+    if checks:
+        lines += ["Direct slides at points between the table's nodes (the table's own sweep settings) against the "
+                  "table's interpolation: within two combined standard errors?", "",
+                  "| P [MPa] | v [m/s] | beta | members | A_p/A0 direct | A_p/A0 table | difference / combined SE | "
+                  "nodes read all simulated | passes |", "|---|---|---|---|---|---|---|---|---|"]
+        for c in checks:
+            lines.append(f"| {c['pressure'] / 1e6:g} | {c['velocity']:g} | {c['beta']:.3g} | {c['members']} | "
+                         f"{c['a_p_direct']:.4g} +- {c['a_p_direct_se']:.2g} | {c['a_p_table']:.4g} +- "
+                         f"{c['a_p_table_se']:.2g} | {c['difference_over_combined_se']:+.2f} | "
+                         f"{'yes' if c['all_nodes_simulated'] else 'no'} | {'yes' if c['passed'] else 'NO'} |")
+    else:
+        lines.append("The table is not version 3 with its campaign recorded: no direct-slide check.")
+    m = results[Config("mesoscale", True)]["metrics"]
+    lines += ["", "Clamped lookups (outside the table's axes or its simulated range) in every test of the calibrated "
+                  "column, by figure: " + ", ".join(f"{k}: {v}" for k, v in _clamps_per_figure(m).items()) + ".", "",
+              "mu_bar(P) on the three pads (calibrated column):", "",
+              "| P [MPa] | " + " | ".join(f"{1000 * pad:g} mm" for pad in grid.pads) + " |",
+              "|---|" + "---|" * len(grid.pads)]
+    for P in grid.pressures:
+        lines.append(f"| {P:g} | " + " | ".join(f"{m['mu_by_pad'][pad][P]:.4f}" for pad in grid.pads) + " |")
+    return lines
+
+
+def _clamps_per_figure(m: dict) -> dict[str, int]:
+    out = {name: 0 for name in FIGURES}
+    for scene, count in m["table_clamps_by_scene"].items():
+        out[scene.split(":")[0]] += count
+    return out
 
 
 FIGURES = {  # name: (title, series key, legend label)
@@ -428,9 +584,9 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     grid = QUICK if quick else FULL
     table_path = Path(table_file) if table_file else DEFAULT_TABLE
     table = read_table(table_path)
-    if table.version != 2:
+    if table.version < 2:
         raise ParameterError(f"report paper: friction table {table_path} is format version {table.version}; the "
-                             "eq8 and scaled conventions need version 2 (with the contact areas)")
+                             "eq8 and scaled conventions need version 2 or 3 (with the contact areas)")
     base = {"table_file": str(table_path.resolve())}
     out.mkdir(parents=True, exist_ok=True)
     runs = Runs(workers, log)
@@ -449,6 +605,7 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     for c in CONFIGS:
         figures = collect(runs, figs[c])
         results[c] = {"figures": figures, "metrics": metrics(figures, grid)}
+    extra = physics(runs, base, table, cals["mesoscale"], quick, workers, log)
     wall = time.perf_counter() - t0
     with open(out / "paper.csv", "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
@@ -462,7 +619,9 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     files = plot(results, out)
     header = (f"# The paper's macro results ({'quick' if quick else 'full'} report)\n\nGenerated by `tribocosim report "
               f"paper{' --quick' if quick else ''}` in {wall:.0f} s ({runs.evaluations} strip-draw passes).")
-    (out / "paper.md").write_text(markdown(results, cals, grid, table, table_path, header, files), encoding="utf-8")
+    text = markdown(results, cals, grid, table, table_path, header, files)
+    text += "\n".join(physics_markdown(extra, cals, grid, results)) + "\n"
+    (out / "paper.md").write_text(text, encoding="utf-8")
     summary = {
         "mode": "quick" if quick else "full", "wall_time": wall, "table": str(table_path),
         "table_hash": table.metadata.get("content_hash"), "grid": dataclasses.asdict(grid),
@@ -470,9 +629,47 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
         "calibrations": {k: {**dataclasses.asdict(v), "stderr": v.stderr} for k, v in cals.items()},
         "configurations": {c.label: {"contact_area": c.contact_area, "calibrated": c.calibrated,
                                      "metrics": _jsonable(r["metrics"])} for c, r in results.items()},
+        "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
+                              for k, v in extra["options"].items()}),
+        "budget": _jsonable(extra["budget"]), "budget_total": _jsonable(extra["budget_total"]),
+        "speed": _jsonable(extra["speed"]), "alpha": _jsonable(extra["alpha"]),
+        "direct_slides": _jsonable(extra["direct_slides"]),
     }
     (out / "paper.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return summary
+
+
+def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
+    """The multi-pass options, the uncertainty budget, the drawing-speed prediction, alpha of both observables and
+    the direct-slide check (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
+    from tribocosim.cosim.reports import paper_physics as pp
+
+    params = config_params(base, Config("mesoscale", True))
+    if log:
+        log("multi-pass options ...")
+    options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table) for o in pp.OPTIONS}
+    if log:
+        log("uncertainty budget ...")
+    varied = {}
+    with pp.scratch_folder() as folder:
+        tables = pp.table_variants(table, Path(folder))
+        for v in pp.VARIATIONS:
+            if v.table is not None and v.table not in tables:
+                varied[v.name] = {"error": "needs a version 3 table that records its campaign"}
+                continue
+            p = {**params, **({"table_file": tables[v.table]} if v.table else {}), **v.parameters}
+            varied[v.name] = pp.calibrated_predictions(runs, p, table)
+    rows = pp.budget(options["paper"], varied)
+    total = {key: pp.budget_total(rows, key, cal.stderr_quote if key == "scale" else 0.0)
+             for key in ("scale", "drop3", "drop140")}
+    if log:
+        log("drawing speed ...")
+    speed = pp.speed_prediction(runs, params, cal.scale, total["scale"])
+    alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
+             "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
+    checks = pp.direct_slide_check(table, workers, quick, log)
+    return {"options": options, "budget": rows, "budget_total": total, "speed": speed, "alpha": alpha,
+            "direct_slides": checks}
 
 
 def _jsonable(x):

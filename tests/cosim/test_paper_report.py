@@ -119,4 +119,4 @@ def test_report_refuses_a_version_1_table(tmp_path, capsys):
     write_table(v1, FrictionTable(base.pressure, base.velocity, base.beta, base.mu, dict(base.metadata)))
     assert report_main(["paper", "--quick", "--out", str(tmp_path / "out"), "--table", str(v1)]) == 2
     err = capsys.readouterr().err
-    assert f"friction table {v1} is format version 1" in err and "need version 2" in err
+    assert f"friction table {v1} is format version 1" in err and "need version 2 or 3" in err

@@ -1,0 +1,283 @@
+"""What the paper report adds to the paper's figures: the multi-pass options, the uncertainty budget, the
+drawing-speed prediction, alpha of both observables, and the friction table's checks.
+
+Every strip-draw test is the pure model of :mod:`tribocosim.cosim.apps.stripdraw_experiment` (140 mm draw,
+mu_bar over the last 20 %); a drop is 1 - mu_bar(25 MPa) / mu_bar(1 MPa) on the same pad and pass. Each setting is
+calibrated the same way as the report's main columns: the scale s of A_p solves the paper's one number, the 35 %
+one-pass drop at 25 MPa on the 35 mm pad (:func:`tribocosim.cosim.reports.paper.calibrate`); everything else is
+predicted.
+
+- Multi-pass options (:data:`OPTIONS`; docs/model.md sections 3-4): the paper's model (frictionless flakes, no
+  sink, every flake carried into the next pass) against a flake-borne contact that shears at r tau0, a debris
+  sink of length lambda, and half the debris carried into the next pass. None of r, lambda or the carried share is
+  measured here: each is shown at values that bracket what the literature and the mesoscale model allow (the
+  module constants say why), calibrated on the one-pass 35 % alone, so that the 2- and 3-pass drops, their
+  spacing, the 140 mm pad's drop and the debris weighed after each pass are what would tell them apart.
+- Uncertainty budget (:data:`VARIATIONS`): every chosen input varied over a stated range, s recalibrated, and the
+  change of s and of each prediction recorded; the total is the quadrature sum of the half-ranges (a one-sided
+  variation counts whole).
+- Drawing speed (:data:`SPEEDS`): mu_bar at 0.02-0.5 m/s after 1 and 3 passes at 25 MPa, with the band of s's
+  total standard error. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
+  the debris effect grow with the drawing speed; the table's A_p is simulated at 0.08 and 0.5 m/s.
+- alpha of both observables (every load-bearing flake, the paper's cluster rule alone): the table's Eq. 23 slope
+  at small beta per velocity row (the initial slope of the fitted form, alpha = a E* / P, mean over the
+  pressures with its standard error), and the alpha(v) study of docs/physics/alpha_velocity.md when its results
+  are shipped (``models/alpha_velocity.json``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from tribocosim.cosim.apps.stripdraw_experiment import Point
+
+#: drawing speeds of the speed prediction [m/s]
+SPEEDS = (0.02, 0.05, 0.08, 0.2, 0.5)
+#: the long pad of the prediction that tells the options apart
+LONG_PAD = 0.14
+
+
+@dataclasses.dataclass(frozen=True)
+class Option:
+    """A multi-pass option: the strip-draw parameters it changes, and why those values."""
+
+    name: str
+    label: str
+    parameters: dict
+    why: str
+
+
+OPTIONS = (
+    Option("paper", "the paper's model", {},
+           "frictionless flakes (r = 0), no sink, every flake carried into the next pass"),
+    Option("shear_0.25", "flake-borne shear r = 0.25", {"flake_shear_ratio": 0.25},
+           "r = tau_flake / tau0: a flake-borne junction shears at a quarter of the metal junction's strength"),
+    Option("shear_0.5", "flake-borne shear r = 0.5", {"flake_shear_ratio": 0.5},
+           "r = 0.5: boundary-lubricated oxide (the flakes' Al and Al oxide, EDS Table 2) shearing at half the "
+           "strength; r = 1 would remove the debris effect"),
+    Option("sink_140", "debris sink lambda = 140 mm", {"debris_sink_length": 0.14},
+           "lambda = one draw length: a flake leaves the interface after ~140 mm of sliding under the pad"),
+    Option("sink_35", "debris sink lambda = 35 mm", {"debris_sink_length": 0.035},
+           "lambda = the pad's width: ejected sideways after sliding about one pad width"),
+    Option("carry_0.5", "half the debris carried into the next pass", {"debris_carry_over": 0.5},
+           "half the debris falls off or is wiped from the strip between passes"),
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Variation:
+    """One input of the uncertainty budget varied: the strip-draw parameters it sets or the table it uses."""
+
+    name: str
+    quantity: str
+    value: str
+    parameters: dict = dataclasses.field(default_factory=dict)
+    table: str | None = None  # a table variant (:func:`table_variants`)
+    pair: str | None = None  # the name of the other end of a two-sided range
+
+
+VARIATIONS = (
+    Variation("ensemble_low", "ensemble noise of the table", "A_p - 1 standard error at every node",
+              table="ensemble_low", pair="ensemble_high"),
+    Variation("ensemble_high", "ensemble noise of the table", "A_p + 1 standard error at every node",
+              table="ensemble_high", pair="ensemble_low"),
+    Variation("k_low", "Archard K (an order-of-magnitude choice)", "5e-5 (x 0.5)", {"archard_k": 5e-5}, pair="k_high"),
+    Variation("k_high", "Archard K (an order-of-magnitude choice)", "2e-4 (x 2)", {"archard_k": 2e-4}, pair="k_low"),
+    Variation("h_low", "hardness H (handbook HV 84: 0.8 GPa)", "0.68 GPa (HB 69)", {"hardness": 0.68e9}),
+    Variation("zeta_low", "zeta (the paper's fit to another model: 0.2)", "0.1", {"zeta": 0.1}, pair="zeta_high"),
+    Variation("zeta_high", "zeta (the paper's fit to another model: 0.2)", "0.3", {"zeta": 0.3}, pair="zeta_low"),
+    Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
+    Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
+    Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"}),
+    Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
+              {"friction_velocity": "slip_rate"}),
+)
+
+
+def table_variants(table, folder: Path) -> dict[str, str]:
+    """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
+    (``ensemble_low``/``ensemble_high``), and the table rebuilt from the recorded cases of each surface pair alone
+    (``pair_0``, ``pair_1``; a version 3 table that records its campaign). Returns name -> path."""
+    from tribocosim.components.stripdraw.table import write_table
+
+    out = {}
+    if table.version >= 3:
+        se = table.array("particle_area_se")
+        for name, sign in (("ensemble_low", -1.0), ("ensemble_high", 1.0)):
+            ap = np.maximum(table.particle_area + sign * se, 0.0)
+            mu = table.metadata["calibration"]["mu0"] * np.maximum(0.0, 1.0 - ap / table.contact_area)
+            variant = dataclasses.replace(table, particle_area=ap, mu=mu)
+            out[name] = str(folder / f"{name}.npz")
+            write_table(out[name], variant)
+        meta = table.metadata
+        surfaces = {c["labels"]["surface"] for c in meta.get("cases", [])}
+        if "sweep" in meta.get("campaign", {}) and len(surfaces) > 1:
+            from tribocosim.surrogate.table_build import build_table
+
+            for s in sorted(surfaces):
+                cases = [c for c in meta["cases"] if c["labels"]["surface"] == s]
+                records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0),
+                            "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
+                                        "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}}
+                           for c in cases]
+                manifest = {"sweep": meta["campaign"]["sweep"],
+                            "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
+                rebuilt, _ = build_table(records, manifest, surface_stats=meta["surfaces"])
+                out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
+                write_table(out[f"pair_{s}"], rebuilt)
+    return out
+
+
+def three_pass_points(params: dict, velocity: float = 0.08) -> dict[str, Point]:
+    """The tests the options and the budget read: 3 passes on the 35 mm pad at 1 and 25 MPa, one pass on the
+    140 mm pad at 1 and 25 MPa."""
+    from tribocosim.cosim.reports.paper import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
+
+    return {"low": Point(LOW_PRESSURE, CAL_PAD, 3, params, velocity),
+            "high": Point(CAL_PRESSURE, CAL_PAD, 3, params, velocity),
+            "long_low": Point(LOW_PRESSURE, LONG_PAD, 1, params, velocity),
+            "long_high": Point(CAL_PRESSURE, LONG_PAD, 1, params, velocity)}
+
+
+def predictions(runs, params: dict, velocity: float = 0.08) -> dict:
+    """The drops after 1, 2, 3 passes at 25 MPa (35 mm pad), the 140 mm pad's one-pass drop, the debris weighed
+    after each pass at 25 MPa and the clamped lookups of these tests."""
+    pts = three_pass_points(params, velocity)
+    runs.run(list(pts.values()))
+    drops = [1.0 - runs.mu(pts["high"], k) / runs.mu(pts["low"], k) for k in (1, 2, 3)]
+    return {"drops": drops, "spacing_3_2": drops[2] - drops[1],
+            "drop_140": 1.0 - runs.mu(pts["long_high"]) / runs.mu(pts["long_low"]),
+            "debris_g_m2": [runs.result(pts["high"], k)["debris_g_m2"] for k in (1, 2, 3)],
+            "mu_bar_1mpa": runs.mu(pts["low"]),
+            "clamps": sum(runs.result(p, k)["table_clamps"] for p in pts.values() for k in range(1, p.passes + 1))}
+
+
+def calibrated_predictions(runs, params: dict, table, log=None) -> dict:
+    """s calibrated on the 35 % one-pass drop with ``params``, then :func:`predictions` at that s (or the reason
+    the 35 % cannot be reached)."""
+    from tribocosim.cosim.reports.paper import calibrate
+    from tribocosim.errors import TribocosimError
+
+    try:
+        cal = calibrate(runs, params, table, log=log)
+    except TribocosimError as exc:
+        return {"error": str(exc)}
+    return {"scale": cal.scale, "calibration": cal, **predictions(runs, {**params, "particle_area_scale": cal.scale})}
+
+
+def budget(nominal: dict, varied: dict) -> list[dict]:
+    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop, of the 140 mm drop and of the
+    speed effect; two-sided ranges as half the difference of their ends, one-sided ones whole."""
+    keys = {"scale": lambda r: r["scale"], "drop3": lambda r: r["drops"][2], "drop140": lambda r: r["drop_140"]}
+    rows, seen = [], set()
+    for v in VARIATIONS:
+        if v.name in seen or v.name not in varied:
+            continue
+        ends = [v] + ([w for w in VARIATIONS if w.name == v.pair] if v.pair else [])
+        seen.update(w.name for w in ends)
+        results = [varied.get(w.name) for w in ends]
+        row = {"quantity": v.quantity, "range": " / ".join(w.value for w in ends)}
+        if any(r is None or "error" in r for r in results):
+            row["error"] = "; ".join(r["error"] for r in results if r is not None and "error" in r) or "not run"
+            rows.append(row)
+            continue
+        for key, get in keys.items():
+            if len(results) == 2:
+                row[key] = 0.5 * abs(get(results[1]) - get(results[0]))
+            else:
+                row[key] = abs(get(results[0]) - get(nominal))
+        rows.append(row)
+    return rows
+
+
+def budget_total(rows: list[dict], key: str, ensemble_quote: float = 0.0) -> float:
+    """Quadrature sum of the rows' ``key`` (rows with an error are left out and named by the report)."""
+    return math.sqrt(ensemble_quote**2 + sum(r[key] ** 2 for r in rows if key in r))
+
+
+def table_alpha(table, rule: str = "particle_area") -> list[dict]:
+    """Eq. 23's alpha at small beta per velocity row of a version 3 table: the initial slope of the A_p(beta) fit,
+    alpha = (dA_p/dbeta at beta = 0) E* / P, from the table's first debris level (A_p / beta there), mean over the
+    pressures with its standard error; the cluster rule's the same way."""
+    if table.version < 3:
+        return []
+    e_star = table.metadata.get("e_star", 55e9)
+    values = table.array(rule)
+    k = 1  # the first debris level
+    out = []
+    for j, v in enumerate(table.velocity):
+        if v == 0.0:
+            continue
+        a = values[:, j, k] / table.beta[k] * e_star / table.pressure
+        out.append({"velocity": float(v), "alpha": float(a.mean()),
+                    "stderr": float(a.std(ddof=1) / math.sqrt(a.size)) if a.size > 1 else math.nan,
+                    "beta": float(table.beta[k])})
+    return out
+
+
+def alpha_study() -> dict | None:
+    """The alpha(v) study's results shipped with the models (docs/physics/alpha_velocity.md), or None."""
+    import json
+
+    from tribocosim.paths import MODELS_DIR
+
+    path = Path(MODELS_DIR) / "alpha_velocity.json"
+    if not path.is_file():
+        return None
+    return json.loads(path.read_text())
+
+
+def speed_points(params: dict, scale: float) -> list[tuple[float, dict[str, Point]]]:
+    """The speed prediction's tests: per drawing speed, 3 passes at 1 and 25 MPa on the 35 mm pad."""
+    return [(v, {k: p for k, p in three_pass_points({**params, "particle_area_scale": scale}, v).items()
+                 if k in ("low", "high")}) for v in SPEEDS]
+
+
+def speed_prediction(runs, params: dict, scale: float, scale_se: float) -> list[dict]:
+    """mu_bar after 1 and 3 passes at 25 MPa per drawing speed, and its band for s +- its standard error."""
+    rows = []
+    for s in (scale, max(scale - scale_se, 0.0), scale + scale_se):
+        pts = speed_points(params, s)
+        runs.run([p for _, d in pts for p in d.values()])
+        for v, d in pts:
+            rows.append({"velocity": v, "scale": s, **{f"mu_{k}": runs.mu(d["high"], k) for k in (1, 3)},
+                         **{f"drop_{k}": 1.0 - runs.mu(d["high"], k) / runs.mu(d["low"], k) for k in (1, 3)}})
+    out = []
+    for v in SPEEDS:
+        at = [r for r in rows if r["velocity"] == v]
+        nominal = at[0]
+        entry = {"velocity": v}
+        for key in ("mu_1", "mu_3", "drop_1", "drop_3"):
+            vals = [r[key] for r in at]
+            entry[key] = nominal[key]
+            entry[key + "_band"] = (min(vals), max(vals))
+        out.append(entry)
+    return out
+
+
+def direct_slide_check(table, workers: int | None, quick: bool, log=None) -> list[dict]:
+    """The table against direct slides between its nodes (surrogate.table_check): two placements per surface pair
+    in the quick report, three in the full one."""
+    from tribocosim.surrogate.executors import make_executor
+    from tribocosim.surrogate.table_check import SEEDS, run_check
+
+    if table.version < 3 or "sweep" not in table.metadata.get("campaign", {}):
+        return []
+    seeds = SEEDS[:2] if quick else SEEDS
+    if log:
+        log(f"direct slides at {len(seeds)} placements per surface pair ...")
+    ex = make_executor(workers)
+    try:
+        return [r.to_dict() for r in run_check(table, ex, seeds=seeds)]
+    finally:
+        ex.close()
+
+
+def scratch_folder():
+    """A temporary folder for the table variants (removed when the report ends)."""
+    return tempfile.TemporaryDirectory(prefix="tribocosim-paper-")

@@ -1,0 +1,83 @@
+"""The paper report's physics pieces (tribocosim.cosim.reports.paper_physics): the budget's arithmetic on known
+results, alpha at small beta on a table of known areas, the ensemble variants of a table, and the options' and the
+budget's tests on the real model (the whole report runs in .ci/run: tribocosim report paper --quick)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tribocosim.components.stripdraw.table import FrictionTable
+from tribocosim.cosim.reports import paper, paper_physics as pp
+
+
+def _result(scale, drop3, drop140):
+    return {"scale": scale, "drops": [0.35, 0.5, drop3], "drop_140": drop140}
+
+
+def test_budget_takes_half_a_two_sided_range_and_a_one_sided_change_whole():
+    nominal = _result(1.0, 0.7, 0.6)
+    varied = {"k_low": _result(0.5, 0.5, 0.4), "k_high": _result(2.0, 0.9, 0.8), "h_low": _result(0.8, 0.75, 0.62),
+              "zeta_low": {"error": "cannot be calibrated"}, "zeta_high": _result(1.1, 0.72, 0.61)}
+    rows = {r["quantity"].split(" (")[0]: r for r in pp.budget(nominal, varied)}
+    k = rows["Archard K"]
+    assert (k["scale"], k["drop3"], k["drop140"]) == pytest.approx((0.75, 0.2, 0.2))
+    h = rows["hardness H"]
+    assert (h["scale"], h["drop3"], h["drop140"]) == pytest.approx((0.2, 0.05, 0.02))
+    assert "cannot be calibrated" in rows["zeta"]["error"] and "scale" not in rows["zeta"]
+    assert pp.budget_total(list(rows.values()), "scale", 0.1) == pytest.approx(math.sqrt(0.75**2 + 0.2**2 + 0.1**2))
+
+
+def _v3_table(alpha=400.0, clusters=0.01):
+    p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1])
+    ap = alpha * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 3))
+    ac = np.broadcast_to((p / 3e8)[:, None, None], (3, 3, 3)).copy()
+    se = 0.1 * ap
+    zeros = np.zeros((3, 3, 3))
+    return FrictionTable(p, v, b, 0.15 * np.maximum(0.0, 1 - ap / ac), {"beta_threshold": 1.0, "calibration": {"mu0": 0.15}},
+                         contact_area=ac, particle_area=ap, contact_area_std=zeros, particle_area_std=se,
+                         extras={"simulated": np.ones((3, 3, 3)), "contact_area_se": zeros, "particle_area_se": se,
+                                 "particle_area_clusters": clusters * ap, "particle_area_clusters_se": zeros})
+
+
+def test_table_alpha_is_eq23_at_the_first_level_for_both_observables():
+    t = _v3_table()
+    a = pp.table_alpha(t, "particle_area")
+    c = pp.table_alpha(t, "particle_area_clusters")
+    assert [r["velocity"] for r in a] == [0.08, 0.5]
+    assert all(r["alpha"] == pytest.approx(400.0) and r["stderr"] == pytest.approx(0.0, abs=1e-9) for r in a)
+    assert all(r["alpha"] == pytest.approx(4.0) for r in c)
+
+
+def test_ensemble_variants_move_a_p_by_one_standard_error(tmp_path):
+    from tribocosim.components.stripdraw.table import read_table
+
+    t = _v3_table()
+    paths = pp.table_variants(t, tmp_path)
+    low, high = read_table(paths["ensemble_low"]), read_table(paths["ensemble_high"])
+    np.testing.assert_allclose(low.particle_area, 0.9 * t.particle_area, rtol=1e-12)
+    np.testing.assert_allclose(high.particle_area, 1.1 * t.particle_area, rtol=1e-12)
+    np.testing.assert_allclose(high.mu, 0.15 * (1 - high.particle_area / high.contact_area), rtol=1e-12)
+    assert "pair_0" not in paths  # no campaign recorded
+
+
+def test_options_calibrate_on_the_one_pass_drop_and_a_sink_leaves_less_debris(tmp_path):
+    """On the real model with a table of known areas: each option reaches the 35 % one-pass drop with its own s;
+    in the paper's model the debris on the strip grows pass by pass, and a debris sink leaves less after every
+    pass."""
+    from tribocosim.components.stripdraw.table import write_table
+
+    path = tmp_path / "t.npz"
+    write_table(path, _v3_table(alpha=3000.0))
+    table = _v3_table(alpha=3000.0)
+    runs = paper.Runs(workers=1)
+    params = paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True))
+    base = pp.calibrated_predictions(runs, params, table)
+    sink = pp.calibrated_predictions(runs, {**params, "debris_sink_length": 0.035}, table)
+    assert base["drops"][0] == pytest.approx(0.35, abs=2e-4) and sink["drops"][0] == pytest.approx(0.35, abs=2e-4)
+    d = base["debris_g_m2"]
+    assert d[2] > d[1] > d[0] > 0
+    assert all(s < b for s, b in zip(sink["debris_g_m2"], base["debris_g_m2"]))
+    assert sink["scale"] > base["scale"]  # less debris under the pad needs a larger A_p scale for the same 35 %
