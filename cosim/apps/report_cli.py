@@ -45,12 +45,19 @@ def _paper(args) -> int:
             print(msg, file=sys.stderr, flush=True)
 
     try:
-        run_report(Path(args.out), args.table, args.quick, args.workers, log)
+        summary = run_report(Path(args.out), args.table, args.quick, args.workers, log)
     except TribocosimError as exc:
         print(f"tribocosim report paper: {exc}", file=sys.stderr)
         return 2
     print(f"wrote {Path(args.out) / 'paper.md'}")
-    return 0
+    failed = [c for c in summary.get("direct_slides", []) if not c["passed"]]
+    for c in failed:
+        print(f"tribocosim report paper: the table fails its direct-slide check at P = {c['pressure'] / 1e6:g} MPa, "
+              f"v = {c['velocity']:g} m/s, beta = {c['beta']:.3g}: direct {c['a_p_direct']:.4g}, table "
+              f"{c['a_p_table']:.4g}, {c['difference_over_combined_se']:+.2f} combined standard errors"
+              + ("" if c["all_nodes_simulated"] else "; the interpolation reads nodes the campaign did not simulate"),
+              file=sys.stderr)
+    return 1 if failed else 0
 
 
 def main(argv: list[str] | None = None) -> int:
