@@ -14,7 +14,9 @@ cluster rule and <A_c>/A0 with the recorded values:
 - anything else fails.
 
 The sample: the cheapest recorded case of every debris level (and one particle-free case), cheapest first, as
-long as the recorded wall times add up to at most ``budget_s`` (at least one case).
+long as the recorded wall times add up to at most ``budget_s`` (at least one case). A format 2 table records no
+wall times; its cases are ordered by the cost of a slide instead (the fastest velocity, then the highest pressure:
+the shortest DEM run and the fewest flakes per contact patch first) and every debris level is sampled once.
 """
 
 from __future__ import annotations
@@ -80,12 +82,15 @@ def _std(values) -> float:
 
 def sample_cases(recorded: list[Recorded], budget_s: float) -> list[Recorded]:
     """The cheapest case of every debris level (module docstring), within ``budget_s`` of recorded wall time."""
+    def cost(r: Recorded):
+        return (r.wall_s, -r.case.labels["velocity"], -r.case.labels["pressure"])
+
     by_level: dict = {}
-    for r in sorted(recorded, key=lambda r: r.wall_s):
+    for r in sorted(recorded, key=cost):
         by_level.setdefault(r.case.labels["n_flakes"], r)
     chosen, total = [], 0.0
-    for r in sorted(by_level.values(), key=lambda r: r.wall_s):
-        if chosen and total + r.wall_s > budget_s:
+    for r in sorted(by_level.values(), key=cost):
+        if chosen and math.isfinite(r.wall_s) and total + r.wall_s > budget_s:
             break
         chosen.append(r)
         total += r.wall_s

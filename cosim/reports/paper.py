@@ -44,11 +44,12 @@ import numpy as np
 
 from tribocosim.errors import TribocosimError
 from tribocosim.cosim.apps.stripdraw_experiment import V0, Point, draw, run_points
+from tribocosim.cosim.reports import paper_physics as pp
+from tribocosim.cosim.reports.paper_physics import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
 
 PAPER_DROP_1PASS = 0.35  # Sec. 2.1: 35 % at 25 MPa after one pass, 35 x 35 mm pad
 PAPER_DROP_3PASS = 0.72  # Sec. 2.1: "up to 72 % at 25 MPa" after three passes
 QUOTE_STD = 0.005 / math.sqrt(3.0)  # "35 %" rounded to a whole percent
-CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035
 PAPER_ZETA, PAPER_K = 0.2, 1e-4  # Fig. 19: the only fitted parameter zeta = 0.2; K = 1e-4
 DROP_TOL = 1e-4
 
@@ -435,7 +436,6 @@ def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, hea
 
 def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list[str]:
     """The sections after the paper-vs-model table (paper_physics): options, budget, speed, alpha, checks."""
-    from tribocosim.cosim.reports import paper_physics as pp
 
     lines = ["", "## Multi-pass options", "",
              "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
@@ -642,12 +642,11 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
 def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
     """The multi-pass options, the uncertainty budget, the drawing-speed prediction, alpha of both observables and
     the direct-slide check (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
-    from tribocosim.cosim.reports import paper_physics as pp
 
     params = config_params(base, Config("mesoscale", True))
     if log:
         log("multi-pass options ...")
-    options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table) for o in pp.OPTIONS}
+    options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table, calibrate) for o in pp.OPTIONS}
     if log:
         log("uncertainty budget ...")
     varied = {}
@@ -658,7 +657,7 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
                 varied[v.name] = {"error": "needs a version 3 table that records its campaign"}
                 continue
             p = {**params, **({"table_file": tables[v.table]} if v.table else {}), **v.parameters}
-            varied[v.name] = pp.calibrated_predictions(runs, p, table)
+            varied[v.name] = pp.calibrated_predictions(runs, p, table, calibrate)
     rows = pp.budget(options["paper"], varied)
     total = {key: pp.budget_total(rows, key, cal.stderr_quote if key == "scale" else 0.0)
              for key in ("scale", "drop3", "drop140")}

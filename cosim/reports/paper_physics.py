@@ -34,12 +34,14 @@ from pathlib import Path
 
 import numpy as np
 
+from tribocosim.errors import TribocosimError
 from tribocosim.cosim.apps.stripdraw_experiment import Point
 
 #: drawing speeds of the speed prediction [m/s]
 SPEEDS = (0.02, 0.05, 0.08, 0.2, 0.5)
 #: the long pad of the prediction that tells the options apart
 LONG_PAD = 0.14
+CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test and its 1 MPa reference
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,8 +138,6 @@ def table_variants(table, folder: Path) -> dict[str, str]:
 def three_pass_points(params: dict, velocity: float = 0.08) -> dict[str, Point]:
     """The tests the options and the budget read: 3 passes on the 35 mm pad at 1 and 25 MPa, one pass on the
     140 mm pad at 1 and 25 MPa."""
-    from tribocosim.cosim.reports.paper import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
-
     return {"low": Point(LOW_PRESSURE, CAL_PAD, 3, params, velocity),
             "high": Point(CAL_PRESSURE, CAL_PAD, 3, params, velocity),
             "long_low": Point(LOW_PRESSURE, LONG_PAD, 1, params, velocity),
@@ -157,12 +157,9 @@ def predictions(runs, params: dict, velocity: float = 0.08) -> dict:
             "clamps": sum(runs.result(p, k)["table_clamps"] for p in pts.values() for k in range(1, p.passes + 1))}
 
 
-def calibrated_predictions(runs, params: dict, table, log=None) -> dict:
-    """s calibrated on the 35 % one-pass drop with ``params``, then :func:`predictions` at that s (or the reason
-    the 35 % cannot be reached)."""
-    from tribocosim.cosim.reports.paper import calibrate
-    from tribocosim.errors import TribocosimError
-
+def calibrated_predictions(runs, params: dict, table, calibrate, log=None) -> dict:
+    """s calibrated on the 35 % one-pass drop with ``params`` by ``calibrate`` (the paper report's), then
+    :func:`predictions` at that s (or the reason the 35 % cannot be reached)."""
     try:
         cal = calibrate(runs, params, table, log=log)
     except TribocosimError as exc:

@@ -74,8 +74,8 @@ def test_options_calibrate_on_the_one_pass_drop_and_a_sink_leaves_less_debris(tm
     table = _v3_table(alpha=3000.0)
     runs = paper.Runs(workers=1)
     params = paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True))
-    base = pp.calibrated_predictions(runs, params, table)
-    sink = pp.calibrated_predictions(runs, {**params, "debris_sink_length": 0.035}, table)
+    base = pp.calibrated_predictions(runs, params, table, paper.calibrate)
+    sink = pp.calibrated_predictions(runs, {**params, "debris_sink_length": 0.035}, table, paper.calibrate)
     assert base["drops"][0] == pytest.approx(0.35, abs=2e-4) and sink["drops"][0] == pytest.approx(0.35, abs=2e-4)
     d = base["debris_g_m2"]
     assert d[2] > d[1] > d[0] > 0

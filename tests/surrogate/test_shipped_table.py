@@ -22,6 +22,14 @@ from tribocosim.surrogate.sweep import load_preset, parse_sweep_dict
 from tribocosim.surrogate.table_build import build_table
 
 
+# Issue 25: the quick campaign for the version 3 table has not finished, and models/ still ships the version 2
+# table of the earlier campaign (beta <= 0.048, 2-50 m/s). Until the new table ships, every check below is expected
+# to fail on it, strictly: shipping the version 3 table turns the marker off, and a check that passes on the old
+# table fails the run. ``tribocosim surrogate verify`` in .ci/run reruns the shipped table's recorded cases either way.
+pytestmark = pytest.mark.xfail(read_table(DEFAULT_TABLE).version < 3, strict=True,
+                               reason="issue 25: the version 3 table is not shipped yet (its campaign is running)")
+
+
 @pytest.fixture(scope="module")
 def shipped():
     return read_table(DEFAULT_TABLE)
