@@ -475,8 +475,9 @@ def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list
     lines += ["## Drawing speed", "",
               f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g} +- {tot['scale']:.2g}: the range in brackets), "
               "and the drop against 1 MPa at the same speed. The paper's alpha(v) (Fig. 15) rises with the sliding "
-              "speed, which would make the debris effect grow from 0.08 to 0.5 m/s; here A_p is simulated at 0.08 and "
-              "0.5 m/s (docs/physics/table_domain.md).", "",
+              "speed, which would make the debris effect grow from 0.08 to 0.5 m/s; here A_p is simulated at "
+              f"{' / '.join(f'{v:g}' for v in extra['simulated_velocities']) or 'no recorded'} m/s "
+              "(docs/physics/table_domain.md).", "",
               "| V0 [m/s] | mu_bar, 1 pass | drop, 1 pass | mu_bar, 3 passes | drop, 3 passes |", "|---|---|---|---|---|"]
     for r in extra["speed"]:
         lines.append(f"| {r['velocity']:g} | {r['mu_1']:.4f} [{r['mu_1_band'][0]:.4f}, {r['mu_1_band'][1]:.4f}] | "
@@ -486,10 +487,14 @@ def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list
     if 0.08 in by_v and 0.5 in by_v and by_v[0.08]["drop_1"] > 0:
         lines += ["", f"The one-pass drop at 0.5 m/s is {by_v[0.5]['drop_1'] / by_v[0.08]['drop_1']:.3f} times that at "
                       f"0.08 m/s, the three-pass drop {by_v[0.5]['drop_3'] / by_v[0.08]['drop_3']:.3f} times."]
-    lines += ["", "## alpha of both observables", "",
-              "Eq. 23's alpha = A_p / A0 / (beta P / E*) at the table's first debris level, mean over the pressures "
-              "(+- standard error), for every load-bearing flake and for the paper's cluster rule alone:", "",
-              "| v [m/s] | every load-bearing flake | cluster rule alone |", "|---|---|---|"]
+    lines += ["", "## alpha of both observables", ""]
+    if not extra["alpha"]["load_bearing"]:
+        lines.append("The friction table is format version 2: it holds A_p of every load-bearing flake only, not that "
+                     "of the paper's cluster rule; a version 3 table gives alpha of both here.")
+    else:
+        lines += ["Eq. 23's alpha = A_p / A0 / (beta P / E*) at the table's first debris level, mean over the pressures "
+                  "(+- standard error), for every load-bearing flake and for the paper's cluster rule alone:", "",
+                  "| v [m/s] | every load-bearing flake | cluster rule alone |", "|---|---|---|"]
     for a, c in zip(extra["alpha"]["load_bearing"], extra["alpha"]["clusters"]):
         lines.append(f"| {a['velocity']:g} | {a['alpha']:.4g} +- {a['stderr']:.2g} | {c['alpha']:.3g} +- "
                      f"{c['stderr']:.2g} |")
@@ -668,7 +673,7 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
     checks = pp.direct_slide_check(table, workers, quick, log)
     return {"options": options, "budget": rows, "budget_total": total, "speed": speed, "alpha": alpha,
-            "direct_slides": checks}
+            "direct_slides": checks, "simulated_velocities": pp.simulated_velocities(table)}
 
 
 def _jsonable(x):

@@ -18,7 +18,7 @@ predicted.
   variation counts whole).
 - Drawing speed (:data:`SPEEDS`): mu_bar at 0.02-0.5 m/s after 1 and 3 passes at 25 MPa, with the band of s's
   total standard error. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
-  the debris effect grow with the drawing speed; the table's A_p is simulated at 0.08 and 0.5 m/s.
+  the debris effect grow with the drawing speed; the report names the velocities the table simulated.
 - alpha of both observables (every load-bearing flake, the paper's cluster rule alone): the table's Eq. 23 slope
   at small beta per velocity row (the initial slope of the fitted form, alpha = a E* / P, mean over the
   pressures with its standard error), and the alpha(v) study of docs/physics/alpha_velocity.md when its results
@@ -227,6 +227,15 @@ def alpha_study() -> dict | None:
     if not path.is_file():
         return None
     return json.loads(path.read_text())
+
+
+def simulated_velocities(table) -> list[float]:
+    """The velocities at which the table's A_p was simulated: a version 3 table's velocities with a simulated node
+    (not the v = 0 row copied from the slowest one), a version 2 table's campaign velocities."""
+    if table.version >= 3:
+        sim = table.array("simulated")
+        return [float(v) for j, v in enumerate(table.velocity) if v > 0.0 and sim[:, j, :].any()]
+    return [float(v) for v in table.metadata.get("axes", {}).get("velocity", {}).get("campaign", [])]
 
 
 def speed_points(params: dict, scale: float) -> list[tuple[float, dict[str, Point]]]:

@@ -51,6 +51,19 @@ def test_table_alpha_is_eq23_at_the_first_level_for_both_observables():
     assert all(r["alpha"] == pytest.approx(4.0) for r in c)
 
 
+def test_simulated_velocities_leave_out_the_copied_v0_row_and_unsimulated_columns():
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    t = _v3_table()
+    assert pp.simulated_velocities(t) == [0.08, 0.5]
+    t.extras["simulated"][:, 2, :] = 0.0
+    assert pp.simulated_velocities(t) == [0.08]
+    shipped = read_table(DEFAULT_TABLE)
+    if shipped.version == 2:  # the campaign velocities recorded in its metadata
+        assert pp.simulated_velocities(shipped) == shipped.metadata["axes"]["velocity"]["campaign"]
+
+
 def test_ensemble_variants_move_a_p_by_one_standard_error(tmp_path):
     from tribocosim.components.stripdraw.table import read_table
 
