@@ -120,45 +120,55 @@ typedef struct {
     double ke, ks, wT, af, cm, st, kt, sg, kg;
 } window_problem;
 
-/* Pi_W(d), the window residual r = dPi_W/dd and max |r|; tractions T and stick/slip states (0 off the pad,
- * 1 stick, 2/3 slip +/-) and the nodal forces f (contact + elements inside the window) */
-static double window_eval(const window_problem *w, const double *d, double *T, signed char *state, double *f,
-                          double *r, double *rmax) {
+/* Pi_W(d), the tractions T and stick/slip states (0 off the pad, 1 stick, 2/3 slip +/-) of the window */
+static double window_potential(const window_problem *w, const double *d, double *T, signed char *state) {
     const size_t lo = w->lo, hi = w->hi;
-    const double af = w->af, ke = w->ke, cm = w->cm;
+    const double *x = w->x, *z = w->z, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m, *tmax = w->tmax;
+    const double ks = w->ks, cw = (1.0 - w->af) * w->wT, ce = (1.0 - w->af) * 0.5 * w->ke, hcm = 0.5 * w->cm;
     double pot = 0.0;
     for (size_t i = lo; i <= hi; ++i) {
         T[i] = 0.0;
         state[i] = 0;
-        if (w->ov[i] > 0.0) {
-            const double xs = w->z[i] + d[i];
+        if (ov[i] > 0.0) {
+            const double xs = z[i] + d[i];
             int slipping;
             double phi;
-            T[i] = interface_law(xs, w->ks, w->tmax[i], &slipping, &phi);
+            T[i] = interface_law(xs, ks, tmax[i], &slipping, &phi);
             state[i] = (signed char)(!slipping ? 1 : (xs > 0 ? 2 : 3));
-            pot += (1.0 - af) * w->wT * w->ov[i] * phi;
+            pot += cw * ov[i] * phi;
         }
-        f[i] = T[i] * w->wT * w->ov[i];
     }
     for (size_t e = lo; e < hi; ++e) {
-        const double s = w->dU[e] + (d[e + 1] - d[e]);
-        f[e] -= ke * s;
-        f[e + 1] += ke * s;
-        pot += (1.0 - af) * 0.5 * ke * s * s;
+        const double s = dU[e] + (d[e + 1] - d[e]);
+        pot += ce * s * s;
     }
     for (size_t i = lo; i <= hi; ++i) {
-        const double y = w->x[i] + d[i];
-        r[i] = cm * w->m[i] * y + w->lin[i] + (1.0 - af) * f[i];
-        pot += 0.5 * cm * w->m[i] * y * y + w->lin[i] * d[i];
+        const double y = x[i] + d[i];
+        pot += hcm * m[i] * y * y + lin[i] * d[i];
     }
-    r[lo] += w->st + w->kt * d[lo];
     pot += (w->st + 0.5 * w->kt * d[lo]) * d[lo];
-    r[hi] += w->sg + w->kg * d[hi];
     pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
+    return pot;
+}
+
+/* the window residual r = dPi_W/dd at d with the tractions T of window_potential, and max |r|; f: the nodal forces
+ * (contact + elements inside the window) */
+static double window_residual(const window_problem *w, const double *d, const double *T, double *f, double *r) {
+    const size_t lo = w->lo, hi = w->hi;
+    const double *x = w->x, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m;
+    const double wT = w->wT, ke = w->ke, cm = w->cm, caf = 1.0 - w->af;
+    for (size_t i = lo; i <= hi; ++i) f[i] = T[i] * wT * ov[i];
+    for (size_t e = lo; e < hi; ++e) {
+        const double s = dU[e] + (d[e + 1] - d[e]);
+        f[e] -= ke * s;
+        f[e + 1] += ke * s;
+    }
+    for (size_t i = lo; i <= hi; ++i) r[i] = cm * m[i] * (x[i] + d[i]) + lin[i] + caf * f[i];
+    r[lo] += w->st + w->kt * d[lo];
+    r[hi] += w->sg + w->kg * d[hi];
     double rm = 0.0;
     for (size_t i = lo; i <= hi; ++i) rm = fabs(r[i]) > rm ? fabs(r[i]) : rm;
-    *rmax = rm;
-    return pot;
+    return rm;
 }
 
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
@@ -246,8 +256,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     fscale += tmax[N] * wT * ov[N];
 
     const size_t nw = hi - lo + 1;
-    double rmax, rmax_t;
-    double pot = window_eval(&w, d, T, state, f, r, &rmax);
+    double pot = window_potential(&w, d, T, state);
+    double rmax = window_residual(&w, d, T, f, r);
     int iters = 0;
     while (rmax > rtol * fscale) {
         if (iters >= max_iter) return -1;
@@ -268,15 +278,15 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         double alpha = 1.0, pot_t;
         for (;;) { /* backtracking (Armijo) line search on Pi_W */
             for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
-            pot_t = window_eval(&w, dtr, T, state, f, r, &rmax_t);
+            pot_t = window_potential(&w, dtr, T, state);
             if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
             alpha *= 0.5;
         }
         for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
         pot = pot_t;
-        rmax = rmax_t;
         iters += 1;
-        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
+        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there (its
+                             * residual is not needed) */
             int same = 1;
             for (size_t i = lo; i <= hi; ++i)
                 if (state[i] != used[i]) {
@@ -285,6 +295,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
                 }
             if (same) break;
         }
+        rmax = window_residual(&w, d, T, f, r);
     }
     /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
     const double bdt2 = beta * dt * dt;
