@@ -73,11 +73,15 @@ static double interface_law(double x, double ks, double tmax, int *slipping, dou
     return trial;
 }
 
-void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain) {
+void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double c, double *chain) {
     const size_t N = n - 1;
     double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
-           *ig = chain + 5 * n;
+           *ig = chain + 5 * n, *cmm = chain + 6 * n, *amm = chain + 7 * n;
     memset(chain, 0, TC_SD_CHAIN(n) * sizeof *chain);
+    for (size_t i = 0; i < n; ++i) {
+        cmm[i] = cm * m[i];
+        amm[i] = am * m[i];
+    }
     for (size_t i = 0; i + 1 < N; ++i) { /* the tail never reaches node N-1 */
         const double e = i == 0 ? cm * m[i] : cm * m[i] + qt[i - 1] * et[i - 1];
         et[i] = e;
@@ -179,7 +183,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const size_t N = n - 1;
     const double c = (1.0 - af) * ke;
     const double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
-                 *ig = chain + 5 * n;
+                 *ig = chain + 5 * n, *cmm = chain + 6 * n, *amm = chain + 7 * n;
     double *x = work, *lin = work + n, *dU = work + 2 * n, *z = work + 3 * n, *d = work + 4 * n;
     double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
     double *dtr = work + 10 * n, *sub = work + 11 * n, *dia = work + 12 * n, *sup = work + 13 * n;
@@ -196,7 +200,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
     for (size_t i = lo; i <= hi; ++i) {
         x[i] = shift - dt * V[i] - cA * A[i];
-        lin[i] = am * m[i] * A[i] + af * fprev[i];
+        lin[i] = amm[i] * A[i] + af * fprev[i];
         Upn[i] = Up[i];
         d[i] = 0.0;
         if (ov[i] > 0.0) {
@@ -207,36 +211,48 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     Upn[N] = Up[N];
     if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
     /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
-     * recurrences are independent, and each node's residual at d = 0 is computed on the way */
+     * recurrences are independent, and each node's residual at d = 0 is computed on the way (its element forces
+     * from k_e dU of the element on either side, the one shared with the node before carried) */
     const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
+    const double caf = 1.0 - af;
     double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
-    /* node k of the tail and node N-1-k of the grip side; the first of each has no carry (and node 0 no element
-     * on its left) */
-#define TAIL_NODE(i, carry)                                                                                     \
-    do {                                                                                                       \
-        x[i] = shift - dt * V[i] - cA * A[i];                                                                  \
-        const double fel = ((i) > 0 ? ke * dU[(i) - 1] : 0.0) - ke * dU[i];                                    \
-        double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);              \
-        if (carry) r0 += qt[(i) - 1] * rt;                                                                     \
-        rho[i] = rt = r0;                                                                                      \
-    } while (0)
-#define GRIP_NODE(j, carry)                                                                                     \
-    do {                                                                                                       \
-        x[j] = shift - dt * V[j] - cA * A[j];                                                                  \
-        const double fel = ke * dU[(j) - 1] - ke * dU[j];                                                      \
-        double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);              \
-        if (carry) r0 += qg[(j) + 1] * rg;                                                                     \
-        rho[j] = rg = r0;                                                                                      \
-    } while (0)
-    if (nt > 0) TAIL_NODE(0, 0);
-    if (ng > 0) GRIP_NODE(N - 1, 0);
-    size_t k = 1;
-    for (; k < both; ++k) { /* side by side, without tests in the loop */
-        TAIL_NODE(k, 1);
-        GRIP_NODE(N - 1 - k, 1);
+    double kdt = 0.0, kdg = ng > 0 ? ke * dU[N - 1] : 0.0; /* k_e dU of the element before node i / after node j */
+    /* node i of the tail and node j of the grip side: x, and the residual at d = 0 into r0 */
+#define TAIL_NODE(i, r0)                                                                                        \
+    const double xt = shift - dt * V[i] - cA * A[i];                                                           \
+    const double kt_i = ke * dU[i];                                                                            \
+    double r0 = -(cmm[i] * xt + (amm[i] * A[i] + af * fprev[i]) + caf * (kdt - kt_i));                        \
+    x[i] = xt;                                                                                                 \
+    kdt = kt_i
+#define GRIP_NODE(j, r0)                                                                                        \
+    const double xg = shift - dt * V[j] - cA * A[j];                                                           \
+    const double kg_j = ke * dU[(j) - 1];                                                                      \
+    double r0 = -(cmm[j] * xg + (amm[j] * A[j] + af * fprev[j]) + caf * (kg_j - kdg));                        \
+    x[j] = xg;                                                                                                 \
+    kdg = kg_j
+    if (nt > 0) { /* the first node of each sweep has no carry */
+        TAIL_NODE(0, r0);
+        rho[0] = rt = r0;
     }
-    for (size_t kt = k; kt < nt; ++kt) TAIL_NODE(kt, 1);
-    for (size_t kg = k; kg < ng; ++kg) GRIP_NODE(N - 1 - kg, 1);
+    if (ng > 0) {
+        GRIP_NODE(N - 1, r0);
+        rho[N - 1] = rg = r0;
+    }
+    size_t k = 1;
+    for (size_t j = N - 2; k < both; ++k, --j) { /* side by side, without tests in the loop */
+        TAIL_NODE(k, r0t);
+        GRIP_NODE(j, r0g);
+        rho[k] = rt = r0t + qt[k - 1] * rt;
+        rho[j] = rg = r0g + qg[j + 1] * rg;
+    }
+    for (size_t i = k; i < nt; ++i) {
+        TAIL_NODE(i, r0);
+        rho[i] = rt = r0 + qt[i - 1] * rt;
+    }
+    for (size_t j = N - 1 - k; j > hi && k < ng; --j) {
+        GRIP_NODE(j, r0);
+        rho[j] = rg = r0 + qg[j + 1] * rg;
+    }
 #undef TAIL_NODE
 #undef GRIP_NODE
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};

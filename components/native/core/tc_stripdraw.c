@@ -316,7 +316,7 @@ static const double *chain_for(tc_stripdraw *m, double h) {
     }
     m->chain_h[k] = h;
     const double cm = (1.0 - m->am) / (m->beta_nm * h * h);
-    tc_sd_chain_factors(m->n, cm, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
+    tc_sd_chain_factors(m->n, cm, m->am, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
     return m->chain + (size_t)k * size;
 }
 
