@@ -123,22 +123,35 @@ struct tc_stripdraw {
  * kernels
  * ------------------------------------------------------------------------------------------------- */
 
-void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
-                   double *ov) {
-    /* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
-     * positions are finite, and the compares vectorise) */
+/* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
+ * positions are finite, and the compares vectorise) */
 #define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
-    if (n == 0) return;
-    for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
+
+/* tc_sd_overlap of the interior nodes [b, e) (their segments are two-sided) */
+static void overlap_interior(size_t b, size_t e, const double *X, const double *U, double half_le, double a_lo,
+                             double a_hi, double *ov) {
+    for (size_t i = b; i < e; ++i) {
         const double x = X[i] + U[i];
         const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
         ov[i] = d > 0.0 ? d : 0.0;
     }
+}
+
+/* tc_sd_overlap of the end nodes (n >= 1; their segments are one-sided) */
+static void overlap_ends(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                         double *ov) {
     const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
     const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
     ov[0] = d0 > 0.0 ? d0 : 0.0;
     if (n > 1) ov[n - 1] = dn > 0.0 ? dn : 0.0;
+}
 #undef TC_SD_OVERLAP
+
+void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                   double *ov) {
+    if (n == 0) return;
+    overlap_interior(1, n - 1, X, U, half_le, a_lo, a_hi, ov);
+    overlap_ends(n, X, U, half_le, a_lo, a_hi, ov);
 }
 
 /* The interface law (Eq. 4-5) on one node of elastic slip x: the traction limited to +-tmax; *slipping when
@@ -237,14 +250,63 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
  * the model
  * ------------------------------------------------------------------------------------------------- */
 
-/* the contact weights of U (the overlap with the pad over l_e) and their nonzero range */
+/* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
+static int positions_in_order(size_t n, const double *X, const double *U) {
+    int sorted = 1;
+    for (size_t i = 0; i + 1 < n; ++i) sorted &= X[i] + U[i] <= X[i + 1] + U[i + 1];
+    return sorted;
+}
+
+/* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
+ * the interior nodes whose segment reaches past a_lo (x + l_e/2 > a_lo) are those from some node on, those whose
+ * segment starts before a_hi (x - l_e/2 < a_hi) those up to some node: only the nodes of both sets can meet the pad,
+ * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
     const size_t n = m->n;
-    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
-    size_t first = 0, last = n;
-    while (first < n && w[first] == 0.0) ++first;
-    while (last > first && w[last - 1] == 0.0) --last;
+    const double *X = m->X, *U = m->U, h = m->half_le;
+    size_t b = 1, e = n > 1 ? n - 1 : 1; /* the interior nodes that may meet the pad: [b, e) */
+    if (n > 2 && positions_in_order(n, X, U)) {
+        size_t lo = 1, hi = n - 1;
+        while (lo < hi) { /* the first interior node with x + l_e/2 > a_lo */
+            const size_t mid = lo + (hi - lo) / 2;
+            if (X[mid] + U[mid] + h > m->a_lo)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        b = lo;
+        hi = n - 1;
+        while (lo < hi) { /* the first one on with x - l_e/2 >= a_hi */
+            const size_t mid = lo + (hi - lo) / 2;
+            if (!(X[mid] + U[mid] - h < m->a_hi))
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        e = lo;
+        memset(w, 0, n * sizeof *w);
+        overlap_interior(b, e, X, U, h, m->a_lo, m->a_hi, w);
+        overlap_ends(n, X, U, h, m->a_lo, m->a_hi, w);
+    } else {
+        tc_sd_overlap(n, X, U, h, m->a_lo, m->a_hi, w);
+    }
+    /* the first and last node with w != 0, in the order 0, [b, e), n - 1 (the other nodes' w are 0) */
+    size_t first = n, last = 0; /* last: one past it */
+    if (w[0] != 0.0) {
+        first = 0;
+    } else {
+        for (size_t i = b; i < e && first == n; ++i)
+            if (w[i] != 0.0) first = i;
+        if (first == n && n > 1 && w[n - 1] != 0.0) first = n - 1;
+    }
+    if (n > 1 && w[n - 1] != 0.0) {
+        last = n;
+    } else {
+        for (size_t i = e; i > b && last == 0; --i)
+            if (w[i - 1] != 0.0) last = i;
+        if (last == 0 && w[0] != 0.0) last = 1;
+    }
     m->w_first = first < n ? first : 1;
     m->w_last = first < n ? last - 1 : 0;
     for (size_t i = first; i < last; ++i) w[i] = w[i] / m->le;
