@@ -438,6 +438,22 @@ static int all_finite(const double *a, size_t n) {
     return isfinite(s[0] + s[1] + s[2] + s[3]);
 }
 
+/* d = a - b over n values, and whether every d is finite (the sum of 0 d in four lanes, as all_finite) */
+static int difference_finite(size_t n, const double *a, const double *b, double *d) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; ++k) {
+            d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
+            s[k] += 0.0 * d[i + (size_t)k];
+        }
+    for (; i < n; ++i) {
+        d[i] = a[i] - b[i];
+        s[0] += 0.0 * d[i];
+    }
+    return isfinite(s[0] + s[1] + s[2] + s[3]);
+}
+
 /* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
 static double largest(const double *a, size_t n) {
     double mx[4] = {a[0], a[0], a[0], a[0]};
@@ -449,17 +465,19 @@ static double largest(const double *a, size_t n) {
     return m23 > m01 ? m23 : m01;
 }
 
-/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU, with
- * the weights averaged over the interval. Only nodes where the weights of the start (w0, range [f0, l0]) or the
- * end are not 0 change (the source and the flux are 0 elsewhere), unless the cap falls below beta elsewhere. */
-static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0) {
+/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU
+ * (du_finite: every one finite), with the weights averaged over the interval. Only nodes where the weights of the
+ * start (w0, range [f0, l0]) or the end are not 0 change (the source and the flux are 0 elsewhere), unless the cap
+ * falls below beta elsewhere. */
+static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0,
+                      int du_finite) {
     const tc_stripdraw_params *p = &m->p;
     const size_t n = m->n;
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
     size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
     if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
     if (m->w_first > m->w_last) t0 = f0, t1 = l0;
-    const int windowed = isfinite(kp) && all_finite(m->dU, n) && m->beta_hi == m->beta_hi;
+    const int windowed = isfinite(kp) && du_finite && m->beta_hi == m->beta_hi;
     if (!windowed) t0 = 0, t1 = n - 1;
     const double cap = interval_cap(m, pressure, speed);
     if (t0 <= t1) {
@@ -521,12 +539,13 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
         tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
                        m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
     } else {
-        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le;
+        memset(m->ov, 0, n * sizeof *m->ov); /* the weights are 0 outside [w_first, w_last] */
+        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le;
         int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
+    const int du_finite = difference_finite(n, m->U, m->U0, m->dU);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -535,7 +554,7 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w = m->w0;
     m->w0 = w0;
     update_weights(m);
-    transport(m, pressure, speed, w0, f0, l0);
+    transport(m, pressure, speed, w0, f0, l0, du_finite);
     state_limits(m);
     return TC_OK;
 }
@@ -932,9 +951,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
-        int finite = isfinite(m->reaction);
-        for (size_t i = 0; i < m->n && finite; ++i) finite = isfinite(m->U[i]);
-        if (!finite)
+        if (!(isfinite(m->reaction) && all_finite(m->U, m->n)))
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
