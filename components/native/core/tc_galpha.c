@@ -175,6 +175,41 @@ static double window_residual(const window_problem *w, const double *d, const do
     return rm;
 }
 
+/* The Newton step s of the window on its stick/slip set (state), H s = -r: H is tridiagonal with
+ *
+ *     H_ii = cm m_i + (1 - af) (k_e e_i + k_s w_T ov_i [i sticks])  (+ K_t at lo, + K_g at hi),
+ *     H_i,i+1 = H_i+1,i = -(1 - af) k_e,
+ *
+ * e_i the number of window elements at node i. Solved by the Thomas algorithm as tc_thomas does it (the off-diagonal
+ * is not 0): c_0 = H_01 / H_00, g_0 = -r_0 / H_00, then m_i = H_ii - H_i,i-1 c_i-1, c_i = H_i,i+1 / m_i,
+ * g_i = (-r_i - H_i,i-1 g_i-1) / m_i, and s_i = g_i - c_i s_i+1 backwards. c and g: work of nw values each. */
+static void newton_step(const window_problem *w, const signed char *state, const double *r, double *step, double *c,
+                        double *g) {
+    const size_t lo = w->lo, hi = w->hi, nw = hi - lo + 1;
+    const double *ov = w->ov, *m = w->m;
+    const double ks = w->ks, wT = w->wT, ke = w->ke, cm = w->cm, af = w->af, off = -(1.0 - af) * ke;
+#define DIAGONAL(i)                                                                                             \
+    (cm * m[i] + (1.0 - af) * ((((i) > lo ? 1.0 : 0.0) + ((i) < hi ? 1.0 : 0.0)) * ke +                      \
+                               (state[i] == 1 ? ks * wT * ov[i] : 0.0)))
+    double h0 = DIAGONAL(lo) + w->kt;
+    if (nw == 1) h0 += w->kg;
+    double cp = off / h0, gp = -r[lo] / h0; /* the recurrences' carries */
+    c[0] = cp;
+    g[0] = gp;
+    for (size_t k = 1; k < nw; ++k) {
+        const size_t i = lo + k;
+        double h = DIAGONAL(i);
+        if (k == nw - 1) h += w->kg;
+        const double mk = h - off * cp;
+        c[k] = cp = off / mk;
+        g[k] = gp = (-r[i] - off * gp) / mk;
+    }
+#undef DIAGONAL
+    double sp = g[nw - 1];
+    step[nw - 1] = sp;
+    for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
+}
+
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
                  double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
@@ -186,8 +221,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
                  *ig = chain + 5 * n, *cmm = chain + 6 * n, *amm = chain + 7 * n;
     double *x = work, *lin = work + n, *dU = work + 2 * n, *z = work + 3 * n, *d = work + 4 * n;
     double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
-    double *dtr = work + 10 * n, *sub = work + 11 * n, *dia = work + 12 * n, *sup = work + 13 * n;
-    double *rhs = work + 14 * n, *step = work + 15 * n, *tw = work + 16 * n; /* tw: 2 n for the Thomas solve */
+    double *dtr = work + 10 * n, *step = work + 11 * n, *tw = work + 12 * n; /* tw: 2 n for the Newton step */
     signed char *state = iwork, *used = iwork + n;
 
     /* a step whose square underflows cannot be taken */
@@ -277,18 +311,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     int iters = 0;
     while (rmax > rtol * fscale) {
         if (iters >= max_iter) return -1;
-        for (size_t i = lo; i <= hi; ++i) {
-            const double kt_i = state[i] == 1 ? ks * wT * ov[i] : 0.0;
-            const double springs = (i > lo ? 1.0 : 0.0) + (i < hi ? 1.0 : 0.0);
-            dia[i - lo] = cm * m[i] + (1.0 - af) * (springs * ke + kt_i);
-            sub[i - lo] = -(1.0 - af) * ke;
-            sup[i - lo] = -(1.0 - af) * ke;
-            rhs[i - lo] = -r[i];
-            used[i] = state[i];
-        }
-        dia[0] += w.kt;
-        dia[nw - 1] += w.kg;
-        tc_thomas(nw, sub, dia, sup, rhs, step, tw);
+        memcpy(used + lo, state + lo, nw);
+        newton_step(&w, state, r, step, tw, tw + nw);
         double slope = 0.0;
         for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
         double alpha = 1.0, pot_t;

@@ -13,7 +13,7 @@ void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double
 /* one generalized-alpha step (tc_galpha.c): returns the Newton iterations, -1 without convergence, or -2 when
  * beta dt^2 is 0; nothing is changed when it returns < 0. chain holds tc_sd_chain_factors of dt; the nodes with
  * ov > 0 lie in [first, last] (first > last: not known). */
-#define TC_SD_GALPHA_WORK(n) (18 * (n))
+#define TC_SD_GALPHA_WORK(n) (14 * (n))
 #define TC_SD_GALPHA_IWORK(n) (2 * (n))
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
                  double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
