@@ -41,8 +41,9 @@
  * and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
  * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
  * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
- * Both chains are swept side by side (they are independent), with each node's residual and Newmark update
- * computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
+ * The nodes' residuals at d = 0, their Newmark updates and the elements' forces have no recurrence and are formed
+ * in passes of their own (in vector lanes); the recurrences of the two chains are swept side by side (they are
+ * independent, so their latencies overlap).
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
  * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
@@ -210,6 +211,49 @@ static void newton_step(const window_problem *w, const signed char *state, const
     for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
 }
 
+/* the residual at d = 0 of a free node outside the window, -(cm m_i x_i + am m_i a_i + af f_i + (1 - af)(kl - kr)),
+ * with kl = k_e dU_i-1 (0 at node 0) and kr = k_e dU_i its elements' forces */
+static inline double chain_residual(double cmm, double x, double amm, double a, double af, double f, double caf,
+                                    double kl, double kr) {
+    return -(cmm * x + (amm * a + af * f) + caf * (kl - kr));
+}
+
+/* x_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i and the residual at d = 0 (into r0) of the free nodes [b, e), b >= 1:
+ * no recurrence, so the loop runs in vector lanes */
+static void chain_residuals(size_t b, size_t e, double shift, double dt, double cA, double ke, double af,
+                            const double *restrict V, const double *restrict A, const double *restrict fprev,
+                            const double *restrict dU, const double *restrict cmm, const double *restrict amm,
+                            double *restrict x, double *restrict r0) {
+    const double caf = 1.0 - af;
+    for (size_t i = b; i < e; ++i) {
+        const double xi = shift - dt * V[i] - cA * A[i];
+        r0[i] = chain_residual(cmm[i], xi, amm[i], A[i], af, fprev[i], caf, ke * dU[i - 1], ke * dU[i]);
+        x[i] = xi;
+    }
+}
+
+/* the Newmark update of the free nodes [0, N) from their increments d: a = (x + d) / (b dt^2),
+ * v += dt ((1 - gamma) a_n + gamma a), u += dt V0 + d (in vector lanes) */
+static void newmark_update(size_t N, double dt, double bdt2, double gamma, double shift, const double *restrict x,
+                           const double *restrict d, double *restrict U, double *restrict V, double *restrict A) {
+    for (size_t i = 0; i < N; ++i) {
+        const double anew = (x[i] + d[i]) / bdt2;
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+        A[i] = anew;
+        U[i] = U[i] + (shift + d[i]);
+    }
+}
+
+/* the elements' extensions at the new state, e_k = dU_k + (d_k+1 - d_k) (d_N = 0: the grip node's increment), into
+ * dU, and their forces on the nodes, f_i = k_e e_i-1 - k_e e_i (-k_e e_0 at node 0, k_e e_N-1 at the grip node N) */
+static void element_forces(size_t N, double ke, const double *restrict d, double *restrict dU,
+                           double *restrict fprev) {
+    for (size_t i = 0; i < N; ++i) dU[i] = dU[i] + (d[i + 1] - d[i]);
+    fprev[0] = -ke * dU[0];
+    for (size_t i = 1; i < N; ++i) fprev[i] = ke * dU[i - 1] - ke * dU[i];
+    fprev[N] = ke * dU[N - 1];
+}
+
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
                  double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
@@ -244,51 +288,23 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     }
     Upn[N] = Up[N];
     if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
-    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
-     * recurrences are independent, and each node's residual at d = 0 is computed on the way (its element forces
-     * from k_e dU of the element on either side, the one shared with the node before carried) */
+    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k): first every node's x and residual
+     * at d = 0 (into rho), then the two recurrences side by side (they are independent) */
     const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
-    const double caf = 1.0 - af;
-    double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
-    double kdt = 0.0, kdg = ng > 0 ? ke * dU[N - 1] : 0.0; /* k_e dU of the element before node i / after node j */
-    /* node i of the tail and node j of the grip side: x, and the residual at d = 0 into r0 */
-#define TAIL_NODE(i, r0)                                                                                        \
-    const double xt = shift - dt * V[i] - cA * A[i];                                                           \
-    const double kt_i = ke * dU[i];                                                                            \
-    double r0 = -(cmm[i] * xt + (amm[i] * A[i] + af * fprev[i]) + caf * (kdt - kt_i));                        \
-    x[i] = xt;                                                                                                 \
-    kdt = kt_i
-#define GRIP_NODE(j, r0)                                                                                        \
-    const double xg = shift - dt * V[j] - cA * A[j];                                                           \
-    const double kg_j = ke * dU[(j) - 1];                                                                      \
-    double r0 = -(cmm[j] * xg + (amm[j] * A[j] + af * fprev[j]) + caf * (kg_j - kdg));                        \
-    x[j] = xg;                                                                                                 \
-    kdg = kg_j
-    if (nt > 0) { /* the first node of each sweep has no carry */
-        TAIL_NODE(0, r0);
-        rho[0] = rt = r0;
+    if (nt > 0) {
+        x[0] = shift - dt * V[0] - cA * A[0];
+        rho[0] = chain_residual(cmm[0], x[0], amm[0], A[0], af, fprev[0], 1.0 - af, 0.0, ke * dU[0]);
+        chain_residuals(1, nt, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
     }
-    if (ng > 0) {
-        GRIP_NODE(N - 1, r0);
-        rho[N - 1] = rg = r0;
-    }
+    chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
+    double rt = nt > 0 ? rho[0] : 0.0, rg = ng > 0 ? rho[N - 1] : 0.0; /* the recurrences' carries */
     size_t k = 1;
     for (size_t j = N - 2; k < both; ++k, --j) { /* side by side, without tests in the loop */
-        TAIL_NODE(k, r0t);
-        GRIP_NODE(j, r0g);
-        rho[k] = rt = r0t + qt[k - 1] * rt;
-        rho[j] = rg = r0g + qg[j + 1] * rg;
+        rho[k] = rt = rho[k] + qt[k - 1] * rt;
+        rho[j] = rg = rho[j] + qg[j + 1] * rg;
     }
-    for (size_t i = k; i < nt; ++i) {
-        TAIL_NODE(i, r0);
-        rho[i] = rt = r0 + qt[i - 1] * rt;
-    }
-    for (size_t j = N - 1 - k; j > hi && k < ng; --j) {
-        GRIP_NODE(j, r0);
-        rho[j] = rg = r0 + qg[j + 1] * rg;
-    }
-#undef TAIL_NODE
-#undef GRIP_NODE
+    for (size_t i = k; i < nt; ++i) rho[i] = rt = rho[i] + qt[i - 1] * rt;
+    for (size_t j = N - 1 - k; j > hi && k < ng; --j) rho[j] = rg = rho[j] + qg[j + 1] * rg;
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -337,36 +353,23 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         }
         rmax = window_residual(&w, d, T, f, r);
     }
-    /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
-    const double bdt2 = beta * dt * dt;
+    /* back-substitute the chains (side by side, as above), then every free node's Newmark update */
     double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
-#define NEWMARK(i, di)                                                                                          \
-    do {                                                                                                       \
-        const double anew = (x[i] + (di)) / bdt2;                                                              \
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);                                              \
-        A[i] = anew;                                                                                           \
-        U[i] = U[i] + (shift + (di));                                                                          \
-    } while (0)
     size_t kb = 0;
     for (; kb < both; ++kb) { /* side by side, without tests in the loop */
         const size_t i = lo - 1 - kb, j = hi + 1 + kb;
         d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-        NEWMARK(i, dt_t);
-        NEWMARK(j, dt_g);
     }
     for (size_t kt = kb; kt < nt; ++kt) {
         const size_t i = lo - 1 - kt;
         d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
-        NEWMARK(i, dt_t);
     }
     for (size_t kg = kb; kg < ng; ++kg) {
         const size_t j = hi + 1 + kg;
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-        NEWMARK(j, dt_g);
     }
-    for (size_t i = lo; i <= hi; ++i) NEWMARK(i, d[i]);
-#undef NEWMARK
+    newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U, V, A);
     U[N] = U[N] + shift;
     V[N] = vg;
     A[N] = 0.0;
@@ -377,20 +380,11 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
         state[N] = (signed char)(!slipping ? 1 : 2);
     }
-    /* the elements' extensions at the new state from the increments (not from the updated U, whose rounding to
-     * draw-sized values would make the forces jump by ~k_e ulp(U) between nearby inputs), their
-     * forces at every node, then the friction of the nodes under the pad (window and grip node) */
+    /* the elements' extensions from the increments (not from the updated U, whose rounding to draw-sized values would
+     * make the forces jump by ~k_e ulp(U) between nearby inputs), their forces at every node, then the friction of the
+     * nodes under the pad (window and grip node) */
     d[N] = 0.0;
-    double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
-    dU[0] = left;
-    fprev[0] = -ke * left;
-    for (size_t i = 1; i < N; ++i) {
-        const double right = dU[i] + (d[i + 1] - d[i]);
-        dU[i] = right;
-        fprev[i] = ke * left - ke * right;
-        left = right;
-    }
-    fprev[N] = ke * left;
+    element_forces(N, ke, d, dU, fprev);
     memset(contact, 0, n);
     double fr = 0.0;
     for (size_t kw = lo; kw <= hi + 1; ++kw) {
