@@ -102,6 +102,7 @@ struct tc_stripdraw {
     /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
     double beta_hi;
     int refusal; /* enum tc_stripdraw_refusal of the last refused step */
+    int u_finite; /* every U is finite after the last interval */
     /* work arrays */
     double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
@@ -428,29 +429,23 @@ static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
     return fmin(m->beta_cap, m->cap_value);
 }
 
-/* whether every a[i] is finite (a sum in four lanes: inf or NaN anywhere makes it non-finite) */
-static int all_finite(const double *a, size_t n) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0};
-    size_t i = 0;
-    for (; i + 4 <= n; i += 4)
-        for (int k = 0; k < 4; ++k) s[k] += 0.0 * a[i + (size_t)k];
-    for (; i < n; ++i) s[0] += 0.0 * a[i];
-    return isfinite(s[0] + s[1] + s[2] + s[3]);
-}
-
-/* d = a - b over n values, and whether every d is finite (the sum of 0 d in four lanes, as all_finite) */
-static int difference_finite(size_t n, const double *a, const double *b, double *d) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0};
+/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d and
+ * 0 a in four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers) */
+static int difference_finite(size_t n, const double *a, const double *b, double *d, int *a_finite) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0}, sa[4] = {0.0, 0.0, 0.0, 0.0};
     size_t i = 0;
     for (; i + 4 <= n; i += 4)
         for (int k = 0; k < 4; ++k) {
             d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
             s[k] += 0.0 * d[i + (size_t)k];
+            sa[k] += 0.0 * a[i + (size_t)k];
         }
     for (; i < n; ++i) {
         d[i] = a[i] - b[i];
         s[0] += 0.0 * d[i];
+        sa[0] += 0.0 * a[i];
     }
+    *a_finite = isfinite(sa[0] + sa[1] + sa[2] + sa[3]);
     return isfinite(s[0] + s[1] + s[2] + s[3]);
 }
 
@@ -463,6 +458,21 @@ static double largest(const double *a, size_t n) {
     for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
     const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
     return m23 > m01 ? m23 : m01;
+}
+
+/* beta_i = min(b_i, cap) for i in [a, e), what the cap takes added to *removed (in the order of i), *finite cleared
+ * when a b_i is not finite */
+static void cap_range(const double *b, double *beta, size_t a, size_t e, double cap, double *removed, int *finite) {
+    double r = *removed;
+    int ok = *finite;
+    for (size_t i = a; i < e; ++i) {
+        const double bi = b[i];
+        if (bi > cap) r += bi - cap;
+        beta[i] = bi > cap ? cap : bi;
+        ok &= isfinite(bi);
+    }
+    *removed = r;
+    *finite = ok;
 }
 
 /* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU
@@ -501,16 +511,16 @@ static void transport(tc_stripdraw *m, double pressure, double speed, const doub
         m->beta_removed += sunk;
         tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
     }
-    /* the cap: over every node unless it is >= every beta away from [t0, t1] */
-    size_t c0 = t0, c1 = t1;
-    if (!(windowed && cap >= m->beta_hi)) c0 = 0, c1 = n - 1;
+    /* the cap: over every node unless it is >= every beta away from [t0, t1]; the new beta of [t0, t1] is bnew */
     double removed = 0.0;
     int finite = 1;
-    for (size_t i = c0; i <= c1 && i < n; ++i) {
-        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i];
-        if (b > cap) removed += b - cap;
-        m->beta[i] = b > cap ? cap : b;
-        finite &= isfinite(b);
+    if (t0 > t1) {
+        if (!(windowed && cap >= m->beta_hi)) cap_range(m->beta, m->beta, 0, n, cap, &removed, &finite);
+    } else {
+        const int all = !(windowed && cap >= m->beta_hi);
+        if (all) cap_range(m->beta, m->beta, 0, t0, cap, &removed, &finite);
+        cap_range(m->bnew, m->beta, t0, t1 + 1, cap, &removed, &finite);
+        if (all) cap_range(m->beta, m->beta, t1 + 1, n, cap, &removed, &finite);
     }
     m->beta_hi = finite ? cap : NAN;
     m->beta_removed += removed;
@@ -545,7 +555,7 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
         if (rc != TC_OK) return rc;
     }
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    const int du_finite = difference_finite(n, m->U, m->U0, m->dU);
+    const int du_finite = difference_finite(n, m->U, m->U0, m->dU, &m->u_finite);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -951,7 +961,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
-        if (!(isfinite(m->reaction) && all_finite(m->U, m->n)))
+        if (!(isfinite(m->reaction) && m->u_finite)) /* u_finite: of the last interval (a step has at least one) */
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
@@ -965,28 +975,23 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
 
 int tc_stripdraw_refusal(const tc_stripdraw *m) { return m->refusal; }
 
-/* friction force of the state: the return-mapped tractions of the nodes under the pad at the state's limits */
-static double friction_force(const tc_stripdraw *m) {
-    double fs = 0.0;
-    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
-        if (!(m->w[i] > 0.0) || !m->contact[i]) continue; /* a node entering the pad starts stress-free */
-        int slipping;
-        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (m->w[i] * m->le);
-    }
-    return fs;
-}
-
+/* The outputs of the state. Over the nodes under the pad (weights w_i = ov_i / l_e > 0): the sums of w_i, w_i U_i and
+ * w_i beta_i, and the friction force, the return-mapped tractions T_i w_T ov_i at the state's limits (of the nodes in
+ * contact: a node entering the pad starts stress-free). */
 void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
     const size_t n = m->n;
     const double fn = m->normal_force;
-    double wsum = 0.0, wu = 0.0, wb = 0.0;
+    double wsum = 0.0, wu = 0.0, wb = 0.0, fs = 0.0;
     for (size_t i = m->w_first; i <= m->w_last && i < n; ++i) {
-        wsum += m->w[i];
-        wu += m->w[i] * m->U[i];
-        wb += m->w[i] * m->beta[i];
+        const double w = m->w[i];
+        wsum += w;
+        wu += w * m->U[i];
+        wb += w * m->beta[i];
+        if (!(w > 0.0) || !m->contact[i]) continue;
+        int slipping;
+        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (w * m->le);
     }
     const double bmax = largest(m->beta, n);
-    const double fs = friction_force(m);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
     out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? fs / fn : 0.0;
