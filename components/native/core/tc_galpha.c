@@ -211,6 +211,11 @@ static void newton_step(const window_problem *w, const signed char *state, const
     for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
 }
 
+/* x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i of a node (shift = dt V0, cA = dt^2 (1/2 - b)) */
+static inline double predictor_gap(double shift, double dt, double cA, double v, double a) {
+    return shift - dt * v - cA * a;
+}
+
 /* the residual at d = 0 of a free node outside the window, -(cm m_i x_i + am m_i a_i + af f_i + (1 - af)(kl - kr)),
  * with kl = k_e dU_i-1 (0 at node 0) and kr = k_e dU_i its elements' forces */
 static inline double chain_residual(double cmm, double x, double amm, double a, double af, double f, double caf,
@@ -218,7 +223,7 @@ static inline double chain_residual(double cmm, double x, double amm, double a, 
     return -(cmm * x + (amm * a + af * f) + caf * (kl - kr));
 }
 
-/* x_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i and the residual at d = 0 (into r0) of the free nodes [b, e), b >= 1:
+/* x_i (predictor_gap) and the residual at d = 0 (into r0) of the free nodes [b, e), b >= 1:
  * no recurrence, so the loop runs in vector lanes */
 static void chain_residuals(size_t b, size_t e, double shift, double dt, double cA, double ke, double af,
                             const double *restrict V, const double *restrict A, const double *restrict fprev,
@@ -226,9 +231,23 @@ static void chain_residuals(size_t b, size_t e, double shift, double dt, double 
                             double *restrict x, double *restrict r0) {
     const double caf = 1.0 - af;
     for (size_t i = b; i < e; ++i) {
-        const double xi = shift - dt * V[i] - cA * A[i];
+        const double xi = predictor_gap(shift, dt, cA, V[i], A[i]);
         r0[i] = chain_residual(cmm[i], xi, amm[i], A[i], af, fprev[i], caf, ke * dU[i - 1], ke * dU[i]);
         x[i] = xi;
+    }
+}
+
+/* the window's x_i (predictor_gap), lin_i = am m_i a_i + af f_i, Up_i and d_i = 0 for the nodes [b, e) (in vector
+ * lanes) */
+static void window_inputs(size_t b, size_t e, double shift, double dt, double cA, double af, const double *restrict V,
+                          const double *restrict A, const double *restrict fprev, const double *restrict amm,
+                          const double *restrict Up, double *restrict x, double *restrict lin, double *restrict Upn,
+                          double *restrict d) {
+    for (size_t i = b; i < e; ++i) {
+        x[i] = predictor_gap(shift, dt, cA, V[i], A[i]);
+        lin[i] = amm[i] * A[i] + af * fprev[i];
+        Upn[i] = Up[i];
+        d[i] = 0.0;
     }
 }
 
@@ -276,11 +295,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;
     for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
+    window_inputs(lo, hi + 1, shift, dt, cA, af, V, A, fprev, amm, Up, x, lin, Upn, d);
     for (size_t i = lo; i <= hi; ++i) {
-        x[i] = shift - dt * V[i] - cA * A[i];
-        lin[i] = amm[i] * A[i] + af * fprev[i];
-        Upn[i] = Up[i];
-        d[i] = 0.0;
         if (ov[i] > 0.0) {
             if (contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
             z[i] = (U[i] - Upn[i]) + shift;
@@ -292,7 +308,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
      * at d = 0 (into rho), then the two recurrences side by side (they are independent) */
     const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
     if (nt > 0) {
-        x[0] = shift - dt * V[0] - cA * A[0];
+        x[0] = predictor_gap(shift, dt, cA, V[0], A[0]);
         rho[0] = chain_residual(cmm[0], x[0], amm[0], A[0], af, fprev[0], 1.0 - af, 0.0, ke * dU[0]);
         chain_residuals(1, nt, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
     }

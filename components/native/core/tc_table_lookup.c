@@ -50,16 +50,20 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
 
 /* locate() of a query that is likely in cell h (the cell of the query before): on an increasing axis of n >= 2 points
  * the cell of the clamped query qc is the one k <= n - 2 with axis_k <= qc < axis_k+1 (or k = n - 2), which the
- * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate(). */
-static void locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
-    double qc = q < axis[0] ? axis[0] : q;
-    qc = qc > axis[n - 1] ? axis[n - 1] : qc;
+ * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate();
+ * returns whether q is outside the axis (as outside()). */
+static int locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
+    const int below = q < axis[0];
+    double qc = below ? axis[0] : q;
+    const int above = qc > axis[n - 1]; /* q > axis[n - 1] (a q below the axis is clamped to axis[0]) */
+    qc = above ? axis[n - 1] : qc;
     if (n > 1 && h <= n - 2 && axis[h] <= qc && (h == n - 2 || qc < axis[h + 1])) {
         *i = h;
         *t = (qc - axis[h]) / (axis[h + 1] - axis[h]);
-        return;
+    } else {
+        locate(axis, n, q, i, t);
     }
-    locate(axis, n, q, i, t);
+    return below || above;
 }
 
 static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
@@ -114,10 +118,10 @@ static void lookup_rows(const tc_table *table, const double *m0, const double *m
         }
     }
     for (size_t k = 0; k < n; ++k) {
-        locate_near(table->beta, nb, beta[k], ib, &ib, &tb); /* neighbouring nodes: mostly the same cell */
+        const int outb = locate_near(table->beta, nb, beta[k], ib, &ib, &tb); /* neighbours: mostly the same cell */
         out[k] = bilinear(rows[0][ib], rows[0][ib + sb], rows[1][ib], rows[1][ib + sb], tv, tb);
         if (b0 != NULL) out_b[k] = bilinear(rows[2][ib], rows[2][ib + sb], rows[3][ib], rows[3][ib + sb], tv, tb);
-        if (clamped != NULL) clamped[k] = (unsigned char)(outpv || outside(table->beta, nb, beta[k]));
+        if (clamped != NULL) clamped[k] = (unsigned char)(outpv || outb);
     }
 }
 
@@ -165,12 +169,12 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
             locate(table->velocity, nv, v, &iv, &tv);
             outv = outside(table->velocity, nv, v);
         }
-        locate_near(table->beta, nb, b, ib, &ib, &tb);
+        const int outb = locate_near(table->beta, nb, b, ib, &ib, &tb);
         const size_t c00 = iv * nb + ib, c01 = iv * nb + ib + sb, c10 = (iv + sv) * nb + ib,
                      c11 = (iv + sv) * nb + ib + sb;
         out[k] = interpolate(m0, m1, tp, c00, c01, c10, c11, tv, tb);
         if (b0 != NULL) out_b[k] = interpolate(b0, b1, tp, c00, c01, c10, c11, tv, tb);
-        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outside(table->beta, nb, b));
+        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outb);
     }
     return TC_OK;
 }
