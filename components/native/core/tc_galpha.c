@@ -189,18 +189,17 @@ static void newton_step(const window_problem *w, const signed char *state, const
     const size_t lo = w->lo, hi = w->hi, nw = hi - lo + 1;
     const double *ov = w->ov, *m = w->m;
     const double ks = w->ks, wT = w->wT, ke = w->ke, cm = w->cm, af = w->af, off = -(1.0 - af) * ke;
-#define DIAGONAL(i)                                                                                             \
-    (cm * m[i] + (1.0 - af) * ((((i) > lo ? 1.0 : 0.0) + ((i) < hi ? 1.0 : 0.0)) * ke +                      \
-                               (state[i] == 1 ? ks * wT * ov[i] : 0.0)))
-    double h0 = DIAGONAL(lo) + w->kt;
+    /* H_ii without K_t and K_g, with ek = k_e e_i: k_e at an end of a window of two nodes or more, 2 k_e inside */
+#define DIAGONAL(i, ek) (cm * m[i] + (1.0 - af) * ((ek) + (state[i] == 1 ? ks * wT * ov[i] : 0.0)))
+    const double ke_end = (nw > 1 ? 1.0 : 0.0) * ke, ke_mid = 2.0 * ke;
+    double h0 = DIAGONAL(lo, ke_end) + w->kt;
     if (nw == 1) h0 += w->kg;
     double cp = off / h0, gp = -r[lo] / h0; /* the recurrences' carries */
     c[0] = cp;
     g[0] = gp;
     for (size_t k = 1; k < nw; ++k) {
         const size_t i = lo + k;
-        double h = DIAGONAL(i);
-        if (k == nw - 1) h += w->kg;
+        const double h = k < nw - 1 ? DIAGONAL(i, ke_mid) : DIAGONAL(i, ke_end) + w->kg;
         const double mk = h - off * cp;
         c[k] = cp = off / mk;
         g[k] = gp = (-r[i] - off * gp) / mk;
