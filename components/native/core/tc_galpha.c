@@ -41,8 +41,9 @@
  * and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
  * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
  * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
- * Both chains are swept side by side (they are independent), with each node's residual and Newmark update
- * computed on the way: the sweeps are recurrences whose latency, not their arithmetic, sets their cost.
+ * The nodes' residuals at d = 0, their Newmark updates and the elements' forces have no recurrence and are formed
+ * in passes of their own (in vector lanes); the recurrences of the two chains are swept side by side (they are
+ * independent, so their latencies overlap).
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
  * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
@@ -73,11 +74,15 @@ static double interface_law(double x, double ks, double tmax, int *slipping, dou
     return trial;
 }
 
-void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain) {
+void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double c, double *chain) {
     const size_t N = n - 1;
     double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
-           *ig = chain + 5 * n;
+           *ig = chain + 5 * n, *cmm = chain + 6 * n, *amm = chain + 7 * n;
     memset(chain, 0, TC_SD_CHAIN(n) * sizeof *chain);
+    for (size_t i = 0; i < n; ++i) {
+        cmm[i] = cm * m[i];
+        amm[i] = am * m[i];
+    }
     for (size_t i = 0; i + 1 < N; ++i) { /* the tail never reaches node N-1 */
         const double e = i == 0 ? cm * m[i] : cm * m[i] + qt[i - 1] * et[i - 1];
         et[i] = e;
@@ -120,45 +125,151 @@ typedef struct {
     double ke, ks, wT, af, cm, st, kt, sg, kg;
 } window_problem;
 
-/* Pi_W(d), the window residual r = dPi_W/dd and max |r|; tractions T and stick/slip states (0 off the pad,
- * 1 stick, 2/3 slip +/-) and the nodal forces f (contact + elements inside the window) */
-static double window_eval(const window_problem *w, const double *d, double *T, signed char *state, double *f,
-                          double *r, double *rmax) {
+/* Pi_W(d), the tractions T and stick/slip states (0 off the pad, 1 stick, 2/3 slip +/-) of the window */
+static double window_potential(const window_problem *w, const double *d, double *T, signed char *state) {
     const size_t lo = w->lo, hi = w->hi;
-    const double af = w->af, ke = w->ke, cm = w->cm;
+    const double *x = w->x, *z = w->z, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m, *tmax = w->tmax;
+    const double ks = w->ks, cw = (1.0 - w->af) * w->wT, ce = (1.0 - w->af) * 0.5 * w->ke, hcm = 0.5 * w->cm;
     double pot = 0.0;
     for (size_t i = lo; i <= hi; ++i) {
         T[i] = 0.0;
         state[i] = 0;
-        if (w->ov[i] > 0.0) {
-            const double xs = w->z[i] + d[i];
+        if (ov[i] > 0.0) {
+            const double xs = z[i] + d[i];
             int slipping;
             double phi;
-            T[i] = interface_law(xs, w->ks, w->tmax[i], &slipping, &phi);
+            T[i] = interface_law(xs, ks, tmax[i], &slipping, &phi);
             state[i] = (signed char)(!slipping ? 1 : (xs > 0 ? 2 : 3));
-            pot += (1.0 - af) * w->wT * w->ov[i] * phi;
+            pot += cw * ov[i] * phi;
         }
-        f[i] = T[i] * w->wT * w->ov[i];
     }
     for (size_t e = lo; e < hi; ++e) {
-        const double s = w->dU[e] + (d[e + 1] - d[e]);
-        f[e] -= ke * s;
-        f[e + 1] += ke * s;
-        pot += (1.0 - af) * 0.5 * ke * s * s;
+        const double s = dU[e] + (d[e + 1] - d[e]);
+        pot += ce * s * s;
     }
     for (size_t i = lo; i <= hi; ++i) {
-        const double y = w->x[i] + d[i];
-        r[i] = cm * w->m[i] * y + w->lin[i] + (1.0 - af) * f[i];
-        pot += 0.5 * cm * w->m[i] * y * y + w->lin[i] * d[i];
+        const double y = x[i] + d[i];
+        pot += hcm * m[i] * y * y + lin[i] * d[i];
     }
-    r[lo] += w->st + w->kt * d[lo];
     pot += (w->st + 0.5 * w->kt * d[lo]) * d[lo];
-    r[hi] += w->sg + w->kg * d[hi];
     pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
+    return pot;
+}
+
+/* the window residual r = dPi_W/dd at d with the tractions T of window_potential, and max |r|; f: the nodal forces
+ * (contact + elements inside the window) */
+static double window_residual(const window_problem *w, const double *d, const double *T, double *f, double *r) {
+    const size_t lo = w->lo, hi = w->hi;
+    const double *x = w->x, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m;
+    const double wT = w->wT, ke = w->ke, cm = w->cm, caf = 1.0 - w->af;
+    for (size_t i = lo; i <= hi; ++i) f[i] = T[i] * wT * ov[i];
+    for (size_t e = lo; e < hi; ++e) {
+        const double s = dU[e] + (d[e + 1] - d[e]);
+        f[e] -= ke * s;
+        f[e + 1] += ke * s;
+    }
+    for (size_t i = lo; i <= hi; ++i) r[i] = cm * m[i] * (x[i] + d[i]) + lin[i] + caf * f[i];
+    r[lo] += w->st + w->kt * d[lo];
+    r[hi] += w->sg + w->kg * d[hi];
     double rm = 0.0;
     for (size_t i = lo; i <= hi; ++i) rm = fabs(r[i]) > rm ? fabs(r[i]) : rm;
-    *rmax = rm;
-    return pot;
+    return rm;
+}
+
+/* The Newton step s of the window on its stick/slip set (state), H s = -r: H is tridiagonal with
+ *
+ *     H_ii = cm m_i + (1 - af) (k_e e_i + k_s w_T ov_i [i sticks])  (+ K_t at lo, + K_g at hi),
+ *     H_i,i+1 = H_i+1,i = -(1 - af) k_e,
+ *
+ * e_i the number of window elements at node i. Solved by the Thomas algorithm as tc_thomas does it (the off-diagonal
+ * is not 0): c_0 = H_01 / H_00, g_0 = -r_0 / H_00, then m_i = H_ii - H_i,i-1 c_i-1, c_i = H_i,i+1 / m_i,
+ * g_i = (-r_i - H_i,i-1 g_i-1) / m_i, and s_i = g_i - c_i s_i+1 backwards. c and g: work of nw values each. */
+static void newton_step(const window_problem *w, const signed char *state, const double *r, double *step, double *c,
+                        double *g) {
+    const size_t lo = w->lo, hi = w->hi, nw = hi - lo + 1;
+    const double *ov = w->ov, *m = w->m;
+    const double ks = w->ks, wT = w->wT, ke = w->ke, cm = w->cm, af = w->af, off = -(1.0 - af) * ke;
+    /* H_ii without K_t and K_g, with ek = k_e e_i: k_e at an end of a window of two nodes or more, 2 k_e inside */
+#define DIAGONAL(i, ek) (cm * m[i] + (1.0 - af) * ((ek) + (state[i] == 1 ? ks * wT * ov[i] : 0.0)))
+    const double ke_end = (nw > 1 ? 1.0 : 0.0) * ke, ke_mid = 2.0 * ke;
+    double h0 = DIAGONAL(lo, ke_end) + w->kt;
+    if (nw == 1) h0 += w->kg;
+    double cp = off / h0, gp = -r[lo] / h0; /* the recurrences' carries */
+    c[0] = cp;
+    g[0] = gp;
+    for (size_t k = 1; k < nw; ++k) {
+        const size_t i = lo + k;
+        const double h = k < nw - 1 ? DIAGONAL(i, ke_mid) : DIAGONAL(i, ke_end) + w->kg;
+        const double mk = h - off * cp;
+        c[k] = cp = off / mk;
+        g[k] = gp = (-r[i] - off * gp) / mk;
+    }
+#undef DIAGONAL
+    double sp = g[nw - 1];
+    step[nw - 1] = sp;
+    for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
+}
+
+/* x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i of a node (shift = dt V0, cA = dt^2 (1/2 - b)) */
+static inline double predictor_gap(double shift, double dt, double cA, double v, double a) {
+    return shift - dt * v - cA * a;
+}
+
+/* the residual at d = 0 of a free node outside the window, -(cm m_i x_i + am m_i a_i + af f_i + (1 - af)(kl - kr)),
+ * with kl = k_e dU_i-1 (0 at node 0) and kr = k_e dU_i its elements' forces */
+static inline double chain_residual(double cmm, double x, double amm, double a, double af, double f, double caf,
+                                    double kl, double kr) {
+    return -(cmm * x + (amm * a + af * f) + caf * (kl - kr));
+}
+
+/* x_i (predictor_gap) and the residual at d = 0 (into r0) of the free nodes [b, e), b >= 1:
+ * no recurrence, so the loop runs in vector lanes */
+static void chain_residuals(size_t b, size_t e, double shift, double dt, double cA, double ke, double af,
+                            const double *restrict V, const double *restrict A, const double *restrict fprev,
+                            const double *restrict dU, const double *restrict cmm, const double *restrict amm,
+                            double *restrict x, double *restrict r0) {
+    const double caf = 1.0 - af;
+    for (size_t i = b; i < e; ++i) {
+        const double xi = predictor_gap(shift, dt, cA, V[i], A[i]);
+        r0[i] = chain_residual(cmm[i], xi, amm[i], A[i], af, fprev[i], caf, ke * dU[i - 1], ke * dU[i]);
+        x[i] = xi;
+    }
+}
+
+/* the window's x_i (predictor_gap), lin_i = am m_i a_i + af f_i, Up_i and d_i = 0 for the nodes [b, e) (in vector
+ * lanes) */
+static void window_inputs(size_t b, size_t e, double shift, double dt, double cA, double af, const double *restrict V,
+                          const double *restrict A, const double *restrict fprev, const double *restrict amm,
+                          const double *restrict Up, double *restrict x, double *restrict lin, double *restrict Upn,
+                          double *restrict d) {
+    for (size_t i = b; i < e; ++i) {
+        x[i] = predictor_gap(shift, dt, cA, V[i], A[i]);
+        lin[i] = amm[i] * A[i] + af * fprev[i];
+        Upn[i] = Up[i];
+        d[i] = 0.0;
+    }
+}
+
+/* the Newmark update of the free nodes [0, N) from their increments d: a = (x + d) / (b dt^2),
+ * v += dt ((1 - gamma) a_n + gamma a), u += dt V0 + d (in vector lanes) */
+static void newmark_update(size_t N, double dt, double bdt2, double gamma, double shift, const double *restrict x,
+                           const double *restrict d, double *restrict U, double *restrict V, double *restrict A) {
+    for (size_t i = 0; i < N; ++i) {
+        const double anew = (x[i] + d[i]) / bdt2;
+        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+        A[i] = anew;
+        U[i] = U[i] + (shift + d[i]);
+    }
+}
+
+/* the elements' extensions at the new state, e_k = dU_k + (d_k+1 - d_k) (d_N = 0: the grip node's increment), into
+ * dU, and their forces on the nodes, f_i = k_e e_i-1 - k_e e_i (-k_e e_0 at node 0, k_e e_N-1 at the grip node N) */
+static void element_forces(size_t N, double ke, const double *restrict d, double *restrict dU,
+                           double *restrict fprev) {
+    for (size_t i = 0; i < N; ++i) dU[i] = dU[i] + (d[i + 1] - d[i]);
+    fprev[0] = -ke * dU[0];
+    for (size_t i = 1; i < N; ++i) fprev[i] = ke * dU[i - 1] - ke * dU[i];
+    fprev[N] = ke * dU[N - 1];
 }
 
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
@@ -169,11 +280,10 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const size_t N = n - 1;
     const double c = (1.0 - af) * ke;
     const double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
-                 *ig = chain + 5 * n;
+                 *ig = chain + 5 * n, *cmm = chain + 6 * n, *amm = chain + 7 * n;
     double *x = work, *lin = work + n, *dU = work + 2 * n, *z = work + 3 * n, *d = work + 4 * n;
     double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
-    double *dtr = work + 10 * n, *sub = work + 11 * n, *dia = work + 12 * n, *sup = work + 13 * n;
-    double *rhs = work + 14 * n, *step = work + 15 * n, *tw = work + 16 * n; /* tw: 2 n for the Thomas solve */
+    double *dtr = work + 10 * n, *step = work + 11 * n, *tw = work + 12 * n; /* tw: 2 n for the Newton step */
     signed char *state = iwork, *used = iwork + n;
 
     /* a step whose square underflows cannot be taken */
@@ -184,11 +294,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;
     for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
+    window_inputs(lo, hi + 1, shift, dt, cA, af, V, A, fprev, amm, Up, x, lin, Upn, d);
     for (size_t i = lo; i <= hi; ++i) {
-        x[i] = shift - dt * V[i] - cA * A[i];
-        lin[i] = am * m[i] * A[i] + af * fprev[i];
-        Upn[i] = Up[i];
-        d[i] = 0.0;
         if (ov[i] > 0.0) {
             if (contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
             z[i] = (U[i] - Upn[i]) + shift;
@@ -196,39 +303,23 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     }
     Upn[N] = Up[N];
     if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
-    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k), side by side: the two
-     * recurrences are independent, and each node's residual at d = 0 is computed on the way */
+    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k): first every node's x and residual
+     * at d = 0 (into rho), then the two recurrences side by side (they are independent) */
     const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
-    double rt = 0.0, rg = 0.0; /* the last rho of each sweep, kept in registers: the recurrences' carries */
-    /* node k of the tail and node N-1-k of the grip side; the first of each has no carry (and node 0 no element
-     * on its left) */
-#define TAIL_NODE(i, carry)                                                                                     \
-    do {                                                                                                       \
-        x[i] = shift - dt * V[i] - cA * A[i];                                                                  \
-        const double fel = ((i) > 0 ? ke * dU[(i) - 1] : 0.0) - ke * dU[i];                                    \
-        double r0 = -(cm * m[i] * x[i] + (am * m[i] * A[i] + af * fprev[i]) + (1.0 - af) * fel);              \
-        if (carry) r0 += qt[(i) - 1] * rt;                                                                     \
-        rho[i] = rt = r0;                                                                                      \
-    } while (0)
-#define GRIP_NODE(j, carry)                                                                                     \
-    do {                                                                                                       \
-        x[j] = shift - dt * V[j] - cA * A[j];                                                                  \
-        const double fel = ke * dU[(j) - 1] - ke * dU[j];                                                      \
-        double r0 = -(cm * m[j] * x[j] + (am * m[j] * A[j] + af * fprev[j]) + (1.0 - af) * fel);              \
-        if (carry) r0 += qg[(j) + 1] * rg;                                                                     \
-        rho[j] = rg = r0;                                                                                      \
-    } while (0)
-    if (nt > 0) TAIL_NODE(0, 0);
-    if (ng > 0) GRIP_NODE(N - 1, 0);
-    size_t k = 1;
-    for (; k < both; ++k) { /* side by side, without tests in the loop */
-        TAIL_NODE(k, 1);
-        GRIP_NODE(N - 1 - k, 1);
+    if (nt > 0) {
+        x[0] = predictor_gap(shift, dt, cA, V[0], A[0]);
+        rho[0] = chain_residual(cmm[0], x[0], amm[0], A[0], af, fprev[0], 1.0 - af, 0.0, ke * dU[0]);
+        chain_residuals(1, nt, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
     }
-    for (size_t kt = k; kt < nt; ++kt) TAIL_NODE(kt, 1);
-    for (size_t kg = k; kg < ng; ++kg) GRIP_NODE(N - 1 - kg, 1);
-#undef TAIL_NODE
-#undef GRIP_NODE
+    chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
+    double rt = nt > 0 ? rho[0] : 0.0, rg = ng > 0 ? rho[N - 1] : 0.0; /* the recurrences' carries */
+    size_t k = 1;
+    for (size_t j = N - 2; k < both; ++k, --j) { /* side by side, without tests in the loop */
+        rho[k] = rt = rho[k] + qt[k - 1] * rt;
+        rho[j] = rg = rho[j] + qg[j + 1] * rg;
+    }
+    for (size_t i = k; i < nt; ++i) rho[i] = rt = rho[i] + qt[i - 1] * rt;
+    for (size_t j = N - 1 - k; j > hi && k < ng; --j) rho[j] = rg = rho[j] + qg[j + 1] * rg;
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -246,37 +337,27 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     fscale += tmax[N] * wT * ov[N];
 
     const size_t nw = hi - lo + 1;
-    double rmax, rmax_t;
-    double pot = window_eval(&w, d, T, state, f, r, &rmax);
+    double pot = window_potential(&w, d, T, state);
+    double rmax = window_residual(&w, d, T, f, r);
     int iters = 0;
     while (rmax > rtol * fscale) {
         if (iters >= max_iter) return -1;
-        for (size_t i = lo; i <= hi; ++i) {
-            const double kt_i = state[i] == 1 ? ks * wT * ov[i] : 0.0;
-            const double springs = (i > lo ? 1.0 : 0.0) + (i < hi ? 1.0 : 0.0);
-            dia[i - lo] = cm * m[i] + (1.0 - af) * (springs * ke + kt_i);
-            sub[i - lo] = -(1.0 - af) * ke;
-            sup[i - lo] = -(1.0 - af) * ke;
-            rhs[i - lo] = -r[i];
-            used[i] = state[i];
-        }
-        dia[0] += w.kt;
-        dia[nw - 1] += w.kg;
-        tc_thomas(nw, sub, dia, sup, rhs, step, tw);
+        memcpy(used + lo, state + lo, nw);
+        newton_step(&w, state, r, step, tw, tw + nw);
         double slope = 0.0;
         for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
         double alpha = 1.0, pot_t;
         for (;;) { /* backtracking (Armijo) line search on Pi_W */
             for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
-            pot_t = window_eval(&w, dtr, T, state, f, r, &rmax_t);
+            pot_t = window_potential(&w, dtr, T, state);
             if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
             alpha *= 0.5;
         }
         for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
         pot = pot_t;
-        rmax = rmax_t;
         iters += 1;
-        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there */
+        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there (its
+                             * residual is not needed) */
             int same = 1;
             for (size_t i = lo; i <= hi; ++i)
                 if (state[i] != used[i]) {
@@ -285,37 +366,25 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
                 }
             if (same) break;
         }
+        rmax = window_residual(&w, d, T, f, r);
     }
-    /* back-substitute the chains (side by side, as above), each node's Newmark update on the way */
-    const double bdt2 = beta * dt * dt;
+    /* back-substitute the chains (side by side, as above), then every free node's Newmark update */
     double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
-#define NEWMARK(i, di)                                                                                          \
-    do {                                                                                                       \
-        const double anew = (x[i] + (di)) / bdt2;                                                              \
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);                                              \
-        A[i] = anew;                                                                                           \
-        U[i] = U[i] + (shift + (di));                                                                          \
-    } while (0)
     size_t kb = 0;
     for (; kb < both; ++kb) { /* side by side, without tests in the loop */
         const size_t i = lo - 1 - kb, j = hi + 1 + kb;
         d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-        NEWMARK(i, dt_t);
-        NEWMARK(j, dt_g);
     }
     for (size_t kt = kb; kt < nt; ++kt) {
         const size_t i = lo - 1 - kt;
         d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
-        NEWMARK(i, dt_t);
     }
     for (size_t kg = kb; kg < ng; ++kg) {
         const size_t j = hi + 1 + kg;
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-        NEWMARK(j, dt_g);
     }
-    for (size_t i = lo; i <= hi; ++i) NEWMARK(i, d[i]);
-#undef NEWMARK
+    newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U, V, A);
     U[N] = U[N] + shift;
     V[N] = vg;
     A[N] = 0.0;
@@ -326,20 +395,11 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         T[N] = interface_law(U[N] - Upn[N], ks, tmax[N], &slipping, &phi);
         state[N] = (signed char)(!slipping ? 1 : 2);
     }
-    /* the elements' extensions at the new state from the increments (not from the updated U, whose rounding to
-     * draw-sized values would make the forces jump by ~k_e ulp(U) between nearby inputs), their
-     * forces at every node, then the friction of the nodes under the pad (window and grip node) */
+    /* the elements' extensions from the increments (not from the updated U, whose rounding to draw-sized values would
+     * make the forces jump by ~k_e ulp(U) between nearby inputs), their forces at every node, then the friction of the
+     * nodes under the pad (window and grip node) */
     d[N] = 0.0;
-    double left = dU[0] + (d[1] - d[0]); /* element e's new extension, then its force on both nodes */
-    dU[0] = left;
-    fprev[0] = -ke * left;
-    for (size_t i = 1; i < N; ++i) {
-        const double right = dU[i] + (d[i + 1] - d[i]);
-        dU[i] = right;
-        fprev[i] = ke * left - ke * right;
-        left = right;
-    }
-    fprev[N] = ke * left;
+    element_forces(N, ke, d, dU, fprev);
     memset(contact, 0, n);
     double fr = 0.0;
     for (size_t kw = lo; kw <= hi + 1; ++kw) {

@@ -6,14 +6,14 @@
 #include <stddef.h>
 
 /* the elimination factors of the free bar for one step (cm = (1 - am) / (beta dt^2), c = (1 - af) k_e) into chain
- * (TC_SD_CHAIN(n) doubles: rows et, qt, it, eg, qg, ig of n values each). */
-#define TC_SD_CHAIN(n) (6 * (n))
-void tc_sd_chain_factors(size_t n, double cm, const double *m, double c, double *chain);
+ * (TC_SD_CHAIN(n) doubles: rows et, qt, it, eg, qg, ig, then cm m and am m, of n values each). */
+#define TC_SD_CHAIN(n) (8 * (n))
+void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double c, double *chain);
 
 /* one generalized-alpha step (tc_galpha.c): returns the Newton iterations, -1 without convergence, or -2 when
  * beta dt^2 is 0; nothing is changed when it returns < 0. chain holds tc_sd_chain_factors of dt; the nodes with
  * ov > 0 lie in [first, last] (first > last: not known). */
-#define TC_SD_GALPHA_WORK(n) (18 * (n))
+#define TC_SD_GALPHA_WORK(n) (14 * (n))
 #define TC_SD_GALPHA_IWORK(n) (2 * (n))
 int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
                  double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,

@@ -102,6 +102,7 @@ struct tc_stripdraw {
     /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
     double beta_hi;
     int refusal; /* enum tc_stripdraw_refusal of the last refused step */
+    int u_finite; /* every U is finite after the last interval */
     /* work arrays */
     double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
@@ -123,22 +124,35 @@ struct tc_stripdraw {
  * kernels
  * ------------------------------------------------------------------------------------------------- */
 
-void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
-                   double *ov) {
-    /* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
-     * positions are finite, and the compares vectorise) */
+/* the overlap of the segment [lo, hi] with the pad, 0 when they do not meet (compares, not fmin/fmax: the
+ * positions are finite, and the compares vectorise) */
 #define TC_SD_OVERLAP(lo, hi) (((hi) > a_hi ? a_hi : (hi)) - ((lo) < a_lo ? a_lo : (lo)))
-    if (n == 0) return;
-    for (size_t i = 1; i + 1 < n; ++i) { /* the interior: the end nodes' segments are one-sided */
+
+/* tc_sd_overlap of the interior nodes [b, e) (their segments are two-sided) */
+static void overlap_interior(size_t b, size_t e, const double *X, const double *U, double half_le, double a_lo,
+                             double a_hi, double *ov) {
+    for (size_t i = b; i < e; ++i) {
         const double x = X[i] + U[i];
         const double d = TC_SD_OVERLAP(x - half_le, x + half_le);
         ov[i] = d > 0.0 ? d : 0.0;
     }
+}
+
+/* tc_sd_overlap of the end nodes (n >= 1; their segments are one-sided) */
+static void overlap_ends(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                         double *ov) {
     const double x0 = X[0] + U[0], xn = X[n - 1] + U[n - 1];
     const double d0 = TC_SD_OVERLAP(x0, n == 1 ? x0 : x0 + half_le), dn = TC_SD_OVERLAP(xn - half_le, xn);
     ov[0] = d0 > 0.0 ? d0 : 0.0;
     if (n > 1) ov[n - 1] = dn > 0.0 ? dn : 0.0;
+}
 #undef TC_SD_OVERLAP
+
+void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
+                   double *ov) {
+    if (n == 0) return;
+    overlap_interior(1, n - 1, X, U, half_le, a_lo, a_hi, ov);
+    overlap_ends(n, X, U, half_le, a_lo, a_hi, ov);
 }
 
 /* The interface law (Eq. 4-5) on one node of elastic slip x: the traction limited to +-tmax; *slipping when
@@ -237,14 +251,63 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
  * the model
  * ------------------------------------------------------------------------------------------------- */
 
-/* the contact weights of U (the overlap with the pad over l_e) and their nonzero range */
+/* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
+static int positions_in_order(size_t n, const double *X, const double *U) {
+    int sorted = 1;
+    for (size_t i = 0; i + 1 < n; ++i) sorted &= X[i] + U[i] <= X[i + 1] + U[i + 1];
+    return sorted;
+}
+
+/* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
+ * the interior nodes whose segment reaches past a_lo (x + l_e/2 > a_lo) are those from some node on, those whose
+ * segment starts before a_hi (x - l_e/2 < a_hi) those up to some node: only the nodes of both sets can meet the pad,
+ * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
     const size_t n = m->n;
-    tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, w);
-    size_t first = 0, last = n;
-    while (first < n && w[first] == 0.0) ++first;
-    while (last > first && w[last - 1] == 0.0) --last;
+    const double *X = m->X, *U = m->U, h = m->half_le;
+    size_t b = 1, e = n > 1 ? n - 1 : 1; /* the interior nodes that may meet the pad: [b, e) */
+    if (n > 2 && positions_in_order(n, X, U)) {
+        size_t lo = 1, hi = n - 1;
+        while (lo < hi) { /* the first interior node with x + l_e/2 > a_lo */
+            const size_t mid = lo + (hi - lo) / 2;
+            if (X[mid] + U[mid] + h > m->a_lo)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        b = lo;
+        hi = n - 1;
+        while (lo < hi) { /* the first one on with x - l_e/2 >= a_hi */
+            const size_t mid = lo + (hi - lo) / 2;
+            if (!(X[mid] + U[mid] - h < m->a_hi))
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        e = lo;
+        memset(w, 0, n * sizeof *w);
+        overlap_interior(b, e, X, U, h, m->a_lo, m->a_hi, w);
+        overlap_ends(n, X, U, h, m->a_lo, m->a_hi, w);
+    } else {
+        tc_sd_overlap(n, X, U, h, m->a_lo, m->a_hi, w);
+    }
+    /* the first and last node with w != 0, in the order 0, [b, e), n - 1 (the other nodes' w are 0) */
+    size_t first = n, last = 0; /* last: one past it */
+    if (w[0] != 0.0) {
+        first = 0;
+    } else {
+        for (size_t i = b; i < e && first == n; ++i)
+            if (w[i] != 0.0) first = i;
+        if (first == n && n > 1 && w[n - 1] != 0.0) first = n - 1;
+    }
+    if (n > 1 && w[n - 1] != 0.0) {
+        last = n;
+    } else {
+        for (size_t i = e; i > b && last == 0; --i)
+            if (w[i - 1] != 0.0) last = i;
+        if (last == 0 && w[0] != 0.0) last = 1;
+    }
     m->w_first = first < n ? first : 1;
     m->w_last = first < n ? last - 1 : 0;
     for (size_t i = first; i < last; ++i) w[i] = w[i] / m->le;
@@ -316,7 +379,7 @@ static const double *chain_for(tc_stripdraw *m, double h) {
     }
     m->chain_h[k] = h;
     const double cm = (1.0 - m->am) / (m->beta_nm * h * h);
-    tc_sd_chain_factors(m->n, cm, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
+    tc_sd_chain_factors(m->n, cm, m->am, m->mass, (1.0 - m->af) * m->ke, m->chain + (size_t)k * size);
     return m->chain + (size_t)k * size;
 }
 
@@ -366,13 +429,23 @@ static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
     return fmin(m->beta_cap, m->cap_value);
 }
 
-/* whether every a[i] is finite (a sum in four lanes: inf or NaN anywhere makes it non-finite) */
-static int all_finite(const double *a, size_t n) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0};
+/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d and
+ * 0 a in four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers) */
+static int difference_finite(size_t n, const double *a, const double *b, double *d, int *a_finite) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0}, sa[4] = {0.0, 0.0, 0.0, 0.0};
     size_t i = 0;
     for (; i + 4 <= n; i += 4)
-        for (int k = 0; k < 4; ++k) s[k] += 0.0 * a[i + (size_t)k];
-    for (; i < n; ++i) s[0] += 0.0 * a[i];
+        for (int k = 0; k < 4; ++k) {
+            d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
+            s[k] += 0.0 * d[i + (size_t)k];
+            sa[k] += 0.0 * a[i + (size_t)k];
+        }
+    for (; i < n; ++i) {
+        d[i] = a[i] - b[i];
+        s[0] += 0.0 * d[i];
+        sa[0] += 0.0 * a[i];
+    }
+    *a_finite = isfinite(sa[0] + sa[1] + sa[2] + sa[3]);
     return isfinite(s[0] + s[1] + s[2] + s[3]);
 }
 
@@ -387,17 +460,34 @@ static double largest(const double *a, size_t n) {
     return m23 > m01 ? m23 : m01;
 }
 
-/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU, with
- * the weights averaged over the interval. Only nodes where the weights of the start (w0, range [f0, l0]) or the
- * end are not 0 change (the source and the flux are 0 elsewhere), unless the cap falls below beta elsewhere. */
-static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0) {
+/* beta_i = min(b_i, cap) for i in [a, e), what the cap takes added to *removed (in the order of i), *finite cleared
+ * when a b_i is not finite */
+static void cap_range(const double *b, double *beta, size_t a, size_t e, double cap, double *removed, int *finite) {
+    double r = *removed;
+    int ok = *finite;
+    for (size_t i = a; i < e; ++i) {
+        const double bi = b[i];
+        if (bi > cap) r += bi - cap;
+        beta[i] = bi > cap ? cap : bi;
+        ok &= isfinite(bi);
+    }
+    *removed = r;
+    *finite = ok;
+}
+
+/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU
+ * (du_finite: every one finite), with the weights averaged over the interval. Only nodes where the weights of the
+ * start (w0, range [f0, l0]) or the end are not 0 change (the source and the flux are 0 elsewhere), unless the cap
+ * falls below beta elsewhere. */
+static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0,
+                      int du_finite) {
     const tc_stripdraw_params *p = &m->p;
     const size_t n = m->n;
     const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
     size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
     if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
     if (m->w_first > m->w_last) t0 = f0, t1 = l0;
-    const int windowed = isfinite(kp) && all_finite(m->dU, n) && m->beta_hi == m->beta_hi;
+    const int windowed = isfinite(kp) && du_finite && m->beta_hi == m->beta_hi;
     if (!windowed) t0 = 0, t1 = n - 1;
     const double cap = interval_cap(m, pressure, speed);
     if (t0 <= t1) {
@@ -421,16 +511,16 @@ static void transport(tc_stripdraw *m, double pressure, double speed, const doub
         m->beta_removed += sunk;
         tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
     }
-    /* the cap: over every node unless it is >= every beta away from [t0, t1] */
-    size_t c0 = t0, c1 = t1;
-    if (!(windowed && cap >= m->beta_hi)) c0 = 0, c1 = n - 1;
+    /* the cap: over every node unless it is >= every beta away from [t0, t1]; the new beta of [t0, t1] is bnew */
     double removed = 0.0;
     int finite = 1;
-    for (size_t i = c0; i <= c1 && i < n; ++i) {
-        const double b = i >= t0 && i <= t1 ? m->bnew[i] : m->beta[i];
-        if (b > cap) removed += b - cap;
-        m->beta[i] = b > cap ? cap : b;
-        finite &= isfinite(b);
+    if (t0 > t1) {
+        if (!(windowed && cap >= m->beta_hi)) cap_range(m->beta, m->beta, 0, n, cap, &removed, &finite);
+    } else {
+        const int all = !(windowed && cap >= m->beta_hi);
+        if (all) cap_range(m->beta, m->beta, 0, t0, cap, &removed, &finite);
+        cap_range(m->bnew, m->beta, t0, t1 + 1, cap, &removed, &finite);
+        if (all) cap_range(m->beta, m->beta, t1 + 1, n, cap, &removed, &finite);
     }
     m->beta_hi = finite ? cap : NAN;
     m->beta_removed += removed;
@@ -459,12 +549,13 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
         tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
                        m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
     } else {
-        for (size_t i = 0; i < n; ++i) m->ov[i] = m->w[i] * m->le;
+        memset(m->ov, 0, n * sizeof *m->ov); /* the weights are 0 outside [w_first, w_last] */
+        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le;
         int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    for (size_t i = 0; i < n; ++i) m->dU[i] = m->U[i] - m->U0[i];
+    const int du_finite = difference_finite(n, m->U, m->U0, m->dU, &m->u_finite);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -473,7 +564,7 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w = m->w0;
     m->w0 = w0;
     update_weights(m);
-    transport(m, pressure, speed, w0, f0, l0);
+    transport(m, pressure, speed, w0, f0, l0, du_finite);
     state_limits(m);
     return TC_OK;
 }
@@ -870,9 +961,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK) {
-        int finite = isfinite(m->reaction);
-        for (size_t i = 0; i < m->n && finite; ++i) finite = isfinite(m->U[i]);
-        if (!finite)
+        if (!(isfinite(m->reaction) && m->u_finite)) /* u_finite: of the last interval (a step has at least one) */
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
@@ -886,28 +975,23 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
 
 int tc_stripdraw_refusal(const tc_stripdraw *m) { return m->refusal; }
 
-/* friction force of the state: the return-mapped tractions of the nodes under the pad at the state's limits */
-static double friction_force(const tc_stripdraw *m) {
-    double fs = 0.0;
-    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
-        if (!(m->w[i] > 0.0) || !m->contact[i]) continue; /* a node entering the pad starts stress-free */
-        int slipping;
-        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (m->w[i] * m->le);
-    }
-    return fs;
-}
-
+/* The outputs of the state. Over the nodes under the pad (weights w_i = ov_i / l_e > 0): the sums of w_i, w_i U_i and
+ * w_i beta_i, and the friction force, the return-mapped tractions T_i w_T ov_i at the state's limits (of the nodes in
+ * contact: a node entering the pad starts stress-free). */
 void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPUTS]) {
     const size_t n = m->n;
     const double fn = m->normal_force;
-    double wsum = 0.0, wu = 0.0, wb = 0.0;
+    double wsum = 0.0, wu = 0.0, wb = 0.0, fs = 0.0;
     for (size_t i = m->w_first; i <= m->w_last && i < n; ++i) {
-        wsum += m->w[i];
-        wu += m->w[i] * m->U[i];
-        wb += m->w[i] * m->beta[i];
+        const double w = m->w[i];
+        wsum += w;
+        wu += w * m->U[i];
+        wb += w * m->beta[i];
+        if (!(w > 0.0) || !m->contact[i]) continue;
+        int slipping;
+        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (w * m->le);
     }
     const double bmax = largest(m->beta, n);
-    const double fs = friction_force(m);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
     out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? fs / fn : 0.0;

@@ -48,6 +48,24 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
     *t = (qc - axis[k]) / (axis[k + 1] - axis[k]);
 }
 
+/* locate() of a query that is likely in cell h (the cell of the query before): on an increasing axis of n >= 2 points
+ * the cell of the clamped query qc is the one k <= n - 2 with axis_k <= qc < axis_k+1 (or k = n - 2), which the
+ * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate();
+ * returns whether q is outside the axis (as outside()). */
+static int locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
+    const int below = q < axis[0];
+    double qc = below ? axis[0] : q;
+    const int above = qc > axis[n - 1]; /* q > axis[n - 1] (a q below the axis is clamped to axis[0]) */
+    qc = above ? axis[n - 1] : qc;
+    if (n > 1 && h <= n - 2 && axis[h] <= qc && (h == n - 2 || qc < axis[h + 1])) {
+        *i = h;
+        *t = (qc - axis[h]) / (axis[h + 1] - axis[h]);
+    } else {
+        locate(axis, n, q, i, t);
+    }
+    return below || above;
+}
+
 static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
     char r[TC_REPR_SIZE];
     return tc_fail(msg, TC_DISCARD, "friction table lookup %s = %s %s is outside the table's range [%g, %g] %s", name,
@@ -87,7 +105,7 @@ static void lookup_rows(const tc_table *table, const double *m0, const double *m
                         unsigned char *clamped) {
     const size_t nv = table->n_velocity, nb = table->n_beta, sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
     double rows[4][ROWS_MAX]; /* m at the cell's two velocities, then b */
-    size_t iv, ib;
+    size_t iv, ib = 0;
     double tv, tb;
     locate(table->velocity, nv, v, &iv, &tv);
     for (size_t j = 0; j < nb; ++j) {
@@ -100,10 +118,10 @@ static void lookup_rows(const tc_table *table, const double *m0, const double *m
         }
     }
     for (size_t k = 0; k < n; ++k) {
-        locate(table->beta, nb, beta[k], &ib, &tb);
+        const int outb = locate_near(table->beta, nb, beta[k], ib, &ib, &tb); /* neighbours: mostly the same cell */
         out[k] = bilinear(rows[0][ib], rows[0][ib + sb], rows[1][ib], rows[1][ib + sb], tv, tb);
         if (b0 != NULL) out_b[k] = bilinear(rows[2][ib], rows[2][ib + sb], rows[3][ib], rows[3][ib + sb], tv, tb);
-        if (clamped != NULL) clamped[k] = (unsigned char)(outpv || outside(table->beta, nb, beta[k]));
+        if (clamped != NULL) clamped[k] = (unsigned char)(outpv || outb);
     }
 }
 
@@ -124,7 +142,7 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
             if (outside(table->beta, nb, beta[k]))
                 return domain_error("beta", "1", beta[k], table->beta, nb, msg);
     }
-    size_t ip, iv = 0, ib;
+    size_t ip, iv = 0, ib = 0;
     double tp, tv = 0.0, tb;
     locate(table->pressure, nP, pressure, &ip, &tp);
     const size_t sv = nv > 1 ? 1 : 0, sb = nb > 1 ? 1 : 0;
@@ -133,7 +151,10 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
     const double *b0 = values_b != NULL ? values_b + ip * plane : NULL;
     const double *b1 = values_b != NULL && nP > 1 ? values_b + (ip + 1) * plane : NULL;
     int one_velocity = n > 1 && nP > 1 && nb <= ROWS_MAX;
-    for (size_t k = 1; k < n && one_velocity; ++k) one_velocity = fabs(velocity[k]) == fabs(velocity[0]);
+    if (one_velocity) { /* every |v| the first's (compared without an exit test per query) */
+        const double v0 = fabs(velocity[0]);
+        for (size_t k = 1; k < n; ++k) one_velocity &= fabs(velocity[k]) == v0;
+    }
     if (one_velocity) {
         const double v = fabs(velocity[0]);
         lookup_rows(table, m0, m1, b0, b1, tp, v, n, beta, outp || outside(table->velocity, nv, v), out, out_b,
@@ -148,12 +169,12 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
             locate(table->velocity, nv, v, &iv, &tv);
             outv = outside(table->velocity, nv, v);
         }
-        locate(table->beta, nb, b, &ib, &tb);
+        const int outb = locate_near(table->beta, nb, b, ib, &ib, &tb);
         const size_t c00 = iv * nb + ib, c01 = iv * nb + ib + sb, c10 = (iv + sv) * nb + ib,
                      c11 = (iv + sv) * nb + ib + sb;
         out[k] = interpolate(m0, m1, tp, c00, c01, c10, c11, tv, tb);
         if (b0 != NULL) out_b[k] = interpolate(b0, b1, tp, c00, c01, c10, c11, tv, tb);
-        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outside(table->beta, nb, b));
+        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outb);
     }
     return TC_OK;
 }
