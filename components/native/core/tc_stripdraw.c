@@ -98,7 +98,7 @@ struct tc_stripdraw {
     size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
     int limit_clamped;         /* a lookup was outside the table */
     /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
-    double slip_h, backup_slip_h;
+    double slip_h;
     /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
     double beta_hi;
     int refusal; /* enum tc_stripdraw_refusal of the last refused step */
@@ -114,10 +114,17 @@ struct tc_stripdraw {
     int cap_known;
     unsigned char *clamped; /* table lookups flagged as clamped */
     signed char *giwork;
-    unsigned char *backup; /* the state before the current step */
+    /* the state before the current step: U, V, A, fprev by exchanging the arrays (bar_in_backup: from the step's
+     * start to its first interval the bar's state is in bU, bV, bA, bfprev only, and U, V, A, fprev are free), the
+     * rest copied */
+    double *bU, *bV, *bA, *bfprev, *bUp, *bbeta, *bslip;
+    signed char *bcontact;
+    int bar_in_backup;
+    double b_reaction, b_normal_force, b_grip_velocity, b_beta_removed, b_beta_produced, b_beta_hi, b_slip_h;
+    long long b_clamp_count;
     size_t state_size;
     double *pool;          /* every double array above, in one allocation */
-    unsigned char *bytes;  /* contact, clamped, giwork and backup, in one allocation */
+    unsigned char *bytes;  /* contact, clamped, giwork and bcontact, in one allocation */
 };
 
 /* ---------------------------------------------------------------------------------------------------
@@ -388,13 +395,14 @@ static int refuse(tc_stripdraw *m, int kind) {
     return TC_DISCARD;
 }
 
-/* one implicit step of h from the overlaps ov (nonzero within [first, last]; first > last: not known), halved when
- * its Newton iteration does not converge */
-static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t first, size_t last, double vg, int depth,
-                         tc_msg msg) {
+/* one implicit step of h from the bar's state *from (into U, V, A, fprev) and the overlaps ov (nonzero within
+ * [first, last]; first > last: not known), halved when its Newton iteration does not converge */
+static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const double *ov, size_t first, size_t last,
+                         double vg, int depth, tc_msg msg) {
     const size_t n = m->n;
     double fric, reaction;
-    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke, m->ks, m->wT,
+    int it = tc_sd_galpha(n, h, from, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke,
+                          m->ks, m->wT,
                           m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
                           NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
     if (it >= 0) {
@@ -410,11 +418,12 @@ static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t fir
                        "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
                        "the step halved %d times to %.3g s",
                        m->time, depth, h);
-    int rc = implicit_step(m, 0.5 * h, ov, first, last, vg, depth + 1, msg);
+    int rc = implicit_step(m, 0.5 * h, from, ov, first, last, vg, depth + 1, msg);
     if (rc != TC_OK) return rc;
     double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
     tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
-    return implicit_step(m, 0.5 * h, ov_mid, 1, 0, vg, depth + 1, msg);
+    const tc_sd_bar mid = {m->U, m->V, m->A, m->fprev};
+    return implicit_step(m, 0.5 * h, &mid, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
 /* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
@@ -542,8 +551,19 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     }
     for (size_t i = m->limit_lo; i < m->limit_hi; ++i)
         if (m->clamped[i - m->limit_lo] && m->w[i] > 0) m->clamp_count += 1;
-    memcpy(m->U0, m->U, n * sizeof *m->U);
+    /* the bar's state at the interval's start: in the backup's arrays for a step's first interval, else in U, V, A,
+     * fprev (U copied to U0 for the increments) */
+    const tc_sd_bar from = m->bar_in_backup ? (tc_sd_bar){m->bU, m->bV, m->bA, m->bfprev}
+                                            : (tc_sd_bar){m->U, m->V, m->A, m->fprev};
+    const double *U0 = m->bar_in_backup ? m->bU : m->U0;
+    if (!m->bar_in_backup) memcpy(m->U0, m->U, n * sizeof *m->U);
     if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        if (m->bar_in_backup) { /* the central difference works in place */
+            memcpy(m->U, m->bU, n * sizeof *m->U);
+            memcpy(m->V, m->bV, n * sizeof *m->V);
+            memcpy(m->A, m->bA, n * sizeof *m->A);
+            memcpy(m->fprev, m->bfprev, n * sizeof *m->fprev);
+        }
         double q = ceil(h / m->dt_explicit - 1e-9), fric;
         long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
         tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
@@ -551,11 +571,12 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     } else {
         memset(m->ov, 0, n * sizeof *m->ov); /* the weights are 0 outside [w_first, w_last] */
         for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le;
-        int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
+        int rc = implicit_step(m, h, &from, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
+    m->bar_in_backup = 0;
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    const int du_finite = difference_finite(n, m->U, m->U0, m->dU, &m->u_finite);
+    const int du_finite = difference_finite(n, m->U, U0, m->dU, &m->u_finite);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -742,18 +763,56 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     state_limits(m);
 }
 
-static void backup_state(tc_stripdraw *m) {
-    write_image(m, m->backup, m->slip_h > 0 ? m->dU : m->slip_rate, 0.0);
-    m->backup_slip_h = m->slip_h;
+/* exchange the bar's arrays U, V, A, fprev with the backup's */
+static void swap_bar(tc_stripdraw *m) {
+    double **cur[4] = {&m->U, &m->V, &m->A, &m->fprev}, **bak[4] = {&m->bU, &m->bV, &m->bA, &m->bfprev};
+    for (int k = 0; k < 4; ++k) {
+        double *t = *cur[k];
+        *cur[k] = *bak[k];
+        *bak[k] = t;
+    }
+    m->bar_in_backup = !m->bar_in_backup;
 }
 
+/* the state before a step: the bar's arrays exchanged with the backup's (the step's first interval reads them there
+ * and writes U, V, A, fprev), the rest copied */
+static void backup_state(tc_stripdraw *m) {
+    const size_t nb = m->n * sizeof(double);
+    swap_bar(m);
+    memcpy(m->bUp, m->Up, nb);
+    memcpy(m->bbeta, m->beta, nb);
+    memcpy(m->bslip, m->slip_h > 0 ? m->dU : m->slip_rate, nb);
+    memcpy(m->bcontact, m->contact, m->n);
+    m->b_reaction = m->reaction;
+    m->b_normal_force = m->normal_force;
+    m->b_grip_velocity = m->grip_velocity;
+    m->b_beta_removed = m->beta_removed;
+    m->b_beta_produced = m->beta_produced;
+    m->b_beta_hi = m->beta_hi;
+    m->b_slip_h = m->slip_h;
+    m->b_clamp_count = m->clamp_count;
+}
+
+/* back to the state of backup_state (time and n_steps change only with a step that is taken), with the weights and
+ * limits derived from it */
 static void restore_state(tc_stripdraw *m) {
-    read_state(m, m->backup);
-    if (m->backup_slip_h > 0) { /* the image holds dU */
-        memcpy(m->dU, m->slip_rate, m->n * sizeof *m->dU);
-        m->slip_h = m->backup_slip_h;
-        state_limits(m); /* with the slip rates as they were */
-    }
+    const size_t nb = m->n * sizeof(double);
+    swap_bar(m); /* the state of the step's start into U, V, A, fprev, whether an interval was taken or not */
+    m->bar_in_backup = 0;
+    memcpy(m->Up, m->bUp, nb);
+    memcpy(m->beta, m->bbeta, nb);
+    memcpy(m->b_slip_h > 0 ? m->dU : m->slip_rate, m->bslip, nb);
+    memcpy(m->contact, m->bcontact, m->n);
+    m->reaction = m->b_reaction;
+    m->normal_force = m->b_normal_force;
+    m->grip_velocity = m->b_grip_velocity;
+    m->beta_removed = m->b_beta_removed;
+    m->beta_produced = m->b_beta_produced;
+    m->beta_hi = m->b_beta_hi;
+    m->slip_h = m->b_slip_h;
+    m->clamp_count = m->b_clamp_count;
+    update_weights(m);
+    state_limits(m);
 }
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
@@ -839,15 +898,15 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     tc_stripdraw *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
     const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
-    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, advection 5, then the
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, backup 7, advection 5, then the
      * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level and the cached
      * elimination factors */
-    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 5 +
+    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 7 + 5 +
                             (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
                                       : 1);
     m->state_size = state_size(n);
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
-    m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
+    m->bytes = calloc(5 * n, 1); /* contact, clamped, generalized-alpha flags (2), bcontact */
     if (m->pool == NULL || m->bytes == NULL) {
         tc_stripdraw_free(m);
         return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model (%zu nodes)", n);
@@ -855,7 +914,8 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     double *q = m->pool;
     double **arrays[] = {&m->X,     &m->mass, &m->minv,   &m->U,   &m->V,     &m->A,   &m->Up,
                          &m->beta,  &m->slip_rate, &m->fprev, &m->w, &m->tmax,  &m->U0,  &m->w0,
-                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew};
+                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew,
+                         &m->bU,    &m->bV,        &m->bA,    &m->bfprev, &m->bUp, &m->bbeta, &m->bslip};
     for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
     q += n; /* spare */
     m->awork = q;
@@ -870,7 +930,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     m->contact = (signed char *)m->bytes;
     m->clamped = m->bytes + n;
     m->giwork = (signed char *)(m->bytes + 2 * n);
-    m->backup = m->bytes + 4 * n;
+    m->bcontact = (signed char *)(m->bytes + 4 * n);
 
     m->p = *p;
     m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
@@ -960,6 +1020,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
+    if (rc == TC_OK && m->bar_in_backup) swap_bar(m); /* no interval was taken: the bar is as it was */
     if (rc == TC_OK) {
         if (!(isfinite(m->reaction) && m->u_finite)) /* u_finite: of the last interval (a step has at least one) */
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
