@@ -91,6 +91,7 @@ struct tc_stripdraw {
     /* derived from U: contact weights, and the first and last node where they are not 0 (w_first > w_last: none) */
     double *w;
     size_t w_first, w_last;
+    size_t w0_first, w0_last; /* the work array w0 is 0 outside [w0_first, w0_last] */
     /* derived from the state: the friction limits mu P of the nodes that can reach the pad (tmax), at the
      * state's pressure and velocity; the next interval reuses them when its pressure and speed are the same */
     double *tmax;
@@ -107,6 +108,7 @@ struct tc_stripdraw {
     double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
     double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
+    size_t ov_first, ov_last; /* the first level's overlaps are 0 outside [ov_first, ov_last] */
     double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
     double chain_h[CHAIN_CACHE];
     int chain_used, chain_next;
@@ -261,14 +263,19 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
 /* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
 static int positions_in_order(size_t n, const double *X, const double *U) {
     int sorted = 1;
-    for (size_t i = 0; i + 1 < n; ++i) sorted &= X[i] + U[i] <= X[i + 1] + U[i + 1];
+    double before = X[0] + U[0];
+    for (size_t i = 1; i < n; ++i) {
+        const double x = X[i] + U[i];
+        sorted &= before <= x;
+        before = x;
+    }
     return sorted;
 }
-
 /* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
  * the interior nodes whose segment reaches past a_lo (x + l_e/2 > a_lo) are those from some node on, those whose
  * segment starts before a_hi (x - l_e/2 < a_hi) those up to some node: only the nodes of both sets can meet the pad,
- * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). */
+ * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). On entry
+ * w is 0 outside [w_first, w_last]. */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
     const size_t n = m->n;
@@ -293,7 +300,7 @@ static void update_weights(tc_stripdraw *m) {
                 lo = mid + 1;
         }
         e = lo;
-        memset(w, 0, n * sizeof *w);
+        for (size_t i = m->w_first; i <= m->w_last; ++i) w[i] = 0.0; /* 0 elsewhere already */
         overlap_interior(b, e, X, U, h, m->a_lo, m->a_hi, w);
         overlap_ends(n, X, U, h, m->a_lo, m->a_hi, w);
     } else {
@@ -569,8 +576,10 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
         tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
                        m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
     } else {
-        memset(m->ov, 0, n * sizeof *m->ov); /* the weights are 0 outside [w_first, w_last] */
-        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le;
+        for (size_t i = m->ov_first; i <= m->ov_last; ++i) m->ov[i] = 0.0;
+        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le; /* the weights are 0 elsewhere */
+        m->ov_first = m->w_first;
+        m->ov_last = m->w_last;
         int rc = implicit_step(m, h, &from, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
@@ -584,6 +593,10 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     const size_t f0 = m->w_first, l0 = m->w_last;
     m->w = m->w0;
     m->w0 = w0;
+    m->w_first = m->w0_first; /* the range of w's nonzero values, which update_weights clears */
+    m->w_last = m->w0_last;
+    m->w0_first = f0;
+    m->w0_last = l0;
     update_weights(m);
     transport(m, pressure, speed, w0, f0, l0, du_finite);
     state_limits(m);
@@ -924,6 +937,8 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
         m->gwork = q;
         m->ov = q + TC_SD_GALPHA_WORK(n);
         m->chain = m->ov + (MAX_HALVINGS + 1) * n;
+        m->ov_first = 1; /* none (the pool is zeroed) */
+        m->ov_last = 0;
     } else {
         m->fwork = q;
     }
