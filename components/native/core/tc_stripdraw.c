@@ -72,6 +72,7 @@
 #define N_STATE_ARRAYS 7
 #define N_STATE_DOUBLES 7
 #define N_STATE_INTS 2
+#define N_STEP_SCALARS 7 /* the doubles a step changes (step_scalars) */
 
 struct tc_stripdraw {
     tc_stripdraw_params p;
@@ -122,7 +123,7 @@ struct tc_stripdraw {
     double *bU, *bV, *bA, *bfprev, *bUp, *bbeta, *bslip;
     signed char *bcontact;
     int bar_in_backup;
-    double b_reaction, b_normal_force, b_grip_velocity, b_beta_removed, b_beta_produced, b_beta_hi, b_slip_h;
+    double b_scalars[N_STEP_SCALARS]; /* of step_scalars */
     long long b_clamp_count;
     size_t state_size;
     double *pool;          /* every double array above, in one allocation */
@@ -787,6 +788,13 @@ static void swap_bar(tc_stripdraw *m) {
     m->bar_in_backup = !m->bar_in_backup;
 }
 
+/* the doubles of the model a step changes besides its arrays (time changes only with a step that is taken) */
+static void step_scalars(tc_stripdraw *m, double *s[N_STEP_SCALARS]) {
+    double *all[N_STEP_SCALARS] = {&m->reaction,      &m->normal_force, &m->grip_velocity, &m->beta_removed,
+                                   &m->beta_produced, &m->beta_hi,      &m->slip_h};
+    memcpy(s, all, sizeof all);
+}
+
 /* the state before a step: the bar's arrays exchanged with the backup's (the step's first interval reads them there
  * and writes U, V, A, fprev), the rest copied */
 static void backup_state(tc_stripdraw *m) {
@@ -796,13 +804,9 @@ static void backup_state(tc_stripdraw *m) {
     memcpy(m->bbeta, m->beta, nb);
     memcpy(m->bslip, m->slip_h > 0 ? m->dU : m->slip_rate, nb);
     memcpy(m->bcontact, m->contact, m->n);
-    m->b_reaction = m->reaction;
-    m->b_normal_force = m->normal_force;
-    m->b_grip_velocity = m->grip_velocity;
-    m->b_beta_removed = m->beta_removed;
-    m->b_beta_produced = m->beta_produced;
-    m->b_beta_hi = m->beta_hi;
-    m->b_slip_h = m->slip_h;
+    double *s[N_STEP_SCALARS];
+    step_scalars(m, s);
+    for (int k = 0; k < N_STEP_SCALARS; ++k) m->b_scalars[k] = *s[k];
     m->b_clamp_count = m->clamp_count;
 }
 
@@ -814,16 +818,12 @@ static void restore_state(tc_stripdraw *m) {
     m->bar_in_backup = 0;
     memcpy(m->Up, m->bUp, nb);
     memcpy(m->beta, m->bbeta, nb);
-    memcpy(m->b_slip_h > 0 ? m->dU : m->slip_rate, m->bslip, nb);
     memcpy(m->contact, m->bcontact, m->n);
-    m->reaction = m->b_reaction;
-    m->normal_force = m->b_normal_force;
-    m->grip_velocity = m->b_grip_velocity;
-    m->beta_removed = m->b_beta_removed;
-    m->beta_produced = m->b_beta_produced;
-    m->beta_hi = m->b_beta_hi;
-    m->slip_h = m->b_slip_h;
+    double *s[N_STEP_SCALARS];
+    step_scalars(m, s);
+    for (int k = 0; k < N_STEP_SCALARS; ++k) *s[k] = m->b_scalars[k];
     m->clamp_count = m->b_clamp_count;
+    memcpy(m->slip_h > 0 ? m->dU : m->slip_rate, m->bslip, nb); /* the slip rates as backup_state found them */
     update_weights(m);
     state_limits(m);
 }
