@@ -141,6 +141,31 @@ def test_state_restore_replays_bit_identically(integrator):
     assert np.array_equal(model.get_state(), fields_first)
 
 
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+@pytest.mark.parametrize("velocity", ["grip", "slip_rate"])
+def test_a_step_refused_after_some_intervals_leaves_the_state_as_it_was(integrator, velocity):
+    """A normal force ramped from 10 to 25 MPa over a step of 20 coupling intervals leaves a table that ends at
+    20 MPa (table_policy = error) two thirds into the step: the intervals before that were taken, the refusal puts
+    back the state of the step's start (bit for bit), and the next step equals that of the state set by set_state."""
+    from tribocosim.errors import TableDomainError
+    from tribocosim.components.stripdraw.friction import closed_form_table
+
+    p = StripDrawParameters(friction_model="table", table_policy="error", draw_length=0.01, n_elements=60,
+                            internal_step=1e-4, friction_velocity=velocity, integrator=integrator)
+    table = closed_form_table(p, pressure=np.linspace(1e6, 20e6, 5), velocity=np.linspace(0.0, 1.0, 5),
+                              beta=np.linspace(0.0, 1.0, 5))
+    model, twin = (StripDrawModel(p, make_friction_law(p, table)) for _ in range(2))
+    for k in range(12):
+        inputs = {"normal_force": F_N, "grip_velocity": _ramp((k + 0.5) * 1e-3)}
+        before = model.get_state()
+        with pytest.raises(TableDomainError, match="pressure"):
+            model.step(2e-3, inputs, derivatives={"normal_force": (1.5 * F_N / 2e-3, 0.0)})
+        assert np.array_equal(model.get_state(), before), f"step {k}: the refused step changed the state"
+        twin.set_state(before)
+        assert model.step(1e-3, inputs) == twin.step(1e-3, inputs)
+        assert np.array_equal(model.get_state(), twin.get_state())
+
+
 @pytest.mark.parametrize(
     "inputs, name",
     [

@@ -251,14 +251,18 @@ static void window_inputs(size_t b, size_t e, double shift, double dt, double cA
 }
 
 /* the Newmark update of the free nodes [0, N) from their increments d: a = (x + d) / (b dt^2),
- * v += dt ((1 - gamma) a_n + gamma a), u += dt V0 + d (in vector lanes) */
+ * v = v_n + dt ((1 - gamma) a_n + gamma a), u = u_n + dt V0 + d, from (U0, V0, A0) into (U, V, A), which may be the
+ * same arrays (each node is read before it is written) */
 static void newmark_update(size_t N, double dt, double bdt2, double gamma, double shift, const double *restrict x,
-                           const double *restrict d, double *restrict U, double *restrict V, double *restrict A) {
+                           const double *restrict d, const double *U0, const double *V0, const double *A0, double *U,
+                           double *V, double *A) {
     for (size_t i = 0; i < N; ++i) {
         const double anew = (x[i] + d[i]) / bdt2;
-        V[i] = V[i] + dt * ((1.0 - gamma) * A[i] + gamma * anew);
+        const double vnew = V0[i] + dt * ((1.0 - gamma) * A0[i] + gamma * anew);
+        const double unew = U0[i] + (shift + d[i]);
+        V[i] = vnew;
         A[i] = anew;
-        U[i] = U[i] + (shift + d[i]);
+        U[i] = unew;
     }
 }
 
@@ -272,8 +276,8 @@ static void element_forces(size_t N, double ke, const double *restrict d, double
     fprev[N] = ke * dU[N - 1];
 }
 
-int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
+int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
+                 signed char *contact, double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
                  double rtol, const double *chain, double *fric, double *reaction, double *work,
                  signed char *iwork) {
@@ -285,6 +289,7 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     double *rho = work + 5 * n, *Upn = work + 6 * n, *T = work + 7 * n, *f = work + 8 * n, *r = work + 9 * n;
     double *dtr = work + 10 * n, *step = work + 11 * n, *tw = work + 12 * n; /* tw: 2 n for the Newton step */
     signed char *state = iwork, *used = iwork + n;
+    const double *U0 = from->U, *V0 = from->V, *A0 = from->A, *f0 = from->fprev;
 
     /* a step whose square underflows cannot be taken */
     if (beta * dt * dt == 0.0) return -2;
@@ -293,25 +298,25 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
     const double cm = (1.0 - am) / (beta * dt * dt);
     const double cA = dt * dt * (0.5 - beta);
     const double shift = dt * vg;
-    for (size_t i = 0; i < N; ++i) dU[i] = U[i + 1] - U[i];
-    window_inputs(lo, hi + 1, shift, dt, cA, af, V, A, fprev, amm, Up, x, lin, Upn, d);
+    for (size_t i = 0; i < N; ++i) dU[i] = U0[i + 1] - U0[i];
+    window_inputs(lo, hi + 1, shift, dt, cA, af, V0, A0, f0, amm, Up, x, lin, Upn, d);
     for (size_t i = lo; i <= hi; ++i) {
         if (ov[i] > 0.0) {
-            if (contact[i] == 0) Upn[i] = U[i]; /* nodes entering the pad start stress-free */
-            z[i] = (U[i] - Upn[i]) + shift;
+            if (contact[i] == 0) Upn[i] = U0[i]; /* nodes entering the pad start stress-free */
+            z[i] = (U0[i] - Upn[i]) + shift;
         }
     }
     Upn[N] = Up[N];
-    if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U[N];
+    if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U0[N];
     /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k): first every node's x and residual
      * at d = 0 (into rho), then the two recurrences side by side (they are independent) */
     const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
     if (nt > 0) {
-        x[0] = predictor_gap(shift, dt, cA, V[0], A[0]);
-        rho[0] = chain_residual(cmm[0], x[0], amm[0], A[0], af, fprev[0], 1.0 - af, 0.0, ke * dU[0]);
-        chain_residuals(1, nt, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
+        x[0] = predictor_gap(shift, dt, cA, V0[0], A0[0]);
+        rho[0] = chain_residual(cmm[0], x[0], amm[0], A0[0], af, f0[0], 1.0 - af, 0.0, ke * dU[0]);
+        chain_residuals(1, nt, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
     }
-    chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V, A, fprev, dU, cmm, amm, x, rho);
+    chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
     double rt = nt > 0 ? rho[0] : 0.0, rg = ng > 0 ? rho[N - 1] : 0.0; /* the recurrences' carries */
     size_t k = 1;
     for (size_t j = N - 2; k < both; ++k, --j) { /* side by side, without tests in the loop */
@@ -384,8 +389,8 @@ int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *U
         const size_t j = hi + 1 + kg;
         d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
     }
-    newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U, V, A);
-    U[N] = U[N] + shift;
+    newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U0, V0, A0, U, V, A);
+    U[N] = U0[N] + shift;
     V[N] = vg;
     A[N] = 0.0;
     /* forces at the new state: friction (the window's tractions, and the grip node's if it is under the pad) */

@@ -10,13 +10,19 @@
 #define TC_SD_CHAIN(n) (8 * (n))
 void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double c, double *chain);
 
-/* one generalized-alpha step (tc_galpha.c): returns the Newton iterations, -1 without convergence, or -2 when
- * beta dt^2 is 0; nothing is changed when it returns < 0. chain holds tc_sd_chain_factors of dt; the nodes with
- * ov > 0 lie in [first, last] (first > last: not known). */
+/* the bar's state a step starts from: displacements, velocities, accelerations and the nodal forces (n values each) */
+typedef struct {
+    const double *U, *V, *A, *fprev;
+} tc_sd_bar;
+
+/* one generalized-alpha step (tc_galpha.c) from the state *from into U, V, A and fprev (the same arrays as from's, or
+ * others): returns the Newton iterations, -1 without convergence, or -2 when beta dt^2 is 0; nothing is changed when
+ * it returns < 0. Up and contact are read and updated in place. chain holds tc_sd_chain_factors of dt; the nodes
+ * with ov > 0 lie in [first, last] (first > last: not known). */
 #define TC_SD_GALPHA_WORK(n) (14 * (n))
 #define TC_SD_GALPHA_IWORK(n) (2 * (n))
-int tc_sd_galpha(size_t n, double dt, double *U, double *V, double *A, double *Up, signed char *contact,
-                 double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
+int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
+                 signed char *contact, double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
                  double rtol, const double *chain, double *fric, double *reaction, double *work, signed char *iwork);
 

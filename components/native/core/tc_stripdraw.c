@@ -72,6 +72,7 @@
 #define N_STATE_ARRAYS 7
 #define N_STATE_DOUBLES 7
 #define N_STATE_INTS 2
+#define N_STEP_SCALARS 7 /* the doubles a step changes (step_scalars) */
 
 struct tc_stripdraw {
     tc_stripdraw_params p;
@@ -91,6 +92,7 @@ struct tc_stripdraw {
     /* derived from U: contact weights, and the first and last node where they are not 0 (w_first > w_last: none) */
     double *w;
     size_t w_first, w_last;
+    size_t w0_first, w0_last; /* the work array w0 is 0 outside [w0_first, w0_last] */
     /* derived from the state: the friction limits mu P of the nodes that can reach the pad (tmax), at the
      * state's pressure and velocity; the next interval reuses them when its pressure and speed are the same */
     double *tmax;
@@ -98,7 +100,7 @@ struct tc_stripdraw {
     size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
     int limit_clamped;         /* a lookup was outside the table */
     /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
-    double slip_h, backup_slip_h;
+    double slip_h;
     /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
     double beta_hi;
     int refusal; /* enum tc_stripdraw_refusal of the last refused step */
@@ -107,6 +109,7 @@ struct tc_stripdraw {
     double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
     double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
+    size_t ov_first, ov_last; /* the first level's overlaps are 0 outside [ov_first, ov_last] */
     double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
     double chain_h[CHAIN_CACHE];
     int chain_used, chain_next;
@@ -114,10 +117,17 @@ struct tc_stripdraw {
     int cap_known;
     unsigned char *clamped; /* table lookups flagged as clamped */
     signed char *giwork;
-    unsigned char *backup; /* the state before the current step */
+    /* the state before the current step: U, V, A, fprev by exchanging the arrays (bar_in_backup: from the step's
+     * start to its first interval the bar's state is in bU, bV, bA, bfprev only, and U, V, A, fprev are free), the
+     * rest copied */
+    double *bU, *bV, *bA, *bfprev, *bUp, *bbeta, *bslip;
+    signed char *bcontact;
+    int bar_in_backup;
+    double b_scalars[N_STEP_SCALARS]; /* of step_scalars */
+    long long b_clamp_count;
     size_t state_size;
     double *pool;          /* every double array above, in one allocation */
-    unsigned char *bytes;  /* contact, clamped, giwork and backup, in one allocation */
+    unsigned char *bytes;  /* contact, clamped, giwork and bcontact, in one allocation */
 };
 
 /* ---------------------------------------------------------------------------------------------------
@@ -254,14 +264,19 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
 /* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
 static int positions_in_order(size_t n, const double *X, const double *U) {
     int sorted = 1;
-    for (size_t i = 0; i + 1 < n; ++i) sorted &= X[i] + U[i] <= X[i + 1] + U[i + 1];
+    double before = X[0] + U[0];
+    for (size_t i = 1; i < n; ++i) {
+        const double x = X[i] + U[i];
+        sorted &= before <= x;
+        before = x;
+    }
     return sorted;
 }
-
 /* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
  * the interior nodes whose segment reaches past a_lo (x + l_e/2 > a_lo) are those from some node on, those whose
  * segment starts before a_hi (x - l_e/2 < a_hi) those up to some node: only the nodes of both sets can meet the pad,
- * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). */
+ * and bisection finds them; the others' overlaps are 0 (as tc_sd_overlap computes them: the same expressions). On entry
+ * w is 0 outside [w_first, w_last]. */
 static void update_weights(tc_stripdraw *m) {
     double *w = m->w;
     const size_t n = m->n;
@@ -286,7 +301,7 @@ static void update_weights(tc_stripdraw *m) {
                 lo = mid + 1;
         }
         e = lo;
-        memset(w, 0, n * sizeof *w);
+        for (size_t i = m->w_first; i <= m->w_last; ++i) w[i] = 0.0; /* 0 elsewhere already */
         overlap_interior(b, e, X, U, h, m->a_lo, m->a_hi, w);
         overlap_ends(n, X, U, h, m->a_lo, m->a_hi, w);
     } else {
@@ -388,13 +403,14 @@ static int refuse(tc_stripdraw *m, int kind) {
     return TC_DISCARD;
 }
 
-/* one implicit step of h from the overlaps ov (nonzero within [first, last]; first > last: not known), halved when
- * its Newton iteration does not converge */
-static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t first, size_t last, double vg, int depth,
-                         tc_msg msg) {
+/* one implicit step of h from the bar's state *from (into U, V, A, fprev) and the overlaps ov (nonzero within
+ * [first, last]; first > last: not known), halved when its Newton iteration does not converge */
+static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const double *ov, size_t first, size_t last,
+                         double vg, int depth, tc_msg msg) {
     const size_t n = m->n;
     double fric, reaction;
-    int it = tc_sd_galpha(n, h, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke, m->ks, m->wT,
+    int it = tc_sd_galpha(n, h, from, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke,
+                          m->ks, m->wT,
                           m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
                           NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
     if (it >= 0) {
@@ -410,11 +426,12 @@ static int implicit_step(tc_stripdraw *m, double h, const double *ov, size_t fir
                        "implicit bar step did not converge (stick/slip set kept changing) at t = %.9g s even with "
                        "the step halved %d times to %.3g s",
                        m->time, depth, h);
-    int rc = implicit_step(m, 0.5 * h, ov, first, last, vg, depth + 1, msg);
+    int rc = implicit_step(m, 0.5 * h, from, ov, first, last, vg, depth + 1, msg);
     if (rc != TC_OK) return rc;
     double *ov_mid = m->ov + (size_t)(depth + 1) * n; /* level depth+1: in use only below this call */
     tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
-    return implicit_step(m, 0.5 * h, ov_mid, 1, 0, vg, depth + 1, msg);
+    const tc_sd_bar mid = {m->U, m->V, m->A, m->fprev};
+    return implicit_step(m, 0.5 * h, &mid, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
 /* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
@@ -542,20 +559,34 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     }
     for (size_t i = m->limit_lo; i < m->limit_hi; ++i)
         if (m->clamped[i - m->limit_lo] && m->w[i] > 0) m->clamp_count += 1;
-    memcpy(m->U0, m->U, n * sizeof *m->U);
+    /* the bar's state at the interval's start: in the backup's arrays for a step's first interval, else in U, V, A,
+     * fprev (U copied to U0 for the increments) */
+    const tc_sd_bar from = m->bar_in_backup ? (tc_sd_bar){m->bU, m->bV, m->bA, m->bfprev}
+                                            : (tc_sd_bar){m->U, m->V, m->A, m->fprev};
+    const double *U0 = m->bar_in_backup ? m->bU : m->U0;
+    if (!m->bar_in_backup) memcpy(m->U0, m->U, n * sizeof *m->U);
     if (p->integrator == TC_STRIPDRAW_INTEGRATOR_EXPLICIT) {
+        if (m->bar_in_backup) { /* the central difference works in place */
+            memcpy(m->U, m->bU, n * sizeof *m->U);
+            memcpy(m->V, m->bV, n * sizeof *m->V);
+            memcpy(m->A, m->bA, n * sizeof *m->A);
+            memcpy(m->fprev, m->bfprev, n * sizeof *m->fprev);
+        }
         double q = ceil(h / m->dt_explicit - 1e-9), fric;
         long long n_sub = q > 1.0 ? (long long)q : 1; /* bounded in advance() */
         tc_sd_explicit(n, n_sub, h / (double)n_sub, m->U, m->V, m->A, m->Up, m->contact, m->X, m->minv, m->ke, m->ks,
                        m->wT, m->half_le, m->a_lo, m->a_hi, m->tmax, vg, &fric, &m->reaction, m->fwork);
     } else {
-        memset(m->ov, 0, n * sizeof *m->ov); /* the weights are 0 outside [w_first, w_last] */
-        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le;
-        int rc = implicit_step(m, h, m->ov, m->w_first, m->w_last, vg, 0, msg);
+        for (size_t i = m->ov_first; i <= m->ov_last; ++i) m->ov[i] = 0.0;
+        for (size_t i = m->w_first; i <= m->w_last; ++i) m->ov[i] = m->w[i] * m->le; /* the weights are 0 elsewhere */
+        m->ov_first = m->w_first;
+        m->ov_last = m->w_last;
+        int rc = implicit_step(m, h, &from, m->ov, m->w_first, m->w_last, vg, 0, msg);
         if (rc != TC_OK) return rc;
     }
+    m->bar_in_backup = 0;
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    const int du_finite = difference_finite(n, m->U, m->U0, m->dU, &m->u_finite);
+    const int du_finite = difference_finite(n, m->U, U0, m->dU, &m->u_finite);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -563,6 +594,10 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     const size_t f0 = m->w_first, l0 = m->w_last;
     m->w = m->w0;
     m->w0 = w0;
+    m->w_first = m->w0_first; /* the range of w's nonzero values, which update_weights clears */
+    m->w_last = m->w0_last;
+    m->w0_first = f0;
+    m->w0_last = l0;
     update_weights(m);
     transport(m, pressure, speed, w0, f0, l0, du_finite);
     state_limits(m);
@@ -742,18 +777,55 @@ static void read_state(tc_stripdraw *m, const unsigned char *b) {
     state_limits(m);
 }
 
-static void backup_state(tc_stripdraw *m) {
-    write_image(m, m->backup, m->slip_h > 0 ? m->dU : m->slip_rate, 0.0);
-    m->backup_slip_h = m->slip_h;
+/* exchange the bar's arrays U, V, A, fprev with the backup's */
+static void swap_bar(tc_stripdraw *m) {
+    double **cur[4] = {&m->U, &m->V, &m->A, &m->fprev}, **bak[4] = {&m->bU, &m->bV, &m->bA, &m->bfprev};
+    for (int k = 0; k < 4; ++k) {
+        double *t = *cur[k];
+        *cur[k] = *bak[k];
+        *bak[k] = t;
+    }
+    m->bar_in_backup = !m->bar_in_backup;
 }
 
+/* the doubles of the model a step changes besides its arrays (time changes only with a step that is taken) */
+static void step_scalars(tc_stripdraw *m, double *s[N_STEP_SCALARS]) {
+    double *all[N_STEP_SCALARS] = {&m->reaction,      &m->normal_force, &m->grip_velocity, &m->beta_removed,
+                                   &m->beta_produced, &m->beta_hi,      &m->slip_h};
+    memcpy(s, all, sizeof all);
+}
+
+/* the state before a step: the bar's arrays exchanged with the backup's (the step's first interval reads them there
+ * and writes U, V, A, fprev), the rest copied */
+static void backup_state(tc_stripdraw *m) {
+    const size_t nb = m->n * sizeof(double);
+    swap_bar(m);
+    memcpy(m->bUp, m->Up, nb);
+    memcpy(m->bbeta, m->beta, nb);
+    memcpy(m->bslip, m->slip_h > 0 ? m->dU : m->slip_rate, nb);
+    memcpy(m->bcontact, m->contact, m->n);
+    double *s[N_STEP_SCALARS];
+    step_scalars(m, s);
+    for (int k = 0; k < N_STEP_SCALARS; ++k) m->b_scalars[k] = *s[k];
+    m->b_clamp_count = m->clamp_count;
+}
+
+/* back to the state of backup_state (time and n_steps change only with a step that is taken), with the weights and
+ * limits derived from it */
 static void restore_state(tc_stripdraw *m) {
-    read_state(m, m->backup);
-    if (m->backup_slip_h > 0) { /* the image holds dU */
-        memcpy(m->dU, m->slip_rate, m->n * sizeof *m->dU);
-        m->slip_h = m->backup_slip_h;
-        state_limits(m); /* with the slip rates as they were */
-    }
+    const size_t nb = m->n * sizeof(double);
+    swap_bar(m); /* the state of the step's start into U, V, A, fprev, whether an interval was taken or not */
+    m->bar_in_backup = 0;
+    memcpy(m->Up, m->bUp, nb);
+    memcpy(m->beta, m->bbeta, nb);
+    memcpy(m->contact, m->bcontact, m->n);
+    double *s[N_STEP_SCALARS];
+    step_scalars(m, s);
+    for (int k = 0; k < N_STEP_SCALARS; ++k) *s[k] = m->b_scalars[k];
+    m->clamp_count = m->b_clamp_count;
+    memcpy(m->slip_h > 0 ? m->dU : m->slip_rate, m->bslip, nb); /* the slip rates as backup_state found them */
+    update_weights(m);
+    state_limits(m);
 }
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
@@ -839,15 +911,15 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     tc_stripdraw *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model");
     const int implicit = p->integrator == TC_STRIPDRAW_INTEGRATOR_IMPLICIT;
-    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, advection 5, then the
+    /* one pool of doubles, in arrays of n: mesh 3, state 7, weights 1, limits 1, work 10, backup 7, advection 5, then the
      * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level and the cached
      * elimination factors */
-    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 5 +
+    const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 7 + 5 +
                             (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
                                       : 1);
     m->state_size = state_size(n);
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
-    m->bytes = calloc(4 * n + m->state_size, 1); /* contact, clamped, generalized-alpha flags (2), backup */
+    m->bytes = calloc(5 * n, 1); /* contact, clamped, generalized-alpha flags (2), bcontact */
     if (m->pool == NULL || m->bytes == NULL) {
         tc_stripdraw_free(m);
         return tc_fail(msg, TC_NOMEM, "out of memory for the strip-draw model (%zu nodes)", n);
@@ -855,7 +927,8 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
     double *q = m->pool;
     double **arrays[] = {&m->X,     &m->mass, &m->minv,   &m->U,   &m->V,     &m->A,   &m->Up,
                          &m->beta,  &m->slip_rate, &m->fprev, &m->w, &m->tmax,  &m->U0,  &m->w0,
-                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew};
+                         &m->dU,    &m->weight,    &m->vel,   &m->mu,  &m->ac,  &m->bsrc, &m->bnew,
+                         &m->bU,    &m->bV,        &m->bA,    &m->bfprev, &m->bUp, &m->bbeta, &m->bslip};
     for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k, q += n) *arrays[k] = q;
     q += n; /* spare */
     m->awork = q;
@@ -864,13 +937,15 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
         m->gwork = q;
         m->ov = q + TC_SD_GALPHA_WORK(n);
         m->chain = m->ov + (MAX_HALVINGS + 1) * n;
+        m->ov_first = 1; /* none (the pool is zeroed) */
+        m->ov_last = 0;
     } else {
         m->fwork = q;
     }
     m->contact = (signed char *)m->bytes;
     m->clamped = m->bytes + n;
     m->giwork = (signed char *)(m->bytes + 2 * n);
-    m->backup = m->bytes + 4 * n;
+    m->bcontact = (signed char *)(m->bytes + 4 * n);
 
     m->p = *p;
     m->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
@@ -960,6 +1035,7 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
+    if (rc == TC_OK && m->bar_in_backup) swap_bar(m); /* no interval was taken: the bar is as it was */
     if (rc == TC_OK) {
         if (!(isfinite(m->reaction) && m->u_finite)) /* u_finite: of the last interval (a step has at least one) */
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
