@@ -464,7 +464,9 @@ def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list
         if "error" in r:
             lines.append(f"| {r['quantity']} | {r['range']} | {r['error']} | | |")
         else:
-            lines.append(f"| {r['quantity']} | {r['range']} | {r['scale']:.3g} | {100 * r['drop3']:.1f} | "
+            s_cell = (f"{r['scale']:.3g}" if "scale" in r
+                      else f"s = {r['scale_value']:.3g} scales another A_p: not in the total")
+            lines.append(f"| {r['quantity']} | {r['range']} | {s_cell} | {100 * r['drop3']:.1f} | "
                          f"{100 * r['drop140']:.1f} |")
     tot = extra["budget_total"]
     lines += [f"| **total** (quadrature, with the quote) | | **{tot['scale']:.3g}** | **{100 * tot['drop3']:.1f}** | "

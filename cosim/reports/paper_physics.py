@@ -81,6 +81,9 @@ class Variation:
     parameters: dict = dataclasses.field(default_factory=dict)
     table: str | None = None  # a table variant (:func:`table_variants`)
     pair: str | None = None  # the name of the other end of a two-sided range
+    #: False where the variation changes the A_p that s scales (another observable): its s is another quantity,
+    #: reported beside the budget and left out of the total of s
+    same_scale: bool = True
 
 
 VARIATIONS = (
@@ -95,7 +98,8 @@ VARIATIONS = (
     Variation("zeta_high", "zeta (the paper's fit to another model: 0.2)", "0.3", {"zeta": 0.3}, pair="zeta_low"),
     Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
     Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
-    Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"}),
+    Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"},
+              same_scale=False),
     Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
               {"friction_velocity": "slip_rate"}),
 )
@@ -168,8 +172,9 @@ def calibrated_predictions(runs, params: dict, table, calibrate, log=None) -> di
 
 
 def budget(nominal: dict, varied: dict) -> list[dict]:
-    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop, of the 140 mm drop and of the
-    speed effect; two-sided ranges as half the difference of their ends, one-sided ones whole."""
+    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop and of the 140 mm drop; two-sided
+    ranges as half the difference of their ends, one-sided ones whole. A variation that changes the A_p s scales
+    (``same_scale`` False) gives its s itself (``scale_value``) instead of a change of s."""
     keys = {"scale": lambda r: r["scale"], "drop3": lambda r: r["drops"][2], "drop140": lambda r: r["drop_140"]}
     rows, seen = [], set()
     for v in VARIATIONS:
@@ -184,7 +189,9 @@ def budget(nominal: dict, varied: dict) -> list[dict]:
             rows.append(row)
             continue
         for key, get in keys.items():
-            if len(results) == 2:
+            if key == "scale" and not v.same_scale:
+                row["scale_value"] = get(results[0])
+            elif len(results) == 2:
                 row[key] = 0.5 * abs(get(results[1]) - get(results[0]))
             else:
                 row[key] = abs(get(results[0]) - get(nominal))

@@ -30,6 +30,16 @@ def test_budget_takes_half_a_two_sided_range_and_a_one_sided_change_whole():
     assert pp.budget_total(list(rows.values()), "scale", 0.1) == pytest.approx(math.sqrt(0.75**2 + 0.2**2 + 0.1**2))
 
 
+def test_budget_reports_the_s_of_another_observable_beside_the_total_and_its_predictions_in_it():
+    nominal = _result(1.0, 0.7, 0.6)
+    rows = pp.budget(nominal, {"h_low": _result(0.8, 0.75, 0.62), "rule": _result(500.0, 0.4, 0.3)})
+    rule = next(r for r in rows if r["quantity"] == "blocking rule")
+    assert "scale" not in rule and rule["scale_value"] == 500.0
+    assert (rule["drop3"], rule["drop140"]) == pytest.approx((0.3, 0.3))
+    assert pp.budget_total(rows, "scale") == pytest.approx(0.2)
+    assert pp.budget_total(rows, "drop3") == pytest.approx(math.hypot(0.05, 0.3))
+
+
 def _v3_table(alpha=400.0, clusters=0.01):
     p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1])
     ap = alpha * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 3))
