@@ -234,7 +234,7 @@ def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("key, value, message", [
-    ("fmus.drive.parameters.velocity_setpoint", -5.0, "velocity_setpoint = -5 m/s is below 0 m/s, the least "
+    ("fmus.drive.parameters.velocity_setpoint", -0.3, "velocity_setpoint = -0.3 m/s is below 0 m/s, the least "
      "strip.grip_velocity the model is built for (the grip pulls the strip"),
     ("fmus.drive.parameters.velocity_setpoint", -0.08, "velocity_setpoint = -0.08 m/s is below 0 m/s"),
 ])
