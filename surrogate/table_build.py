@@ -323,6 +323,20 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     return table, json_clean(fits)
 
 
+def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> FrictionTable:
+    """The table :func:`build_table` makes from the cases a version 3 table records (``metadata["cases"]``, or the
+    subset ``cases`` of them) with its recorded sweep and surface statistics: what the table was built from, without
+    the campaign folder."""
+    cases = metadata["cases"] if cases is None else cases
+    records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0),
+                "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
+                            "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}} for c in cases]
+    manifest = {"sweep": metadata["campaign"]["sweep"],
+                "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
+    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"])
+    return table
+
+
 def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:
     """Differences of two tables with the same axes, against the uncertainty recorded with both.
 

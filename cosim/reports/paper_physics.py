@@ -123,17 +123,10 @@ def table_variants(table, folder: Path) -> dict[str, str]:
         meta = table.metadata
         surfaces = {c["labels"]["surface"] for c in meta.get("cases", [])}
         if "sweep" in meta.get("campaign", {}) and len(surfaces) > 1:
-            from tribocosim.surrogate.table_build import build_table
+            from tribocosim.surrogate.table_build import rebuild_from_metadata
 
             for s in sorted(surfaces):
-                cases = [c for c in meta["cases"] if c["labels"]["surface"] == s]
-                records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0),
-                            "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
-                                        "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}}
-                           for c in cases]
-                manifest = {"sweep": meta["campaign"]["sweep"],
-                            "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
-                rebuilt, _ = build_table(records, manifest, surface_stats=meta["surfaces"])
+                rebuilt = rebuild_from_metadata(meta, [c for c in meta["cases"] if c["labels"]["surface"] == s])
                 out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
                 write_table(out[f"pair_{s}"], rebuilt)
     return out
@@ -288,7 +281,7 @@ def direct_slide_check(table, workers: int | None, quick: bool, log=None) -> lis
         log(f"direct slides at {len(points)} point(s), {len(SEEDS)} placements per surface pair ...")
     ex = make_executor(workers)
     try:
-        return [r.to_dict() for r in run_check(table, ex, points=points, seeds=SEEDS)]
+        return [r.to_dict() for r in run_check(table, ex, points=points)]
     finally:
         ex.close()
 

@@ -19,15 +19,7 @@ from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.surrogate.campaign import make_case, run_case
 from tribocosim.surrogate.sweep import load_preset, parse_sweep_dict
-from tribocosim.surrogate.table_build import build_table
-
-
-# Issue 25: the quick campaign for the version 3 table has not finished, and models/ still ships the version 2
-# table of the earlier campaign (beta <= 0.048, 2-50 m/s). Until the new table ships, every check below is expected
-# to fail on it, strictly: shipping the version 3 table turns the marker off, and a check that passes on the old
-# table fails the run. ``tribocosim surrogate verify`` in .ci/run reruns the shipped table's recorded cases either way.
-pytestmark = pytest.mark.xfail(read_table(DEFAULT_TABLE).version < 3, strict=True,
-                               reason="issue 25: the version 3 table is not shipped yet (its campaign is running)")
+from tribocosim.surrogate.table_build import rebuild_from_metadata
 
 
 @pytest.fixture(scope="module")
@@ -60,13 +52,7 @@ def test_the_domain_covers_the_strip_draw(shipped):
 
 
 def test_the_build_makes_exactly_the_shipped_arrays_from_the_recorded_cases(shipped):
-    meta = shipped.metadata
-    records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c["wall_s"],
-                "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
-                            "mean_particle_fraction_clusters": c["a_p_clusters"]}} for c in meta["cases"]]
-    manifest = {"sweep": meta["campaign"]["sweep"], "cases": [{"case_id": c["case_id"], "labels": c["labels"]}
-                                                               for c in meta["cases"]]}
-    rebuilt, _ = build_table(records, manifest, surface_stats=meta["surfaces"])
+    rebuilt = rebuild_from_metadata(shipped.metadata)
     for name in shipped.arrays():
         np.testing.assert_array_equal(rebuilt.array(name), shipped.array(name), err_msg=name)
 
