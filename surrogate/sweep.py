@@ -30,7 +30,6 @@ by every slide. Example (SI units everywhere)::
     [table]
     mu0 = 0.15                     # particle-free friction coefficient (calibration, Eq. 6)
     quasi_static_row = false       # a v = 0 row: the slowest grid velocity's values (the plateau)
-    zero_pressure_row = false      # a P = 0 row: no load, no contact (A_c = A_p = 0, exact)
 
     [adaptive]                     # optional: more placements where the ensemble is noisy
     target_relative_se = 0.10      # standard error of <A_p> / <A_p> at a node
@@ -66,7 +65,7 @@ SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_r
 _TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table", "adaptive")
 _GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
 _FLAKE_KEYS = ("count", "diameter", "min_pressure", "velocities", "seeds")
-_TABLE_KEYS = ("mu0", "quasi_static_row", "zero_pressure_row")
+_TABLE_KEYS = ("mu0", "quasi_static_row")
 _ADAPTIVE_KEYS = ("target_relative_se", "extra_seeds")
 #: members (placements x surface pairs) a debris level needs at every grid point
 MIN_MEMBERS = 2
@@ -83,15 +82,10 @@ class TableSettings:
     quasi_static_row : bool
         Add a v = 0 row holding the slowest grid velocity's values: the quasi-static limit, where A_p has
         reached its plateau (the sweep must show it: docs/physics/table_domain.md).
-    zero_pressure_row : bool
-        Add a P = 0 row below the grid's pressures: without load there is no contact, A_c = A_p = 0 exactly.
-        Between it and the lowest grid pressure P_1 both areas are interpolated linearly, so their ratio, and
-        mu, below P_1 is the ratio at P_1 (the model evaluates the areas at P_1 there).
     """
 
     mu0: float = 0.15
     quasi_static_row: bool = False
-    zero_pressure_row: bool = False
 
 
 @dataclass(frozen=True)
@@ -186,8 +180,7 @@ def parse_sweep_dict(data: dict) -> Sweep:
                      seeds=tuple(data["seeds"]), flakes=flakes, surfaces=tuple(dict(x) for x in data["surfaces"]),
                      slide=dict(data["slide"]), particle_free=bool(data.get("particle_free", True)),
                      table=TableSettings(float(tset.get("mu0", TableSettings.mu0)),
-                                         bool(tset.get("quasi_static_row", False)),
-                                         bool(tset.get("zero_pressure_row", False))),
+                                         bool(tset.get("quasi_static_row", False))),
                      adaptive=None if ad is None else AdaptiveSettings(float(ad["target_relative_se"]),
                                                                        tuple(ad["extra_seeds"])),
                      source=data.get("source", ""))
@@ -402,9 +395,6 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     qs_row = tbl.get("quasi_static_row", False)
     if not isinstance(qs_row, bool):
         chk.fail("table", "quasi_static_row", f"= {qs_row!r}; true or false is required")
-    zero_row = tbl.get("zero_pressure_row", False)
-    if not isinstance(zero_row, bool):
-        chk.fail("table", "zero_pressure_row", f"= {zero_row!r}; true or false is required")
 
     adaptive = None
     if "adaptive" in data:
@@ -440,7 +430,7 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         surfaces=tuple(surfaces),
         slide=slide,
         particle_free=particle_free,
-        table=TableSettings(float(mu0), qs_row, zero_row),
+        table=TableSettings(float(mu0), qs_row),
         adaptive=adaptive,
         source=source,
     )

@@ -6,9 +6,7 @@ alone, and mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by the particle-free mu
 beta = 0 is mu0 at every pressure. The strip-draw model computes mu from the areas, with A_c from the table
 (``contact_area = "mesoscale"``) or from Eq. 8 (``"eq8"``).
 
-Axes: the campaign's pressures, below them a P = 0 row when the sweep asks for it (``[table]
-zero_pressure_row``: no load, no contact, A_c = A_p = 0 exactly; mu there is its limit P -> 0+, the lowest
-grid pressure's, since both areas fall linearly to zero between the two rows); its velocities, below them a v = 0 row when the sweep asks for the quasi-static
+Axes: the campaign's pressures; its velocities, below them a v = 0 row when the sweep asks for the quasi-static
 row (``[table] quasi_static_row``: the values of the slowest velocity, the plateau where the damping per pixel
 of sliding is large; docs/physics/table_domain.md measures it); beta = 0 and every debris level of the sweep.
 No node lies above the largest simulated level.
@@ -38,7 +36,7 @@ from dataclasses import asdict
 import numpy as np
 
 from tribocosim.errors import TableError
-from tribocosim.components.stripdraw.table import UNITS, FrictionTable, mu_of_areas
+from tribocosim.components.stripdraw.table import UNITS, FrictionTable
 
 from .fit import BETA_FORMS, BetaFit, _key, ensemble, fit_alpha, fit_beta_forms, fit_contact
 from .slide_config import SlideConfig
@@ -195,7 +193,6 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     pressures = sorted(float(p) for p in sweep["pressures"])
     v_grid = sorted(float(v) for v in sweep["velocities"])
     qs_row = bool(tset.get("quasi_static_row", False))
-    zero_row = bool(tset.get("zero_pressure_row", False))
     vel_axis = ([0.0] if qs_row else []) + v_grid
     flakes = sweep["flakes"]
     levels = sorted({_key(f["beta"]) for f in flakes})
@@ -234,6 +231,8 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                 arr["ac_std"][i, j, k] = q.ac_std if q is not None else ac_se
                 arr["simulated"][i, j, k] = 1.0 if simulated else 0.0
                 arr["n"][i, j, k] = q.n if q is not None else 0
+                arr["mu"][i, j, k] = mu0 * max(0.0, 1.0 - arr["ap"][i, j, k] / arr["ac"][i, j, k]) \
+                    if arr["ac"][i, j, k] > 0 else mu0
                 if q is not None and b > 0:
                     x = b * p / e_star
                     nodes.append({"pressure": p, "velocity": v, "beta": b, "members": q.n,
@@ -272,14 +271,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                                        f"<A_c>/A0 vs P of the {contact.source}; mu uses mu0 and the areas"},
         "e_star": e_star, "p_crit": p_crit,
         "axes": {
-            "pressure": {"unit": UNITS["pressure"], "values": ([0.0] if zero_row else []) + pressures,
-                         "campaign": pressures, "zero_pressure_row": zero_row,
-                         "source": "campaign grid" + (
-                             "; P = 0: no load, no contact (A_c = A_p = 0 exactly, simulated = 1 as an exact "
-                             "node); below the first grid pressure the areas are interpolated linearly from it, "
-                             "so their ratio, and mu, is the first grid pressure's (its mu row here is that "
-                             f"limit). The particle-free A_c/A0 = s_c P through the origin has R^2 = "
-                             f"{contact.r2:.7f} over the grid" if zero_row else "")},
+            "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
             "velocity": {"unit": UNITS["velocity"], "campaign": v_grid, "quasi_static_row": qs_row,
                          "note": (f"v = 0: the quasi-static limit, the values of the {v_grid[0]:g} m/s row (the "
                                   "plateau of A_p where the damping per pixel of sliding is large; "
@@ -322,14 +314,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    p_axis = pressures
-    if zero_row:  # no load, no contact: both areas vanish (an exact node)
-        p_axis = [0.0] + pressures
-        for name, a in arr.items():
-            arr[name] = np.concatenate([np.ones_like(a[:1]) if name == "simulated" else np.zeros_like(a[:1]), a])
-        meta["ensemble"]["n_members"] = arr["n"].astype(int).tolist()
-    arr["mu"] = mu_of_areas(mu0, np.array(p_axis), arr["ap"], arr["ac"])
-    table = FrictionTable(np.array(p_axis), np.array(vel_axis), np.array(beta_axis), arr["mu"], json_clean(meta),
+    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), arr["mu"], json_clean(meta),
                           contact_area=arr["ac"], particle_area=arr["ap"], contact_area_std=arr["ac_std"],
                           particle_area_std=arr["ap_std"],
                           extras={"simulated": arr["simulated"], "contact_area_se": arr["ac_se"],

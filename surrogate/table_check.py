@@ -9,8 +9,6 @@ of the tabulated value (the fit's). The check passes when |A_p,direct - A_p,tabl
 
 :data:`POINTS`: one point at moderate debris (P = 3 MPa, beta = 0.15) and one at beta >= 0.3 (P = 15 MPa,
 beta = 0.4), both at the strip-draw test's 0.08 m/s, each between pressure nodes and between debris levels.
-A table with the exact P = 0 row adds :data:`LOW_PRESSURE_POINT` (:func:`check_points`): half its first grid
-pressure, beta = 0.15, where A_p is interpolated linearly between that row and the first grid pressure.
 """
 
 from __future__ import annotations
@@ -27,8 +25,6 @@ from .sweep import parse_sweep_dict
 
 #: (P [Pa], v [m/s], beta) of the standing check (module docstring)
 POINTS = ((3e6, 0.08, 0.15), (15e6, 0.08, 0.4))
-#: (fraction of the first grid pressure, v [m/s], beta) checked on a table with the P = 0 row
-LOW_PRESSURE_POINT = (0.5, 0.08, 0.15)
 #: placement seeds of the check's slides (none of them a table seed of the shipped preset)
 SEEDS = (101, 102, 103)
 
@@ -63,15 +59,6 @@ class CheckResult:
                 "difference_over_combined_se": (self.direct - self.table) / self.combined_se
                 if self.combined_se > 0 else math.inf,
                 "all_nodes_simulated": self.all_nodes_simulated, "passed": self.passed, "wall_s": self.wall_s}
-
-
-def check_points(table) -> tuple:
-    """:data:`POINTS`, and on a table whose pressure axis starts with the P = 0 row the point between that row
-    and the first grid pressure (:data:`LOW_PRESSURE_POINT`)."""
-    if table.pressure.size > 1 and table.pressure[0] == 0.0:
-        frac, v, beta = LOW_PRESSURE_POINT
-        return POINTS + ((frac * float(table.pressure[1]), v, beta),)
-    return POINTS
 
 
 def check_cases(table, points=POINTS, seeds=SEEDS) -> list:

@@ -81,18 +81,6 @@ def _as_axis(name: str, values) -> np.ndarray:
     return a
 
 
-def mu_of_areas(mu0: float, pressure: np.ndarray, particle_area: np.ndarray, contact_area: np.ndarray) -> np.ndarray:
-    """mu = mu0 max(0, 1 - A_p / A_c) at every node of a (P, v, beta) array (Eq. 7 with tau0 set by mu0, Eq. 6);
-    mu0 where A_c = 0 at P > 0, and on the no-load row (P = 0, A_c = A_p = 0) the limit P -> 0+: the first grid
-    pressure's value, since both areas fall linearly to zero between the two rows."""
-    ac, pressure = np.asarray(contact_area, float), np.asarray(pressure, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mu = np.where(ac > 0, mu0 * np.maximum(0.0, 1.0 - np.asarray(particle_area, float) / ac), mu0)
-    if pressure.size > 1 and pressure[0] == 0.0:
-        mu[0] = mu[1]
-    return mu
-
-
 @dataclass(frozen=True)
 class FrictionTable:
     """A friction table mu(P, v, beta) with its metadata.

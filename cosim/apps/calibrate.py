@@ -220,10 +220,11 @@ def _stderr(J: np.ndarray, sigma: np.ndarray, r: np.ndarray, weighted: bool, n: 
 def scaled_table(table, scale: float, contact_area: str, mu0: float, metadata: dict):
     """The table with A_p and its spread times ``scale`` and mu recomputed (mu0 (1 - A_p / A_c) with the
     table's A_c; the model recomputes mu with the chosen convention anyway), metadata added."""
-    from tribocosim.components.stripdraw.table import FrictionTable, mu_of_areas
+    from tribocosim.components.stripdraw.table import FrictionTable
 
     ap = table.particle_area * scale
-    mu = mu_of_areas(mu0, table.pressure, ap, table.contact_area)
+    mu = mu0 * np.maximum(0.0, 1.0 - np.where(table.contact_area > 0, ap / np.where(table.contact_area > 0,
+                                                                                       table.contact_area, 1.0), 0.0))
     meta = {**table.metadata, "strip_draw_calibration": metadata}
     meta.pop("content_hash", None)
     return FrictionTable(table.pressure, table.velocity, table.beta, mu, meta, contact_area=table.contact_area,

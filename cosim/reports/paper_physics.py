@@ -109,21 +109,22 @@ def table_variants(table, folder: Path) -> dict[str, str]:
     """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
     (``ensemble_low``/``ensemble_high``), and the table rebuilt from the recorded cases of each surface pair alone
     (``pair_0``, ``pair_1``; a version 3 table that records its campaign). Returns name -> path."""
-    from tribocosim.components.stripdraw.table import mu_of_areas, write_table
-    from tribocosim.surrogate.table_build import rebuild_from_metadata
+    from tribocosim.components.stripdraw.table import write_table
 
     out = {}
     if table.version >= 3:
         se = table.array("particle_area_se")
         for name, sign in (("ensemble_low", -1.0), ("ensemble_high", 1.0)):
             ap = np.maximum(table.particle_area + sign * se, 0.0)
-            mu = mu_of_areas(table.metadata["calibration"]["mu0"], table.pressure, ap, table.contact_area)
+            mu = table.metadata["calibration"]["mu0"] * np.maximum(0.0, 1.0 - ap / table.contact_area)
             variant = dataclasses.replace(table, particle_area=ap, mu=mu)
             out[name] = str(folder / f"{name}.npz")
             write_table(out[name], variant)
         meta = table.metadata
         surfaces = {c["labels"]["surface"] for c in meta.get("cases", [])}
         if "sweep" in meta.get("campaign", {}) and len(surfaces) > 1:
+            from tribocosim.surrogate.table_build import rebuild_from_metadata
+
             for s in sorted(surfaces):
                 rebuilt = rebuild_from_metadata(meta, [c for c in meta["cases"] if c["labels"]["surface"] == s])
                 out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
@@ -267,16 +268,15 @@ def speed_prediction(runs, params: dict, scale: float, scale_se: float) -> list[
 
 def direct_slide_check(table, workers: int | None, quick: bool, log=None) -> list[dict]:
     """The table against direct slides between its nodes (surrogate.table_check), three placements per surface pair:
-    every point in the full report (12 slides, 18 with the point below the first grid pressure of a table with the
-    P = 0 row), the moderate-debris point alone in the quick one (CI; 6 slides: a
+    both points in the full report (12 slides), the moderate-debris point alone in the quick one (CI; 6 slides: a
     slide of the point at beta = 0.4 carries three times the flakes and costs several times more). The quick check
     is the full one's first point, slide for slide (seeded), so the two cannot disagree on it."""
     from tribocosim.surrogate.executors import make_executor
-    from tribocosim.surrogate.table_check import POINTS, SEEDS, check_points, run_check
+    from tribocosim.surrogate.table_check import POINTS, SEEDS, run_check
 
     if table.version < 3 or "sweep" not in table.metadata.get("campaign", {}):
         return []
-    points = POINTS[:1] if quick else check_points(table)
+    points = POINTS[:1] if quick else POINTS
     if log:
         log(f"direct slides at {len(points)} point(s), {len(SEEDS)} placements per surface pair ...")
     ex = make_executor(workers)

@@ -124,22 +124,3 @@ def test_the_strip_caps_beta_where_the_particle_area_reaches_the_contact_area():
     assert out["beta_max"] == pytest.approx(cap, rel=1e-12), "saturated at the cap"
     assert model.beta_removed > 0
     assert out["mu_mean"] < 0.01, "where A_p = A_c the particles carry all the contact: mu -> 0"
-
-
-def test_below_the_first_pressure_a_zero_pressure_row_gives_the_exact_ratio_unclamped():
-    """A table with the exact P = 0 row (no load: A_c = A_p = 0) and its first pressure at 1 MPa. Eq. 8 and Eq.
-    23 are both proportional to P, so mu = mu0 (1 - A_p / A_c) does not depend on P: below 1 MPa the law must
-    give the closed form to rounding, unclamped, with the cap of 1 MPa; a table without the row clamps there."""
-    p = StripDrawParameters(friction_model="table", alpha_b=40.0)
-    ref = closed_form_law(p)
-    with_zero = make_friction_law(p, closed_form_table(p, pressure=[0.0, 1e6, 1e7]))
-    without = make_friction_law(p, closed_form_table(p, pressure=[1e6, 1e7]))
-    P = np.array([1e-3, 1e3, 2.5e5, 0.5e6, 0.999e6, 1e6, 3e6])
-    B = np.full(P.shape, 0.05)  # mu = 0.099, a third of the way from mu0 to the cap (beta 0.147)
-    mu, clamped = with_zero.mu(P, 0.08, B)
-    assert_allclose(mu, ref.mu(P, 0.08, B)[0], rtol=1e-12)
-    assert 0.09 < mu[0] < 0.11
-    assert not clamped.any()
-    assert with_zero.beta_cap(0.5e6, 0.08) == with_zero.beta_cap(1e6, 0.08)
-    assert without.mu(P, 0.08, B)[1].tolist() == [True] * 5 + [False] * 2
-    assert with_zero.mu(2e7, 0.08, 0.05)[1].all(), "above the last pressure the lookup is still clamped"

@@ -86,22 +86,6 @@ def test_ensemble_variants_move_a_p_by_one_standard_error(tmp_path):
     assert "pair_0" not in paths  # no campaign recorded
 
 
-def test_variants_of_a_table_with_the_no_load_row_keep_its_mu_limit(tmp_path):
-    """The shipped table starts with the exact P = 0 row (A_c = A_p = 0): every variant holds there the limit
-    P -> 0+ of mu, its first grid pressure's, instead of 0 / 0."""
-    from tribocosim.components.stripdraw.table import read_table
-    from tribocosim.paths import DEFAULT_TABLE
-
-    shipped = read_table(DEFAULT_TABLE)
-    assert shipped.pressure[0] == 0.0
-    paths = pp.table_variants(shipped, tmp_path)
-    assert {"ensemble_low", "ensemble_high", "pair_0", "pair_1"} <= set(paths)
-    for name, path in paths.items():
-        v = read_table(path)
-        np.testing.assert_array_equal(v.mu[0], v.mu[1], err_msg=name)
-        assert not v.contact_area[0].any() and not v.particle_area[0].any(), name
-
-
 def test_options_calibrate_on_the_one_pass_drop_and_a_sink_leaves_less_debris(tmp_path):
     """On the real model with a table of known areas: each option reaches the 35 % one-pass drop with its own s;
     in the paper's model the debris on the strip grows pass by pass, and a debris sink leaves less after every

@@ -186,7 +186,7 @@ def test_each_later_pass_has_lower_mu_bar(tmp_path):
 
 BAD = {
     "fmus.drive.parameters.drive_stiffness": (-5e7, "outside the declared range"),
-    "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's simulated pressures"),
+    "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's pressure axis"),
     "fmus.strip.parameters.friction_model": ("tabel", "is not allowed; choose one of table"),
     "fmus.press.parameters.setpoint_table": ("0 0; 0.1", "is malformed"),
     "fmus.strip.parameters.beta_initial": (1.5, "outside the declared range"),

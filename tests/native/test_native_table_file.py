@@ -82,12 +82,9 @@ def test_the_resource_reads_back_as_the_table(folder, which):
         ours = law_mu(handle, params, grid)
         assert np.array_equal(ours, law_mu(law.native_table, params, grid)), "the resource is the .npz's table"
         if table.version >= 2:  # an oracle in NumPy: mu0 (1 - A_p / A_c) of FrictionTable.interpolate_array
-            # (below the first grid pressure of a table with the P = 0 row both areas scale with P: their ratio is
-            # the first grid pressure's)
-            low = table.pressure[1] if table.pressure[0] == 0.0 else 0.0
-            ap = np.concatenate([table.interpolate_array(table.particle_area, max(pk, low), grid[1][grid[0] == pk],
+            ap = np.concatenate([table.interpolate_array(table.particle_area, pk, grid[1][grid[0] == pk],
                                                          grid[2][grid[0] == pk])[0] for pk in np.unique(grid[0])])
-            ac = np.concatenate([table.interpolate_array(table.contact_area, max(pk, low), grid[1][grid[0] == pk],
+            ac = np.concatenate([table.interpolate_array(table.contact_area, pk, grid[1][grid[0] == pk],
                                                          grid[2][grid[0] == pk])[0] for pk in np.unique(grid[0])])
             order = np.concatenate([np.flatnonzero(grid[0] == pk) for pk in np.unique(grid[0])])
             ref = np.empty(ours.size)

@@ -145,24 +145,6 @@ def test_the_quasi_static_row_is_the_slowest_row(built):
     assert "quasi-static" in t.metadata["axes"]["velocity"]["note"]
 
 
-def test_the_zero_pressure_row_is_exact_and_holds_the_first_rows_mu(built):
-    """[table] zero_pressure_row: a P = 0 row with A_c = A_p = 0 and no spread, marked as an exact node, whose mu
-    is the limit P -> 0+ (the first grid pressure's, since both areas fall linearly to zero); the rest is the
-    table without the row."""
-    manifest, records = campaign(sweep_text=SWEEP.replace("quasi_static_row = true",
-                                                          "quasi_static_row = true\nzero_pressure_row = true"))
-    t, _ = build_table(records, manifest, surface_stats=STATS)
-    ref = built[2]
-    assert_allclose(t.pressure, [0.0, 5e6, 10e6, 30e6])
-    for name in t.arrays():
-        want = ref.array(name)[0] if name == "mu" else 1.0 if name == "simulated" else 0.0
-        assert_allclose(t.array(name)[0], np.broadcast_to(want, t.array(name)[0].shape), rtol=0, atol=0, err_msg=name)
-        assert_allclose(t.array(name)[1:], ref.array(name), rtol=0, atol=0, err_msg=name)
-    axis = t.metadata["axes"]["pressure"]
-    assert axis["zero_pressure_row"] and axis["values"][0] == 0.0 and axis["campaign"] == [5e6, 10e6, 30e6]
-    assert np.array(t.metadata["ensemble"]["n_members"]).shape == t.mu.shape
-
-
 def test_caps_are_where_the_fitted_area_reaches_the_contact_area():
     """A_p = 0.8 A_c at beta = 0.2 growing linearly: the cap (A_p = A_c) at beta = 0.25 inside the axis; a row
     whose A_p stays below A_c has none."""

@@ -60,20 +60,8 @@ static void contact_area(const tc_stripdraw_params *p, const tc_table *table, do
     (void)tc_table_lookup(table, table->contact_area, pressure, n, velocity, beta, TC_TABLE_CLAMP, ac, NULL, NO_MSG);
 }
 
-/* The pressure at which the areas are read. A table whose pressure axis starts with the exact P = 0 row (no
- * load, no contact: A_c = A_p = 0) interpolates both areas linearly between it and its first grid pressure P_1,
- * so below P_1 each is (P / P_1) times its value at P_1 and their ratio, which is all that mu and the cap use,
- * is the ratio at P_1 (Eq. 8's A_c is proportional to P too); reading them at P_1 gives that ratio without the
- * 0 / 0 at P = 0. */
-static double area_pressure(const tc_table *table, double pressure) {
-    if (table->n_pressure > 1 && table->pressure[0] == 0.0 && pressure < table->pressure[1])
-        return table->pressure[1];
-    return pressure;
-}
-
 /* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */
 static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
-    pressure = area_pressure(table, pressure);
     const double *b = table->beta;
     double d_prev = 0.0;
     for (size_t k = 0; k < table->n_beta; ++k) {
@@ -135,7 +123,6 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
         if (!with_areas(p, table))
             return tc_table_lookup(table, table->mu, pressure, n, velocity, beta, p->table_policy, mu, clamped, msg);
         /* mu = mu0 (1 - (1 - r) s A_p / A_c); A_p (and the table's A_c) located once per query */
-        pressure = area_pressure(table, pressure);
         const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
         int rc = tc_table_lookup2(table, particle_area(p, table), eq8 ? NULL : table->contact_area, pressure, n,
                                   velocity, beta, p->table_policy, mu, ac_work, clamped, msg);
