@@ -456,8 +456,9 @@ def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list
     nominal = extra["options"]["paper"]
     cal = cals["mesoscale"]
     lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
-              "Every chosen input varied over the range shown, s recalibrated on the 35 %, and the change of s and of "
-              "the predictions recorded (a two-sided range: half the difference of its ends). The quote of the 35 % "
+              "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
+              "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
+              "(a two-sided range: half the difference of its ends). The quote of the 35 % "
               f"alone gives s a standard error of {cal.stderr_quote:.2g}.", "",
               "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
     for r in rows:
@@ -469,11 +470,18 @@ def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list
             lines.append(f"| {r['quantity']} | {r['range']} | {s_cell} | {100 * r['drop3']:.1f} | "
                          f"{100 * r['drop140']:.1f} |")
     tot = extra["budget_total"]
-    lines += [f"| **total** (quadrature, with the quote) | | **{tot['scale']:.3g}** | **{100 * tot['drop3']:.1f}** | "
-              f"**{100 * tot['drop140']:.1f}** |", "",
+    missing = extra["budget_not_varied"]
+    for m in missing:
+        lines.append(f"| {m['quantity']} | {m['range']} | not varied: {m['why']} | - | - |")
+    not_in = f", without the {', '.join(m['quantity'] for m in missing)}" if missing else ""
+    lines += [f"| **total** (quadrature, with the quote{not_in}) | | **{tot['scale']:.3g}** | "
+              f"**{100 * tot['drop3']:.1f}** | **{100 * tot['drop140']:.1f}** |", "",
               f"So s = {cal.scale:.3g} +- {tot['scale']:.2g}, the 3-pass drop {_pct(nominal['drops'][2])} +- "
               f"{100 * tot['drop3']:.1f} points (the paper: up to 72 %), the 140 mm pad's one-pass drop "
-              f"{_pct(nominal['drop_140'])} +- {100 * tot['drop140']:.1f} points.", ""]
+              f"{_pct(nominal['drop_140'])} +- {100 * tot['drop140']:.1f} points"
+              + (f"; the {', '.join(m['quantity'] for m in missing)} is not varied, so these ranges leave "
+                 f"{'it' if len(missing) == 1 else 'them'} out." if missing else ".")]
+    lines.append("")
     lines += ["## Drawing speed", "",
               f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g} +- {tot['scale']:.2g}: the range in brackets), "
               "and the drop against 1 MPa at the same speed. The paper's alpha(v) (Fig. 15) rises with the sliding "
@@ -639,6 +647,7 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
         "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
                               for k, v in extra["options"].items()}),
         "budget": _jsonable(extra["budget"]), "budget_total": _jsonable(extra["budget_total"]),
+        "budget_not_varied": _jsonable(extra["budget_not_varied"]),
         "speed": _jsonable(extra["speed"]), "alpha": _jsonable(extra["alpha"]),
         "direct_slides": _jsonable(extra["direct_slides"]),
     }
@@ -674,8 +683,9 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
     checks = pp.direct_slide_check(table, workers, quick, log)
-    return {"options": options, "budget": rows, "budget_total": total, "speed": speed, "alpha": alpha,
-            "direct_slides": checks, "simulated_velocities": pp.simulated_velocities(table)}
+    return {"options": options, "budget": rows, "budget_total": total, "budget_not_varied": pp.inputs_not_varied(table),
+            "speed": speed, "alpha": alpha, "direct_slides": checks,
+            "simulated_velocities": pp.simulated_velocities(table)}
 
 
 def _jsonable(x):

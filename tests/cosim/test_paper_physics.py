@@ -74,6 +74,18 @@ def test_simulated_velocities_leave_out_the_copied_v0_row_and_unsimulated_column
         assert pp.simulated_velocities(shipped) == shipped.metadata["axes"]["velocity"]["campaign"]
 
 
+def test_the_budget_names_the_domain_size_it_does_not_vary():
+    """One domain size in the shipped table's campaign: the budget says so instead of leaving the input out."""
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    shipped = read_table(DEFAULT_TABLE)
+    size = shipped.metadata["campaign"]["sweep"]["slide"]["size"]
+    (row,) = pp.inputs_not_varied(shipped)
+    assert row["quantity"] == "domain size of the slides" and f"{size * 1e6:g} um domain only" in row["range"]
+    assert all("domain" not in v.quantity for v in pp.VARIATIONS), "a domain-size variation exists: drop the row"
+
+
 def test_ensemble_variants_move_a_p_by_one_standard_error(tmp_path):
     from tribocosim.components.stripdraw.table import read_table
 
