@@ -106,8 +106,8 @@ VARIATIONS = (
 
 
 def inputs_not_varied(table) -> list[dict]:
-    """The chosen inputs of issue 26's budget that no variation covers, named so that the budget's total is not read
-    as covering them: the domain size of the table's slides (one domain size, no second table at the nodes the
+    """The chosen inputs of the uncertainty budget that no variation covers, named so that the budget's total is not
+    read as covering them: the domain size of the table's slides (one domain size, no second table at the nodes the
     3-pass test reads; docs/physics/table_domain.md)."""
     size = table.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("size")
     where = f"the table's {size * 1e6:g} um domain only" if size else "the table's one domain size"
