@@ -45,8 +45,8 @@ COMPONENT = Component(
     outputs=(
         Port("grip_velocity", "m/s", "velocity of the grip carriage v_g"),
         Port("grip_position", "m", "position of the grip carriage x_g from its start"),
-        Port("velocity_reference", "m/s", "velocity set-point v_set(t) now: the ramp to velocity_setpoint",
-             key="velocity_setpoint"),
+        Port("velocity_reference", "m/s", "velocity set-point v_set(t) now: 0 until start_time, then the ramp to "
+             "velocity_setpoint", key="velocity_setpoint"),
         Port("motor_force", "N", "force of the servo motor at the ball-screw nut F_m"),
     ),
     build=build,

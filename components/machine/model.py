@@ -10,10 +10,11 @@ grip carriage of mass m_g, which the strip loads with ``pull_force`` F_p (the in
     tau_i F_m' = F_c - F_m                                  (current loop: first-order lag)
     F_c = K_p (v_set - v_m) + K_i I,   I' = v_set - v_m     (PI speed control on the motor encoder)
 
-The velocity set-point ramps from 0 to ``velocity_setpoint`` over ``ramp_time`` and then holds.
+The velocity set-point is 0 until ``start_time``, ramps to ``velocity_setpoint`` over ``ramp_time``
+and then holds.
 With integral action the steady state is v_g = v_m = v_set, k_d (x_m - x_g) = F_p. Outputs:
 ``grip_velocity`` v_g and ``grip_position`` x_g. Linear, advanced exactly per step with F_p held
-and the set-point affine (split at the ramp's end; ``tc_linear.h``).
+and the set-point affine (split at the ramp's start and end; ``tc_linear.h``).
 """
 
 from __future__ import annotations

@@ -26,6 +26,8 @@ class MachineParameters:
     speed_kp: float = param(4e5, "N s/m", "proportional gain of the speed controller", 0.0, 1e12)
     speed_ki: float = param(2e7, "N/m", "integral gain of the speed controller", 0.0, 1e14)
     current_time_constant: float = param(5e-4, "s", "lag of the motor force behind its command", 1e-7, 10.0)
+    start_time: float = param(0.0, "s", "time after the start at which the velocity ramp begins (0 before: the "
+                              "strip is held while the press closes)", 0.0, 1e4)
 
     def __post_init__(self) -> None:
         validate_fields(self)

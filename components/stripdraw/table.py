@@ -42,7 +42,8 @@ The native code reads the table in its resource form (:func:`write_table_resourc
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
-caller can report them) or ``"error"`` (raise :class:`~tribocosim.errors.TableDomainError`).
+caller can report them) or ``"error"`` (raise :class:`~tribocosim.errors.TableDomainError`). A query
+within ``AXIS_END_TOLERANCE`` (1e-9, relative) of an axis end is on the end.
 """
 
 from __future__ import annotations
@@ -62,6 +63,10 @@ FORMAT = "tribocosim-friction-table"
 FORMAT_VERSION = 3  # written when the table carries the version 3 arrays; 1 and 2 are still read and written
 VERSIONS = (1, 2, 3)
 AXES = ("pressure", "velocity", "beta")
+#: a query within this of an axis end (relative to the end) is on the end, not outside the table: the round-off of
+#: the inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15 on either side);
+#: the native lookup (tc_table_lookup.c) uses the same
+AXIS_END_TOLERANCE = 1e-9
 AREAS = ("contact_area", "particle_area", "contact_area_std", "particle_area_std")
 #: the version 3 arrays (all of them, or none)
 EXTRAS = ("simulated", "contact_area_se", "particle_area_se", "particle_area_clusters", "particle_area_clusters_se")
@@ -243,7 +248,7 @@ class FrictionTable:
     def _locate(self, name: str, q: np.ndarray, policy: str):
         """Cell index, local coordinate in [0, 1] and out-of-range mask of queries on one axis."""
         axis = getattr(self, name)
-        out = (q < axis[0]) | (q > axis[-1])
+        out = (q < axis[0] - AXIS_END_TOLERANCE * abs(axis[0])) | (q > axis[-1] + AXIS_END_TOLERANCE * abs(axis[-1]))
         if policy == "error" and np.any(out):
             bad = float(np.asarray(q)[out].flat[0]) if np.ndim(q) else float(q)
             raise TableDomainError(

@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, scratch, started_at_once, timed
 from tribocosim.cosim.reports.coupling_order import coupling_order
 from tribocosim.cosim.reports.metrics import max_relative_error, relative_difference
 from tribocosim.cosim.reports.near_pcrit import near_pcrit
@@ -141,7 +141,7 @@ def demo(settings: Settings) -> Family:
     # 5e-5 s in both modes: at 1e-4 s the reference is itself ~6e-4 off at the start of the draw, and at
     # dt_ref = DEMO_INTERNAL_STEP the step-doubling rows' reference is the same run (computed once)
     dt_ref = 5e-5
-    over = {"experiment.stop": stop}
+    over = {"experiment.stop": stop, **started_at_once(load_scene(path))}
     grid_over = {**over, "fmus.strip.parameters.internal_step": DEMO_INTERNAL_STEP}
     n_ref = int(round(stop / dt_ref))
     t_ref = dt_ref * np.arange(n_ref + 1)
@@ -168,7 +168,8 @@ def demo(settings: Settings) -> Family:
     fam = Family("demo", title, curve="curve", error="error", cost="wall_time", label="setting",
                  errors=("error", "error_after_ramps"),
                  summary_curves=("jacobi/1", "adaptive step-doubling", "adaptive energy"))
-    fam.note = (f"demo.toml with stop = {stop} s{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
+    fam.note = (f"demo.toml with the drive started at once (start_time = 0: both ramps overlap) and stop = {stop} s"
+                f"{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
                 f"Error: max |F - F_ref| / max |F_ref| of strip.pull_force over the communication points; F_ref is the "
                 f"monolithic reference (cosim.apps.monolithic.reference_for_scene: pure models, coupling solved every "
                 f"step to {DEMO_REFERENCE_TOL:g}, dt_ref = {dt_ref:g} s, {ref_time:.1f} s to compute), interpolated linearly (the "

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, scratch, timed
+from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, scratch, started_at_once, timed
 from tribocosim.cosim.reports.oscfmus import Unavailable, oscillator_fmus, oscillator_scene
 from tribocosim.cosim.reports.stability_criterion import ERROR, STABLE, UNSTABLE, Criterion, Verdict, classify, largest_stable_step
 
@@ -241,7 +241,8 @@ def demo(settings: Settings) -> Family:
     area = float(sp.get("tool_length", 0.035)) * float(sp.get("tool_width", 0.035))
     schemes = [("jacobi", 0), ("gauss-seidel", 0), ("iterative", 1)] if quick else SCENE_SCHEMES
     fam = Family("demo", title)
-    fam.note = (f"demo.toml, stop = {stop:g} s (the last case: the whole {full_stop:g} s draw in one step). Largest "
+    fam.note = (f"demo.toml with the drive started at once (start_time = 0: both ramps overlap), stop = {stop:g} s "
+                f"(the last case: the whole {full_stop:g} s draw in one step). Largest "
                 f"stable step by log bisection to {'20' if quick else '5'} % in [1e-4 s, {stop / MIN_STEPS:g} s] (a run "
                 f"has at least {MIN_STEPS} steps). Near p_crit the strip takes the closed-form friction law "
                 f"(friction_model = \"closed_form\", Eq. 9): the shipped friction table's pressure axis does not reach "
@@ -254,14 +255,15 @@ def demo(settings: Settings) -> Family:
     near = 0.99 * 340e6
     # the shipped friction table's pressure axis ends far below p_crit (the scene check refuses the set-point); the
     # closed form (Eq. 9) has no pressure axis
-    cases = [("nominal (10 MPa)", {}, None),
+    at_once = started_at_once(plan)
+    cases = [("nominal (10 MPa)", at_once, None),
              (f"P_N = {near / 1e6:.1f} MPa (0.99 p_crit, closed-form friction)",
-              {f"fmus.{press}.parameters.force_setpoint": near * area,
+              {**at_once, f"fmus.{press}.parameters.force_setpoint": near * area,
                f"fmus.{strip}.parameters.friction_model": "closed_form"}, None),
-             ("grip velocity set-point 0", {f"fmus.{drive}.parameters.velocity_setpoint": 0.0}, None)]
+             ("grip velocity set-point 0", {**at_once, f"fmus.{drive}.parameters.velocity_setpoint": 0.0}, None)]
     _scene_cells(settings, fam, path, cases, schemes, stop, 1e-4, stop, 0.2 if quick else 0.05,
                  budget=30.0 if quick else 120.0)
-    _scene_cells(settings, fam, path, [("one step = whole draw", {}, full_stop)], schemes, full_stop, None, None,
+    _scene_cells(settings, fam, path, [("one step = whole draw", at_once, full_stop)], schemes, full_stop, None, None,
                  None, budget=60.0)
     return fam
 

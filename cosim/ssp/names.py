@@ -65,7 +65,7 @@ def fmpy_parameter_set(path: str | Path):
     ``component.variable`` names, the form fmpy's ``simulate_ssp(..., parameter_set=...)`` applies
     (fmpy 0.3 reads the bindings but applies only the set it is given)::
 
-        simulate_ssp("rig.ssp", stop_time=1.76, step_size=1e-3, parameter_set=fmpy_parameter_set("rig.ssp"))
+        simulate_ssp("rig.ssp", stop_time=2.06, step_size=1e-3, parameter_set=fmpy_parameter_set("rig.ssp"))
     """
     from fmpy.ssp.ssd import ParameterSet, find_components, read_ssd
 

@@ -51,3 +51,36 @@ def test_state_round_trip_and_bad_input():
         MachineParameters(drive_stiffness=-1.0)
     with pytest.raises(ParameterError, match="setpoint_table"):
         PressParameters(setpoint_table="0 1; 0.5")
+
+
+@pytest.mark.parametrize("ramp_time", [0.02, 0.0])
+def test_machine_held_until_its_start_time_then_runs_as_one_started_at_zero(ramp_time):
+    """The drive is linear and time-invariant: with start_time t_s the set-point is 0 before t_s, so the grip stays
+    exactly at rest, and after t_s it follows the trajectory of a drive started at 0, shifted by t_s (a pull that
+    starts with the motion). dt and t_s are powers of two, so the times add up exactly."""
+    dt, hold = 2.0**-10, 128
+    held = MachineModel(MachineParameters(velocity_setpoint=0.08, ramp_time=ramp_time, start_time=hold * dt))
+    fresh = MachineModel(MachineParameters(velocity_setpoint=0.08, ramp_time=ramp_time))
+    for k in range(hold):
+        out = held.step(dt, {"pull_force": 0.0})
+        assert out["grip_velocity"] == 0.0 and out["grip_position"] == 0.0
+        at_start = k == hold - 1 and ramp_time == 0  # at t_s a stepped set-point has its value after the step
+        assert out["velocity_setpoint"] == (0.08 if at_start else 0.0)
+    for k in range(300):
+        pull = {"pull_force": 3700.0 * min(1.0, k / 50)}
+        a, b = held.step(dt, pull), fresh.step(dt, pull)
+        for name in ("grip_velocity", "grip_position", "velocity_setpoint", "motor_force"):
+            assert_allclose(a[name], b[name], rtol=1e-12, atol=1e-15, err_msg=f"{name} at step {k}")
+    assert_allclose(b["grip_velocity"], 0.08, rtol=0.05)
+
+
+def test_machine_step_set_point_at_its_start_time_splits_the_step():
+    """ramp_time = 0: the set-point steps from 0 to velocity_setpoint at start_time; a step across it equals the two
+    steps that end and start there (the step is split at the jump, not averaged over it)."""
+    p = MachineParameters(velocity_setpoint=0.08, ramp_time=0.0, start_time=0.25)
+    one, two = MachineModel(p), MachineModel(p)
+    one.step(0.5, {"pull_force": 100.0})
+    two.step(0.25, {"pull_force": 100.0})
+    assert two.outputs()["velocity_setpoint"] == 0.08, "the set-point at start_time is the value after the step"
+    two.step(0.25, {"pull_force": 100.0})
+    assert_allclose(one.state, two.state, rtol=1e-11, atol=1e-15)

@@ -9,7 +9,9 @@ from numpy.testing import assert_allclose
 from tribocosim.errors import ParameterError, TableDomainError, TableError
 from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw import StripDrawModel, make_friction_law
 from tribocosim.components.stripdraw.table import FrictionTable, read_table, write_table
+from tribocosim.paths import DEFAULT_TABLE
 
 
 def _trilinear_table():
@@ -105,6 +107,27 @@ def test_out_of_range_policy():
     assert_allclose(mu[:2], edge, err_msg="clamped lookups take the edge value")
     with pytest.raises(TableDomainError, match=r"pressure = 500000.0 Pa is outside .*\[1e\+06, 2e\+07\]"):
         table.interpolate([5e5], [0.1], [0.1], policy="error")
+
+
+def test_a_query_within_round_off_of_an_axis_end_is_on_the_end_in_python_and_in_the_native_lookup():
+    """AXIS_END_TOLERANCE (1e-9 relative): 1e-12 beyond an end is on it, with the end's value; 1e-6 is outside."""
+    table = _trilinear_table()
+    ends = np.array([1e6 * (1 - 1e-12), 2e7 * (1 + 1e-12)])
+    mu, clamped = table.interpolate(ends, [0.1, 0.1], [0.1, 0.1], policy="error")
+    assert not clamped.any()
+    assert_allclose(mu, table.interpolate([1e6, 2e7], [0.1, 0.1], [0.1, 0.1])[0], rtol=1e-12)
+    assert table.interpolate([2e7 * (1 + 1e-6)], [0.1], [0.1])[1].tolist() == [True]
+    shipped = read_table(DEFAULT_TABLE)
+    last = float(shipped.pressure[-1])
+    for factor, inside in ((1 + 1e-12, True), (1 - 1e-12, True), (1 + 1e-6, False)):
+        p = StripDrawParameters(table_policy="error")
+        m = StripDrawModel(p, make_friction_law(p, shipped))
+        inputs = {"normal_force": last * factor * p.tool_length * p.tool_width, "grip_velocity": 0.08}
+        if inside:
+            assert m.step(1e-3, inputs)["table_clamp_count"] == 0
+        else:
+            with pytest.raises(TableDomainError, match="pressure = 3.000003e"):
+                m.step(1e-3, inputs)
 
 
 def test_closed_form_table_says_where_it_comes_from():

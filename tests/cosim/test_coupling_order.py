@@ -29,7 +29,7 @@ STEPS = (4e-3, 2e-3, 1e-3, 5e-4)
 
 
 def _pull_force(algorithm: str, q: int, h: float):
-    over = {"experiment.stop": STOP, "fmus.strip.parameters.internal_step": TAU,
+    over = {"experiment.stop": STOP, "fmus.strip.parameters.internal_step": TAU, "fmus.drive.parameters.start_time": 0.0,
             "fmus.strip.parameters.n_elements": 80, "master.algorithm": algorithm, "master.extrapolation": q,
             "experiment.step": h}
     res = run_plan(load_scene(MODELS_DIR / "scenes" / "demo.toml", over))

@@ -38,7 +38,8 @@ from tribocosim.cosim.scene.validate import load_scene
 P_CRIT = 340e6
 STOP = 0.02
 STEP = 1e-3
-NEAR = {"experiment.stop": STOP, "fmus.press.parameters.force_setpoint": 0.99 * P_CRIT * 0.035 * 0.035,
+NEAR = {"experiment.stop": STOP, "experiment.step": STEP, "fmus.drive.parameters.start_time": 0.0,  # drive at once
+        "fmus.press.parameters.force_setpoint": 0.99 * P_CRIT * 0.035 * 0.035,
         "fmus.strip.parameters.friction_model": "closed_form"}
 #: the master's convergence test per coupling value, |G(x) - x| <= TOL (1 + |x|) (the default of [master.iterative])
 TOL = 1e-8

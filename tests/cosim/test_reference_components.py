@@ -25,7 +25,8 @@ from tribocosim.cosim.scene.schema import parse_scene
 DEMO = Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml"
 
 STOP = 0.2  # s: the velocity and force ramps, break-away and 14 mm of sliding
-CHEAP = {"fmus.strip.parameters.n_elements": 100, "fmus.strip.parameters.draw_length": 0.05, "experiment.stop": STOP}
+CHEAP = {"fmus.strip.parameters.n_elements": 100, "fmus.strip.parameters.draw_length": 0.05, "experiment.stop": STOP,
+         "experiment.step": 1e-3, "fmus.drive.parameters.start_time": 0.0}  # the drive at once: ramps and break-away
 VARIABLES = ("strip.pull_force", "drive.grip_velocity", "press.normal_force")
 
 

@@ -1,7 +1,7 @@
 """The shipped scenes (models/scenes) through the master with the real FMUs: the paper's trends,
 the equalities of the coupled rig, the sweep and multi-pass machinery, and bad input.
 
-Cheap settings (a 50 mm draw on a 100-element bar, 2.5 ms communication step) keep the runs short;
+Cheap settings (a 50 mm draw on a 100-element bar, 1 ms communication step) keep the runs short;
 the trends are those of the paper (Sec. 2.1, 7; Fig. 2, 17-19): mu_bar falls with P_N and with pad
 length; more debris sticking to the tool (zeta) and more wear (K) lower it, saturating at large K
 (beta at its cap under the whole pad); a second and a third pass over the same strip lower it.
@@ -30,11 +30,12 @@ from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
 DEMO = SCENES / "demo.toml"
 DRAW = 0.05  # m
+HOLD = tomllib.loads(DEMO.read_text())["fmus"]["drive"]["parameters"]["start_time"]  # s: the press closes first
 CHEAP = {
     "fmus.strip.parameters.n_elements": 100,
     "fmus.strip.parameters.draw_length": DRAW,
-    "experiment.stop": DRAW / 0.08 + 0.01,
-    "experiment.step": 2.5e-3,
+    "experiment.stop": HOLD + DRAW / 0.08 + 0.01,
+    "experiment.step": 1e-3,
 }
 
 
@@ -54,7 +55,7 @@ def by(rows, key, **where):
 
 @pytest.fixture(scope="module")
 def demo_run():
-    """The demo scene at the cheap settings (Jacobi, 2.5 ms)."""
+    """The demo scene at the cheap settings (Jacobi, 1 ms)."""
     return run(load_component_scene(DEMO, CHEAP), write=False)
 
 
@@ -88,14 +89,16 @@ def test_pull_force_over_twice_the_normal_force_is_the_strips_mu(demo_run):
 def test_press_holds_its_setpoint_and_the_drive_reaches_its_velocity(demo_run):
     r = demo_run
     t = r.time
-    steady = t >= 0.3
-    fn, fset = r["press.normal_force"][steady], r["press.force_reference"][steady]
+    start = HOLD  # the drive's start_time: the strip is held while the press closes and settles
+    held, steady = t <= start - 0.01, t >= start + 0.3
+    assert np.all(r["drive.grip_velocity"][held] == 0.0) and np.all(r["drive.grip_position"][held] == 0.0)
+    fn, fset = r["press.normal_force"][t >= start], r["press.force_reference"][t >= start]
     assert np.all(np.abs(fn - fset) <= 0.01 * fset), f"press off by {np.max(np.abs(fn / fset - 1)):.2%}"
     assert fset[-1] == 12250.0
     v, vset = r["drive.grip_velocity"][steady], r["drive.velocity_reference"][steady]
     assert vset[-1] == 0.08 and np.all(np.abs(v - vset) <= 0.01 * vset), f"drive off by {np.max(np.abs(v / vset - 1)):.2%}"
     # the machine pulled the strip through: the grip travelled the draw (+ the ramp's lag)
-    assert r["drive.grip_position"][-1] == pytest.approx(0.08 * (t[-1] - 0.01), rel=0.01)
+    assert r["drive.grip_position"][-1] == pytest.approx(0.08 * (t[-1] - start - 0.01), rel=0.01)
 
 
 def test_mu_bar_falls_with_pressure_and_pad_length(tmp_path):

@@ -29,9 +29,11 @@ from tribocosim.cosim.ssp.names import toml_text
 from tribocosim.cosim.api import run_ssp
 from tribocosim.cosim.ssp.reader import load_ssp
 
-#: the short demo rig: scene keys set on models/scenes/demo.toml
-RIG = {"experiment.stop": 0.4, "fmus.press.parameters.force_setpoint": 9800.0, "fmus.strip.parameters.tool_width": 0.03,
-       "fmus.drive.parameters.ramp_time": 0.03}
+#: the short demo rig: scene keys set on models/scenes/demo.toml (the strip held for 0.1 s while the press closes, so
+#: every host also runs the drive's start_time; a 1 ms step, stable at this load)
+RIG = {"experiment.stop": 0.4, "experiment.step": 1e-3, "fmus.press.parameters.force_setpoint": 9800.0,
+       "fmus.strip.parameters.tool_width": 0.03, "fmus.drive.parameters.ramp_time": 0.03,
+       "fmus.drive.parameters.start_time": 0.1}
 STEPS = 400
 
 
@@ -149,7 +151,7 @@ def test_fmpy_simulate_ssp_gives_our_jacobi_pull_force(rig, scene_run):
     # fmpy 0.3's simulate_ssp applies one parameter set of "component.variable" names, not the SSD's
     # bindings: fmpy_parameter_set gathers the components' bindings into one
     merged = fmpy_parameter_set(rig)
-    assert len(merged.parameters) == 7 and "strip.tool_width" in {p.name for p in merged.parameters}
+    assert len(merged.parameters) == 8 and "strip.tool_width" in {p.name for p in merged.parameters}
     res = simulate_ssp(str(rig), stop_time=0.4, step_size=1e-3, parameter_set=merged)
     ours = scene_run["strip.pull_force"][1:]  # fmpy's row k holds the outputs after the step from t_k
     got = res["strip.pull_force"][:STEPS]

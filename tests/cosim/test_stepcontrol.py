@@ -202,7 +202,8 @@ def test_step_doubling_on_the_strips_internal_grid_does_not_collapse():
     first-order lag keeps the error per unit step above the tolerance and every step is the smallest allowed;
     with internal_step = step_quantum the estimate sees the coupling alone and the step grows after the ramps."""
     ad = {"tolerance": 1e-2, "min_step": 1e-4, "max_step": 0.05, "estimator": "step-doubling"}
-    base = {"experiment.stop": 0.2, "master.extrapolation": 1, "master.adaptive": ad}
+    base = {"experiment.stop": 0.2, "experiment.step": 1e-3, "fmus.drive.parameters.start_time": 0.0,
+            "master.extrapolation": 1, "master.adaptive": ad}
     plain = run("demo", overrides=base, write=False)
     grid = run("demo", overrides={**base, "fmus.strip.parameters.internal_step": 5e-5,
                                   "master.adaptive": {**ad, "step_quantum": 5e-5}}, write=False)

@@ -7,9 +7,10 @@
  *     tau_i F_m' = F_c - F_m                                  (current loop: first-order lag)
  *     F_c = K_p (v_set - v_m) + K_i I,   I' = v_set - v_m     (PI speed control on the motor encoder)
  *
- * With z = [x_m, v_m, x_g, v_g, F_m, I] and w = [v_set, F_p] this is z' = A z + B w (matrices below). v_set
- * ramps linearly from 0 to velocity_setpoint over ramp_time, so a step is split at the ramp's end and each piece
- * advanced with v_set affine and F_p held (tc_propagator_step).
+ * With z = [x_m, v_m, x_g, v_g, F_m, I] and w = [v_set, F_p] this is z' = A z + B w (matrices below). v_set is 0
+ * until start_time, then ramps linearly to velocity_setpoint over ramp_time (a step at start_time when ramp_time =
+ * 0), so a step is split at the ramp's start and end and each piece advanced with v_set affine and F_p held
+ * (tc_propagator_step).
  */
 #include "tc_machine.h"
 
@@ -31,11 +32,13 @@ struct tc_machine {
     double time, pull_force;
 };
 
-/* v_set(t) = velocity_setpoint min(1, t / ramp_time) */
-static double setpoint(const tc_machine *m, double t) {
-    if (m->p.ramp_time == 0) return m->p.velocity_setpoint;
-    const double s = t / m->p.ramp_time;
-    return m->p.velocity_setpoint * (s < 1.0 ? s : 1.0);
+/* v_set(t) = velocity_setpoint min(1, max(0, (t - start_time) / ramp_time)); with ramp_time = 0 a step at
+ * start_time, whose value there is 0 from the left (left != 0) and velocity_setpoint from the right */
+static double setpoint(const tc_machine *m, double t, int left) {
+    const double s = t - m->p.start_time;
+    if (m->p.ramp_time == 0) return s > 0 || (s == 0 && !left) ? m->p.velocity_setpoint : 0.0;
+    const double r = s / m->p.ramp_time;
+    return m->p.velocity_setpoint * (r < 0.0 ? 0.0 : r < 1.0 ? r : 1.0);
 }
 
 void tc_machine_free(tc_machine *m) { free(m); }
@@ -82,11 +85,13 @@ int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg) {
     if (!isfinite(pull_force))
         return tc_fail(msg, TC_DISCARD, "pull_force = %s is not finite; a finite number is required",
                        tc_repr_double(pull_force, r));
-    const double t0 = m->time, t1 = m->time + dt, ramp = m->p.ramp_time;
-    double cuts[3];
+    const double t0 = m->time, t1 = m->time + dt;
+    const double start = m->p.start_time, end = m->p.start_time + m->p.ramp_time; /* the set-point's breakpoints */
+    double cuts[4];
     int n_cuts = 0;
     cuts[n_cuts++] = t0;
-    if (t0 < ramp && ramp < t1) cuts[n_cuts++] = ramp;
+    if (t0 < start && start < t1) cuts[n_cuts++] = start;
+    if (t0 < end && end < t1 && end > start) cuts[n_cuts++] = end;
     cuts[n_cuts++] = t1;
     double z[6];
     memcpy(z, m->z, sizeof z);
@@ -94,7 +99,7 @@ int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg) {
         const double a = cuts[k], b = cuts[k + 1], h = b - a;
         if (!(h > 0)) /* a step lost in rounding against the time */
             return tc_fail(msg, TC_DISCARD, "step of %s s is lost in rounding at t = %.17g s", tc_repr_double(h, r), a);
-        const double va = setpoint(m, a), vb = setpoint(m, b);
+        const double va = setpoint(m, a, 0), vb = setpoint(m, b, 1); /* the piece's ends, from inside it */
         const double u0[2] = {va, pull_force}, u1[2] = {(vb - va) / h, 0.0};
         int rc = tc_propagator_step(&m->prop, z, h, u0, u1, z, msg);
         if (rc != TC_OK) return rc;
@@ -113,7 +118,7 @@ int tc_machine_step(tc_machine *m, double dt, double pull_force, tc_msg msg) {
 void tc_machine_outputs(const tc_machine *m, double out[TC_MACHINE_N_OUTPUTS]) {
     out[TC_MACHINE_GRIP_VELOCITY] = m->z[3];
     out[TC_MACHINE_GRIP_POSITION] = m->z[2];
-    out[TC_MACHINE_VELOCITY_SETPOINT] = setpoint(m, m->time);
+    out[TC_MACHINE_VELOCITY_SETPOINT] = setpoint(m, m->time, 0);
     out[TC_MACHINE_MOTOR_FORCE] = m->z[4];
 }
 

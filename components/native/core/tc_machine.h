@@ -1,9 +1,9 @@
 /* The drawing machine: servo drive that pulls the strip (Python binding: components/machine/model.py).
  *
  * States z = [x_m, v_m, x_g, v_g, F_m, I] (motor side and grip positions [m] and velocities [m/s], motor force
- * [N], integral of the speed error [m]); inputs w = [v_set, F_p], the velocity set-point (a ramp from 0 to
- * velocity_setpoint over ramp_time) and the strip's pull force (held over a step). Each step is advanced
- * exactly with the affine-input propagator (tc_linear.h), split at the ramp's end. No global state; a step that
+ * [N], integral of the speed error [m]); inputs w = [v_set, F_p], the velocity set-point (0 until start_time, then a
+ * ramp to velocity_setpoint over ramp_time) and the strip's pull force (held over a step). Each step is advanced
+ * exactly with the affine-input propagator (tc_linear.h), split at the ramp's start and end. No global state; a step that
  * returns TC_DISCARD leaves the state unchanged.
  */
 #ifndef TC_MACHINE_H

@@ -543,11 +543,33 @@ static void transport(tc_stripdraw *m, double pressure, double speed, const doub
     m->beta_removed += removed;
 }
 
+/* whether the bar is at rest as made: every U, V, A, fprev and Up 0 (scanned from the grip, whose node moves first,
+ * so a bar that has moved is found at once) */
+static int bar_at_rest(const tc_stripdraw *m) {
+    const tc_sd_bar bar = m->bar_in_backup ? (tc_sd_bar){m->bU, m->bV, m->bA, m->bfprev}
+                                           : (tc_sd_bar){m->U, m->V, m->A, m->fprev};
+    const double *arrays[5] = {bar.U, bar.V, bar.A, bar.fprev, m->Up};
+    for (int k = 0; k < 5; ++k)
+        for (size_t i = m->n; i-- > 0;)
+            if (arrays[k][i] != 0.0) return 0;
+    return 1;
+}
+
 /* one coupling interval of length h at normal force fn (>= 0) and grip velocity vg */
 static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
     const size_t n = m->n;
     const double speed = fabs(vg), pressure = fn / m->pad_area; /* as state_limits computes it */
+    /* The strip held at rest while the press closes (the grip still, the bar at rest as made): it stays at rest
+     * whatever the friction limits, nothing slides, so no debris is made, carried or capped and no limit enters the
+     * result; none is looked up for the interval (nor counted in clamp_count), and the state takes the inputs. */
+    if (vg == 0.0 && bar_at_rest(m)) {
+        m->normal_force = fn;
+        m->grip_velocity = vg;
+        m->u_finite = 1;
+        state_limits(m);
+        return TC_OK;
+    }
     /* the limits of the state serve when the pressure and the speed are the same (and under the error policy
      * when none was clamped); else they are looked up under the model's policy */
     const int same = pressure == m->limit_pressure &&

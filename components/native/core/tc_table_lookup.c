@@ -13,7 +13,10 @@
  *          + tv ((1 - tb) plane(iv + sv, ib) + tb plane(iv + sv, ib + sb)),
  *
  * with sv, sb = 1 (0 on a one-point axis). A query outside an axis is flagged (clamp policy) or refused
- * (error policy: pressure first, then the first velocity, then the first beta outside the table).
+ * (error policy: pressure first, then the first velocity, then the first beta outside the table). A query within
+ * AXIS_END_TOLERANCE of an axis end (relative to the end) is on the end, not outside: that is the round-off of the
+ * inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15, on either side), and
+ * it moves a value by far less than the table's standard errors (10 % of A_p at most).
  */
 #include "tc_table_lookup.h"
 
@@ -23,7 +26,11 @@
 #include <string.h>
 
 
-static int outside(const double *axis, size_t n, double q) { return q < axis[0] || q > axis[n - 1]; }
+#define AXIS_END_TOLERANCE 1e-9 /* relative; components/stripdraw/table.py reads the same */
+
+static int outside(const double *axis, size_t n, double q) {
+    return q < axis[0] - AXIS_END_TOLERANCE * fabs(axis[0]) || q > axis[n - 1] + AXIS_END_TOLERANCE * fabs(axis[n - 1]);
+}
 
 /* the cell and the local coordinate of one query */
 static void locate(const double *axis, size_t n, double q, size_t *i, double *t) {
@@ -53,17 +60,15 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
  * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate();
  * returns whether q is outside the axis (as outside()). */
 static int locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
-    const int below = q < axis[0];
-    double qc = below ? axis[0] : q;
-    const int above = qc > axis[n - 1]; /* q > axis[n - 1] (a q below the axis is clamped to axis[0]) */
-    qc = above ? axis[n - 1] : qc;
+    double qc = q < axis[0] ? axis[0] : q;
+    qc = qc > axis[n - 1] ? axis[n - 1] : qc;
     if (n > 1 && h <= n - 2 && axis[h] <= qc && (h == n - 2 || qc < axis[h + 1])) {
         *i = h;
         *t = (qc - axis[h]) / (axis[h + 1] - axis[h]);
     } else {
         locate(axis, n, q, i, t);
     }
-    return below || above;
+    return outside(axis, n, q);
 }
 
 static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
