@@ -209,10 +209,12 @@ def stiff_drive(settings: Settings) -> Family:
     schemes = [("jacobi", 0), ("gauss-seidel", 0), ("iterative", 1)] if quick else SCENE_SCHEMES
     stop = min(plan.scene.experiment.stop, 0.1 if quick else 0.4)
     fam = Family("stiff_drive", title)
-    fam.note = (f"stiff_drive.toml with fmus.{drive}.parameters.drive_stiffness overridden, stop = {stop:g} s, at the "
+    fam.note = (f"stiff_drive.toml with the creep started at once (start_time = 0) and fmus.{drive}.parameters."
+                f"drive_stiffness overridden, stop = {stop:g} s, at the "
                 f"scene's step; largest stable step by log bisection to {'20' if quick else '5'} % in "
                 f"[1e-6 s, {stop / MIN_STEPS:g} s] (a run has at least {MIN_STEPS} steps).")
-    cases = [(f"k_d = {k:g} N/m", {f"fmus.{drive}.parameters.drive_stiffness": k}, None) for k in ks]
+    at_once = started_at_once(plan)
+    cases = [(f"k_d = {k:g} N/m", {**at_once, f"fmus.{drive}.parameters.drive_stiffness": k}, None) for k in ks]
     _scene_cells(settings, fam, path, cases, schemes, stop, 1e-6, stop, 0.2 if quick else 0.05,
                  budget=30.0 if quick else 120.0)
     for r in fam.rows:

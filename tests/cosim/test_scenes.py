@@ -290,9 +290,11 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
     spring on a 20 kg grip through the coupling. Jacobi at 1 ms rings at the friction limit;
     Jacobi at 50 us and the iterative scheme at 1 ms give the smooth build-up of the pull force."""
     scene = SCENES / "stiff_drive.toml"
+    creep = tomllib.loads(scene.read_text())["fmus"]["drive"]["parameters"]["start_time"]  # after the press closes
     small = run(load_component_scene(scene, {"experiment.step": 5e-5}), write=False)
     pull = small["strip.pull_force"]
-    assert np.all(np.diff(pull[small.time > 0.05]) > 0) and 150 < pull[-1] < 300, "smooth build-up while sticking"
+    assert np.all(pull[small.time <= creep] == 0.0), "nothing moves while the press closes"
+    assert np.all(np.diff(pull[small.time > creep + 0.05]) > 0) and 150 < pull[-1] < 300, "smooth build-up while sticking"
     jac = run(load_component_scene(scene), write=False)
     assert np.max(np.abs(jac["strip.pull_force"])) > 10 * pull[-1], "Jacobi at 1 ms should ring (unstable loop)"
     assert np.min(jac["drive.grip_velocity"]) < -0.01, "... with the grip reversing"
