@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, timed
+from tribocosim.cosim.reports.common import Family, Settings, packaged_scene, started_at_once, timed
 from tribocosim.cosim.reports.runner import failed_row, master_row, run_plan
 
 #: the strip's internal step [s] (as the demo family's step-doubling rows)
@@ -59,7 +59,8 @@ def coupling_order(settings: Settings) -> Family:
     title = "Demo rig, strip on its internal grid: coupling error against the communication step (order)"
     path = packaged_scene("demo")
     steps = STEPS_QUICK if settings.quick else STEPS_FULL
-    base = {"experiment.stop": STOP, "fmus.strip.parameters.internal_step": INTERNAL_STEP}
+    base = {"experiment.stop": STOP, "fmus.strip.parameters.internal_step": INTERNAL_STEP,
+            **started_at_once(load_scene(path))}  # the drive at once: the ramps and the start of the draw
     fam = Family("coupling_order", title, curve="curve", error="error", cost="wall_time", label="setting")
     orders = {}
     for algorithm, q in CURVES:

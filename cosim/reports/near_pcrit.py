@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, timed
+from tribocosim.cosim.reports.common import Family, Settings, instance_of, packaged_scene, started_at_once, timed
 from tribocosim.cosim.reports.metrics import max_relative_error
 
 P_CRIT = 340e6
@@ -47,8 +47,11 @@ FINE_DT = 5e-5
 RELAXED_MAX_ITERATIONS = 200
 
 
-def _overrides(strip: str, press: str, area: float, stop: float) -> dict:
-    return {"experiment.stop": stop, f"fmus.{press}.parameters.force_setpoint": FRACTION * P_CRIT * area,
+def _overrides(plan, strip: str, press: str, area: float, stop: float) -> dict:
+    """The demo at FRACTION p_crit with the closed-form law, its drive started at once (both ramps overlap) and the
+    family's communication step."""
+    return {"experiment.stop": stop, "experiment.step": STEP, **started_at_once(plan),
+            f"fmus.{press}.parameters.force_setpoint": FRACTION * P_CRIT * area,
             f"fmus.{strip}.parameters.friction_model": "closed_form"}
 
 
@@ -102,7 +105,7 @@ def near_pcrit(settings: Settings) -> Family:
     # peak of the pull force (t ~ 0.11 s), where the debris cap takes mu down and quasi-Newton sees its largest
     # contraction
     stop = 0.01 if settings.quick else 0.3
-    over = _overrides(strip, press, area, stop)
+    over = _overrides(plan, strip, press, area, stop)
     n = int(round(stop / STEP))
     t_ref, refs, ref_times = {}, {}, {}
     for col, dt, tol in (("error", STEP, REFERENCE_TOL), ("error_vs_fine", FINE_DT, 1e-9)):
