@@ -658,6 +658,7 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
 def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
     """The multi-pass options, the uncertainty budget, the drawing-speed prediction, alpha of both observables and
     the direct-slide check (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
+    from tribocosim.paths import DEFAULT_TABLE
 
     params = config_params(base, Config("mesoscale", True))
     if log:
@@ -667,7 +668,10 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
         log("uncertainty budget ...")
     varied = {}
     with pp.scratch_folder() as folder:
-        tables = pp.table_variants(table, Path(folder))
+        # the domain-size variation's table is the shipped table's (the same slides on a 128 um domain)
+        shipped = Path(base["table_file"]).resolve() == Path(DEFAULT_TABLE).resolve()
+        domain = Path(DEFAULT_TABLE).with_name(pp.DOMAIN_TABLE)
+        tables = pp.table_variants(table, Path(folder), domain if shipped and domain.is_file() else None)
         for v in pp.VARIATIONS:
             if v.table is not None and v.table not in tables:
                 varied[v.name] = {"error": "needs a version 3 table that records its campaign"}
@@ -683,7 +687,7 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
     checks = pp.direct_slide_check(table, workers, quick, log)
-    return {"options": options, "budget": rows, "budget_total": total, "budget_not_varied": pp.inputs_not_varied(table),
+    return {"options": options, "budget": rows, "budget_total": total, "budget_not_varied": pp.inputs_not_varied(table, tables),
             "speed": speed, "alpha": alpha, "direct_slides": checks,
             "simulated_velocities": pp.simulated_velocities(table)}
 

@@ -15,7 +15,8 @@ predicted.
   spacing, the 140 mm pad's drop and the debris weighed after each pass are what would tell them apart.
 - Uncertainty budget (:data:`VARIATIONS`): every chosen input varied over a stated range, s recalibrated, and the
   change of s and of each prediction recorded; the total is the quadrature sum of the half-ranges (a one-sided
-  variation counts whole).
+  variation counts whole). The slides' domain size is varied with the shipped table of the same slides on a
+  128 um domain at the rows the 3-pass test reads (:data:`DOMAIN_TABLE`).
 - Drawing speed (:data:`SPEEDS`): mu_bar at 0.02-0.5 m/s after 1 and 3 passes at 25 MPa, with the band of s's
   total standard error. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
   the debris effect grow with the drawing speed; the report names the velocities the table simulated.
@@ -42,6 +43,9 @@ SPEEDS = (0.02, 0.05, 0.08, 0.2, 0.5)
 #: the long pad of the prediction that tells the options apart
 LONG_PAD = 0.14
 CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test and its 1 MPa reference
+#: the domain-size variation's table, beside the shipped table: the quick preset's slides on a 128 um domain
+#: (128^2 pixels of 1 um) at 1, 20 and 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um``)
+DOMAIN_TABLE = "friction_table_128um.npz"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,6 +102,8 @@ VARIATIONS = (
     Variation("zeta_high", "zeta (the paper's fit to another model: 0.2)", "0.3", {"zeta": 0.3}, pair="zeta_low"),
     Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
     Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
+    Variation("domain_128", "domain size of the slides", "128 um instead of 256 um at 1, 20 and 30 MPa (0.08 m/s)",
+              table="domain_128"),
     Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"},
               same_scale=False),
     Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
@@ -105,21 +111,50 @@ VARIATIONS = (
 )
 
 
-def inputs_not_varied(table) -> list[dict]:
+def inputs_not_varied(table, variants: dict) -> list[dict]:
     """The chosen inputs of the uncertainty budget that no variation covers, named so that the budget's total is not
-    read as covering them: the domain size of the table's slides (one domain size, no second table at the nodes the
-    3-pass test reads; docs/physics/table_domain.md)."""
+    read as covering them: the domain size of the table's slides when there is no table on a second domain size
+    (``variants`` has no ``domain_128``; docs/physics/table_domain.md)."""
+    if "domain_128" in variants:
+        return []
     size = table.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("size")
     where = f"the table's {size * 1e6:g} um domain only" if size else "the table's one domain size"
     return [{"quantity": "domain size of the slides", "range": where,
              "why": "no table on a second domain size at the nodes the 3-pass test reads"}]
 
 
-def table_variants(table, folder: Path) -> dict[str, str]:
+def with_rows_of(table, other):
+    """``table`` with the areas of ``other`` on the (pressure, velocity) rows both tables have: A_p, A_c, their
+    standard errors and the simulated flags interpolated linearly in beta onto ``table``'s beta axis (which
+    ``other``'s must span), mu = mu0 (1 - A_p / A_c) there. Version 3 tables."""
+    from tribocosim.errors import TableError
+
+    if other.beta[0] > table.beta[0] or other.beta[-1] < table.beta[-1]:
+        raise TableError(f"the beta axis [{other.beta[0]:g}, {other.beta[-1]:g}] does not span the table's "
+                         f"[{table.beta[0]:g}, {table.beta[-1]:g}]")
+    names = ("particle_area", "contact_area", "particle_area_se", "contact_area_se", "simulated")
+    arrays = {name: table.array(name).copy() for name in names}
+    for i, p in enumerate(table.pressure):
+        for j, v in enumerate(table.velocity):
+            if p not in other.pressure or v not in other.velocity:
+                continue
+            for name in names:
+                arrays[name][i, j] = other.interpolate_array(other.array(name), p, v, table.beta, "error")[0]
+    arrays["simulated"] = (arrays["simulated"] == 1.0).astype(float)  # a node between an unsimulated one is not
+    ap, ac = arrays["particle_area"], arrays["contact_area"]
+    mu0 = table.metadata["calibration"]["mu0"]
+    mu = np.where(ac > 0, mu0 * np.maximum(0.0, 1.0 - ap / np.where(ac > 0, ac, 1.0)), mu0)
+    extras = {**table.extras, **{k: arrays[k] for k in names if k in table.extras}}
+    return dataclasses.replace(table, particle_area=ap, contact_area=ac, mu=mu, extras=extras)
+
+
+def table_variants(table, folder: Path, domain_table: Path | None = None) -> dict[str, str]:
     """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
-    (``ensemble_low``/``ensemble_high``), and the table rebuilt from the recorded cases of each surface pair alone
-    (``pair_0``, ``pair_1``; a version 3 table that records its campaign). Returns name -> path."""
-    from tribocosim.components.stripdraw.table import write_table
+    (``ensemble_low``/``ensemble_high``), the table rebuilt from the recorded cases of each surface pair alone
+    (``pair_0``, ``pair_1``; a version 3 table that records its campaign), and the table with the rows of the
+    slides on another domain size (``domain_128``: :func:`with_rows_of` the table ``domain_table``, when given).
+    Returns name -> path."""
+    from tribocosim.components.stripdraw.table import read_table, write_table
 
     out = {}
     if table.version >= 3:
@@ -139,6 +174,9 @@ def table_variants(table, folder: Path) -> dict[str, str]:
                 rebuilt = rebuild_from_metadata(meta, [c for c in meta["cases"] if c["labels"]["surface"] == s])
                 out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
                 write_table(out[f"pair_{s}"], rebuilt)
+        if domain_table is not None:
+            out["domain_128"] = str(folder / "domain_128.npz")
+            write_table(out["domain_128"], with_rows_of(table, read_table(domain_table)))
     return out
 
 

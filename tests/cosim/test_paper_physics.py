@@ -4,12 +4,14 @@ budget's tests on the real model (the whole report runs in .ci/run: tribocosim r
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from tribocosim.components.stripdraw.table import FrictionTable
+from tribocosim.errors import TableError
 from tribocosim.cosim.reports import paper, paper_physics as pp
 
 
@@ -74,16 +76,53 @@ def test_simulated_velocities_leave_out_the_copied_v0_row_and_unsimulated_column
         assert pp.simulated_velocities(shipped) == shipped.metadata["axes"]["velocity"]["campaign"]
 
 
-def test_the_budget_names_the_domain_size_it_does_not_vary():
-    """One domain size in the shipped table's campaign: the budget says so instead of leaving the input out."""
+def test_the_budget_names_the_domain_size_unless_a_table_on_another_size_varies_it():
+    """Without the domain-size variant the budget says the input is not varied instead of leaving it out; with it,
+    the row is the variation's."""
     from tribocosim.components.stripdraw.table import read_table
     from tribocosim.paths import DEFAULT_TABLE
 
     shipped = read_table(DEFAULT_TABLE)
     size = shipped.metadata["campaign"]["sweep"]["slide"]["size"]
-    (row,) = pp.inputs_not_varied(shipped)
+    (row,) = pp.inputs_not_varied(shipped, {})
     assert row["quantity"] == "domain size of the slides" and f"{size * 1e6:g} um domain only" in row["range"]
-    assert all("domain" not in v.quantity for v in pp.VARIATIONS), "a domain-size variation exists: drop the row"
+    assert pp.inputs_not_varied(shipped, {"domain_128": "x.npz"}) == []
+    assert [v.quantity for v in pp.VARIATIONS if v.table == "domain_128"] == ["domain size of the slides"]
+
+
+def test_with_rows_of_takes_the_other_tables_shared_rows_interpolated_in_beta(tmp_path):
+    """The other table's A_p is linear in beta, so its values on this table's beta axis are exact; rows the other
+    table lacks (10 MPa, 0.5 m/s) keep their values, and mu follows the new areas."""
+    from tribocosim.components.stripdraw.table import read_table
+
+    t = _v3_table()
+    p, v, b = np.array([1e6, 30e6]), np.array([0.0, 0.08]), np.array([0.0, 0.05, 0.12])
+    ap = 300.0 * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((2, 2, 3))
+    ac = np.broadcast_to((p / 2e8)[:, None, None], (2, 2, 3)).copy()
+    zeros = np.zeros((2, 2, 3))
+    other = FrictionTable(p, v, b, 0.15 * (1 - ap / ac), {"beta_threshold": 1.0, "calibration": {"mu0": 0.15}},
+                          contact_area=ac, particle_area=ap, contact_area_std=zeros, particle_area_std=zeros,
+                          extras={"simulated": np.ones((2, 2, 3)), "contact_area_se": zeros, "particle_area_se": zeros,
+                                  "particle_area_clusters": zeros, "particle_area_clusters_se": zeros})
+    paths = pp.table_variants(t, tmp_path, _write(tmp_path / "other.npz", other))
+    got = read_table(paths["domain_128"])
+    for i, j in ((0, 0), (0, 1), (2, 0), (2, 1)):  # 1 and 30 MPa at v = 0 and 0.08 m/s
+        pressure = t.pressure[i]
+        np.testing.assert_allclose(got.particle_area[i, j], 300.0 * t.beta * pressure / 55e9, rtol=1e-12)
+        np.testing.assert_allclose(got.contact_area[i, j], pressure / 2e8, rtol=1e-12)
+    np.testing.assert_array_equal(got.particle_area[1], t.particle_area[1])
+    np.testing.assert_array_equal(got.particle_area[:, 2], t.particle_area[:, 2])
+    np.testing.assert_allclose(got.mu, 0.15 * np.maximum(0.0, 1 - got.particle_area / got.contact_area), rtol=1e-12)
+    short = dataclasses.replace(other, beta=np.array([0.0, 0.05, 0.09]))
+    with pytest.raises(TableError, match="does not span"):
+        pp.with_rows_of(t, short)
+
+
+def _write(path, table):
+    from tribocosim.components.stripdraw.table import write_table
+
+    write_table(path, table)
+    return path
 
 
 def test_ensemble_variants_move_a_p_by_one_standard_error(tmp_path):

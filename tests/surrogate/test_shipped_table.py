@@ -69,3 +69,25 @@ def test_a_recorded_case_reruns_to_its_recorded_result(shipped):
     n = case.config.n
     assert abs(out["summary"]["mean_contact_fraction"] - rec["a_c"]) <= 1.0 / (n * n)
     assert out["summary"]["mean_particle_fraction"] == rec["a_p"] == 0.0
+
+
+def test_the_domain_size_variations_table_is_its_presets_and_fits_the_shipped_rows(shipped):
+    """models/friction_table_128um.npz (the budget's domain-size variation): the domain_128um preset's table,
+    rebuilt exactly from its recorded cases by one version of the mesoscale code, on rows the shipped table has and a
+    beta axis that spans the shipped one's (what paper_physics.with_rows_of needs)."""
+    from tribocosim.cosim.reports.paper_physics import DOMAIN_TABLE
+    from tribocosim.paths import MODELS_DIR
+
+    domain = read_table(MODELS_DIR / DOMAIN_TABLE)
+    meta = domain.metadata
+    recorded = {k: v for k, v in meta["campaign"]["sweep"].items() if k != "source"}
+    current = json.loads(json.dumps(load_preset("domain_128um").to_dict()))
+    current.pop("source", None)
+    assert recorded == current, "the domain_128um preset changed since its table was built: rebuild and ship it"
+    assert len(meta["case_source_digests"]) == 1
+    rebuilt = rebuild_from_metadata(meta)
+    for name in domain.arrays():
+        np.testing.assert_array_equal(rebuilt.array(name), domain.array(name), err_msg=name)
+    assert meta["campaign"]["sweep"]["slide"]["size"] == 128e-6
+    assert set(domain.pressure) <= set(shipped.pressure) and set(domain.velocity) <= set(shipped.velocity)
+    assert domain.beta[0] == shipped.beta[0] and domain.beta[-1] >= shipped.beta[-1]
