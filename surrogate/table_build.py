@@ -36,7 +36,7 @@ from dataclasses import asdict
 import numpy as np
 
 from tribocosim.errors import TableError
-from tribocosim.components.stripdraw.table import UNITS, FrictionTable
+from tribocosim.components.stripdraw.table import UNITS, FrictionTable, mu_of_areas
 
 from .fit import BETA_FORMS, BetaFit, _key, ensemble, fit_alpha, fit_beta_forms, fit_contact
 from .slide_config import SlideConfig
@@ -231,8 +231,6 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                 arr["ac_std"][i, j, k] = q.ac_std if q is not None else ac_se
                 arr["simulated"][i, j, k] = 1.0 if simulated else 0.0
                 arr["n"][i, j, k] = q.n if q is not None else 0
-                arr["mu"][i, j, k] = mu0 * max(0.0, 1.0 - arr["ap"][i, j, k] / arr["ac"][i, j, k]) \
-                    if arr["ac"][i, j, k] > 0 else mu0
                 if q is not None and b > 0:
                     x = b * p / e_star
                     nodes.append({"pressure": p, "velocity": v, "beta": b, "members": q.n,
@@ -242,6 +240,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                                   "relative_se": (q.ap_se / q.ap_mean) if q.n > 1 and q.ap_mean > 0 else None})
             caps.append({"pressure": p, "velocity": v, "beta_cap_s1": _cap(row, fit, beta_axis[-1]),
                          "simulated_max_beta": max(row.simulated)})
+    arr["mu"] = mu_of_areas(mu0, arr["ap"], arr["ac"])
     cap_values = [c["beta_cap_s1"] for c in caps if c["beta_cap_s1"] is not None]
     beta_thres = min(1.0, max(cap_values)) if cap_values and len(cap_values) == len(caps) else 1.0
 

@@ -263,6 +263,13 @@ class FrictionTable:
         return i, t, out
 
 
+def mu_of_areas(mu0: float, particle_area, contact_area) -> np.ndarray:
+    """The mu column of a version 2 or 3 table from its areas: mu = mu0 max(0, 1 - A_p / A_c) (Eq. 7 with Eq. 6),
+    mu0 where A_c = 0."""
+    ap, ac = np.asarray(particle_area, float), np.asarray(contact_area, float)
+    return np.where(ac > 0, mu0 * np.maximum(0.0, 1.0 - ap / np.where(ac > 0, ac, 1.0)), mu0)
+
+
 def write_table(path: str | os.PathLike, table: FrictionTable) -> str:
     """Write ``table`` to ``path`` (``.npz``) atomically and return its content hash."""
     meta = dict(table.metadata)
