@@ -673,6 +673,8 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
         domain = Path(DEFAULT_TABLE).with_name(pp.DOMAIN_TABLE)
         tables = pp.table_variants(table, Path(folder), domain if shipped and domain.is_file() else None)
         for v in pp.VARIATIONS:
+            if v.table == pp.DOMAIN_VARIANT and v.table not in tables:
+                continue  # no table on another domain size: named as not varied (pp.inputs_not_varied)
             if v.table is not None and v.table not in tables:
                 varied[v.name] = {"error": "needs a version 3 table that records its campaign"}
                 continue

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import TribocosimError
+from tribocosim.components.stripdraw.table import mu_of_areas
 from tribocosim.cosim.apps.stripdraw_experiment import Point
 
 #: drawing speeds of the speed prediction [m/s]
@@ -46,6 +47,7 @@ CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test a
 #: the domain-size variation's table, beside the shipped table: the quick preset's slides on a 128 um domain
 #: (128^2 pixels of 1 um) at 1, 20 and 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um``)
 DOMAIN_TABLE = "friction_table_128um.npz"
+DOMAIN_VARIANT = "domain_128"  # its variant's name in table_variants
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,7 +105,7 @@ VARIATIONS = (
     Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
     Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
     Variation("domain_128", "domain size of the slides", "128 um instead of 256 um at 1, 20 and 30 MPa (0.08 m/s)",
-              table="domain_128"),
+              table=DOMAIN_VARIANT),
     Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"},
               same_scale=False),
     Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
@@ -115,7 +117,7 @@ def inputs_not_varied(table, variants: dict) -> list[dict]:
     """The chosen inputs of the uncertainty budget that no variation covers, named so that the budget's total is not
     read as covering them: the domain size of the table's slides when there is no table on a second domain size
     (``variants`` has no ``domain_128``; docs/physics/table_domain.md)."""
-    if "domain_128" in variants:
+    if DOMAIN_VARIANT in variants:
         return []
     size = table.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("size")
     where = f"the table's {size * 1e6:g} um domain only" if size else "the table's one domain size"
@@ -142,8 +144,7 @@ def with_rows_of(table, other):
                 arrays[name][i, j] = other.interpolate_array(other.array(name), p, v, table.beta, "error")[0]
     arrays["simulated"] = (arrays["simulated"] == 1.0).astype(float)  # a node between an unsimulated one is not
     ap, ac = arrays["particle_area"], arrays["contact_area"]
-    mu0 = table.metadata["calibration"]["mu0"]
-    mu = np.where(ac > 0, mu0 * np.maximum(0.0, 1.0 - ap / np.where(ac > 0, ac, 1.0)), mu0)
+    mu = mu_of_areas(table.metadata["calibration"]["mu0"], ap, ac)
     extras = {**table.extras, **{k: arrays[k] for k in names if k in table.extras}}
     return dataclasses.replace(table, particle_area=ap, contact_area=ac, mu=mu, extras=extras)
 
@@ -152,7 +153,8 @@ def table_variants(table, folder: Path, domain_table: Path | None = None) -> dic
     """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
     (``ensemble_low``/``ensemble_high``), the table rebuilt from the recorded cases of each surface pair alone
     (``pair_0``, ``pair_1``; a version 3 table that records its campaign), and the table with the rows of the
-    slides on another domain size (``domain_128``: :func:`with_rows_of` the table ``domain_table``, when given).
+    slides on another domain size (:data:`DOMAIN_VARIANT`: :func:`with_rows_of` the table ``domain_table``, when
+    given).
     Returns name -> path."""
     from tribocosim.components.stripdraw.table import read_table, write_table
 
@@ -161,7 +163,7 @@ def table_variants(table, folder: Path, domain_table: Path | None = None) -> dic
         se = table.array("particle_area_se")
         for name, sign in (("ensemble_low", -1.0), ("ensemble_high", 1.0)):
             ap = np.maximum(table.particle_area + sign * se, 0.0)
-            mu = table.metadata["calibration"]["mu0"] * np.maximum(0.0, 1.0 - ap / table.contact_area)
+            mu = mu_of_areas(table.metadata["calibration"]["mu0"], ap, table.contact_area)
             variant = dataclasses.replace(table, particle_area=ap, mu=mu)
             out[name] = str(folder / f"{name}.npz")
             write_table(out[name], variant)
@@ -175,8 +177,8 @@ def table_variants(table, folder: Path, domain_table: Path | None = None) -> dic
                 out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
                 write_table(out[f"pair_{s}"], rebuilt)
         if domain_table is not None:
-            out["domain_128"] = str(folder / "domain_128.npz")
-            write_table(out["domain_128"], with_rows_of(table, read_table(domain_table)))
+            out[DOMAIN_VARIANT] = str(folder / f"{DOMAIN_VARIANT}.npz")
+            write_table(out[DOMAIN_VARIANT], with_rows_of(table, read_table(domain_table)))
     return out
 
 
