@@ -70,12 +70,13 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import ndimage
+from scipy import ndimage, sparse
+from scipy.sparse import csgraph
 
 from tribocosim.errors import ConvergenceError
 
 from . import dem
-from .flakes import Footprint, footprints, random_placement
+from .flakes import Footprint, Footprints, footprints, random_placement
 from .slide_config import SlideConfig
 
 #: a flake is blocked when it overlaps the tool in at least this many distinct clusters
@@ -94,11 +95,8 @@ def overlap_clusters(fp: Footprint, h_top) -> int:
 def _stacked(fps: list[Footprint], field) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """z_lo, z_hi, inside and the windows of ``field``, stacked over flakes (all windows of a
     :func:`~tribocosim.surrogate.flakes.footprints` call have one size)."""
-    ix = np.stack([fp.ix for fp in fps])
-    iy = np.stack([fp.iy for fp in fps])
-    z_lo = np.stack([fp.z_lo for fp in fps])
-    z_hi = np.stack([fp.z_hi for fp in fps])
-    return z_lo, z_hi, np.isfinite(z_lo), np.asarray(field)[ix[:, :, None], iy[:, None, :]]
+    ix, iy, z_lo, z_hi, inside = (fps if isinstance(fps, Footprints) else Footprints(fps)).stacked()
+    return z_lo, z_hi, inside, np.asarray(field)[ix[:, :, None], iy[:, None, :]]
 
 
 def classify(fps: list[Footprint], h_top, threshold: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -151,22 +149,16 @@ def stack_groups(fps: list[Footprint], n: int) -> np.ndarray:
     flake resting on another is pressed into the sheet through it, so the pinch test reads the
     stack's top against the tool and its bottom against the sheet, and a blocked flake makes its
     whole stack load-bearing."""
-    parent = np.arange(len(fps))
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    owner = np.full(n * n, -1, dtype=np.int64)
-    for i, fp in enumerate(fps):
-        flat = (fp.ix[:, None] * n + fp.iy[None, :])[fp.inside]
-        for j in np.unique(owner[flat]):
-            if j >= 0:
-                parent[root(int(j))] = root(i)
-        owner[flat] = i
-    return np.array([root(i) for i in range(len(fps))], dtype=np.int64)
+    if not fps:
+        return np.zeros(0, dtype=np.int64)
+    flake = np.concatenate([np.full(int(fp.inside.sum()), i) for i, fp in enumerate(fps)])
+    pixel = np.concatenate([(fp.ix[:, None] * n + fp.iy[None, :])[fp.inside] for fp in fps])
+    order = np.lexsort((flake, pixel))
+    pixel, flake = pixel[order], flake[order]
+    shared = pixel[1:] == pixel[:-1]  # consecutive flakes on one pixel: an edge of the stack graph
+    graph = sparse.coo_matrix((np.ones(int(shared.sum())), (flake[:-1][shared], flake[1:][shared])),
+                              shape=(len(fps), len(fps)))
+    return csgraph.connected_components(graph, directed=False)[1].astype(np.int64)
 
 
 def _per_stack_max(values: np.ndarray, groups: np.ndarray | None) -> np.ndarray:
@@ -215,33 +207,67 @@ def _cuts(fp: Footprint, h_top, h_low) -> tuple[float, float]:
 def attach_stacks(fps: list[Footprint], blocked, h_top, groups=None) -> list[Footprint]:
     """The footprints as the contact solve sees them: every blocked flake attached to the tool
     (:func:`attach_to_tool`), dropped by the largest drop in its stack so that the stack moves as one
-    body; the others unchanged."""
+    body; the others unchanged. (Footprints of one window size are done all at once, with the same
+    minima and maxima as :func:`attach_to_tool` one by one.)"""
     idx = np.flatnonzero(blocked)
-    drops = np.zeros(len(fps))
-    drops[idx] = [attach_to_tool(fps[j], h_top)[1] for j in idx]
-    drops = _per_stack_max(np.where(blocked, drops, -np.inf), groups)
     out = list(fps)
-    for j in idx:
-        out[j] = attach_to_tool(fps[j], h_top, drop=float(drops[j]))[0]
+    if idx.size == 0:
+        return out
+    if len({fps[j].z_lo.shape for j in idx}) != 1:
+        drops = np.zeros(len(fps))
+        drops[idx] = [attach_to_tool(fps[j], h_top)[1] for j in idx]
+        drops = _per_stack_max(np.where(blocked, drops, -np.inf), groups)
+        for j in idx:
+            out[j] = attach_to_tool(fps[j], h_top, drop=float(drops[j]))[0]
+        return out
+    sel = [fps[j] for j in idx]
+    z_lo, z_hi, _, window = _stacked(sel, h_top)
+    z_lo = ndimage.minimum_filter(np.nan_to_num(z_lo, nan=np.inf), size=(1, 3, 3), mode="constant",
+                                  cval=np.inf)
+    z_hi = ndimage.maximum_filter(np.nan_to_num(z_hi, nan=-np.inf), size=(1, 3, 3), mode="constant",
+                                  cval=-np.inf)
+    drops = np.zeros(len(fps))
+    drops[idx] = np.maximum(0.0, np.max(z_hi - window, axis=(1, 2)))
+    drop = _per_stack_max(np.where(blocked, drops, -np.inf), groups)[idx][:, None, None]
+    z_lo = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
+    z_hi = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
+    for k, j in enumerate(idx):
+        out[j] = Footprint(fps[j].ix, fps[j].iy, z_lo[k], z_hi[k])
     return out
+
+
+def _window_indices(fps: list[Footprint], n: int) -> np.ndarray:
+    """Flat grid indices (len(fps), wx, wy) of the footprints' windows (one window size)."""
+    ix = np.stack([fp.ix for fp in fps])
+    iy = np.stack([fp.iy for fp in fps])
+    return ix[:, :, None] * n + iy[:, None, :]
 
 
 def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:
     """Eq. 18: min of the tool and the lower surface of every blocked flake."""
     h_star = np.array(h_top, dtype=np.float64, copy=True)
-    for fp, b in zip(fps, blocked):
-        if b:
-            sub = h_star[np.ix_(fp.ix, fp.iy)]
-            h_star[np.ix_(fp.ix, fp.iy)] = np.fmin(sub, fp.z_lo)
+    sel = [fp for fp, b in zip(fps, blocked) if b]
+    if sel and len({fp.z_lo.shape for fp in sel}) == 1:
+        z = np.stack([fp.z_lo for fp in sel])
+        inside = np.isfinite(z)
+        np.minimum.at(h_star.reshape(-1), _window_indices(sel, h_star.shape[0])[inside], z[inside])
+        return h_star
+    for fp in sel:
+        sub = h_star[np.ix_(fp.ix, fp.iy)]
+        h_star[np.ix_(fp.ix, fp.iy)] = np.fmin(sub, fp.z_lo)
     return h_star
 
 
 def blocked_mask(fps: list[Footprint], blocked, n: int) -> np.ndarray:
     """Boolean (n, n) mask of the pixels under a blocked flake."""
     mask = np.zeros((n, n), dtype=bool)
-    for fp, b in zip(fps, blocked):
-        if b:
-            mask[np.ix_(fp.ix, fp.iy)] |= fp.inside
+    sel = [fp for fp, b in zip(fps, blocked) if b]
+    if sel and len({fp.z_lo.shape for fp in sel}) == 1:
+        inside = np.stack([fp.inside for fp in sel])
+        mask.reshape(-1)[_window_indices(sel, n)[inside]] = True
+        return mask
+    for fp in sel:
+        mask[np.ix_(fp.ix, fp.iy)] |= fp.inside
     return mask
 
 

@@ -138,6 +138,57 @@ _GAP, _SLOPE, _POS, _QUAT, _SHIFT, _OFFSET, _SIDE, _AGE, _CAP, _RECORD = (
 _SKIP, _PARTIAL, _WHOLE = 0, 1, 2
 
 
+@_inline
+def _face_lever(rot, i, xb, yb, zb, s_low, face):
+    """The face point over the body point (xb, yb) relative to the centre of flake i, space frame: on the face
+    looking down (face 0, the sheet's; body height s_low zb) or up (face 1, the tool's)."""
+    sz = s_low * zb if face == 0 else -s_low * zb
+    rx = rot[i, 0, 0] * xb + rot[i, 0, 1] * yb + rot[i, 0, 2] * sz
+    ry = rot[i, 1, 0] * xb + rot[i, 1, 1] * yb + rot[i, 1, 2] * sz
+    rz = rot[i, 2, 0] * xb + rot[i, 2, 1] * yb + rot[i, 2, 2] * sz
+    return rx, ry, rz
+
+
+@_inline
+def _face_contact(face, hv, gx, gy, pz):
+    """Overlap d of a face point at height pz with the surface of height hv and slope (gx, gy) there (the sheet
+    below, face 0; the tool above, face 1) and the direction of its penalty force k w d (f_x, f_y, f_z), the
+    gradient of the surface's half-space (module docstring of :mod:`tribocosim.surrogate.dem`)."""
+    if face == 0:
+        return hv - pz, -gx, -gy, 1.0
+    return pz - hv, gx, gy, -1.0
+
+
+@_inline
+def _disc_point(rot, P, xb, yb, ox, oy, oz, nx, ny, nz, ac, c):
+    """A point of the mid-plane disc of flake P (body (xb, yb), on the core disc of radius ac) against the
+    sphere-swept disc of flake Q (centre at (ox, oy, oz) from P's, axis (nx, ny, nz), core radius ac, sweep
+    radius c): the overlap d = 2c - distance, the unit separation u (from Q's closest point to P's point),
+    the point relative to P's centre r and Q's closest point relative to Q's centre t."""
+    rx = rot[P, 0, 0] * xb + rot[P, 0, 1] * yb  # point relative to centre of P
+    ry = rot[P, 1, 0] * xb + rot[P, 1, 1] * yb
+    rz = rot[P, 2, 0] * xb + rot[P, 2, 1] * yb
+    vx, vy, vz = rx - ox, ry - oy, rz - oz  # relative to centre of Q
+    vn = vx * nx + vy * ny + vz * nz
+    tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
+    tl = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if tl > ac:
+        tx *= ac / tl
+        ty *= ac / tl
+        tz *= ac / tl
+    ex, ey, ez = vx - tx, vy - ty, vz - tz  # closest point of Q -> point of P
+    dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+    d = 2.0 * c - dist
+    if d <= 0.0:
+        return d, 0.0, 0.0, 0.0, rx, ry, rz, tx, ty, tz
+    if dist > 1e-12 * c:
+        ux, uy, uz = ex / dist, ey / dist, ez / dist
+    else:
+        sgn = 1.0 if vn >= 0.0 else -1.0
+        ux, uy, uz = sgn * nx, sgn * ny, sgn * nz
+    return d, ux, uy, uz, rx, ry, rz, tx, ty, tz
+
+
 @_jit
 def _slope_bound(h, dh, w_dh, ic, jc, half, inv_dx):
     """Largest |h[i+1, j] - h[i, j]|, |h[i, j+1] - h[i, j]| over the pixels i = ic-half..ic+half,
@@ -361,13 +412,7 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                 m = mode_top
                 if m == _PARTIAL and gaps[i, 1, k] > app_top:
                     continue  # proven clear
-            xb = samples[k, 0]
-            yb = samples[k, 1]
-            zb = zface[k]
-            sz = s_low * zb if face == 0 else -s_low * zb
-            rx = rot[i, 0, 0] * xb + rot[i, 0, 1] * yb + rot[i, 0, 2] * sz
-            ry = rot[i, 1, 0] * xb + rot[i, 1, 1] * yb + rot[i, 1, 2] * sz
-            rz = rot[i, 2, 0] * xb + rot[i, 2, 1] * yb + rot[i, 2, 2] * sz
+            rx, ry, rz = _face_lever(rot, i, samples[k, 0], samples[k, 1], zface[k], s_low, face)
             px = pos[i, 0] + rx
             py = pos[i, 1] + ry
             pz = pos[i, 2] + rz
@@ -386,16 +431,14 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                     g = pz - (hv + max(rise, 0.0))
                     gaps[i, 0, k] = g
                     gap_low = min(gap_low, g)
-                d = hv - pz
-                fx, fy, fz = -gx, -gy, 1.0
+                d, fx, fy, fz = _face_contact(0, hv, gx, gy, pz)
             else:
                 hv, gx, gy = _bilinear(h_top, px - top_shift, py, inv_dx)
                 if track and m == _WHOLE:
                     g = hv + top_offset - pz
                     gaps[i, 1, k] = g
                     gap_top = min(gap_top, g)
-                d = pz - (hv + top_offset)
-                fx, fy, fz = gx, gy, -1.0
+                d, fx, fy, fz = _face_contact(1, hv + top_offset, gx, gy, pz)
             if d > 0.0:
                 kw = k_area * weights[k]
                 f = kw * d
@@ -460,29 +503,11 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                 ox, oy, oz = -dxij, -dyij, -dzij
             nx, ny, nz = rot[Q, 0, 2], rot[Q, 1, 2], rot[Q, 2, 2]
             for k in range(nps):
-                xb = pair_samples[k, 0] * scale
-                yb = pair_samples[k, 1] * scale
-                rx = rot[P, 0, 0] * xb + rot[P, 0, 1] * yb  # point relative to centre of P
-                ry = rot[P, 1, 0] * xb + rot[P, 1, 1] * yb
-                rz = rot[P, 2, 0] * xb + rot[P, 2, 1] * yb
-                vx, vy, vz = rx - ox, ry - oy, rz - oz  # relative to centre of Q
-                vn = vx * nx + vy * ny + vz * nz
-                tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
-                tl = math.sqrt(tx * tx + ty * ty + tz * tz)
-                if tl > ac:
-                    tx *= ac / tl
-                    ty *= ac / tl
-                    tz *= ac / tl
-                ex, ey, ez = vx - tx, vy - ty, vz - tz  # closest point of Q -> point of P
-                dist = math.sqrt(ex * ex + ey * ey + ez * ez)
-                d = 2.0 * c - dist
+                d, ux, uy, uz, rx, ry, rz, tx, ty, tz = _disc_point(
+                    rot, P, pair_samples[k, 0] * scale, pair_samples[k, 1] * scale, ox, oy, oz, nx, ny,
+                    nz, ac, c)
                 if d <= 0.0:
                     continue
-                if dist > 1e-12 * c:
-                    ux, uy, uz = ex / dist, ey / dist, ez / dist
-                else:
-                    sgn = 1.0 if vn >= 0.0 else -1.0
-                    ux, uy, uz = sgn * nx, sgn * ny, sgn * nz
                 kw = k_pair * pair_weights[k]
                 f = kw * d
                 fx, fy, fz = f * ux, f * uy, f * uz

@@ -47,13 +47,28 @@ class Footprint:
         return np.isfinite(self.z_lo)
 
 
-def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> list[Footprint]:
+class Footprints(list):
+    """The footprints of one :func:`footprints` call (a list of :class:`Footprint`, all windows of one size)
+    with their arrays stacked over flakes, made once when first asked for."""
+
+    _stack = None
+
+    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(ix, iy, z_lo, z_hi, inside), stacked over the flakes."""
+        if self._stack is None:
+            z_lo = np.stack([fp.z_lo for fp in self])
+            self._stack = (np.stack([fp.ix for fp in self]), np.stack([fp.iy for fp in self]), z_lo,
+                           np.stack([fp.z_hi for fp in self]), np.isfinite(z_lo))
+        return self._stack
+
+
+def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
     """Rasterise every flake on the n x n grid of a periodic domain of side ``size``.
 
     Returns
     -------
-    list of Footprint
-        One per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
+    Footprints
+        One Footprint per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
     """
     dx = size / n
     a, c = shape.a, shape.c
@@ -62,7 +77,7 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> list[Footpr
     half = int(math.ceil(a / dx)) + 1
     offs = np.arange(-half, half + 1)
     if len(pos) == 0:
-        return []
+        return Footprints()
     # all flakes at once (the same elementwise operations as one at a time, so the same numbers)
     m = np.stack([R @ np.diag([a**-2, a**-2, c**-2]) @ R.T for R in rot])[:, :, :, None, None]
     i0 = np.array([int(math.floor(r[0] / dx)) for r in pos])
@@ -77,8 +92,8 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> list[Footpr
     z0 = pos[:, 2, None, None]
     z_lo = z0 + (-qb - root) / (2.0 * qa)
     z_hi = z0 + (-qb + root) / (2.0 * qa)
-    return [Footprint((i0[k] + offs) % n, (j0[k] + offs) % n, z_lo[k], z_hi[k])
-            for k in range(len(pos))]
+    return Footprints(Footprint((i0[k] + offs) % n, (j0[k] + offs) % n, z_lo[k], z_hi[k])
+                      for k in range(len(pos)))
 
 
 def _bilinear_np(h, x, y, dx):
