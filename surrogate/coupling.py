@@ -76,6 +76,8 @@ from scipy.sparse import csgraph
 from tribocosim.errors import ConvergenceError
 
 from . import dem
+from .flake_body import DampingRates
+from .flake_relax import RELAX_SUBSTEPS, Drag, RelaxStats, relax
 from .flakes import Footprint, Footprints, footprints, random_placement
 from .slide_config import SlideConfig
 
@@ -347,9 +349,16 @@ class SlideSimulation:
                                      damping,
                                      spacing=c.sample_spacing_px * c.dx, dt_safety=c.dt_safety,
                                      pair_spacing=None if c.pair_spacing_px is None else c.pair_spacing_px * c.dx)
-        v_run = c.run_velocity
-        self.n_sub = max(1, math.ceil(c.dx / (v_run * params.dt)))
-        self.params = replace(params, dt=c.dx / (v_run * self.n_sub))
+        if c.overdamped:  # the flakes relax as the tool slides (flake_relax): no time step
+            self.n_sub = RELAX_SUBSTEPS if c.relax_substeps is None else c.relax_substeps
+            self.params = params
+            self.drag = Drag(c.damping(self.shape) if c.damping_rate is None else
+                             DampingRates.uniform(c.damping_rate), self.shape.mass, self.shape.inertia)
+            self.relax_stats = RelaxStats()
+        else:
+            v_run = c.run_velocity
+            self.n_sub = max(1, math.ceil(c.dx / (v_run * params.dt)))
+            self.params = replace(params, dt=c.dx / (v_run * self.n_sub))
         self.k = 0  # pixels slid so far
         self.u_p = np.zeros_like(self.h_def0)
         self.z_top = 0.0
@@ -409,11 +418,15 @@ class SlideSimulation:
         """Step 1: DEM with rigid surfaces while the tool advances one pixel."""
         c = self.cfg
         t0 = time.perf_counter()
+        motion = dict(shift0=self.k * c.dx, dshift=c.dx / self.n_sub, top_offset=self.z_prev,
+                      dtop=(self.z_top - self.z_prev) / self.n_sub, dh_low=self.h_low - self.h_low_prev)
         try:
-            dem.advance(self.state, self.params, self.h_low_prev, self.h_tool0, self.n_sub,
-                        shift0=self.k * c.dx, dshift=c.dx / self.n_sub, top_offset=self.z_prev,
-                        dtop=(self.z_top - self.z_prev) / self.n_sub,
-                        dh_low=self.h_low - self.h_low_prev, step_offset=self.k * self.n_sub)
+            if c.overdamped:
+                relax(self.state, self.params, self.drag, self.h_low_prev, self.h_tool0, self.n_sub,
+                      stats=self.relax_stats, where=f"at sliding step {self.k + 1}", **motion)
+            else:
+                dem.advance(self.state, self.params, self.h_low_prev, self.h_tool0, self.n_sub,
+                            step_offset=self.k * self.n_sub, **motion)
         except dem.DemBlowUpError as exc:
             raise dem.DemBlowUpError(f"sliding step {self.k + 1} of {c.steps}: {exc}") from None
         self.z_prev = self.z_top
@@ -499,9 +512,12 @@ class SlideSimulation:
         if c.cluster_thresholds:
             cols["particle_fraction_cluster_thresholds"] = np.array(
                 [r["particle_fraction_cluster_thresholds"] for r in recs], dtype=float)
-        info = {**init, "contact_resolves": self.resolves, "dem_dt": self.params.dt,
-                "dem_steps_per_pixel": self.n_sub,
+        info = {**init, "contact_resolves": self.resolves, "dem_steps_per_pixel": self.n_sub,
                 "penalty_k_area": self.params.k_area, "face_samples": len(self.params.samples)}
+        if c.overdamped:
+            info.update({f"relax_{k}": v for k, v in self.relax_stats.as_dict().items()})
+        else:
+            info["dem_dt"] = self.params.dt
         return SlideResult(c, **cols, snapshots=snaps, timings=dict(self.timings), info=info)
 
 

@@ -32,9 +32,12 @@ from .flake_body import DEFAULT_OIL_VISCOSITY, DampingRates
 
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
-                 "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds")
+                 "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds", "flake_solver",
+                 "relax_substeps")
 #: how the flakes are laid into the gap at the start of a slide (:func:`tribocosim.surrogate.flakes.random_placement`)
 PLACEMENTS = ("monolayer", "deposition")
+#: how the flakes move during a DEM phase (:mod:`tribocosim.surrogate.dem`, :mod:`tribocosim.surrogate.flake_relax`)
+FLAKE_SOLVERS = ("inertial", "overdamped")
 
 
 @dataclass(frozen=True)
@@ -107,6 +110,14 @@ class SlideConfig:
         flake falls at a uniformly random (x, y) onto the sheet or onto the flakes already there
         (stacked flat, mid-planes h_p apart), so that beta = N a_p / A0 (Eq. 10) may approach and exceed
         the covered fraction (1 - exp(-beta) for independent positions).
+    flake_solver : {"inertial", "overdamped"} or None
+        ``inertial`` (None): the DEM of Eq. 15-16 with velocity-Verlet (:mod:`tribocosim.surrogate.dem`);
+        ``overdamped``: the flakes relax to force and torque balance as the tool slides
+        (:mod:`tribocosim.surrogate.flake_relax`), the limit of large damping per pixel, allowed where
+        Lambda = gamma_min dx / v0 >= :data:`tribocosim.surrogate.flake_relax.LAMBDA_MIN` (the physical
+        damping at the physical v0; ``dem_velocity`` and ``dt_safety`` do not apply).
+    relax_substeps : int or None
+        Substeps per pixel of the overdamped solver (None: its default, 8).
     dt_safety : float
         Safety factor on the Verlet limit 2/omega_max.
     sample_spacing_px : float
@@ -157,6 +168,8 @@ class SlideConfig:
     dem_velocity: float | None = None
     placement_pressure: float | None = None
     placement: str | None = None
+    flake_solver: str | None = None
+    relax_substeps: int | None = None
     damping_rate: float | None = None
     oil_viscosity: float | None = None
     dt_safety: float = 0.1
@@ -224,6 +237,13 @@ class SlideConfig:
         if self.damping_rate is not None:
             _number("damping_rate", self.damping_rate, "1/s")
             check_range("damping_rate", self.damping_rate, 0.0, unit="1/s")
+        if self.flake_solver is not None and self.flake_solver not in FLAKE_SOLVERS:
+            raise ParameterError(f"flake_solver = {self.flake_solver!r} is not known; allowed: "
+                                 f"{', '.join(FLAKE_SOLVERS)}")
+        if self.relax_substeps is not None:
+            _int("relax_substeps", self.relax_substeps, 1)
+        if self.overdamped:
+            self._check_overdamped()
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
         check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)
         if self.pair_spacing_px is not None:
@@ -243,6 +263,24 @@ class SlideConfig:
         check_range("bem_tol", self.bem_tol, 0.0, 1.0, low_inclusive=False)
         _int("bem_max_iter", self.bem_max_iter, 1)
         _int("threads", self.threads, 1)
+
+    @property
+    def overdamped(self) -> bool:
+        """True when the flakes move by the overdamped solver (``flake_solver``)."""
+        return self.flake_solver == "overdamped"
+
+    def _check_overdamped(self) -> None:
+        from .flake_body import FlakeShape
+        from .flake_relax import LAMBDA_MIN, damping_per_pixel
+
+        rates = self.damping(FlakeShape(self.flake_diameter, self.flake_thickness, self.flake_density))
+        rates = rates if isinstance(rates, DampingRates) else DampingRates.uniform(rates)
+        lam = damping_per_pixel(rates, self.dx, self.v0)
+        if not lam >= LAMBDA_MIN:
+            raise ParameterError(
+                f"flake_solver = 'overdamped' at v0 = {self.v0!r} m/s: the damping per pixel Lambda = gamma dx / v0 "
+                f"= {lam:.3g} (the least damped motion); allowed: Lambda >= {LAMBDA_MIN:g} (a slower slide, "
+                f"more viscous oil or larger pixels), or flake_solver = 'inertial'")
 
     @property
     def dx(self) -> float:
