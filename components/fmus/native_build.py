@@ -134,15 +134,6 @@ def description(comp: Component, fmu_guid: str, fmi_version: int = 2) -> str:
     return model_description(comp, fmu_guid)
 
 
-def _zig_version() -> str:
-    try:
-        from importlib.metadata import version
-
-        return version("ziglang")
-    except Exception:  # noqa: BLE001 - the compiler's absence is reported by the build itself
-        return "?"
-
-
 def source_digest(name: str, fmi_version: int = 2) -> str:
     """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
     comp = component(name)
@@ -156,7 +147,7 @@ def source_digest(name: str, fmi_version: int = 2) -> str:
     for path in comp.resource_files:
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    h.update(" ".join((*compiler.CFLAGS, _zig_version(), *PLATFORMS)).encode())
+    h.update(" ".join((*compiler.CFLAGS, compiler.zig_version(), *PLATFORMS)).encode())
     return h.hexdigest()
 
 
@@ -303,7 +294,7 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
                 z.writestr("resources/", "")
     return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
                                                     "source_digest": digest, "platforms": list(platforms),
-                                                    "python": sys.version.split()[0], "ziglang": _zig_version()})
+                                                    "python": sys.version.split()[0], "ziglang": compiler.zig_version()})
 
 
 __all__ = ["binary_path", "build_native_fmus", "compile_binaries", "description", "fmi3_headers", "fmus",

@@ -115,13 +115,7 @@ def digest() -> str:
                         package / "params.py", *package.glob("*/parameters.py")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    try:
-        from importlib.metadata import version
-
-        zig = version("ziglang")
-    except Exception:  # noqa: BLE001 - the build says what is missing
-        zig = "?"
-    h.update(" ".join((*compiler.CFLAGS, zig)).encode())
+    h.update(" ".join((*compiler.CFLAGS, compiler.zig_version())).encode())
     return h.hexdigest()
 
 
