@@ -33,7 +33,6 @@ from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
 from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
 from tribocosim.cosim.engine.timegrid import TimeGrid
 from tribocosim.cosim.scene.validate import Plan
-from tribocosim.cosim.ssp.reader import load_ssp
 
 
 @dataclass
@@ -322,6 +321,8 @@ def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict
     The metadata names the package as the scene (``scene``, ``scene_sha256``) and keeps the
     translated scene's text under ``ssp.scene_toml``.
     """
+    from tribocosim.cosim.ssp.reader import load_ssp
+
     ssp = Path(path).resolve()
     plan = load_ssp(ssp, overrides)
     try:
@@ -379,15 +380,20 @@ def _json_default(o):
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
+def distribution_version(name: str) -> str | None:
+    """The version of an installed distribution, from the name of its ``.dist-info`` folder on ``sys.path`` (what
+    :func:`importlib.metadata.version` reads, without importing its e-mail parser on the run path), or None."""
+    import sys
+
+    for entry in sys.path:
+        folder = Path(entry or ".")
+        found = sorted(folder.glob(f"{name}-*.dist-info")) if folder.is_dir() else []
+        if found:
+            return found[0].name[len(name) + 1:-len(".dist-info")]
+    return None
+
+
 def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict) -> dict:
-    from importlib.metadata import PackageNotFoundError, version
-
-    def ver(pkg):
-        try:
-            return version(pkg)
-        except PackageNotFoundError:
-            return None
-
     plan, m = b.plan, b.master
     scene = plan.scene
     sysm = m.system
@@ -398,7 +404,7 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
         "scene": str(scene.path),
         "scene_sha256": hashlib.sha256(scene.path.read_bytes()).hexdigest(),
         "started": started,
-        "versions": {"tribocosim": ver("tribocosim"), "fmpy": ver("fmpy")},
+        "versions": {"tribocosim": distribution_version("tribocosim"), "fmpy": distribution_version("fmpy")},
         "experiment": asdict(scene.experiment),
         "master": {
             "algorithm": ms.algorithm,
