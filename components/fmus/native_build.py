@@ -42,11 +42,12 @@ from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
 from tribocosim.components.native.toolchain import compiler, declarations
+from tribocosim.components.native.toolchain.library import COMMON_SOURCES
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
 #: version-independent FMI core and the version's wrapper
-SHARED_SOURCES = {2: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi2.c"),
-                  3: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi3.c")}
+SHARED_SOURCES = {2: (*COMMON_SOURCES, "fmi/tc_fmu_instance.c", "fmi/tc_fmi2.c"),
+                  3: (*COMMON_SOURCES, "fmi/tc_fmu_instance.c", "fmi/tc_fmi3.c")}
 #: the platforms a native FMU is built for (by default all): the machines it runs on
 PLATFORMS = ("linux64", "win64", "darwin64", "aarch64-linux", "aarch64-darwin")
 FMI_VERSIONS = (2, 3)

@@ -3,8 +3,14 @@ no FMU state, and leaves to the Python loop the steps it does not take."""
 
 from __future__ import annotations
 
+import ctypes
+import re
+
 import numpy as np
 import pytest
+
+from tribocosim.components.native.toolchain.prototypes import code
+from tribocosim.cosim.engine import native_loop
 
 from tribocosim.errors import RunFailed
 from tribocosim.cosim import run
@@ -86,3 +92,30 @@ def test_without_rollback_the_repeated_run_stops_with_the_python_loops_message(t
         run(scene, write=False, loop="python")
     assert str(auto.value) == str(python.value) and "cannot roll back" in str(auto.value)
     _same(auto.value.result, python.value.result)
+
+
+#: the C types of tc_master.h's struct members and the ctypes type each is passed as
+_C_TYPES = {"fmi2Component": ctypes.c_void_p, "double": ctypes.c_double, "int64_t": ctypes.c_int64,
+            "int": ctypes.c_int, "size_t": ctypes.c_size_t, "double *": ctypes.POINTER(ctypes.c_double),
+            "fmi2Integer *": ctypes.POINTER(ctypes.c_int), "unsigned char *": ctypes.POINTER(ctypes.c_ubyte),
+            "const int *": ctypes.POINTER(ctypes.c_int), "const size_t *": ctypes.POINTER(ctypes.c_size_t),
+            "const fmi2ValueReference *": ctypes.POINTER(ctypes.c_uint), "const char *": ctypes.c_char_p}
+
+
+def test_the_ctypes_structs_are_the_headers():
+    """Every struct of tc_master.h, member by member (name and type), is the ctypes structure native_loop passes."""
+    text = code((native_loop.NATIVE_DIR / native_loop.HEADER).read_text())
+    structs = dict(re.findall(r"typedef struct (\w+) \{(.*?)\} \1;", text, flags=re.S))
+    assert set(structs) == set(native_loop.STRUCTS)
+    for name, body in structs.items():
+        members = []
+        for decl in filter(None, (d.strip() for d in body.split(";"))):
+            ctype, member = re.fullmatch(r"(.*?)\s*\b(\w+)", " ".join(decl.split())).groups()
+            if ctype.endswith("TYPE *"):  # a pointer to an FMI function
+                expected = ctypes.c_void_p
+            elif ctype.startswith(("tcm_", "const tcm_")):  # a pointer to an array of the loop's structs
+                expected = ctypes.POINTER(native_loop.STRUCTS[ctype.replace("const ", "").rstrip(" *")])
+            else:
+                expected = _C_TYPES[ctype]
+            members.append((member, expected))
+        assert native_loop.STRUCTS[name]._fields_ == members, name

@@ -116,7 +116,8 @@ typedef struct tcm_state {
     size_t capacity;
     size_t n_rows;               /* rows written (added to) */
     int64_t steps;               /* accepted steps (added to) */
-    double min_step, max_step;   /* of the accepted steps (updated) */
+    double min_step;             /* the shortest accepted step (updated) */
+    double max_step;             /* the longest accepted step (updated) */
     int failed_slave;            /* TCM_STOPPED or TCM_FMI_ERROR: the slave, -1 for a recorded value */
     int failed_status;           /* its FMI status */
     const char *failed_function; /* the FMI function, or "non-finite output" */
