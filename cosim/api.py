@@ -196,7 +196,7 @@ def native_resource(spec, name: str, value):
     """The value of parameter ``name`` of a scene FMU as the FMU reads it: for a native FMU of a component whose
     parameter names a resource file the C code reads in another form (the strip's ``table_file``, a .npz table),
     that form, converted once into the cache; every other value as it is."""
-    if spec.component is None or spec.variant == "python" or not isinstance(value, str) or not value:
+    if spec.component is None or not isinstance(value, str) or not value:
         return value
     from tribocosim.components import registry
 

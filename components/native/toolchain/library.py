@@ -8,8 +8,7 @@ compiled on first use with the C compiler of the ``ziglang`` package
 core functions are exported) into ``$TRIBOCOSIM_CACHE/core`` (default ``~/.cache/tribocosim/fmus/core``), under a
 name that carries the digest of its sources, generated headers, flags and compiler version: a changed source
 builds a new library, an unchanged one is loaded as it is. The build writes a temporary file and renames it into
-place, so concurrent processes never load a half-written library. A Python FMU carries the library it was built
-with (:data:`BUNDLED`), used instead of a build.
+place, so concurrent processes never load a half-written library.
 
 Calls return a status (``TC_OK``, ``TC_DISCARD``, ``TC_ERROR``, ``TC_NOMEM``) and a message; :meth:`Core.check`
 raises the matching exception.
@@ -38,8 +37,8 @@ TC_OK = 0
 TC_DISCARD = 1
 TC_ERROR = 2
 TC_NOMEM = 3
-#: a library shipped beside this module (a Python FMU's), used instead of building one
-BUNDLED = Path(__file__).resolve().parent / f"libtc_core{'.dll' if sys.platform.startswith('win') else '.so'}"
+#: the shared-library suffix of this machine
+SUFFIX = ".dll" if sys.platform.startswith("win") else ".dylib" if sys.platform == "darwin" else ".so"
 
 DBL_P = ctypes.POINTER(ctypes.c_double)
 UBYTE_P = ctypes.POINTER(ctypes.c_ubyte)
@@ -162,10 +161,8 @@ def build(output: str | os.PathLike, defines=()) -> Path:
 
 
 def library_path() -> Path:
-    """The core library for this process: the bundled one, else the cached build (built now if missing)."""
-    if BUNDLED.is_file():
-        return BUNDLED
-    path = cache_dir() / "core" / f"libtc_core-{digest()[:20]}{BUNDLED.suffix}"
+    """The core library for this process: the cached build (built now if missing)."""
+    path = cache_dir() / "core" / f"libtc_core-{digest()[:20]}{SUFFIX}"
     return path if path.is_file() else build(path)
 
 
