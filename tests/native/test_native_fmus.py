@@ -136,7 +136,8 @@ def test_model_descriptions_declare_the_components_variables(descriptions):
             assert var.causality == "parameter" and meta["description"] in var.description, (name, f.name)
             if var.type == "Real":
                 assert float(var.start) == f.default and var.unit == (meta["unit"] or "1"), (name, f.name)
-                assert (float(var.min), float(var.max)) == (meta["low"], meta["high"]), (name, f.name)
+                num = lambda x: None if x is None else float(x)  # noqa: E731
+                assert (num(var.min), num(var.max)) == (num(meta.get("low")), num(meta.get("high"))), (name, f.name)
         for port in comp.outputs:
             var = variables[port.name]
             assert var.causality == "output" and var.initial == "calculated" and var.start is None, (name, port.name)

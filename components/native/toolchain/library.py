@@ -102,14 +102,22 @@ def sources() -> tuple[str, ...]:
     return tuple(out)
 
 
+def source_files() -> list[Path]:
+    """The C files of the model folders (``core/``, ``resource_io/``): the files of :func:`sources`, found without
+    importing a component (``tests/native/test_native_prototypes.py`` holds the two to each other), for the digest
+    and the prototypes of a library that is loaded, not built."""
+    from tribocosim.components.native.toolchain import compiler
+
+    return sorted(p for folder in ("core", "resource_io") for p in (compiler.NATIVE_DIR / folder).glob("*.c"))
+
+
 @functools.lru_cache(maxsize=1)
 def prototypes() -> dict:
     """The functions the core library exports (``TC_API``), read from the headers of its sources
     (:func:`tribocosim.components.native.toolchain.prototypes.exported`)."""
-    from tribocosim.components.native.toolchain import compiler
     from tribocosim.components.native.toolchain.prototypes import exported
 
-    return exported(compiler.source(s).with_suffix(".h") for s in sources())
+    return exported(p.with_suffix(".h") for p in source_files())
 
 
 def cache_dir() -> Path:
@@ -128,12 +136,12 @@ def _headers(folder: Path) -> None:
 
 def digest() -> str:
     """SHA-256 of what the library is made of: sources, headers, what generates the parameter headers (the
-    parameter modules of the package's components and the generator), flags, compiler."""
+    parameter modules of the package's components and the generator), flags, compiler. Imports no component."""
     from tribocosim.components.native.toolchain import compiler
 
     h = hashlib.sha256()
     package = compiler.NATIVE_DIR.parent
-    for path in sorted({*map(compiler.source, sources()), *compiler.headers(), Path(__file__).with_name("declarations.py"),
+    for path in sorted({*source_files(), *compiler.headers(), Path(__file__).with_name("declarations.py"),
                         package / "params.py", *package.glob("*/parameters.py")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
