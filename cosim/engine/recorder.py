@@ -157,10 +157,10 @@ class Recorder(Observer):
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(path.suffix + ".part")
+        data = np.column_stack([self.time, np.array(self._rows).reshape(len(self._rows), len(self.names))])
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(",".join(f'"{n}"' for n in ["time", *self.names]) + "\n")
-            for t, row in zip(self._times, self._rows):
-                f.write(",".join(map(repr, [float(t), *row.tolist()])) + "\n")
+            f.write("".join(",".join(map(repr, row)) + "\n" for row in data.tolist()))
         tmp.replace(path)
         return path
 
