@@ -59,8 +59,9 @@ def test_the_python_drive_runs_beside_the_native_fmus(example):
 def test_a_bad_profile_file_stops_the_run_at_initialization_naming_it(example, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("time,velocity\n0.0,0.0\n0.0,0.1\n")
+    fmu = example / "MeasuredDrive.fmu"
     scene = (example / "measured_drive.toml").read_text().replace(
-        'path = "MeasuredDrive.fmu"', f'path = "{example / "MeasuredDrive.fmu"}"\nparameters = {{ profile_file = "{bad}" }}')
+        'path = "MeasuredDrive.fmu"', f'path = "{fmu}"\nparameters = {{ profile_file = "{bad}" }}')
     (tmp_path / "bad.toml").write_text(scene)
     with pytest.raises(RunFailed) as exc:
         run(tmp_path / "bad.toml", write=False)

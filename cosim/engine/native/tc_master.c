@@ -117,7 +117,9 @@ static int read_outputs(const tcm_rig *r, tcm_state *s, int i) {
     for (size_t g = r->get_first[i]; g < r->get_first[i + 1]; g++) {
         const tcm_get *get = &r->gets[g];
         for (size_t j = 0; j < get->n_dst; j++) {
-            if (!isfinite(s->y[get->dst[j]])) return failed(s, TCM_STOPPED, i, fmi2OK, "non-finite output", r->slaves[i].current_time);
+            if (!isfinite(s->y[get->dst[j]])) {
+                return failed(s, TCM_STOPPED, i, fmi2OK, "non-finite output", r->slaves[i].current_time);
+            }
         }
     }
     return TCM_DONE;
@@ -158,7 +160,9 @@ static int gauss_seidel(const tcm_rig *r, tcm_state *s, double t, double h) {
         int rc = apply_inputs(r, s, i, s->y);
         if (rc == TCM_DONE) rc = do_step(r, s, i, t, h);
         if (rc == TCM_DONE && r->propagate && r->set_first[i] != r->set_first[i + 1]) {
-            for (size_t k = 0; k < r->n_links; k++) s->held[k] = s->stepped[r->link_source[k]] ? s->y[k] : s->y[k] + 0.0;
+            for (size_t k = 0; k < r->n_links; k++) {
+                s->held[k] = s->stepped[r->link_source[k]] ? s->y[k] : s->y[k] + 0.0;
+            }
             rc = set_inputs(r, s, i, s->held);
         }
         if (rc == TCM_DONE) rc = read_outputs(r, s, i);
