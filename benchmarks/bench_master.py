@@ -6,8 +6,8 @@ host runs it in a fresh process, records the demo's 12 output variables at every
 force (printed):
 
 - tribocosim: ``tribocosim run demo --quiet`` (writes the CSV and the metadata JSON); the loop is the metadata's
-  ``wall_time.loop``, for the loop the run takes (``auto``: the C loop) and for the Python loop
-  (``--set``-free, the API's ``loop="python"``);
+  ``wall_time.loop``, for the loop the run takes (``auto``: the C loop) and for the Python loop (the API's
+  ``loop="python"``);
 - ecos (ecospy): the package with its parameter set ``demo``, a CSV writer of the 12 variables, ``step(4120)``
   (the loop: that call); ecospy's library needs the tbb package's ``libtbb.so.12`` on ``LD_LIBRARY_PATH``;
 - libcosim (libcosimpy): the package (its step from the OSP annotation), a time-series observer of the 12
@@ -15,13 +15,15 @@ force (printed):
 - OMSimulator: its command line on the package, where an ``OMSimulator`` executable is on ``PATH`` (its pip
   package downloads a binary when it is built, which this machine cannot; it is then reported as not installed).
 
-Each figure is the best of ``--repeat`` runs (after one warm-up run, so that every library and the FMU cache are
-built and Python's bytecode is cached: ``PYTHONDONTWRITEBYTECODE`` is cleared for the runs and the bytecode kept in
-the cache folder). The load average is printed before and after each host: figures taken while the machine computes
-something else are slower by roughly the load over the core count. ``--tribocosim`` runs another installation's
-console script (e.g. a checkout of an earlier commit in its own venv), for before/after figures.
+Each figure is the best of ``--repeat`` rounds, each round one run of every host in turn, so that a load that
+changes while the benchmark runs hits every host alike (after one warm-up run each, so that every library and the
+FMU cache are built and Python's bytecode is cached: ``PYTHONDONTWRITEBYTECODE`` is cleared for the runs and the
+bytecode kept in the cache folder). The load average is printed with every round: figures taken while the machine
+computes something else are slower by roughly the load over the core count. ``--before`` adds another
+installation's console script (e.g. a checkout of an earlier commit in its own venv) to the rounds, for
+before/after figures.
 
-Usage: ``python benchmarks/bench_master.py [--repeat 5] [--tribocosim PATH]``.
+Usage: ``python benchmarks/bench_master.py [--repeat 5] [--before PATH]``.
 """
 
 from __future__ import annotations
@@ -114,16 +116,25 @@ def timed(cmd: list[str], env: dict, cwd: Path) -> tuple[float, str]:
     return wall, proc.stdout
 
 
-def best(label: str, repeat: int, once) -> tuple[float, float, float]:
-    """Run ``once() -> (whole, loop, pull force)`` 1 + repeat times; print and return the best whole and loop."""
-    print(f"# {label}: {load()}", flush=True)
-    once()  # warm-up: libraries built, bytecode cached
-    runs = [once() for _ in range(repeat)]
-    whole, loop = min(r[0] for r in runs), min(r[1] for r in runs)
-    force = runs[-1][2]
-    print(f"{label:<28} whole {whole:7.3f} s   loop {loop:7.4f} s   pull force {force:.6f} N   ({load()})",
-          flush=True)
-    return whole, loop, force
+def interleaved(runners: dict, repeat: int) -> dict[str, tuple[float, float, float]]:
+    """Run every ``once() -> (whole, loop, pull force)`` of ``runners`` once to warm up, then ``repeat`` rounds of one
+    run each, host after host (a changing load then hits every host alike); print and return the best whole and loop
+    of each with the pull force."""
+    for label, once in runners.items():
+        print(f"# warm-up {label} ({load()})", flush=True)
+        once()
+    runs: dict[str, list] = {label: [] for label in runners}
+    for r in range(repeat):
+        print(f"# round {r + 1} of {repeat} ({load()})", flush=True)
+        for label, once in runners.items():
+            runs[label].append(once())
+    out = {}
+    for label, rows in runs.items():
+        whole, loop, force = min(x[0] for x in rows), min(x[1] for x in rows), rows[-1][2]
+        print(f"{label:<32} whole {whole:7.3f} s   loop {loop:7.4f} s   pull force {force:.6f} N", flush=True)
+        out[label] = (whole, loop, force)
+    print(f"# after the last round: {load()}")
+    return out
 
 
 def main(argv=None) -> int:
@@ -131,6 +142,8 @@ def main(argv=None) -> int:
     p.add_argument("--repeat", type=int, default=5, help="timed runs per host (best of them is printed)")
     p.add_argument("--tribocosim", default=shutil.which("tribocosim") or "tribocosim",
                    help="the tribocosim console script to time (default: the one on PATH)")
+    p.add_argument("--before", help="another installation's tribocosim console script (e.g. an earlier commit's, in "
+                                    "its own venv), timed in the same rounds for before/after figures")
     args = p.parse_args(argv)
     work = Path(tempfile.mkdtemp(prefix="bench-master-"))
     cache = Path(os.environ.get("TRIBOCOSIM_CACHE", Path.home() / ".cache" / "tribocosim" / "fmus"))
@@ -145,16 +158,16 @@ def main(argv=None) -> int:
               f"best of {args.repeat}; {os.cpu_count()} cores; python {sys.version.split()[0]}")
         print(f"# tribocosim: {args.tribocosim}")
 
-        def ours(loop_kind: str):
+        runners = {}
+
+        def ours(console: str, loop_kind: str):
             def once():
-                out = work / f"out-{loop_kind}"
+                out = work / f"out-{abs(hash((console, loop_kind)))}"
                 if loop_kind == "auto":
-                    wall, _ = timed([args.tribocosim, "run", "demo", "--quiet", "--out", str(out)], env, work)
+                    wall, _ = timed([console, "run", "demo", "--quiet", "--out", str(out)], env, work)
                 else:  # the Python loop, through the API (no command-line switch for it)
-                    code = ("import sys; from tribocosim.cosim import run; "
-                            f"run('demo', sys.argv[1], loop={loop_kind!r})")
-                    python = Path(args.tribocosim).with_name("python")
-                    wall, _ = timed([str(python), "-c", code, str(out)], env, work)
+                    code = f"import sys; from tribocosim.cosim import run; run('demo', sys.argv[1], loop={loop_kind!r})"
+                    wall, _ = timed([str(Path(console).with_name("python")), "-c", code, str(out)], env, work)
                 meta = json.loads((out / "demo.json").read_text())
                 with open(out / "demo.csv", encoding="utf-8") as f:
                     header = f.readline().replace('"', "").strip().split(",")
@@ -162,11 +175,10 @@ def main(argv=None) -> int:
                 return wall, meta["wall_time"]["loop"], float(last[header.index("strip.pull_force")])
             return once
 
-        results["tribocosim"] = best("tribocosim run demo", args.repeat, ours("auto"))
-        try:
-            results["tribocosim python loop"] = best("tribocosim, Python loop", args.repeat, ours("python"))
-        except RuntimeError as exc:  # an installation without the loop option
-            print(f"tribocosim, Python loop: not measured ({str(exc).splitlines()[-1]})")
+        runners["tribocosim"] = ours(args.tribocosim, "auto")
+        runners["tribocosim, Python loop"] = ours(args.tribocosim, "python")
+        if args.before:
+            runners["tribocosim before"] = ours(args.before, "auto")
 
         libs = tbb_library_dirs()
         if libs:
@@ -180,7 +192,7 @@ def main(argv=None) -> int:
                 loop, force = map(float, out.split())
                 return wall, loop, force
 
-            results["ecos"] = best("ecos (ecospy)", args.repeat, ecos)
+            runners["ecos (ecospy)"] = ecos
         else:
             print("ecos: not measured (the tbb package, whose libtbb.so.12 ecospy loads, is not installed)")
 
@@ -192,7 +204,7 @@ def main(argv=None) -> int:
             loop, force = map(float, out.split())
             return wall, loop, force
 
-        results["libcosim"] = best("libcosim (libcosimpy)", args.repeat, libcosim)
+        runners["libcosim (libcosimpy)"] = libcosim
 
         oms = shutil.which("OMSimulator")
         if oms:
@@ -200,14 +212,19 @@ def main(argv=None) -> int:
                 wall, _ = timed([oms, str(rig), f"--stopTime={STEPS * STEP!r}", "--resultFile=oms.csv"], env, work)
                 return wall, float("nan"), float("nan")
 
-            results["OMSimulator"] = best("OMSimulator (command line)", args.repeat, omsimulator)
+            runners["OMSimulator (command line)"] = omsimulator
         else:
             print("OMSimulator: not measured (no OMSimulator executable on PATH)")
+        results = interleaved(runners, args.repeat)
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
     ours_whole, ours_loop, _ = results["tribocosim"]
     hosts = {k: v for k, v in results.items() if not k.startswith("tribocosim")}
+    if "tribocosim before" in results:
+        w, l, _ = results["tribocosim before"]
+        print(f"# tribocosim before -> now: whole process {w:.3f} -> {ours_whole:.3f} s ({w / ours_whole:.1f}x), "
+              f"loop {l:.4f} -> {ours_loop:.4f} s ({l / ours_loop:.1f}x)")
     print(f"# ratios, tribocosim / host ({load()}):")
     for name, (whole, loop, _) in hosts.items():
         print(f"  {name:<12} whole process {ours_whole / whole:5.2f}x   loop {ours_loop / loop:5.2f}x")
