@@ -182,12 +182,12 @@ def main(argv=None) -> int:
 
         libs = tbb_library_dirs()
         if libs:
-            script = work / "run_ecos.py"
-            script.write_text(ECOS)
+            ecos_script = work / "run_ecos.py"
+            ecos_script.write_text(ECOS)
             ecos_env = {**env, "LD_LIBRARY_PATH": os.pathsep.join([*libs, env.get("LD_LIBRARY_PATH", "")])}
 
             def ecos():
-                wall, out = timed([sys.executable, str(script), str(rig), str(work / "ecos.csv"), str(STEPS),
+                wall, out = timed([sys.executable, str(ecos_script), str(rig), str(work / "ecos.csv"), str(STEPS),
                                    ",".join(VARIABLES), repr(STEP)], ecos_env, work)
                 loop, force = map(float, out.split())
                 return wall, loop, force
@@ -196,11 +196,12 @@ def main(argv=None) -> int:
         else:
             print("ecos: not measured (the tbb package, whose libtbb.so.12 ecospy loads, is not installed)")
 
-        script = work / "run_libcosim.py"
-        script.write_text(LIBCOSIM)
+        libcosim_script = work / "run_libcosim.py"
+        libcosim_script.write_text(LIBCOSIM)
 
         def libcosim():
-            wall, out = timed([sys.executable, str(script), str(rig), str(STEPS), ",".join(VARIABLES)], env, work)
+            wall, out = timed([sys.executable, str(libcosim_script), str(rig), str(STEPS), ",".join(VARIABLES)], env,
+                              work)
             loop, force = map(float, out.split())
             return wall, loop, force
 
