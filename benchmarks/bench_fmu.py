@@ -1,10 +1,8 @@
-"""Cost of the StripDraw FMUs (native C and pythonfmu) against calling the strip-draw model directly.
+"""Cost of the StripDraw FMU against calling the strip-draw model directly.
 
 Measures, for the default parameters (table friction, implicit integrator, 150 elements):
 
-0. the native FMU: per-step cost of ``setReal + doStep + getReal`` through fmpy, against the
-   pythonfmu FMU through the same loop (both run the native core: the difference is the FMI layer, C against
-   pythonfmu), and the default 140 mm draw
+0. the FMU: per-step cost of ``setReal + doStep + getReal`` through fmpy, and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
    loop, per-step cost and real-time factor (target >= 500), and the same draw on other meshes (MESHES:
    the step's cost grows with the bar's nodes);
@@ -15,11 +13,8 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    ``fmpy.simulate_fmu`` on the extracted FMU against a plain loop over ``model.step`` that
    records the same outputs (the model is the native core: the ratio is fmpy's and the FMI layer's cost).
 3. cold start in a fresh process (``--cold``): ``fmpy simulate StripDraw.fmu`` from the command
-   line (extraction, imports, loading the bundled core library) against a fresh process
+   line (extraction, imports, loading the FMU's library) against a fresh process
    that imports the model and runs the same draw.
-
-In this process the FMU reuses the already imported ``components`` package (see
-components/fmus/adapter.py), so (1) and (2) measure the FMI layer, not a second compilation.
 
     python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold]
 
@@ -182,19 +177,13 @@ def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
 MESHES = (100, 450, 900)
 
 
-def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
-    """The native FMU's figures (see the module docstring, item 0)."""
+def native(tmp: Path, fmu: Path, repeat: int, steps: int) -> dict:
+    """The FMU's figures (see the module docstring, item 0)."""
     from fmpy import extract, read_model_description
 
-    from tribocosim.components.fmus.native_build import build_native_fmus
-
-    fmu = build_native_fmus(tmp / "native", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
     md = read_model_description(str(fmu))
     unzipped = str(extract(str(fmu), str(tmp / "native_unzipped")))
     _, t_native = per_step(unzipped, md, n_warm=200, n=steps, repeat=repeat)
-    py_md = read_model_description(str(python_fmu))
-    py_unzipped = str(extract(str(python_fmu), str(tmp / "python_unzipped")))
-    _, t_python = per_step(py_unzipped, py_md, n_warm=200, n=steps, repeat=repeat)
     cmd = host_command(tmp, unzipped, md, N_DRAW)
     vr = {v.name: v.valueReference for v in md.modelVariables}
 
@@ -214,7 +203,7 @@ def native(tmp: Path, python_fmu: Path, repeat: int, steps: int) -> dict:
     from fmpy import simulate_fmu
 
     simulate_fmu(unzipped, model_description=md, stop_time=N_DRAW * DT, output_interval=DT)
-    return {"fmpy_native": t_native, "fmpy_python": t_python, "host_loop": loop, "host_meshes": meshes,
+    return {"fmpy_native": t_native, "host_loop": loop, "host_meshes": meshes,
             "simulate_fmu_native": time.perf_counter() - t0}
 
 
@@ -231,9 +220,9 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         fmu = args.fmu
         if fmu is None:
-            from tribocosim.components.fmus.python_build import build_fmus
+            from tribocosim.components.fmus.native_build import build_native_fmus
 
-            fmu = build_fmus(tmp / "fmus", names=["StripDraw"])["StripDraw"]
+            fmu = build_native_fmus(tmp / "fmus", names=["StripDraw"], platforms=["linux64"])["StripDraw"]
         md = read_model_description(str(fmu))
         unzipped = str(extract(str(fmu), str(tmp / "unzipped")))
         _model().step(DT, {"normal_force": F10, "grip_velocity": V0})  # load the core library
@@ -242,9 +231,7 @@ def main(argv=None) -> int:
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
               f"{os.cpu_count()} CPUs")  # fmt: skip
         nat = native(tmp, Path(fmu), args.repeat, args.steps)
-        speedup = nat["fmpy_python"] / nat["fmpy_native"]
-        print(f"native FMU   fmpy set+doStep+get {nat['fmpy_native'] * 1e6:8.1f} us/step   pythonfmu FMU "
-              f"{nat['fmpy_python'] * 1e6:8.1f} us/step   native {speedup:.1f}x faster (the same core: FMI layers)")
+        print(f"native FMU   fmpy set+doStep+get {nat['fmpy_native'] * 1e6:8.1f} us/step")
         rtf = N_DRAW * DT / nat["host_loop"]
         print(f"native FMU   140 mm draw at 1 ms in the C host (no Python): {nat['host_loop'] * 1e3:8.2f} ms, "
               f"{nat['host_loop'] / N_DRAW * 1e6:6.2f} us/step, real-time factor {rtf:.0f} "

@@ -1,31 +1,37 @@
-"""Master overhead per FMU per macro step: cosim vs fmpy's simulate_fmu loop vs libcosim.
+"""The demo rig side by side: ``tribocosim run demo`` against ecos, libcosim and OMSimulator, whole process and loop.
 
-A trivial pythonfmu FMU (one input u, one output y = x + u, x' = 1 integrated exactly) is built
-twice (with and without ``--handle-state``) into a temporary folder. N instances are chained
-(y_i -> u_{i+1}) and run with a fixed step on
+The rig is the demo scene (press, strip draw, drawing machine: the native FMUs, 4,120 steps of 0.5 ms, Jacobi) and
+its SSP package (``tribocosim ssp export demo``, the FMUs and the scene's parameter values as parameter sets). Every
+host runs it in a fresh process, records the demo's 12 output variables at every step and ends on the same pull
+force (printed):
 
-- cosim (this project): Jacobi, extrapolation 0, one recorded output per FMU; FMUs without state
-  support (no per-step snapshot) and with it (a snapshot every step, for discard recovery);
-- fmpy.simulate_fmu (N = 1 only: it runs a single FMU), recording y;
-- libcosimpy (libcosim's C++ fixed-step loop), N chained FMUs, ``execution.step(n)``;
-- a bare Python loop calling the FMI functions directly (set u, doStep, get y): the floor for
-  any Python master on these FMUs.
+- tribocosim: ``tribocosim run demo --quiet`` (writes the CSV and the metadata JSON); the loop is the metadata's
+  ``wall_time.loop``, for the loop the run takes (``auto``: the C loop) and for the Python loop (the API's
+  ``loop="python"``);
+- ecos (ecospy): the package with its parameter set ``demo``, a CSV writer of the 12 variables, ``step(4120)``
+  (the loop: that call); ecospy's library needs the tbb package's ``libtbb.so.12`` on ``LD_LIBRARY_PATH``;
+- libcosim (libcosimpy): the package (its step from the OSP annotation), a time-series observer of the 12
+  variables, ``step(4120)``;
+- OMSimulator: its command line on the package, where an ``OMSimulator`` executable is on ``PATH`` (its pip
+  package downloads a binary when it is built, which this machine cannot; it is then reported as not installed).
 
-For cosim the time spent inside FMI calls is measured separately, so the master's own overhead
-(total minus FMU time) is reported too. Every figure is wall time per FMU per macro step, the
-median of ``--repeat`` runs. Python FMUs are slow to call (each FMI call enters the Python
-interpreter), so the absolute numbers are dominated by the FMU; the overhead columns are what
-compares the masters.
+Each figure is the best of ``--repeat`` rounds, each round one run of every host in turn, so that a load that
+changes while the benchmark runs hits every host alike (after one warm-up run each, so that every library and the
+FMU cache are built and Python's bytecode is cached: ``PYTHONDONTWRITEBYTECODE`` is cleared for the runs and the
+bytecode kept in the cache folder). The load average is printed with every round: figures taken while the machine
+computes something else are slower by roughly the load over the core count. ``--before`` adds another
+installation's console script (e.g. a checkout of an earlier commit in its own venv) to the rounds, for
+before/after figures.
 
-Usage: ``python benchmarks/bench_master.py [--steps 20000] [--repeat 3]``.
+Usage: ``python benchmarks/bench_master.py [--repeat 5] [--before PATH]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -33,162 +39,200 @@ import textwrap
 import time
 from pathlib import Path
 
-TRIVIAL = textwrap.dedent('''
-    from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
-    from pythonfmu.enums import Fmi2Initial
+STEPS = 4120
+STEP = 5e-4
+VARIABLES = ["strip.pull_force", "strip.mu_mean", "strip.friction_force", "strip.sliding_distance",
+             "strip.beta_mean", "strip.beta_max", "press.normal_force", "press.force_reference",
+             "drive.grip_velocity", "drive.velocity_reference", "drive.grip_position", "drive.motor_force"]
 
+ECOS = textwrap.dedent("""
+    import sys, time
+    from ecospy import EcosLib, EcosSimulation
 
-    class BenchTrivial(Fmi2Slave):
-        """y = x + u with x' = 1 (the cheapest FMU that still has state, input and output)."""
-
-        def __init__(self, **kwargs):
-            super().__init__(**kwargs)
-            self.u = 0.0
-            self.x = 0.0
-            self.register_variable(Real("u", causality=Fmi2Causality.input, start=0.0))
-            self.register_variable(Real("y", causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                                        initial=Fmi2Initial.exact, start=0.0, getter=lambda: self.x + self.u))
-
-        def do_step(self, t, h):
-            self.x += h
-            return True
-
-        def _get_fmu_state(self):
-            return {"x": self.x, "u": self.u}
-
-        def _set_fmu_state(self, s):
-            self.x, self.u = s["x"], s["u"]
-''')
-
-
-def build(folder: Path) -> dict[str, Path]:
-    script = folder / "BenchTrivial.py"
-    script.write_text(TRIVIAL)
-    out = {}
-    for kind, flags in (("state", ["--handle-state"]), ("nostate", [])):
-        dest = folder / kind
-        dest.mkdir()
-        subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(script), "--dest", str(dest), *flags],
-                       check=True, capture_output=True)
-        out[kind] = dest / "BenchTrivial.fmu"
-    return out
-
-
-def scene(folder: Path, fmu: Path, n: int, steps: int, h: float) -> Path:
-    lines = [f"[experiment]\nstop = {steps * h!r}\nstep = {h!r}\n", '[master]\nalgorithm = "jacobi"\n']
-    for i in range(n):
-        lines.append(f'[fmus.f{i}]\npath = "{fmu}"\n')
-    for i in range(n - 1):
-        lines.append(f'[[connections]]\nfrom = "f{i}.y"\nto = "f{i + 1}.u"\n')
-    lines.append("[output]\nvariables = [" + ", ".join(f'"f{i}.y"' for i in range(n)) + "]\n")
-    path = folder / f"bench_{fmu.parent.name}_{n}.toml"
-    path.write_text("\n".join(lines))
-    return path
-
-
-def bench_cosim(folder, fmu, n, steps, h):
-    from tribocosim.cosim import run
-
-    res = run(scene(folder, fmu, n, steps, h), write=False)
-    wt = res.metadata["wall_time"]
-    total = wt["loop"]
-    fmu_time = sum(wt["fmus"].values())
-    per = n * steps
-    return total / per, (total - fmu_time) / per
-
-
-def bench_fmpy(fmu, steps, h):
-    from fmpy import simulate_fmu
-
-    def once(k):
+    EcosLib().set_log_level("warn")
+    rig, csv, steps, names = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4].split(",")
+    with EcosSimulation(ssp_path=rig, step_size=float(sys.argv[5])) as sim:
+        sim.add_csv_writer(csv, identifiers=[n.replace(".", "::") for n in names])
+        sim.init(parameter_set="demo")
         t0 = time.perf_counter()
-        simulate_fmu(str(fmu), stop_time=k * h, output_interval=h, output=["y"], validate=False)
-        return time.perf_counter() - t0
+        sim.step(steps)
+        loop = time.perf_counter() - t0
+        force = sim.get_real("strip::pull_force")
+        sim.terminate()
+    print(f"{loop!r} {force!r}")
+""")
 
-    return (once(steps) - once(10)) / (steps - 10)
-
-
-def bench_libcosim(fmu, n, steps, h):
+LIBCOSIM = textwrap.dedent("""
+    import sys, time
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
 
     log_output_level(CosimLogLevel.ERROR)
-    ex = CosimExecution.from_step_size(int(round(h * 1e9)))
-    idx = [ex.add_local_slave(CosimLocalSlave(str(fmu), f"f{i}")) for i in range(n)]
-    refs = {v.name.decode(): v.reference for v in ex.slave_variables(idx[0])}
-    for a, b in zip(idx, idx[1:]):
-        ex.connect_real_variables(a, refs["y"], b, refs["u"])
-    obs = CosimObserver.create_last_value()
+    rig, steps, names = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(",")
+    ex = CosimExecution.from_ssp_file(rig)
+    obs = CosimObserver.create_time_series()
     ex.add_observer(obs)
-    ex.step(10)  # initialization and warm-up
+    refs = {}
+    for name in names:
+        inst, var = name.split(".", 1)
+        i = ex.slave_index_from_instance_name(inst)
+        vr = {v.name.decode(): v.reference for v in ex.slave_variables(i)}[var]
+        obs.start_time_series(i, vr, CosimVariableType.REAL)
+        refs[name] = (i, vr)
     t0 = time.perf_counter()
-    ok = ex.step(steps)
-    dt = time.perf_counter() - t0
-    assert ok
-    return dt / (n * steps)
+    assert ex.step(steps)
+    loop = time.perf_counter() - t0
+    i, vr = refs["strip.pull_force"]
+    times, numbers, values = obs.time_series_real_samples(i, vr, steps, 1)
+    assert numbers == [steps], numbers
+    print(f"{loop!r} {values[-1]!r}")
+""")
 
 
-def bench_bare(fmu, steps, h):
-    """Set u, doStep, get y through the loaded C functions: the floor for a Python master."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave, fmi2Real, fmi2ValueReference
+def load() -> str:
+    return "load {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
 
-    md = read_model_description(str(fmu))
-    d = extract(str(fmu))
+
+def tbb_library_dirs() -> list[str]:
+    """The folders of the tbb package's libtbb.so.* (ecospy's library needs them on LD_LIBRARY_PATH)."""
+    from importlib.metadata import PackageNotFoundError, files
+
     try:
-        f = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="b")
-        f.instantiate()
-        f.setupExperiment(startTime=0.0)
-        f.enterInitializationMode()
-        f.exitInitializationMode()
-        vr = {v.name: v.valueReference for v in md.modelVariables}
-        set_real, get_real, do_step = f.dll.fmi2SetReal, f.dll.fmi2GetReal, f.dll.fmi2DoStep
-        vu, vy = (fmi2ValueReference * 1)(vr["u"]), (fmi2ValueReference * 1)(vr["y"])
-        val = (fmi2Real * 1)()
-        c = f.component
-        t0 = time.perf_counter()
-        for k in range(steps):
-            set_real(c, vu, 1, val)
-            do_step(c, k * h, h, 1)
-            get_real(c, vy, 1, val)
-        dt = time.perf_counter() - t0
-        f.terminate()
-        f.freeInstance()
-    finally:
-        shutil.rmtree(d, ignore_errors=True)
-    return dt / steps
+        found = files("tbb") or ()
+    except PackageNotFoundError:
+        return []
+    return sorted({str(Path(f.locate()).resolve().parent) for f in found if f.name.startswith("libtbb.so")})
+
+
+def timed(cmd: list[str], env: dict, cwd: Path) -> tuple[float, str]:
+    """(wall time of the process, its stdout); raises if it fails."""
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True, timeout=600)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed (exit {proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    return wall, proc.stdout
+
+
+def interleaved(runners: dict, repeat: int) -> dict[str, tuple[float, float, float]]:
+    """Run every ``once() -> (whole, loop, pull force)`` of ``runners`` once to warm up, then ``repeat`` rounds of one
+    run each, host after host (a changing load then hits every host alike); print and return the best whole and loop
+    of each with the pull force."""
+    for label, once in runners.items():
+        print(f"# warm-up {label} ({load()})", flush=True)
+        once()
+    runs: dict[str, list] = {label: [] for label in runners}
+    for r in range(repeat):
+        print(f"# round {r + 1} of {repeat} ({load()})", flush=True)
+        for label, once in runners.items():
+            runs[label].append(once())
+    out = {}
+    for label, rows in runs.items():
+        whole, loop, force = min(x[0] for x in rows), min(x[1] for x in rows), rows[-1][2]
+        print(f"{label:<32} whole {whole:7.3f} s   loop {loop:7.4f} s   pull force {force:.6f} N", flush=True)
+        out[label] = (whole, loop, force)
+    print(f"# after the last round: {load()}")
+    return out
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--steps", type=int, default=20000, help="macro steps per run (N = 1; divided by N for chains)")
-    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--repeat", type=int, default=5, help="timed runs per host (best of them is printed)")
+    p.add_argument("--tribocosim", default=shutil.which("tribocosim") or "tribocosim",
+                   help="the tribocosim console script to time (default: the one on PATH)")
+    p.add_argument("--before", help="another installation's tribocosim console script (e.g. an earlier commit's, in "
+                                    "its own venv), timed in the same rounds for before/after figures")
     args = p.parse_args(argv)
-    h = 1e-3
-    folder = Path(tempfile.mkdtemp(prefix="bench-master-"))
+    work = Path(tempfile.mkdtemp(prefix="bench-master-"))
+    cache = Path(os.environ.get("TRIBOCOSIM_CACHE", Path.home() / ".cache" / "tribocosim" / "fmus"))
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(cache / "pycache")
+    results = {}
     try:
-        fmus = build(folder)
-        med = lambda f: statistics.median(f() for _ in range(args.repeat))  # noqa: E731
-        print(f"# wall time per FMU per macro step [us], median of {args.repeat}; load: {os.getloadavg()}")
-        print(f"# python {sys.version.split()[0]}, pythonfmu FMUs (every FMI call enters Python)")
-        bare = med(lambda: bench_bare(fmus["nostate"], args.steps, h))
-        print(f"bare Python loop (set u, doStep, get y), N=1          : {1e6 * bare:8.1f}")
-        fm = med(lambda: bench_fmpy(fmus["nostate"], args.steps, h))
-        print(f"fmpy.simulate_fmu, N=1                                : {1e6 * fm:8.1f}")
-        for n in (1, 4):
-            steps = args.steps // n
-            lc = med(lambda: bench_libcosim(fmus["nostate"], n, steps, h))
-            print(f"libcosimpy (C++ loop), N={n}                            : {1e6 * lc:8.1f}")
-            for kind in ("nostate", "state"):
-                runs = [bench_cosim(folder, fmus[kind], n, steps, h) for _ in range(args.repeat)]
-                tot = statistics.median(r[0] for r in runs)
-                own = statistics.median(r[1] for r in runs)
-                label = "no rollback" if kind == "nostate" else "snapshot/step"
-                print(f"cosim Jacobi, N={n}, {label:<13}: total {1e6 * tot:8.1f}, master overhead {1e6 * own:8.1f}")
+        rig = work / "rig.ssp"
+        subprocess.run([args.tribocosim, "ssp", "export", "demo", "-o", str(rig)], env=env, check=True,
+                       capture_output=True)
+        print(f"# demo rig: {STEPS} steps of {STEP} s, 3 native FMUs, {len(VARIABLES)} variables recorded; "
+              f"best of {args.repeat}; {os.cpu_count()} cores; python {sys.version.split()[0]}")
+        print(f"# tribocosim: {args.tribocosim}")
+
+        runners = {}
+
+        def ours(console: str, loop_kind: str):
+            def once():
+                out = work / f"out-{abs(hash((console, loop_kind)))}"
+                if loop_kind == "auto":
+                    wall, _ = timed([console, "run", "demo", "--quiet", "--out", str(out)], env, work)
+                else:  # the Python loop, through the API (no command-line switch for it)
+                    code = f"import sys; from tribocosim.cosim import run; run('demo', sys.argv[1], loop={loop_kind!r})"
+                    wall, _ = timed([str(Path(console).with_name("python")), "-c", code, str(out)], env, work)
+                meta = json.loads((out / "demo.json").read_text())
+                with open(out / "demo.csv", encoding="utf-8") as f:
+                    header = f.readline().replace('"', "").strip().split(",")
+                    last = f.readlines()[-1].split(",")
+                return wall, meta["wall_time"]["loop"], float(last[header.index("strip.pull_force")])
+            return once
+
+        runners["tribocosim"] = ours(args.tribocosim, "auto")
+        runners["tribocosim, Python loop"] = ours(args.tribocosim, "python")
+        if args.before:
+            runners["tribocosim before"] = ours(args.before, "auto")
+
+        libs = tbb_library_dirs()
+        if libs:
+            ecos_script = work / "run_ecos.py"
+            ecos_script.write_text(ECOS)
+            ecos_env = {**env, "LD_LIBRARY_PATH": os.pathsep.join([*libs, env.get("LD_LIBRARY_PATH", "")])}
+
+            def ecos():
+                wall, out = timed([sys.executable, str(ecos_script), str(rig), str(work / "ecos.csv"), str(STEPS),
+                                   ",".join(VARIABLES), repr(STEP)], ecos_env, work)
+                loop, force = map(float, out.split())
+                return wall, loop, force
+
+            runners["ecos (ecospy)"] = ecos
+        else:
+            print("ecos: not measured (the tbb package, whose libtbb.so.12 ecospy loads, is not installed)")
+
+        libcosim_script = work / "run_libcosim.py"
+        libcosim_script.write_text(LIBCOSIM)
+
+        def libcosim():
+            wall, out = timed([sys.executable, str(libcosim_script), str(rig), str(STEPS), ",".join(VARIABLES)], env,
+                              work)
+            loop, force = map(float, out.split())
+            return wall, loop, force
+
+        runners["libcosim (libcosimpy)"] = libcosim
+
+        oms = shutil.which("OMSimulator")
+        if oms:
+            def omsimulator():
+                wall, _ = timed([oms, str(rig), f"--stopTime={STEPS * STEP!r}", "--resultFile=oms.csv"], env, work)
+                return wall, float("nan"), float("nan")
+
+            runners["OMSimulator (command line)"] = omsimulator
+        else:
+            print("OMSimulator: not measured (no OMSimulator executable on PATH)")
+        results = interleaved(runners, args.repeat)
     finally:
-        shutil.rmtree(folder, ignore_errors=True)
+        shutil.rmtree(work, ignore_errors=True)
+
+    ours_whole, ours_loop, _ = results["tribocosim"]
+    hosts = {k: v for k, v in results.items() if not k.startswith("tribocosim")}
+    if "tribocosim before" in results:
+        w, l, _ = results["tribocosim before"]
+        print(f"# tribocosim before -> now: whole process {w:.3f} -> {ours_whole:.3f} s ({w / ours_whole:.1f}x), "
+              f"loop {l:.4f} -> {ours_loop:.4f} s ({l / ours_loop:.1f}x)")
+    print(f"# ratios, tribocosim / host ({load()}):")
+    for name, (whole, loop, _) in hosts.items():
+        print(f"  {name:<12} whole process {ours_whole / whole:5.2f}x   loop {ours_loop / loop:5.2f}x")
+    if hosts:
+        fastest = min(hosts, key=lambda k: hosts[k][0])
+        print(f"# target: at most 1.5x the faster host, whole process: {ours_whole / hosts[fastest][0]:.2f}x "
+              f"of {fastest}")
     return 0
 
 

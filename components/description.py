@@ -23,8 +23,8 @@ it (``tribocosim/components/<name>/component.py``, module attribute ``COMPONENT`
   an ``observer`` for side outputs (the strip's field file); and its native implementation
   (``native``: C sources and the prefix of its C functions).
 
-:mod:`tribocosim.components.registry` finds the descriptions: the FMU build, the pythonfmu adapter,
-the native FMU's model description, the scene checks, the monolithic reference, the demo and the
+:mod:`tribocosim.components.registry` finds the descriptions: the FMU build and its model
+descriptions, the scene checks, the monolithic reference, the demo and the
 reports all read them. Adding a component is writing its model and its description.
 """
 

@@ -26,13 +26,13 @@ from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
 from tribocosim.cosim.engine.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.engine.graph import gauss_seidel_order
 from tribocosim.cosim.engine.master import Master
+from tribocosim.cosim.engine.native_loop import NativeLoopStopped
 from tribocosim.cosim.engine.recorder import Progress, Recorder
 from tribocosim.cosim.engine.slave import FmpySlave
 from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
 from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
 from tribocosim.cosim.engine.timegrid import TimeGrid
 from tribocosim.cosim.scene.validate import Plan
-from tribocosim.cosim.ssp.reader import load_ssp
 
 
 @dataclass
@@ -113,13 +113,16 @@ def extracted_fmu(path: Path) -> Path:
     return d
 
 
-def build(plan: Plan) -> Build:
+def build(plan: Plan, loop: str = "auto") -> Build:
     """Assemble a master for a validated scene (FMUs extracted, not yet instantiated).
 
     Parameters
     ----------
     plan : Plan
         From :func:`tribocosim.cosim.scene.validate.load_scene`.
+    loop : {"auto", "python"}
+        The master's loop (:class:`~tribocosim.cosim.engine.master.Master`): the C loop where it takes the run, or
+        always the Python one.
     """
     scene = plan.scene
     names = list(plan.fmus)
@@ -175,7 +178,7 @@ def build(plan: Plan) -> Build:
         grid = TimeGrid.variable(ex.start, ex.stop, ms.adaptive.min_step)
         controller = ESTIMATORS[ms.adaptive.estimator].create(ms.adaptive, grid, ex.step, p, plan.bonds)
     recorder = Recorder(slaves, index, plan.recorded, system)
-    master = Master(system, algorithm, controller, grid, recorder, names)
+    master = Master(system, algorithm, controller, grid, recorder, names, loop=loop)
     master.gauss_seidel = gs
     master.accuracy_order = p  # of the coupling error with exact subsystems (reported in the metadata)
     params = []
@@ -193,7 +196,7 @@ def native_resource(spec, name: str, value):
     """The value of parameter ``name`` of a scene FMU as the FMU reads it: for a native FMU of a component whose
     parameter names a resource file the C code reads in another form (the strip's ``table_file``, a .npz table),
     that form, converted once into the cache; every other value as it is."""
-    if spec.component is None or spec.variant == "python" or not isinstance(value, str) or not value:
+    if spec.component is None or not isinstance(value, str) or not value:
         return value
     from tribocosim.components import registry
 
@@ -215,7 +218,7 @@ def native_resource(spec, name: str, value):
 
 
 def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, overrides: dict | None = None,
-        progress: bool = False, write: bool = True) -> Result:
+        progress: bool = False, write: bool = True, loop: str = "auto") -> Result:
     """Load, validate and run a scene.
 
     Parameters
@@ -233,6 +236,10 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         Show a progress bar on stderr for runs longer than two seconds.
     write : bool
         Write the CSV and JSON files (False: only return the result).
+    loop : {"auto", "python"}
+        "auto": a fixed-step Jacobi or Gauss-Seidel run without extrapolation takes its steps in C
+        (:mod:`tribocosim.cosim.engine.native_loop`, the same results); a step the C loop does not take (a discard,
+        a non-finite value) repeats the run with the Python loop, which can roll back. "python": the Python loop.
 
     Returns
     -------
@@ -245,30 +252,16 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
         scene = load_component_scene(scene_file(scene), overrides)
     plan = scene
-    b = build(plan)
-    m = b.master
-    ex = plan.scene.experiment
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    bar = Progress(ex.start, ex.stop) if progress else None
-    if bar is not None:
-        m.observers.append(bar)
     t0 = time.perf_counter()
-    failure = None
     try:
-        m.initialize(ex.start, ex.stop, b.parameters)
-        m.run()
-    # a step that could not be recovered (an FMU's refusal, a non-finite output, a coupling iteration that
-    # does not converge): keep what was accepted
-    except (CosimStepError, ConvergenceError) as exc:
-        failure = exc
-    finally:
-        if bar is not None:
-            bar.close()
-        total = time.perf_counter() - t0
-        fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
-        calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
-        m.warnings.extend(_outside_table_warnings(b))
-        b.close()
+        b, failure, fmu_times, calls = _execute(plan, loop, progress)
+    except NativeLoopStopped as stop:  # the C loop saves no state: the Python loop repeats the run and rolls back
+        b, failure, fmu_times, calls = _execute(plan, "python", progress)
+        b.notes.append(f"the native loop stopped ({stop}); the run was repeated with the Python loop, which can "
+                       "roll back and halve the step")
+    total = time.perf_counter() - t0
+    m = b.master
     meta = _metadata(b, started, total, fmu_times, calls)
     if failure is not None:
         meta["failure"] = {"message": str(failure), "last_accepted_time": m.grid.time(m.n),
@@ -289,6 +282,34 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     return result
 
 
+def _execute(plan: Plan, loop: str, progress: bool):
+    """Build, initialize and run a master: ``(build, failure or None, FMU wall times, FMI call counts)``; the FMUs
+    are freed. A step that could not be recovered (an FMU's refusal, a non-finite output, a coupling iteration that
+    does not converge) is the failure, and what was accepted before it is kept."""
+    b = build(plan, loop)
+    m = b.master
+    ex = plan.scene.experiment
+    bar = Progress(ex.start, ex.stop) if progress else None
+    if bar is not None:
+        m.observers.append(bar)
+    failure = None
+    try:
+        m.initialize(ex.start, ex.stop, b.parameters)
+        m.run()
+    except NativeLoopStopped:
+        raise
+    except (CosimStepError, ConvergenceError) as exc:
+        failure = exc
+    finally:
+        if bar is not None:
+            bar.close()
+        fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
+        calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
+        m.warnings.extend(_outside_table_warnings(b))
+        b.close()
+    return b, failure, fmu_times, calls
+
+
 #: the output through which a strip-draw FMU counts its friction-table lookups outside the simulated range
 CLAMP_OUTPUT = "table_clamp_count"
 
@@ -300,6 +321,8 @@ def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict
     The metadata names the package as the scene (``scene``, ``scene_sha256``) and keeps the
     translated scene's text under ``ssp.scene_toml``.
     """
+    from tribocosim.cosim.ssp.reader import load_ssp
+
     ssp = Path(path).resolve()
     plan = load_ssp(ssp, overrides)
     try:
@@ -357,15 +380,20 @@ def _json_default(o):
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
+def distribution_version(name: str) -> str | None:
+    """The version of an installed distribution, from the name of its ``.dist-info`` folder on ``sys.path`` (what
+    :func:`importlib.metadata.version` reads, without importing its e-mail parser on the run path), or None."""
+    import sys
+
+    for entry in sys.path:
+        folder = Path(entry or ".")
+        found = sorted(folder.glob(f"{name}-*.dist-info")) if folder.is_dir() else []
+        if found:
+            return found[0].name[len(name) + 1:-len(".dist-info")]
+    return None
+
+
 def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict) -> dict:
-    from importlib.metadata import PackageNotFoundError, version
-
-    def ver(pkg):
-        try:
-            return version(pkg)
-        except PackageNotFoundError:
-            return None
-
     plan, m = b.plan, b.master
     scene = plan.scene
     sysm = m.system
@@ -376,7 +404,7 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
         "scene": str(scene.path),
         "scene_sha256": hashlib.sha256(scene.path.read_bytes()).hexdigest(),
         "started": started,
-        "versions": {"tribocosim": ver("tribocosim"), "fmpy": ver("fmpy")},
+        "versions": {"tribocosim": distribution_version("tribocosim"), "fmpy": distribution_version("fmpy")},
         "experiment": asdict(scene.experiment),
         "master": {
             "algorithm": ms.algorithm,
@@ -386,6 +414,8 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
             "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
             **({ms.algorithm: asdict(ms.algorithm_settings)} if ms.algorithm_settings is not None else {}),
             "order_of_accuracy": m.accuracy_order,
+            "loop": m.loop_used,
+            **({"python_loop_because": m.loop_reason} if m.loop_used == "python" else {}),
             "time_tick": m.grid.tick,
         },
         "fmus": {n: {"path": str(plan.fmus[n].path), "can_roll_back": plan.fmus[n].can_roll_back,

@@ -55,14 +55,13 @@ def main(argv: list[str] | None = None) -> int:
 def console() -> None:
     """The console script: :func:`main`, then exit.
 
-    When a pythonfmu FMU ran in this process (the reports' oscillator FMUs, a scene's ``variant = "python"``),
+    When a pythonfmu FMU ran in this process (the reports' oscillator FMUs, a user's component in Python),
     its embedded interpreter state can corrupt the heap during Python's own teardown (pythonfmu 0.7.0; seen once
     as "corrupted double-linked list" after a report had written all its files), so then the process ends
     without that teardown (``os._exit``). What Python's exit does first, and what this process relies on, still
     happens before: the ``atexit`` handlers run, which remove the folders the FMUs and SSP packages were
     extracted to (:mod:`tribocosim.cosim.api`, :mod:`tribocosim.cosim.ssp.reader`), the temporary folders of
-    ``weakref.finalize`` (``tempfile.TemporaryDirectory``) and the pythonfmu exit guard
-    (:mod:`tribocosim.components.fmus.exitguard`); then every output is flushed. ``os._exit`` skips only the
+    ``weakref.finalize`` (``tempfile.TemporaryDirectory``); then every output is flushed. ``os._exit`` skips only the
     module and object teardown and the C library's exit, where the heap corruption happens."""
     code = main()
     if "pythonfmu" in sys.modules:

@@ -1,9 +1,8 @@
 """``tribocosim fmu``: build the project's FMUs.
 
-    tribocosim fmu build [--out DIR] [--only NAME ...] [--python] [--platform P ...] [--fmi {2,3}]
-        native FMUs (C; binaries for linux64, win64, darwin64 (universal: Intel and Apple Silicon); with --fmi 3
-        also aarch64-linux and aarch64-darwin) by default, into build/fmus;
-        --python: the pythonfmu variants (the physics in Python; the host needs Python and numpy);
+    tribocosim fmu build [--out DIR] [--only NAME ...] [--platform P ...] [--fmi {2,3}]
+        the FMUs (C; binaries for linux64, win64, darwin64 (universal: Intel and Apple Silicon); with --fmi 3
+        also aarch64-linux and aarch64-darwin), into build/fmus;
         --fmi 3: FMI 3.0 co-simulation variants of the native FMUs, same file names (StripDraw.fmu...),
         into build/fmus/fmi3 unless --out is given
     tribocosim fmu list                                  the FMUs this project builds
@@ -24,18 +23,15 @@ DEFAULT_OUT_FMI3 = "build/fmus/fmi3"
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="tribocosim fmu", description="Build the project's FMUs.")
     sub = parser.add_subparsers(dest="command", required=True)
-    build = sub.add_parser("build", help="build FMUs (FMI 2.0 co-simulation, or 3.0 with --fmi 3; native unless "
-                                          "--python)")
+    build = sub.add_parser("build", help="build FMUs (FMI 2.0 co-simulation, or 3.0 with --fmi 3)")
     build.add_argument("--out", help=f"destination folder (default: {DEFAULT_OUT}; with --fmi 3: {DEFAULT_OUT_FMI3})")
     build.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
-    build.add_argument("--python", action="store_true",
-                       help="build the pythonfmu variants (change the physics in Python; need Python and numpy in the host)")
     build.add_argument("--platform", nargs="+", choices=("linux64", "win64", "darwin64", "aarch64-linux",
                                                          "aarch64-darwin"),
-                       help="native: the platforms to compile for (default: all; FMI 2.0 has no ARM Linux folder "
+                       help="the platforms to compile for (default: all; FMI 2.0 has no ARM Linux folder "
                             "and runs Apple Silicon from the universal darwin64 binary)")
     build.add_argument("--fmi", type=int, choices=(2, 3), default=2,
-                       help="native: the FMI version (default: 2). 3: FMI 3.0 co-simulation FMUs with the same "
+                       help="the FMI version (default: 2). 3: FMI 3.0 co-simulation FMUs with the same "
                             f"names (StripDraw.fmu...) into {DEFAULT_OUT_FMI3} unless --out is given; StripDraw "
                             "also outputs the nodal fields beta, U, contact as arrays of n_nodes = n_elements + 1 "
                             "values (n_nodes and n_elements are structural parameters)")
@@ -51,8 +47,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim fmu``; returns the exit code."""
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     from tribocosim.components import registry
-    from tribocosim.components.fmus.python_build import FmuBuildError, build_fmus, fmus
-    from tribocosim.components.fmus.native_build import PLATFORMS, build_native_fmus
+    from tribocosim.components.fmus.native_build import PLATFORMS, FmuBuildError, build_native_fmus, fmus
 
     if args.command == "table-resource":
         from tribocosim.errors import TribocosimError
@@ -68,16 +63,9 @@ def main(argv: list[str] | None = None) -> int:
         for name, comp in fmus().items():
             print(f"{name}\t{registry.module_of(comp)}")
         return 0
-    if args.python and args.fmi != 2:
-        print("tribocosim fmu build: --python builds FMI 2.0 FMUs only (pythonfmu); --fmi 3 is for the native FMUs",
-              file=sys.stderr)
-        return 2
     out = args.out or (DEFAULT_OUT_FMI3 if args.fmi == 3 else DEFAULT_OUT)
     try:
-        if args.python:
-            built = build_fmus(out, args.only)
-        else:
-            built = build_native_fmus(out, args.only, args.platform or PLATFORMS, fmi_version=args.fmi)
+        built = build_native_fmus(out, args.only, args.platform or PLATFORMS, fmi_version=args.fmi)
     except FmuBuildError as exc:
         print(f"tribocosim fmu build: {exc}", file=sys.stderr)
         return 1

@@ -1,9 +1,7 @@
-"""What the model descriptions of both FMU variants share: units, descriptions, unit definitions.
+"""What the model descriptions of the FMI 2.0 and 3.0 FMUs share: units, descriptions, unit definitions.
 
-The Python (pythonfmu) and native variants of a component's FMU declare the same variables with the
-same descriptions and units, both from the component's description; the native builder writes its
-whole model description from :func:`tribocosim.components.native.toolchain.declarations.variables`, the
-pythonfmu adapter lets pythonfmu write it and adds the unit definitions.
+Both declare the variables of the component's description with the same descriptions and units; the builder
+writes each whole model description from :func:`tribocosim.components.native.toolchain.declarations.variables`.
 """
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ For each component with a native implementation (``Component.native``) the build
 
 1. generates, from the component's description, the parameter header and the FMU's variable table
    (:mod:`tribocosim.components.native.toolchain.declarations`) and the model description (FMI 2.0: this
-   module, with the same names, units, descriptions, start values, ranges and value references as
-   the Python variant; FMI 3.0: :mod:`.modeldescription3`, the same variables plus ``time`` and
+   module, with the names, units, descriptions, start values, ranges and value references of
+   the component's description; FMI 3.0: :mod:`.modeldescription3`, the same variables plus ``time`` and
    the strip's nodal-field arrays);
 2. compiles the model's C sources, its glue, the FMI core (``tc_fmu_instance.c``) and the wrapper
    of the FMI version (``tc_fmi2.c`` or ``tc_fmi3.c``, against the standard's headers that fmpy
@@ -28,6 +28,7 @@ core, so their outputs agree to the last bit.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import sys
 import tempfile
@@ -37,16 +38,17 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from tribocosim.components import registry
 from tribocosim.components.description import Component
-from tribocosim.components.fmus.python_build import FmuBuildError, _validate_and_place
 from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
 from tribocosim.components.native.toolchain import compiler, declarations
+from tribocosim.components.native.toolchain.library import COMMON_SOURCES
+from tribocosim.errors import TribocosimError
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
 #: version-independent FMI core and the version's wrapper
-SHARED_SOURCES = {2: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi2.c"),
-                  3: ("core/tc_common.c", "fmi/tc_fmu_instance.c", "fmi/tc_fmi3.c")}
+SHARED_SOURCES = {2: (*COMMON_SOURCES, "fmi/tc_fmu_instance.c", "fmi/tc_fmi2.c"),
+                  3: (*COMMON_SOURCES, "fmi/tc_fmu_instance.c", "fmi/tc_fmi3.c")}
 #: the platforms a native FMU is built for (by default all): the machines it runs on
 PLATFORMS = ("linux64", "win64", "darwin64", "aarch64-linux", "aarch64-darwin")
 FMI_VERSIONS = (2, 3)
@@ -56,6 +58,10 @@ FMI2_FOLDERS = {"linux64": "linux64", "win64": "win64", "darwin64": "darwin64", 
 #: the FMI 3.0 binaries folder (platform tuple) of each platform
 FMI3_PLATFORMS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "darwin64": "x86_64-darwin",
                   "aarch64-linux": "aarch64-linux", "aarch64-darwin": "aarch64-darwin"}
+
+
+class FmuBuildError(TribocosimError):
+    """An FMU could not be built (unknown name, compiler failure, validation problems); the message says which."""
 
 
 def fmus() -> dict[str, Component]:
@@ -134,15 +140,6 @@ def description(comp: Component, fmu_guid: str, fmi_version: int = 2) -> str:
     return model_description(comp, fmu_guid)
 
 
-def _zig_version() -> str:
-    try:
-        from importlib.metadata import version
-
-        return version("ziglang")
-    except Exception:  # noqa: BLE001 - the compiler's absence is reported by the build itself
-        return "?"
-
-
 def source_digest(name: str, fmi_version: int = 2) -> str:
     """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
     comp = component(name)
@@ -156,7 +153,7 @@ def source_digest(name: str, fmi_version: int = 2) -> str:
     for path in comp.resource_files:
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    h.update(" ".join((*compiler.CFLAGS, _zig_version(), *PLATFORMS)).encode())
+    h.update(" ".join((*compiler.CFLAGS, compiler.zig_version(), *PLATFORMS)).encode())
     return h.hexdigest()
 
 
@@ -171,7 +168,7 @@ def _number(x) -> str:
 
 
 def model_description(comp: Component, fmu_guid: str) -> str:
-    """The FMI 2.0 model description of a component's native FMU (variables in the Python variant's order)."""
+    """The FMI 2.0 model description of a component's native FMU (variables in the declaration's order)."""
     from tribocosim import __name__ as package
 
     start, stop, step = comp.default_experiment
@@ -303,8 +300,26 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
                 z.writestr("resources/", "")
     return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
                                                     "source_digest": digest, "platforms": list(platforms),
-                                                    "python": sys.version.split()[0], "ziglang": _zig_version()})
+                                                    "python": sys.version.split()[0], "ziglang": compiler.zig_version()})
 
 
 __all__ = ["binary_path", "build_native_fmus", "compile_binaries", "description", "fmi3_headers", "fmus",
            "model_description", "source_digest"]
+
+
+def _validate_and_place(name: str, partial: Path, out: Path, record: dict) -> Path:
+    """``fmpy validate`` the built FMU, then move it and its JSON record into place atomically."""
+    try:
+        from fmpy.validation import validate_fmu
+
+        problems = validate_fmu(str(partial))
+        if problems:
+            raise FmuBuildError(f"FMU {name}: fmpy validate found problems:\n" + "\n".join(problems))
+        target = out / f"{name}.fmu"
+        os.replace(partial, target)
+    finally:
+        partial.unlink(missing_ok=True)
+    tmp_json = out / f".{name}.{os.getpid()}.partial.json"
+    tmp_json.write_text(json.dumps(record, indent=2) + "\n")
+    os.replace(tmp_json, out / f"{name}.fmu.json")
+    return target

@@ -35,7 +35,7 @@ Input derivatives (native FMI 2.0 FMU: ``canInterpolateInputs = true``)
     polynomials over the next step (the model's ``step(..., derivatives=...)``): with ``internal_step`` > 0
     friction and debris then follow the inputs within a communication step and Jacobi or Gauss-Seidel with
     extrapolation 1 are second-order. The derivatives apply to the next ``fmi2DoStep`` only and are zero
-    again after it or after ``fmi2SetReal`` of the input. The pythonfmu variant holds its inputs.
+    again after it or after ``fmi2SetReal`` of the input.
 
 Errors particular to this model
     NaN/inf/negative ``normal_force``, NaN/inf ``grip_velocity``, a table lookup outside the table

@@ -59,7 +59,6 @@ import operator
 import os
 import time
 import tomllib
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -446,6 +445,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                 progress(len(by_case), len(cases), by_case[case.index])
     else:
         import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed  # not on the path of a single run
 
         with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
             futures = [pool.submit(_worker, str(sweep.path), c.index, str(out)) for c in cases]

@@ -3,6 +3,7 @@
 :mod:`.master` (the time loop, rejection and rollback), :mod:`.algorithms` (Jacobi, Gauss-Seidel, iterative coupling),
 :mod:`.stepcontrol` (fixed step, step doubling, energy residual), :mod:`.slave` (one FMU instance as the master sees
 it, and its fmpy implementation), :mod:`.system` (slaves, links, coupling values), :mod:`.graph` (Gauss-Seidel order,
-algebraic loops), :mod:`.timegrid` (integer time ticks), :mod:`.extrapolation` (input polynomials) and
-:mod:`.recorder` (observers: the recorded outputs, progress). Nothing here reads a scene file.
+algebraic loops), :mod:`.timegrid` (integer time ticks), :mod:`.extrapolation` (input polynomials),
+:mod:`.recorder` (observers: the recorded outputs, progress) and :mod:`.native_loop` (the fixed-step loop in C,
+``native/tc_master.c``). Nothing here reads a scene file.
 """

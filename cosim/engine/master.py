@@ -32,6 +32,8 @@ from tribocosim.cosim.engine.system import CoupledSystem, NonFiniteOutput
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
 LOG = logging.getLogger("tribocosim.cosim")
+#: the loops a master can run: "auto" (the C loop where it takes the run) or "python"
+LOOPS = ("auto", "python")
 
 
 @dataclass
@@ -72,10 +74,13 @@ class Master:
         Instance names (for messages).
     observers : list of Observer, optional
         Notified after the recorder (e.g. a progress bar).
+    loop : {"auto", "python"}
+        "auto": the fixed-step loop in C (:mod:`tribocosim.cosim.engine.native_loop`) where it takes the run,
+        else the Python loop; "python": always the Python loop.
     """
 
     def __init__(self, system: CoupledSystem, algorithm: Algorithm, controller, grid: TimeGrid, recorder: Recorder,
-                 names: list[str], observers: list[Observer] = ()) -> None:
+                 names: list[str], observers: list[Observer] = (), loop: str = "auto") -> None:
         self.system = system
         self.algorithm = algorithm
         self.controller = controller
@@ -90,6 +95,12 @@ class Master:
         self.last_failure = ""
         self.last_inputs_at_end = system.u_end
         self.warnings: list[str] = []
+        if loop not in LOOPS:
+            raise ValueError(f"loop = {loop!r} is not one of {', '.join(LOOPS)}")
+        self.loop = loop
+        #: the loop that ran: "native" (:mod:`.native_loop`) or "python", and why not native
+        self.loop_used = "python"
+        self.loop_reason = "not run yet"
 
     # --- initialization ----------------------------------------------------------------------
     def initialize(self, start: float, stop: float, parameters: list[dict[int, tuple[str, object]]]) -> None:
@@ -204,9 +215,29 @@ class Master:
 
     # --- the loop ----------------------------------------------------------------------------
     def run(self) -> RunStats:
-        """Advance to the end of the grid; return the statistics."""
+        """Advance to the end of the grid; return the statistics.
+
+        With ``loop = "auto"`` the C loop takes the run where it can
+        (:class:`~tribocosim.cosim.engine.native_loop.NativeLoop`); it raises
+        :class:`~tribocosim.cosim.engine.native_loop.NativeLoopStopped` at a step only the Python loop can take (the
+        run is then repeated with ``loop = "python"``).
+        """
         t0 = time.perf_counter()
+        try:
+            if self.loop == "auto" and self.n < self.grid.end_ticks:
+                from tribocosim.cosim.engine import native_loop
+
+                self.loop_reason = native_loop.unsupported(self)
+                if self.loop_reason is None:
+                    self.loop_used = "native"
+                    native_loop.NativeLoop(self).run(self)
+            else:
+                self.loop_reason = "loop = \"python\""
+            self._python_loop()
+        finally:
+            self.stats.wall_time = time.perf_counter() - t0
+        return self.stats
+
+    def _python_loop(self) -> None:
         while self.n < self.grid.end_ticks:
             self.controller.advance(self, self.n)
-        self.stats.wall_time = time.perf_counter() - t0
-        return self.stats

@@ -25,7 +25,13 @@ from tribocosim.cosim.engine.slave import Slave
 
 
 class Observer:
-    """What the master calls on its observers (a base that does nothing)."""
+    """What the master calls on its observers (a base that does nothing).
+
+    An observer with ``sampled = True`` needs only the time of the latest accepted step now and then (a progress
+    reporter), so the native loop (:mod:`tribocosim.cosim.engine.native_loop`) may tell it once per chunk of steps.
+    """
+
+    sampled = False
 
     def step_attempted(self, t: float) -> list[str]:
         """A macro step to ``t`` succeeded in the FMUs; return the names of values that make it unusable."""
@@ -103,6 +109,11 @@ class Recorder(Observer):
         self._times.append(t)
         self._rows.append(row)
 
+    def extend(self, times: np.ndarray, rows: np.ndarray) -> None:
+        """Append the rows of a block of accepted points (``rows[j]`` at ``times[j]``)."""
+        self._times.extend(times.tolist())
+        self._rows.extend(np.array(rows, dtype=float))
+
     def sample(self, t: float) -> None:
         """Read every recorded variable and append a row at time t."""
         self.append(t, self.read())
@@ -146,16 +157,18 @@ class Recorder(Observer):
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(path.suffix + ".part")
+        data = np.column_stack([self.time, np.array(self._rows).reshape(len(self._rows), len(self.names))])
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(",".join(f'"{n}"' for n in ["time", *self.names]) + "\n")
-            for t, row in zip(self._times, self._rows):
-                f.write(",".join([repr(float(t)), *(repr(float(v)) for v in row)]) + "\n")
+            f.write("".join(",".join(map(repr, row)) + "\n" for row in data.tolist()))
         tmp.replace(path)
         return path
 
 
 class Progress(Observer):
     """A one-line progress bar on stderr, shown once a run has taken longer than ``delay`` seconds."""
+
+    sampled = True
 
     def __init__(self, start: float, stop: float, delay: float = 2.0, stream=None) -> None:
         self.start, self.stop, self.delay = start, stop, delay

@@ -254,6 +254,19 @@ class FmpySlave:
             self._fmu = None
             self._dll = {}
 
+    @property
+    def loaded(self) -> bool:
+        """True between :meth:`instantiate` and :meth:`terminate`."""
+        return self._fmu is not None
+
+    def fmi_functions(self) -> dict[str, int]:
+        """The addresses of the hot FMI functions of the loaded library (for a native loop that calls them)."""
+        return {name: ctypes.cast(fn, ctypes.c_void_p).value for name, fn in self._dll.items()}
+
+    def component_address(self) -> int:
+        """The address of the FMI instance (``fmi2Component``)."""
+        return int(self._c)
+
     # --- values ------------------------------------------------------------------------------
     def set_real(self, refs: Sequence[int], values: Sequence[float]) -> None:
         n = len(refs)

@@ -1,9 +1,8 @@
 """FMUs of this project's components, built on demand and cached (scene key ``component = "..."``).
 
 ``component = "stripdraw"`` in a scene means: the FMU the project builds from that component's
-description (:mod:`tribocosim.components.registry`), native (C, this machine's binary) unless the
-scene says ``variant = "python"`` (pythonfmu), built the first time it is needed and kept in a
-cache folder, ``$TRIBOCOSIM_CACHE`` or ``~/.cache/tribocosim/fmus``. The cache entry is keyed
+description (:mod:`tribocosim.components.registry`), in C (this machine's binary), built the first time it
+is needed and kept in a cache folder, ``$TRIBOCOSIM_CACHE`` or ``~/.cache/tribocosim/fmus``. The cache entry is keyed
 by the builder's source digest (the FMU's code, its model modules and its resource files, e.g. the
 friction table), so editing the model or replacing the table rebuilds the FMU and nothing else
 does. The build goes to a temporary folder that is renamed into place, so concurrent runs never
@@ -41,9 +40,9 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         Component name (``"stripdraw"``) or model identifier (``"StripDraw"``), case-insensitive.
     cache : Path, optional
         Cache folder (default :func:`cache_dir`).
-    variant : {"native", "python"}, optional
-        The native FMU (C; in the cache with this machine's binary only) or the pythonfmu one; default
-        native when the component has a native implementation.
+    variant : {"native"}, optional
+        The FMU's implementation: C (in the cache with this machine's binary only), the only one the project
+        builds.
 
     Raises
     ------
@@ -51,19 +50,21 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         If the component is unknown or the build fails (with the builder's message).
     """
     from tribocosim.components import registry
-    from tribocosim.components.fmus import native_build, python_build
+    from tribocosim.components.fmus import native_build
 
     comp = registry.find(component)
     if comp is None:
         raise SceneError(f"unknown component {component!r}; this installation builds: "
                          f"{', '.join(c.name for c in registry.components().values())}")
     name = comp.model_identifier
-    variant = variant or ("native" if comp.native is not None else "python")
-    if variant == "native" and comp.native is None:
-        raise SceneError(f"component {component!r} has no native implementation; use variant = \"python\"")
+    variant = variant or "native"
+    if comp.native is None:
+        raise SceneError(f"component {component!r} has no native implementation: the project builds its FMUs in C; "
+                         "a component written in Python is a pythonfmu FMU of its own, named by path = ... "
+                         "(docs/user-guide.md)")
     root = Path(cache) if cache is not None else cache_dir()
     try:
-        digest = python_build.source_digest(name) if variant == "python" else native_build.source_digest(name)
+        digest = native_build.source_digest(name)
     except TribocosimError as exc:
         raise SceneError(f"component {component!r}: {exc}") from exc
     entry = root / f"{name}-{variant}-{digest[:16]}"
@@ -73,10 +74,7 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
-        if variant == "python":
-            python_build.build_fmus(tmp, names=[name])
-        else:
-            native_build.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
+        native_build.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
         try:
             os.rename(tmp, entry)
         except OSError:

@@ -30,8 +30,7 @@ settings and the outputs to record; nothing else is loaded, computed or written.
 
     [fmus.strip]
     path = "StripDraw.fmu"      # relative to the scene file, or: component = "stripdraw"
-    # variant = "native"        # of a component's FMU: native (C, the default where the component has one)
-                                # or python (pythonfmu)
+    # variant = "native"        # of a component's FMU: native (C), the one the project builds
     parameters = { tool_length = 0.035 }
     # feedthrough = false       # outputs never depend directly on inputs (default: from the
                                 # model description, else probed numerically at the start)
@@ -74,7 +73,7 @@ _EXPERIMENT_KEYS = ("start", "stop", "step")
 _MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive",
                 *(name for name, spec in ALGORITHMS.items() if spec.settings is not None))
 _FMU_KEYS = ("path", "component", "variant", "parameters", "feedthrough")
-VARIANTS = ("native", "python")
+VARIANTS = ("native",)
 _CONNECTION_KEYS = ("from", "to")
 _BOND_KEYS = ("effort", "flow")
 _OUTPUT_KEYS = ("file", "variables")
@@ -111,7 +110,7 @@ class FmuSpec:
     component: str | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
     feedthrough: bool | None = None
-    variant: str | None = None  # of a component's FMU: native (C; the default when there is one) or python
+    variant: str | None = None  # of a component's FMU: native (C), the one the project builds
 
 
 @dataclass(frozen=True)

@@ -32,11 +32,11 @@ REAL_OUTPUTS = tuple(name for name in OUTPUT_NAMES if name != "table_clamp_count
 
 @pytest.fixture(scope="session")
 def built_fmus(tmp_path_factory) -> dict[str, Path]:
-    """``tribocosim fmu build --python --out TMP`` (the command line, in a subprocess): the pythonfmu
-    variants; ``{name: FMU file}``."""
+    """``tribocosim fmu build --platform linux64 --out TMP`` (the command line, in a subprocess): the FMUs with this
+    machine's binary; ``{name: FMU file}``."""
     out = tmp_path_factory.mktemp("fmus")
     proc = subprocess.run(
-        [sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--python", "--out", str(out)],
+        [sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--platform", "linux64", "--out", str(out)],
         cwd=PROJECT_ROOT,
         capture_output=True,
         text=True,

@@ -18,7 +18,7 @@ from tribocosim.cosim.reports.oscfmus import CONNECTIONS
 
 HERE = Path(__file__).resolve().parent
 SCRIPTS = HERE / "fmus"
-NAMES = ("OscMassA", "OscMassB", "LoopGain", "Fragile")
+NAMES = ("OscMassA", "OscMassB", "LoopGain", "Fragile", "Lag")
 NOSTATE = ("OscMassA", "OscMassB", "Fragile")
 
 #: the exact solution of the reference two-mass oscillator at t = 10 s

@@ -61,10 +61,10 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
 def test_demo_says_why_when_the_fmus_cannot_be_built(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "empty"))
 
-    from tribocosim.components.fmus import native_build, python_build
+    from tribocosim.components.fmus import native_build
 
     def build_native_fmus(out_dir, names=None, platforms=None):
-        raise python_build.FmuBuildError("compiling Press.so for linux64 failed (exit 1): no C compiler found")
+        raise native_build.FmuBuildError("compiling Press.so for linux64 failed (exit 1): no C compiler found")
 
     monkeypatch.setattr(native_build, "build_native_fmus", build_native_fmus)
     assert demo.main(["--out", str(tmp_path / "out")]) == 1

@@ -1,7 +1,6 @@
 """Tests of cosim.scene.fmucache (``component = "..."`` scenes) and of a StripDraw scene end to end.
 
-The cache logic is tested with the test component ``lag`` (tests/components/extra); the
-StripDraw path builds the project's StripDraw FMU and runs ``tribocosim run`` on it in a subprocess.
+The cache logic is tested with the press (the cheapest FMU to compile); the StripDraw path builds the project's StripDraw FMU and runs ``tribocosim run`` on it in a subprocess.
 """
 
 import json
@@ -19,17 +18,28 @@ from tribocosim.cosim.scene import fmucache
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_component_is_built_once_and_cached(tmp_path, lag_component):
-    from tribocosim.components.fmus import python_build
+def test_component_is_built_once_and_cached(tmp_path):
+    from tribocosim.components.fmus import native_build
 
     cache = tmp_path / "cache"
-    first = fmucache.component_fmu("lag", cache=cache)
+    first = fmucache.component_fmu("press", cache=cache)
     stamp = first.stat().st_mtime_ns
-    second = fmucache.component_fmu("LAG", cache=cache)
+    second = fmucache.component_fmu("PRESS", cache=cache)
     assert first == second and first.is_file() and first.parent.parent == cache
     assert second.stat().st_mtime_ns == stamp, "the second request uses the cache"
-    assert first.parent.name == f"Lag-python-{python_build.source_digest('Lag')[:16]}", "keyed by the source digest"
+    assert first.parent.name == f"Press-native-{native_build.source_digest('Press')[:16]}", "keyed by the source digest"
     assert not [p for p in cache.iterdir() if p.name.startswith(".")], "no temporary folders left"
+
+
+def test_a_component_without_a_c_implementation_is_a_scene_error_that_says_what_to_do(tmp_path, monkeypatch):
+    import dataclasses
+
+    from tribocosim.components import registry
+
+    python_only = dataclasses.replace(registry.find("press"), name="pylag", model_identifier="PyLag", native=None)
+    monkeypatch.setitem(registry._REGISTERED, "pylag", python_only)  # a component written in Python only
+    with pytest.raises(SceneError, match="no native implementation.*pythonfmu FMU of its own, named by path"):
+        fmucache.component_fmu("pylag", cache=tmp_path)
 
 
 def test_unknown_component_is_a_scene_error(tmp_path):

@@ -1,8 +1,8 @@
 """A run that meets a step it cannot recover stops: ``tribocosim run`` exits 1 with a
 message naming the FMU, the variable, the time and the step, and writes what was accepted up to then (CSV
-without a NaN, JSON with a ``failure`` entry and the rejected attempts). Real FMUs: the test component
-``lag`` (pythonfmu) whose output turns NaN at a set time, and the native strip-draw FMU refusing a negative
-normal force."""
+without a NaN, JSON with a ``failure`` entry and the rejected attempts). Real FMUs: the test FMU
+``Lag`` (pythonfmu, tests/cosim/fmus) whose output turns NaN at a set time, and the native strip-draw FMU refusing a
+negative normal force."""
 
 from __future__ import annotations
 
@@ -32,13 +32,11 @@ def _scene(folder, body: str, variables: list[str]):
     return path
 
 
-def test_a_non_finite_output_that_smaller_steps_do_not_cure_stops_the_run(tmp_path, lag_component, monkeypatch,
-                                                                          capsys):
-    monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "cache"))
-    scene = _scene(tmp_path, """
+def test_a_non_finite_output_that_smaller_steps_do_not_cure_stops_the_run(tmp_path, fmu_dir, capsys):
+    scene = _scene(tmp_path, f"""
         [fmus.lag]
-        component = "lag"
-        parameters = { gain = 2.0, time_constant = 0.01, nan_from = 0.05 }
+        path = "{fmu_dir / 'Lag.fmu'}"
+        parameters = {{ gain = 2.0, time_constant = 0.01, nan_from = 0.05 }}
         [[connections]]
         from = "press.normal_force"
         to = "lag.u"
@@ -59,15 +57,14 @@ def test_a_non_finite_output_that_smaller_steps_do_not_cure_stops_the_run(tmp_pa
     assert meta["steps"]["rejected_failure"] >= 10  # every halving from 1 ms to the tick was tried
 
 
-def test_a_step_the_fmu_discards_at_every_size_stops_the_run(tmp_path, lag_component, monkeypatch, capsys):
-    monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "cache"))
-    scene = _scene(tmp_path, """
+def test_a_step_the_fmu_discards_at_every_size_stops_the_run(tmp_path, fmu_dir, capsys):
+    scene = _scene(tmp_path, f"""
         [fmus.lag]
-        component = "lag"
-        parameters = { gain = -1.0, time_constant = 0.01 }
+        path = "{fmu_dir / 'Lag.fmu'}"
+        parameters = {{ gain = -1.0, time_constant = 0.01 }}
         [fmus.strip]
         component = "stripdraw"
-        parameters = { friction_model = "constant" }
+        parameters = {{ friction_model = "constant" }}
         [[connections]]
         from = "press.normal_force"
         to = "lag.u"

@@ -172,9 +172,6 @@ def test_cli_builds_fmi3_fmus_exporting_every_function(tmp_path, hosts):
     assert not [f for f in exported if f.startswith(("tc_", "fmi2"))], "internal and FMI 2.0 functions stay out"
     symbols = subprocess.run([str(hosts[3]), str(folder), "Press", "x", "--symbols"], capture_output=True, text=True)
     assert symbols.stdout.strip() == "75 functions exported", symbols.stderr
-    bad = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", "3", "--python"],
-                         capture_output=True, text=True)
-    assert bad.returncode == 2 and "FMI 2.0 FMUs only" in bad.stderr
 
 
 def test_model_descriptions_have_the_fmi2_variables_plus_time_and_the_nodal_arrays(built, md):

@@ -1,8 +1,8 @@
 """The native FMUs: built by ``tribocosim fmu build``, run in a C host with no Python, through fmpy
 and libcosimpy, and held against the Python models.
 
-- the model descriptions are the Python variants' (names, value references, causality, units, descriptions,
-  start values), both generated from the component descriptions; ``fmpy validate`` is clean;
+- the model descriptions declare the components' variables (names, causality, units, ranges, start values);
+  ``fmpy validate`` is clean;
 - the linux64 binary exports every fmi2 function and no internal one; the FMU holds no ``.py`` file (the binaries
   of the other platforms: tests/native/test_native_platforms.py, slow);
 - a C host (tests/native/host/fmi2_host.c, compiled here) loads each FMU with dlopen in a process without
@@ -118,26 +118,31 @@ def run_host(host, unzipped, description, tmp_path, steps, *, inputs=(), outputs
 
 
 # ----------------------------------------------------------------------------------- the FMUs as files
-def test_model_descriptions_are_the_python_variants(descriptions, tmp_path_factory):
-    from fmpy import read_model_description
+def test_model_descriptions_declare_the_components_variables(descriptions):
+    """Every parameter field, input and output of the component's declaration, with its unit and range; the outputs
+    are the model's values after initialization (initial = calculated, no start value)."""
+    import dataclasses
 
-    from tribocosim.components.fmus.python_build import build_fmus
+    from tribocosim.components import registry
 
-    python = build_fmus(tmp_path_factory.mktemp("python_fmus"))
     for name in NAMES:
-        mine, theirs = descriptions[name], read_model_description(str(python[name]))
-        key = lambda v: (v.name, v.valueReference, v.causality, v.variability, v.type, v.unit,  # noqa: E731
-                         v.description, None if v.start is None or v.causality == "output" else str(v.start))
-        assert [key(v) for v in mine.modelVariables] == [key(v) for v in theirs.modelVariables], name
-        outputs = [v for v in mine.modelVariables if v.causality == "output"]
-        assert all(v.initial == "calculated" and v.start is None for v in outputs), "the model's values after init"
-        for a, b in zip(mine.modelVariables, theirs.modelVariables):
-            if a.type == "Real":
+        md = descriptions[name]
+        comp = registry.find(name)
+        variables = {v.name: v for v in md.modelVariables}
+        fields = [f for cls in (comp.parameters, comp.files) if cls is not None for f in dataclasses.fields(cls)]
+        assert set(variables) == {f.name for f in fields} | {p.name for p in (*comp.inputs, *comp.outputs)}, name
+        for f in fields:
+            var, meta = variables[f.name], f.metadata
+            assert var.causality == "parameter" and meta["description"] in var.description, (name, f.name)
+            if var.type == "Real":
+                assert float(var.start) == f.default and var.unit == (meta["unit"] or "1"), (name, f.name)
                 num = lambda x: None if x is None else float(x)  # noqa: E731
-                assert (num(a.min), num(a.max)) == (num(b.min), num(b.max)), a.name
-        assert mine.defaultExperiment.stopTime == theirs.defaultExperiment.stopTime
-        assert mine.coSimulation.canGetAndSetFMUstate and mine.coSimulation.canSerializeFMUstate
-        assert mine.coSimulation.canHandleVariableCommunicationStepSize and not mine.coSimulation.needsExecutionTool
+                assert (num(var.min), num(var.max)) == (num(meta.get("low")), num(meta.get("high"))), (name, f.name)
+        for port in comp.outputs:
+            var = variables[port.name]
+            assert var.causality == "output" and var.initial == "calculated" and var.start is None, (name, port.name)
+        assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+        assert md.coSimulation.canHandleVariableCommunicationStepSize and not md.coSimulation.needsExecutionTool
 
 
 def test_fmpy_validate_is_clean_and_no_python_file_is_inside(native_fmus):

@@ -79,6 +79,18 @@ def zig_command() -> list[str]:
     return [sys.executable, "-m", "ziglang", "cc"]
 
 
+def zig_version() -> str:
+    """The version of the installed ``ziglang`` package (from its dist-info folder's name: no metadata import), or
+    ``"?"`` when it is not installed."""
+    try:
+        import ziglang
+    except ImportError:
+        return "?"
+    site = Path(ziglang.__file__).resolve().parent.parent
+    found = sorted(p.name[len("ziglang-"):-len(".dist-info")] for p in site.glob("ziglang-*.dist-info"))
+    return found[-1] if found else "?"
+
+
 def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64", *, include_dirs=(),
                    defines=(), extra_flags=()) -> Path:
     """Compile C ``sources`` into the shared library ``output`` for a platform of :data:`PLATFORMS`.

@@ -1,13 +1,14 @@
 """The native core library: the C models (strip draw, its friction law and table, press, machine, the field file)
 built from the same sources as the FMUs and loaded with ctypes; the Python models are thin bindings over it.
 
-The library is compiled on first use with the C compiler of the ``ziglang`` package
+Its sources are the model sources the components declare (:func:`sources`); the ctypes signatures of its
+functions are read from their headers (:mod:`tribocosim.components.native.toolchain.prototypes`). The library is
+compiled on first use with the C compiler of the ``ziglang`` package
 (:mod:`tribocosim.components.native.toolchain.compiler`, the FMUs' compiler and flags, ``-DTC_EXPORT_CORE`` so that the
 core functions are exported) into ``$TRIBOCOSIM_CACHE/core`` (default ``~/.cache/tribocosim/fmus/core``), under a
 name that carries the digest of its sources, generated headers, flags and compiler version: a changed source
 builds a new library, an unchanged one is loaded as it is. The build writes a temporary file and renames it into
-place, so concurrent processes never load a half-written library. A Python FMU carries the library it was built
-with (:data:`BUNDLED`), used instead of a build.
+place, so concurrent processes never load a half-written library.
 
 Calls return a status (``TC_OK``, ``TC_DISCARD``, ``TC_ERROR``, ``TC_NOMEM``) and a message; :meth:`Core.check`
 raises the matching exception.
@@ -27,18 +28,17 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import ParameterError, TribocosimError
+from tribocosim.components.native.toolchain.prototypes import ctypes_signature
 
-#: the C sources of the core library (the models and what they read and write; not the FMI layer)
-SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "core/tc_friction.c",
-           "core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_linear.c", "core/tc_press.c",
-           "core/tc_machine.c", "resource_io/tc_table_file.c", "resource_io/tc_arrays.c", "resource_io/tc_fields.c")
+#: the C sources of the core library beside the components' model sources: the helpers every model uses
+COMMON_SOURCES = ("core/tc_common.c",)
 #: the status codes of tc_common.h
 TC_OK = 0
 TC_DISCARD = 1
 TC_ERROR = 2
 TC_NOMEM = 3
-#: a library shipped beside this module (a Python FMU's), used instead of building one
-BUNDLED = Path(__file__).resolve().parent / f"libtc_core{'.dll' if sys.platform.startswith('win') else '.so'}"
+#: the shared-library suffix of this machine
+SUFFIX = ".dll" if sys.platform.startswith("win") else ".dylib" if sys.platform == "darwin" else ".so"
 
 DBL_P = ctypes.POINTER(ctypes.c_double)
 UBYTE_P = ctypes.POINTER(ctypes.c_ubyte)
@@ -90,6 +90,36 @@ def ptr(a: np.ndarray, ctype=DBL_P):
 
 
 # ------------------------------------------------------------------------------------------------ building
+def sources() -> tuple[str, ...]:
+    """The C sources of the core library: :data:`COMMON_SOURCES` and the model sources every native component
+    declares (``Native.sources`` outside ``fmi/``, which holds its FMU glue), each once, in declaration order."""
+    from tribocosim.components import registry
+
+    out = list(COMMON_SOURCES)
+    for comp in registry.components().values():
+        if comp.native is not None:
+            out += [s for s in comp.native.sources if not s.startswith("fmi/") and s not in out]
+    return tuple(out)
+
+
+def source_files() -> list[Path]:
+    """The C files of the model folders (``core/``, ``resource_io/``): the files of :func:`sources`, found without
+    importing a component (``tests/native/test_native_prototypes.py`` holds the two to each other), for the digest
+    and the prototypes of a library that is loaded, not built."""
+    from tribocosim.components.native.toolchain import compiler
+
+    return sorted(p for folder in ("core", "resource_io") for p in (compiler.NATIVE_DIR / folder).glob("*.c"))
+
+
+@functools.lru_cache(maxsize=1)
+def prototypes() -> dict:
+    """The functions the core library exports (``TC_API``), read from the headers of its sources
+    (:func:`tribocosim.components.native.toolchain.prototypes.exported`)."""
+    from tribocosim.components.native.toolchain.prototypes import exported
+
+    return exported(p.with_suffix(".h") for p in source_files())
+
+
 def cache_dir() -> Path:
     """The cache folder of built FMUs and of the core library: ``$TRIBOCOSIM_CACHE`` or
     ``~/.cache/tribocosim/fmus``."""
@@ -111,17 +141,11 @@ def digest() -> str:
 
     h = hashlib.sha256()
     package = compiler.NATIVE_DIR.parent
-    for path in sorted({*map(compiler.source, SOURCES), *compiler.headers(), Path(__file__).with_name("declarations.py"),
+    for path in sorted({*source_files(), *compiler.headers(), Path(__file__).with_name("declarations.py"),
                         package / "params.py", *package.glob("*/parameters.py")}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    try:
-        from importlib.metadata import version
-
-        zig = version("ziglang")
-    except Exception:  # noqa: BLE001 - the build says what is missing
-        zig = "?"
-    h.update(" ".join((*compiler.CFLAGS, zig)).encode())
+    h.update(" ".join((*compiler.CFLAGS, compiler.zig_version())).encode())
     return h.hexdigest()
 
 
@@ -136,7 +160,7 @@ def build(output: str | os.PathLike, defines=()) -> Path:
         _headers(Path(tmp))
         partial = Path(tmp) / out.name
         try:
-            compiler.compile_shared(list(map(compiler.source, SOURCES)), partial, platform,
+            compiler.compile_shared(list(map(compiler.source, sources())), partial, platform,
                                      defines=["TC_EXPORT_CORE", *defines], include_dirs=[tmp])
         except compiler.CompileError as exc:
             raise CoreBuildError(f"the native core library cannot be built: {exc}") from exc
@@ -145,10 +169,8 @@ def build(output: str | os.PathLike, defines=()) -> Path:
 
 
 def library_path() -> Path:
-    """The core library for this process: the bundled one, else the cached build (built now if missing)."""
-    if BUNDLED.is_file():
-        return BUNDLED
-    path = cache_dir() / "core" / f"libtc_core-{digest()[:20]}{BUNDLED.suffix}"
+    """The core library for this process: the cached build (built now if missing)."""
+    path = cache_dir() / "core" / f"libtc_core-{digest()[:20]}{SUFFIX}"
     return path if path.is_file() else build(path)
 
 
@@ -162,64 +184,9 @@ class Core:
         except OSError as exc:
             raise CoreBuildError(f"the native core library {path} cannot be loaded: {exc}") from exc
         self.path = Path(path)
-        i, d, sz, msg = ctypes.c_int, ctypes.c_double, ctypes.c_size_t, Msg
-        sd_p = pr_p = ma_p = VP  # the parameter structs, passed by reference (Core.struct)
-        out = ctypes.POINTER(VP)
-        proto = {
-            "tc_table_from_arrays": (i, [sz, sz, sz, DBL_P, DBL_P, DBL_P, DBL_P, d, out, msg]),
-            "tc_table_set_areas": (i, [VP, DBL_P, DBL_P, DBL_P, DBL_P, msg]),
-            "tc_table_set_extras": (i, [VP, DBL_P, DBL_P, msg]),
-            "tc_table_read": (i, [ctypes.c_char_p, out, msg]),
-            "tc_table_free": (None, [VP]),
-            "tc_table_lookup": (i, [VP, DBL_P, d, sz, DBL_P, DBL_P, i, DBL_P, UBYTE_P, msg]),
-            "tc_law_check": (i, [sd_p, VP, msg]),
-            "tc_law_mu": (i, [sd_p, VP, d, sz, DBL_P, DBL_P, DBL_P, UBYTE_P, DBL_P, msg]),
-            "tc_law_beta_threshold": (d, [sd_p, VP]),
-            "tc_law_beta_cap": (d, [sd_p, VP, d, d]),
-            "tc_law_alpha": (d, [sd_p, d]),
-            "tc_stripdraw_create": (i, [sd_p, VP, DBL_P, sz, out, msg]),
-            "tc_stripdraw_free": (None, [VP]),
-            "tc_stripdraw_step_poly": (i, [VP, d, d, DBL_P, d, DBL_P, msg]),
-            "tc_stripdraw_refusal": (i, [VP]),
-            "tc_stripdraw_outputs": (None, [VP, DBL_P]),
-            "tc_stripdraw_state_size": (sz, [VP]),
-            "tc_stripdraw_get_state": (None, [VP, VP]),
-            "tc_stripdraw_set_state": (i, [VP, VP, sz, msg]),
-            "tc_stripdraw_n_nodes": (sz, [VP]),
-            "tc_stripdraw_nodal": (None, [VP, i, DBL_P]),
-            "tc_stripdraw_info": (d, [VP, i]),
-            "tc_thomas": (None, [sz, DBL_P, DBL_P, DBL_P, DBL_P, DBL_P, DBL_P]),
-            "tc_sd_advect": (None, [sz, DBL_P, DBL_P, DBL_P, d, d, DBL_P, DBL_P]),
-            "tc_expm": (i, [sz, DBL_P, DBL_P, msg]),
-            "tc_field_recorder_create": (i, [ctypes.c_char_p, d, sz, DBL_P, DBL_P, ctypes.c_char_p, out, msg]),
-            "tc_field_recorder_record": (i, [VP, d, DBL_P, DBL_P, DBL_P, i, msg]),
-            "tc_field_recorder_truncate": (None, [VP, d]),
-            "tc_field_recorder_finish": (i, [VP, d, DBL_P, DBL_P, DBL_P, msg]),
-            "tc_field_recorder_write": (i, [VP, msg]),
-            "tc_field_recorder_rows": (sz, [VP]),
-            "tc_field_recorder_free": (None, [VP]),
-            "tc_field_read_initial_beta": (i, [ctypes.c_char_p, sz, DBL_P, DBL_P, msg]),
-            "tc_press_create": (i, [pr_p, out, msg]),
-            "tc_press_free": (None, [VP]),
-            "tc_press_step": (i, [VP, d, msg]),
-            "tc_press_outputs": (None, [VP, DBL_P]),
-            "tc_press_state_size": (sz, [VP]),
-            "tc_press_get_state": (None, [VP, VP]),
-            "tc_press_set_state": (i, [VP, VP, sz, msg]),
-            "tc_press_time": (d, [VP]),
-            "tc_machine_create": (i, [ma_p, out, msg]),
-            "tc_machine_free": (None, [VP]),
-            "tc_machine_step": (i, [VP, d, d, msg]),
-            "tc_machine_outputs": (None, [VP, DBL_P]),
-            "tc_machine_state_size": (sz, [VP]),
-            "tc_machine_get_state": (None, [VP, VP]),
-            "tc_machine_set_state": (i, [VP, VP, sz, msg]),
-            "tc_machine_time": (d, [VP]),
-        }
-        for name, (res, args) in proto.items():
+        for name, proto in prototypes().items():  # every TC_API function, typed from its header
             fn = getattr(lib, name)
-            fn.restype = res
-            fn.argtypes = args
+            fn.restype, fn.argtypes = ctypes_signature(proto, Msg)
 
     @staticmethod
     @functools.lru_cache(maxsize=None)

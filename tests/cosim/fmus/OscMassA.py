@@ -13,7 +13,7 @@ import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Initial
 
-from tribocosim.components.fmus.adapter import RealWithUnit, add_unit_definitions
+from tribocosim.components.fmus.pythonfmu_units import RealWithUnit, add_unit_definitions
 from tribocosim.components.linear_model import expm
 
 

@@ -1,0 +1,70 @@
+"""A component written in Python (docs/examples/measured_drive: a drive that plays a velocity profile, a pythonfmu
+FMU of its own) run in a scene beside the project's native press and strip-draw FMUs."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tribocosim.errors import RunFailed
+from tribocosim.cosim import run
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "measured_drive"
+
+
+@pytest.fixture(scope="module")
+def example(tmp_path_factory) -> Path:
+    """The example's folder as the user guide has it: the scene beside the FMU pythonfmu built from the script."""
+    folder = tmp_path_factory.mktemp("measured_drive")
+    proc = subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(EXAMPLE / "MeasuredDrive.py"),
+                           str(EXAMPLE / "velocity_profile.csv"), "--handle-state", "--dest", str(folder)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    shutil.copy(EXAMPLE / "measured_drive.toml", folder)
+    return folder
+
+
+def _exact_position(t: float, times: np.ndarray, velocities: np.ndarray) -> float:
+    """int_0^t of the profile interpolated linearly (held outside its times): trapezoids between its knots."""
+    knots = np.concatenate([[0.0], times[(times > 0.0) & (times < t)], [t]])
+    return float(np.trapezoid(np.interp(knots, times, velocities), knots))
+
+
+def test_the_python_drive_runs_beside_the_native_fmus(example):
+    res = run(example / "measured_drive.toml", write=False)
+    times, velocities = np.loadtxt(EXAMPLE / "velocity_profile.csv", delimiter=",", skiprows=1).T
+    t = res.time
+    assert len(t) == 1201 and res.metadata["master"]["loop"] == "native", "the C loop steps the Python FMU too"
+    # the drive plays the profile, and its position is the profile's integral
+    np.testing.assert_allclose(res["drive.grip_velocity"], np.interp(t, times, velocities), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(res["drive.grip_position"], [_exact_position(x, times, velocities) for x in t],
+                               rtol=1e-12, atol=1e-15)
+    # the strip takes the velocity of each communication point over the next step (Jacobi, held inputs): its grip
+    # moves by sum v(t_n) h, a first-order approximation of the drive's own position
+    h = 5e-4
+    held = np.concatenate([[0.0], np.cumsum(res["drive.grip_velocity"][:-1]) * h])
+    np.testing.assert_allclose(res["strip.grip_position"], held, rtol=1e-9, atol=1e-15)
+    assert abs(res["strip.grip_position"][-1] - res["drive.grip_position"][-1]) <= 0.5 * h * 0.09
+    # drawn, the strip slides: the pull force balances the friction of both faces, mu = F_pull / (2 F_N) (Eq. 1)
+    pull, normal, mu = res["strip.pull_force"][-1], res["press.normal_force"][-1], res["strip.mu_mean"][-1]
+    assert normal == pytest.approx(12250.0, rel=0.01) and 0.02 < mu < 0.5
+    assert pull / (2 * normal) == pytest.approx(mu, rel=0.05)
+
+
+def test_a_bad_profile_file_stops_the_run_at_initialization_naming_it(example, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,velocity\n0.0,0.0\n0.0,0.1\n")
+    fmu = example / "MeasuredDrive.fmu"
+    scene = (example / "measured_drive.toml").read_text().replace(
+        'path = "MeasuredDrive.fmu"', f'path = "{fmu}"\nparameters = {{ profile_file = "{bad}" }}')
+    (tmp_path / "bad.toml").write_text(scene)
+    with pytest.raises(RunFailed) as exc:
+        run(tmp_path / "bad.toml", write=False)
+    message = str(exc.value)
+    assert "FMU instance 'drive': fmi2ExitInitializationMode failed" in message, message
+    assert f"{bad}, row 3: time = 0.0 s" in message and "increasing times" in message, message
