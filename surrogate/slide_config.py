@@ -37,7 +37,7 @@ OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wave
 #: how the flakes are laid into the gap at the start of a slide (:func:`tribocosim.surrogate.flakes.random_placement`)
 PLACEMENTS = ("monolayer", "deposition")
 #: how the flakes move during a DEM phase (:mod:`tribocosim.surrogate.dem`, :mod:`tribocosim.surrogate.flake_relax`)
-FLAKE_SOLVERS = ("inertial", "overdamped")
+FLAKE_SOLVERS = ("inertial", "overdamped", "auto")
 
 
 @dataclass(frozen=True)
@@ -110,12 +110,13 @@ class SlideConfig:
         flake falls at a uniformly random (x, y) onto the sheet or onto the flakes already there
         (stacked flat, mid-planes h_p apart), so that beta = N a_p / A0 (Eq. 10) may approach and exceed
         the covered fraction (1 - exp(-beta) for independent positions).
-    flake_solver : {"inertial", "overdamped"} or None
+    flake_solver : {"inertial", "overdamped", "auto"} or None
         ``inertial`` (None): the DEM of Eq. 15-16 with velocity-Verlet (:mod:`tribocosim.surrogate.dem`);
         ``overdamped``: the flakes relax to force and torque balance as the tool slides
         (:mod:`tribocosim.surrogate.flake_relax`), the limit of large damping per pixel, allowed where
         Lambda = gamma_min dx / v0 >= :data:`tribocosim.surrogate.flake_relax.LAMBDA_MIN` (the physical
-        damping at the physical v0; ``dem_velocity`` and ``dt_safety`` do not apply).
+        damping at the physical v0; ``dem_velocity`` and ``dt_safety`` do not apply); ``auto``: overdamped
+        where Lambda allows it, inertial elsewhere (a sweep over velocities in one preset).
     relax_substeps : int or None
         Substeps per pixel of the overdamped solver (None: its default, 8).
     dt_safety : float
@@ -242,7 +243,7 @@ class SlideConfig:
                                  f"{', '.join(FLAKE_SOLVERS)}")
         if self.relax_substeps is not None:
             _int("relax_substeps", self.relax_substeps, 1)
-        if self.overdamped:
+        if self.flake_solver == "overdamped":
             self._check_overdamped()
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
         check_range("sample_spacing_px", self.sample_spacing_px, 0.0, 4.0, low_inclusive=False)
@@ -267,15 +268,25 @@ class SlideConfig:
     @property
     def overdamped(self) -> bool:
         """True when the flakes move by the overdamped solver (``flake_solver``)."""
+        if self.flake_solver == "auto":
+            from .flake_relax import LAMBDA_MIN
+
+            return self._damping_per_pixel() >= LAMBDA_MIN
         return self.flake_solver == "overdamped"
 
-    def _check_overdamped(self) -> None:
+    def _damping_per_pixel(self) -> float:
+        """Lambda = gamma dx / v0 of the least damped flake motion at the physical v0."""
         from .flake_body import FlakeShape
-        from .flake_relax import LAMBDA_MIN, damping_per_pixel
+        from .flake_relax import damping_per_pixel
 
         rates = self.damping(FlakeShape(self.flake_diameter, self.flake_thickness, self.flake_density))
         rates = rates if isinstance(rates, DampingRates) else DampingRates.uniform(rates)
-        lam = damping_per_pixel(rates, self.dx, self.v0)
+        return damping_per_pixel(rates, self.dx, self.v0)
+
+    def _check_overdamped(self) -> None:
+        from .flake_relax import LAMBDA_MIN
+
+        lam = self._damping_per_pixel()
         if not lam >= LAMBDA_MIN:
             raise ParameterError(
                 f"flake_solver = 'overdamped' at v0 = {self.v0!r} m/s: the damping per pixel Lambda = gamma dx / v0 "

@@ -215,6 +215,13 @@ def test_overdamped_solver_is_refused_where_the_flakes_are_not_overdamped():
         Drag(DampingRates.uniform(0.0), SHAPE.mass, SHAPE.inertia)
 
 
+def test_auto_takes_the_overdamped_solver_where_lambda_allows_it():
+    base = dict(n=32, size=64e-6, wavelength_ratio=0.125, flake_solver="auto")
+    slow, fast = SlideConfig(v0=0.08, **base), SlideConfig(v0=50.0, **base)
+    assert slow.overdamped and not fast.overdamped
+    assert slow._damping_per_pixel() > 20.0 > fast._damping_per_pixel()
+
+
 def test_inertial_case_ids_do_not_see_the_new_keys():
     """The solver keys are left out of a configuration's dict while unset, so the recorded inertial cases keep
     their ids."""
