@@ -70,14 +70,17 @@ TOL_MOVE_FRACTION = 1e-3
 #: least Levenberg-Marquardt damping nu D, as a fraction of the stiffness k_A dx^2 of one face point (module
 #: docstring)
 NU_FLOOR_FRACTION = 1e-8
-#: largest displacement of a point of a flake in one iteration, as a fraction of the pixel (the bilinear
-#: surfaces are smooth within a pixel, which is as far as a linearised contact can be trusted)
-RADIUS_FRACTION = 0.5
+#: largest displacement of a point of a flake in one iteration, as a fraction of h_p: small steps follow the
+#: path of the drag-weighted descent, as the overdamped flake does, instead of jumping to another equilibrium;
+#: on a straight stretch of the path it doubles, up to a fraction of the pixel (the bilinear surfaces are smooth
+#: within a pixel, as far as a linearised contact can be trusted)
+RADIUS_FRACTION = 0.02
+RADIUS_MAX_FRACTION = 0.5
 #: a partial reading of a flake's face considers the points that were within this fraction of h_p of
 #: contact at its last full reading (:mod:`tribocosim.surrogate.relax_kernels`)
 NEAR_FRACTION = 0.5
 #: iterations per substep before the pixel is redone with more substeps
-MAX_ITER = 60
+MAX_ITER = 1000
 #: times a pixel is redone with twice the substeps before the solve is given up
 MAX_REFINE = 4
 #: smallest damping per pixel Lambda = gamma_min dx / v0 the overdamped solver accepts
@@ -185,7 +188,8 @@ def relax(state: DemState, params: DemParams, drag: Drag, h_low, h_top, n_sub: i
             state.pos, state.quat, h_low, dh, ramp, h_top, float(shift0), shift_total / m,
             float(top_offset), dtop_total / m, params.dx, params.size, sh.a, sh.c, params.samples,
             params.weights, params.k_area, *coeffs, m, BLOWUP_FRACTION * sh.thickness,
-            TOL_MOVE_FRACTION * sh.thickness, nu_floor, RADIUS_FRACTION * params.dx, NEAR_FRACTION * sh.thickness,
+            TOL_MOVE_FRACTION * sh.thickness, nu_floor, RADIUS_FRACTION * sh.thickness,
+            RADIUS_MAX_FRACTION * params.dx, NEAR_FRACTION * sh.thickness,
             MAX_ITER, force, torque, overlap, *params.pair_points, counts)
         if stats is not None:
             stats.add(counts, refine)

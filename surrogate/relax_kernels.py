@@ -503,14 +503,18 @@ def _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, s
 @_jit
 def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dtop, dx, size, a, c,
            samples, weights, k_area, t_plane, t_axial, r_diam, r_axis, n_sub, max_overlap, tol_move,
-           nu_floor, radius, cap, max_iter, force, torque, overlap, pair_samples, pair_weights, stats):
+           nu_floor, radius, radius_max, cap, max_iter, force, torque, overlap, pair_samples, pair_weights,
+           stats):
     """``n_sub`` substeps; at substep s the tool is shifted by ``shift0 + s*dshift`` and sits at
     ``top_offset + s*dtop``, and the sheet is ``h_low + ramp (s/n_sub) dh_low`` (ramp = 0 or 1). At each
     substep the flakes move from where they are to force and torque balance by Levenberg-Marquardt
     iterations per component of flakes in contact, delta = (H + nu D)^-1 F with D the drag matrix of
     :func:`_drag` (coefficients t_plane, t_axial, r_diam, r_axis [kg/s, kg m^2/s]) and nu [1/s] at least
     ``nu_floor``, adapted to the ratio of the actual to the predicted decrease of the component's energy and
-    raised until the step moves no point by more than ``radius`` [m]. A substep is done when the step at
+    raised until the step moves no point by more than the component's radius: ``radius`` [m], doubled (up to
+    ``radius_max``) after each step that it shortened, that the model predicted well and that went on in the
+    direction of the one before (a straight stretch of the descent), back to ``radius`` where the path turns.
+    A substep is done when the step at
     ``nu_floor`` moves no point of any flake by more than ``tol_move`` [m]. ``cap`` [m]: the points a partial
     reading of a face considers (:func:`_read_faces`).
 
@@ -560,6 +564,9 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
     start = np.empty(nf + 1, dtype=np.int64)
     local = np.full(nf, -1, dtype=np.int64)
     nu = np.full(nf, nu_floor)
+    rad = np.full(nf, radius)
+    last = np.zeros((nf, 6))
+    limited = np.zeros(nf, dtype=np.bool_)
     moving = np.zeros(nf, dtype=np.bool_)
     settled = np.zeros(nf, dtype=np.bool_)
     comp_pred = np.zeros(nf)
@@ -573,6 +580,8 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
         shift = shift0 + s * dshift
         offset = top_offset + s * dtop
         stats[_SUBSTEPS] += 1
+        rad[:] = radius
+        last[:, :] = 0.0
         # the surfaces moved: read again the faces their records cannot prove still clear
         for i in range(nf):
             if face_stale[i]:
@@ -635,15 +644,20 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
                         settled[j] = True
                     continue
                 damp = nu_floor
+                reach = radius_max
                 for j in members:
                     damp = max(damp, nu[j])
-                if damp > nu_floor or move > radius:
+                    reach = min(reach, rad[j])
+                short = move > reach
+                if damp > nu_floor or short:
                     move = _lm_step(members, big, rhs, drag, damp, a, delta)
-                    while move > radius:
+                    short = move > reach
+                    while move > reach:
                         damp *= 4.0
                         move = _lm_step(members, big, rhs, drag, damp, a, delta)
                 pred = _predicted(members, big, rhs, delta)
                 for j in members:
+                    limited[j] = short
                     moving[j] = True
                     settled[j] = False
                     nu[j] = damp
@@ -686,17 +700,35 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
                 pred = comp_pred[members[0]]
                 rho = (before - after) / (-pred) if pred < 0.0 else (1.0 if after < before else 0.0)
                 if rho > 1e-4:
+                    dot = 0.0
+                    n1 = 0.0
+                    n2 = 0.0
+                    for j in members:
+                        for r in range(6):
+                            w = 1.0 if r < 3 else a * a
+                            dot += w * delta[j, r] * last[j, r]
+                            n1 += w * delta[j, r] * delta[j, r]
+                            n2 += w * last[j, r] * last[j, r]
+                    cos = dot / math.sqrt(n1 * n2) if n1 > 0.0 and n2 > 0.0 else 0.0
                     for j in members:
                         travel[j] += _move(delta, j, a)
                         if rho > 0.75:
                             nu[j] = max(nu_floor, 0.25 * nu[j])
                         elif rho < 0.25:
                             nu[j] *= 4.0
+                        if limited[j] and rho > 0.75 and cos > 0.9:
+                            rad[j] = min(radius_max, 2.0 * rad[j])
+                        elif rho < 0.25 or cos < 0.5:
+                            rad[j] = radius
+                        for r in range(6):
+                            last[j, r] = delta[j, r]
                         _drag(quat, j, t_plane, t_axial, r_diam, r_axis, drag)
                 else:  # back to where it was; its pairs are read again at the next refresh
                     stats[_REJECTED] += 1
                     for j in members:
                         nu[j] *= 16.0
+                        rad[j] = radius
+                        last[j, :] = 0.0
                         for d in range(3):
                             pos[j, d] = old_pos[j, d]
                         for d in range(4):
