@@ -22,7 +22,7 @@ A_c/A0 from the area the large solve gives inside the scan's window.
 
 Usage::
 
-    python benchmarks/periodization.py [--tiles 4] [--pressures 1e6 10e6 30e6]
+    python benchmarks/periodization.py [--tiles 4] [--pressures 1e6 10e6 30e6] [--surface rolloff|powerlaw]
 """
 
 from __future__ import annotations
@@ -67,6 +67,9 @@ def main(argv=None) -> int:
     ap.add_argument("--tiles", type=int, default=4, help="scans per side of the large surface")
     ap.add_argument("--pressures", type=float, nargs="+", default=[1e6, 10e6, 30e6])
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--surface", choices=("rolloff", "powerlaw"), default="rolloff",
+                    help="the quick preset's roll-off sheet, or a pure power law from the large surface's side "
+                         "(most of its height in wavelengths longer than a scan: large edge steps)")
     args = ap.parse_args(argv)
     from tribocosim.surrogate import measured_surfaces as ms
     from tribocosim.surrogate.bem import ContactSolver, gap_against_flat
@@ -74,7 +77,8 @@ def main(argv=None) -> int:
 
     big_n = args.tiles * N
     big_size = big_n * PIXEL
-    q_roll, q_cut = surface_wavenumbers(big_size, SHEET["shortest"] / big_size, SHEET["rolloff"])
+    rolloff = SHEET["rolloff"] if args.surface == "rolloff" else None
+    q_roll, q_cut = surface_wavenumbers(big_size, SHEET["shortest"] / big_size, rolloff)
     big = self_affine_surface(big_n, big_size, SHEET["hurst"], q_roll, q_cut, rms_height=SHEET["rms_height"],
                               seed=args.seed)
     laws = {"elastic": None, "elastic-plastic": P_CRIT}
@@ -104,7 +108,7 @@ def main(argv=None) -> int:
                     for law, p in keys:
                         rows[(m, (law, p))].append(solvers[law].solve(gap, p).contact_area_fraction)
     t_scans = time.perf_counter() - t0
-    print(f"large surface {big_n}^2 of {big_size * 1e6:.0f} um, {args.tiles ** 2} scans of {N}^2 of "
+    print(f"{args.surface} large surface {big_n}^2 of {big_size * 1e6:.0f} um, {args.tiles ** 2} scans of {N}^2 of "
           f"{N * PIXEL * 1e6:.0f} um; solves {t_big:.0f} s (large) + {t_scans:.0f} s (scans); "
           f"load {os.getloadavg()[0]:.2f}")
     print("| contact | P [MPa] | large A_c/A0 | method | scans' mean A_c/A0 | bias (mean - large) +- s.e. | "

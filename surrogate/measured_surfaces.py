@@ -34,7 +34,8 @@ formats. A map becomes the ``n x n`` periodic grid of side ``size`` of a slide i
      discrete Laplacian everywhere: the measured asperities are kept, the edge steps the Fourier BEM would
      see are spread over the patch as a smooth, long-wavelength correction. docs/physics/
      measured_surfaces.md measures its effect on the contact area against a larger patch.
-   - ``"synthesis"``: a periodic surface with the PSD of ``p`` and the patch's height distribution, by
+   - ``"synthesis"``: a periodic surface with the patch's height distribution and the PSD of ``p`` (its shape;
+     its integral is the patch's variance), by
      iterated amplitude-adjusted Fourier transforms (IAAFT: T. Schreiber and A. Schmitz, Phys. Rev. Lett. 77
      (1996) 635, doi:10.1103/PhysRevLett.77.635) from random phases (``seed``): statistically like the
      scan, with other asperities; one scan gives as many surfaces as seeds.
@@ -157,15 +158,20 @@ def read_scan(path, detrend: str = "plane", fill_missing: bool = False, sha256: 
         raise ParameterError(f"measured surface file {p!r} has SHA-256 {digest}, not the {sha256} the "
                              "configuration records: the file has changed since the case was defined")
     st = surface_topography()
-    try:
-        reader = st.open_topography(p)
+    ext = os.path.splitext(p)[1].lower().lstrip(".")
+    known = {reader.format() for reader in st.IO.readers}
+    try:  # a known extension names its reader (whose message then says what is wrong with the file)
+        reader = st.open_topography(p, format=ext if ext in known else None)
         topo = reader.topography()
     except Exception as exc:  # noqa: BLE001 - the readers raise many types; all mean 'not readable'
-        first = str(exc).strip().splitlines()
+        if isinstance(exc, st.Exceptions.CannotDetectFileFormat):
+            why = f"no reader of the {len(known)} formats recognises it"
+        else:
+            lines = str(exc).strip().splitlines()
+            why = f"{type(exc).__name__}: {lines[0] if lines else ''}{' ...' if len(lines) > 1 else ''}"
         raise ParameterError(f"measured surface file {p!r} is not a height map SurfaceTopography can read "
-                             f"({type(exc).__name__}: {first[0] if first else ''}"
-                             f"{' ...' if len(first) > 1 else ''}); allowed: the formats of "
-                             "SurfaceTopography.open_topography (X3P, SUR, DATX, PLU, OPD, AL3D, ...)") from None
+                             f"({why}); allowed: the formats of SurfaceTopography.open_topography (X3P, SUR, "
+                             "DATX, PLU, OPD, AL3D, ...)") from None
     if topo.dim != 2:
         raise ParameterError(f"measured surface file {p!r} holds a line scan (dimension {topo.dim}); "
                              "allowed: an areal map (dimension 2)")
@@ -267,15 +273,16 @@ def periodic_smooth_decomposition(u) -> tuple[np.ndarray, np.ndarray]:
 
 
 def iaaft_surface(patch: np.ndarray, seed: int, iterations: int = IAAFT_ITERATIONS) -> np.ndarray:
-    """A periodic map with the PSD of the periodic component of ``patch`` and the height distribution of
-    ``patch`` (IAAFT from random phases of ``seed``; module docstring, ``"synthesis"``).
+    """A periodic map with the height distribution of ``patch`` and the PSD of its periodic component, scaled
+    to the patch's variance (IAAFT from random phases of ``seed``; module docstring, ``"synthesis"``).
 
     The last step imposes the distribution exactly (a rank-order remap); the PSD is then met to within the
     IAAFT's convergence (docs/physics/measured_surfaces.md gives the residual).
     """
     p, _ = periodic_smooth_decomposition(patch)
-    amplitude = np.abs(np.fft.rfft2(p - p.mean()))
     values = np.sort((patch - patch.mean()).ravel())
+    # the PSD's shape from p (no edge leakage), its integral the patch's variance (that of the distribution)
+    amplitude = np.abs(np.fft.rfft2(p - p.mean())) * (np.std(values) / np.std(p))
     rng = np.random.default_rng(seed)
     h = rng.permutation(values).reshape(patch.shape)
     for _ in range(iterations):
