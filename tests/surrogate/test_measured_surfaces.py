@@ -65,6 +65,11 @@ def test_x3p_round_trip_through_meso_surface_keeps_statistics_and_contact_area(t
     assert_allclose(info["library"]["rms_curvature"], ms.library_statistics(h, SIZE)["rms_curvature"], rtol=1e-12)
     a0, a1 = area_fraction(h, SIZE), area_fraction(back, SIZE)
     assert abs(a1 - a0) <= 1e-9 and 0.02 < a0 < 0.05, (a0, a1)
+    # a file in micrometres (X3P stores metres; SurfaceTopography's NetCDF keeps the unit) reads back in metres
+    microns = tmp_path / "sheet_um.nc"
+    Topography(h * 1e6, (SIZE * 1e6, SIZE * 1e6), unit="um", periodic=True).to_netcdf(str(microns))
+    assert_allclose(ms.prepared_heights(microns, N, SIZE, detrend="mean", periodization="none")[0], h,
+                    rtol=0, atol=1e-12 * 1.40e-6)
 
 
 def test_our_statistics_equal_the_librarys(tmp_path):
