@@ -18,7 +18,8 @@ made periodic by each method and solved on its own 256^2 domain:
 Printed per contact law and pressure: A_c/A0 of the large surface, and per method the mean over the scans of A_c/A0, its
 difference from the large surface's (the bias; the scans tile the large surface, so their local areas in its
 solve average to its A_c/A0 exactly) with the standard error of that mean, and the RMS difference of a scan's
-A_c/A0 from the area the large solve gives inside the scan's window.
+A_c/A0 from the area the large solve gives inside the scan's window; and the mean RMS slope of the periodized
+scans (periodic finite differences: the edges count) next to the large surface's.
 
 Usage::
 
@@ -73,7 +74,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from tribocosim.surrogate import measured_surfaces as ms
     from tribocosim.surrogate.bem import ContactSolver, gap_against_flat
-    from tribocosim.surrogate.surfaces import self_affine_surface, surface_wavenumbers
+    from tribocosim.surrogate.surfaces import rms_slope, self_affine_surface, surface_wavenumbers
 
     big_n = args.tiles * N
     big_size = big_n * PIXEL
@@ -92,6 +93,7 @@ def main(argv=None) -> int:
     t_big = time.perf_counter() - t0
     solvers = {law: ContactSolver(N, N * PIXEL, E_STAR, p_crit=p_crit) for law, p_crit in laws.items()}
     rows = {(m, k): [] for m in METHODS for k in keys}
+    slopes = {m: [] for m in METHODS}
     local = {k: [] for k in keys}
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
@@ -104,13 +106,18 @@ def main(argv=None) -> int:
                 for k in keys:
                     local[k].append(float(big_mask[k][cut].mean()))
                 for m in METHODS:
-                    gap = gap_against_flat(periodized(m, scan, seed=100 + i * args.tiles + j))
+                    h = periodized(m, scan, seed=100 + i * args.tiles + j)
+                    slopes[m].append(rms_slope(h, N * PIXEL, "finite_difference"))
+                    gap = gap_against_flat(h)
                     for law, p in keys:
                         rows[(m, (law, p))].append(solvers[law].solve(gap, p).contact_area_fraction)
     t_scans = time.perf_counter() - t0
     print(f"{args.surface} large surface {big_n}^2 of {big_size * 1e6:.0f} um, {args.tiles ** 2} scans of {N}^2 of "
           f"{N * PIXEL * 1e6:.0f} um; solves {t_big:.0f} s (large) + {t_scans:.0f} s (scans); "
           f"load {os.getloadavg()[0]:.2f}")
+    print(f"RMS slope (periodic finite differences, what the grid presents): large surface "
+          f"{rms_slope(big, big_size, 'finite_difference'):.4f}; scans' mean: "
+          + ", ".join(f"{m} {np.mean(slopes[m]):.4f}" for m in METHODS))
     print("| contact | P [MPa] | large A_c/A0 | method | scans' mean A_c/A0 | bias (mean - large) +- s.e. | "
           "relative bias | RMS vs local window |")
     print("|---|---|---|---|---|---|---|---|")
