@@ -4,10 +4,10 @@ surface (docs/physics/measured_surfaces.md).
 A large periodic roll-off surface (the quick preset's first sheet: RMS height 1.40 um, roll-off wavelength
 49.19 um, shortest wavelength 5 um, H = 0.8, 1 um pixels) of ``--tiles`` x ``--tiles`` domains of 256 um is
 the "larger patch": its BEM contact (rigid rough surface against the flat sheet, E* = 55 GPa, elastic, and
-elastic-plastic with p_crit = 340 MPa as the slides) is exact, because it is periodic. It is cut into ``--tiles^2`` non-periodic
-scans of 256 um, each written to an X3P file and read back through
-:func:`tribocosim.surrogate.measured_surfaces.read_scan` (plane detrended, as a measured scan would be), then
-made periodic by each method and solved on its own 256^2 domain:
+elastic-plastic with p_crit = 340 MPa as the slides) is exact, because it is periodic. It is cut into
+``--tiles^2`` non-periodic scans of 256 um, each written to an X3P file and read back through
+:func:`tribocosim.surrogate.measured_surfaces.read_scan` (plane detrended, as a measured scan would be), then made
+periodic by each method and solved on its own 256^2 domain:
 
 - ``wrap``: the scan taken as it is (its edges meet with steps);
 - ``smooth``: Moisan's periodic component (the product's default);

@@ -109,7 +109,9 @@ def _surface(argv: list[str]) -> int:
     if args.source is None:
         given += [flag for flag, on in (("--fill-missing", args.fill_missing), ("--side", args.side != "sheet")) if on]
     if given:
-        ap.error(f"{', '.join(given)}: {'not allowed with --from (a generated surface)' if args.source else 'allowed only with --from FILE (a measured map)'}")
+        why = ("not allowed with --from (they shape a generated surface)" if args.source
+               else "allowed only with --from FILE (a measured map)")
+        ap.error(f"{', '.join(given)}: {why}")
     if args.source:
         from .measured_surfaces import library_statistics, prepared_heights
 

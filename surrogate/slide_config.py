@@ -176,6 +176,11 @@ class SlideConfig:
     pair_spacing_px: float | None = None
     pinch_overlap_fraction: float = 0.0
     cluster_thresholds: tuple | None = None
+    n_slide_steps: int | None = None
+    snapshot_every: int = 0
+    bem_tol: float = 1e-8
+    bem_max_iter: int = 10000
+    threads: int = 1
     sheet_file: str | None = None
     tool_file: str | None = None
     sheet_file_sha256: str | None = None
@@ -183,11 +188,6 @@ class SlideConfig:
     surface_detrend: str | None = None
     surface_periodization: str | None = None
     surface_fill_missing: bool | None = None
-    n_slide_steps: int | None = None
-    snapshot_every: int = 0
-    bem_tol: float = 1e-8
-    bem_max_iter: int = 10000
-    threads: int = 1
 
     def __post_init__(self):
         _int("n", self.n, 8)

@@ -44,9 +44,9 @@ by every slide. Example (SI units everywhere)::
 A measured file's path is resolved against the sweep file's folder and its SHA-256 recorded with it
 (``sheet_file_sha256``, ``tool_file_sha256``): the case ids hold the files' contents, and a file that
 changes later is refused by the slide that reads it. The keys that the grid sweeps (``pressure``, ``v0``,
-``n_flakes``, ``flake_diameter``, ``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
-as a :class:`~tribocosim.errors.ParameterError` naming the file, the line, the key, its value and
-what is allowed.
+``n_flakes``, ``flake_diameter``, ``flake_seed``, ``sheet_seed``, ``tool_seed``, and the files and their hashes)
+are refused in ``[slide]``. Every problem is reported as a :class:`~tribocosim.errors.ParameterError`
+naming the file, the line, the key, its value and what is allowed.
 
 Presets live in ``surrogate/presets/<name>.toml`` (:func:`preset_path`).
 """

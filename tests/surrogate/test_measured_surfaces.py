@@ -306,8 +306,8 @@ def test_sweep_and_config_refuse_bad_measured_entries(tmp_path):
     (tmp_path / "bad.toml").write_text(text.replace("scans/tool.x3p", "scans/absent.x3p"))
     with pytest.raises(ParameterError, match=r"line 12: \[\[surfaces\]\] entry 1 tool_file: = 'scans/absent.x3p'"):
         load_sweep(tmp_path / "bad.toml")
-    (tmp_path / "bad.toml").write_text(text.replace('tool_file = "scans/tool.x3p"',
-                                                    'tool_file = "scans/tool.x3p"\ntool_file_sha256 = "' + "0" * 64 + '"'))
+    wrong_hash = 'tool_file = "scans/tool.x3p"\ntool_file_sha256 = "' + "0" * 64 + '"'
+    (tmp_path / "bad.toml").write_text(text.replace('tool_file = "scans/tool.x3p"', wrong_hash))
     with pytest.raises(ParameterError, match=r"line 13: \[\[surfaces\]\] entry 1 tool_file_sha256.*has changed"):
         load_sweep(tmp_path / "bad.toml")
     (tmp_path / "bad.toml").write_text(text.replace("[slide]", '[slide]\nsheet_file = "scans/sheet.x3p"'))
