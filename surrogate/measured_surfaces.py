@@ -55,6 +55,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -438,7 +439,10 @@ def library_statistics(heights, size: float, periodic: bool = True) -> dict:
     h = np.asarray(heights, dtype=np.float64)
     topo = st.Topography(h, (size, size * h.shape[1] / h.shape[0]), unit="m", periodic=periodic)
     q, psd = topo.power_spectrum_from_area()
-    return {"rms_height": float(topo.rms_height_from_area()),
+    with warnings.catch_warnings():  # SurfaceTopography 1.27's rms_height_from_area warns that its alias Sq is deprecated
+        warnings.filterwarnings("ignore", message="Function/property `Sq` is deprecated", category=DeprecationWarning)
+        sq = float(topo.rms_height_from_area())
+    return {"rms_height": sq,
             "rms_slope_finite_difference": float(topo.rms_gradient()),
             "rms_slope_spectral": float(math.sqrt(topo.moment_power_spectrum(order=2))),
             "rms_curvature": float(topo.rms_curvature_from_area()),
