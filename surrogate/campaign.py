@@ -3,7 +3,8 @@
 A *case* is one :class:`~tribocosim.surrogate.slide_config.SlideConfig` (one pressure, velocity, debris
 level, flake placement seed and surface pair) run through :func:`tribocosim.surrogate.coupling.run_slide`.
 Its id is the first 16 hex digits of the SHA-256 of the canonical JSON of the configuration, so
-the same case has the same id in every run and on every machine.
+the same case has the same id in every run and on every machine; a measured surface file enters it by
+the SHA-256 of its bytes, not by its path (:func:`tribocosim.surrogate.measured_surfaces.identity`).
 
 Layout of the output folder ``OUT``:
 
@@ -40,6 +41,7 @@ import numpy as np
 
 from tribocosim.errors import TribocosimError
 
+from . import measured_surfaces
 from .slide_config import SlideConfig
 from .sweep import Sweep
 
@@ -88,8 +90,8 @@ def source_digest() -> str:
 
 def case_id(config: SlideConfig) -> str:
     """Deterministic id of a case: SHA-256 of the canonical JSON of its configuration."""
-    blob = json.dumps({"case_format": CASE_FORMAT, "config": config.to_dict()}, sort_keys=True,
-                      separators=(",", ":"))
+    config_dict = measured_surfaces.identity(config.to_dict())
+    blob = json.dumps({"case_format": CASE_FORMAT, "config": config_dict}, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 

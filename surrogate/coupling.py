@@ -522,14 +522,21 @@ class SlideSimulation:
 
 
 def _generate_surfaces(c: SlideConfig):
+    from .measured_surfaces import slide_surface
     from .surfaces import self_affine_surface, surface_wavenumbers
 
-    q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.sheet_rolloff_wavelength)
-    h_def0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
-                                 rms_height=c.sheet_rms_height, seed=c.sheet_seed)
-    q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.tool_rolloff_wavelength)
-    h_tool0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
-                                  rms_height=c.tool_rms_height, seed=c.tool_seed)
+    if c.sheet_file is not None:
+        h_def0 = slide_surface(c, "sheet")[0]
+    else:
+        q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.sheet_rolloff_wavelength)
+        h_def0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
+                                     rms_height=c.sheet_rms_height, seed=c.sheet_seed)
+    if c.tool_file is not None:
+        h_tool0 = slide_surface(c, "tool")[0]
+    else:
+        q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.tool_rolloff_wavelength)
+        h_tool0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
+                                      rms_height=c.tool_rms_height, seed=c.tool_seed)
     return h_def0, h_tool0
 
 

@@ -2,9 +2,13 @@
 
 Subcommands (each prints JSON on stdout; the key names are a stable contract):
 
-- ``surface``: generate a periodic self-affine surface (:mod:`tribocosim.surrogate.surfaces`) and save its
-  heights [m] to ``.npy``; prints one object with the parameters and the measured RMS height,
-  RMS slopes (spectral and finite-difference) and the file name.
+- ``surface``: generate a periodic self-affine surface (:mod:`tribocosim.surrogate.surfaces`), or, with
+  ``--from FILE``, prepare a measured map (X3P and the other formats SurfaceTopography reads; the
+  ``measured`` extra) as the periodic grid of a slide (:mod:`tribocosim.surrogate.measured_surfaces`), and
+  save its heights [m] to ``.npy``; prints one object with the parameters and the measured RMS height,
+  RMS slopes (spectral and finite-difference) and the file name; with ``--from`` also what was done to the
+  file (``measured``: file, sha256, scan points and pixel, detrend, periodization, missing points filled)
+  and the library's statistics of the result (``library``: RMS height, both slopes, RMS curvature).
 - ``contact``: load a height map (``.npy`` or text, metres), build the gap of the rigid rough
   surface against a flat (``max(h) - h``), solve the elastic or elastic-plastic contact
   (:mod:`tribocosim.surrogate.bem`) for each ``--pressure`` from the undeformed state, and print one object
@@ -40,20 +44,32 @@ def _usage() -> str:
 def _surface_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="tribocosim meso surface",
                                  description="periodic isotropic self-affine surface, PSD "
-                                 "~ q^(-2(1+H)) between q_roll and q_cut (heights in m)")
+                                 "~ q^(-2(1+H)) between q_roll and q_cut (heights in m); or, with --from, "
+                                 "a measured map made the periodic grid of a slide")
     ap.add_argument("--n", type=int, required=True, help="grid points per side")
     ap.add_argument("--size", type=float, required=True, help="side length L [m]")
-    ap.add_argument("--hurst", type=float, default=0.8, help="Hurst exponent H (default 0.8)")
-    ap.add_argument("--q-roll", type=float, required=True,
-                    help="roll-off wavenumber [rad/m] (2 pi / wavelength; flat PSD below)")
-    ap.add_argument("--q-cut", type=float, required=True,
-                    help="cutoff wavenumber [rad/m] (zero PSD above; <= pi n / L)")
-    norm = ap.add_mutually_exclusive_group(required=True)
+    gen = ap.add_argument_group("generated surface (without --from)")
+    gen.add_argument("--hurst", type=float, default=None, help="Hurst exponent H (default 0.8)")
+    gen.add_argument("--q-roll", type=float, help="roll-off wavenumber [rad/m] (2 pi / wavelength; flat PSD below)")
+    gen.add_argument("--q-cut", type=float, help="cutoff wavenumber [rad/m] (zero PSD above; <= pi n / L)")
+    norm = gen.add_mutually_exclusive_group()
     norm.add_argument("--rms-slope", type=float, help="RMS slope of the result [-]")
     norm.add_argument("--rms-height", type=float, help="RMS height of the result [m]")
-    ap.add_argument("--slope-definition", choices=("spectral", "finite_difference"),
-                    default="spectral", help="definition used by --rms-slope")
-    ap.add_argument("--seed", type=int, default=0, help="seed of the random phases")
+    gen.add_argument("--slope-definition", choices=("spectral", "finite_difference"),
+                     default=None, help="definition used by --rms-slope")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the random phases (generation, or --periodization "
+                    "synthesis)")
+    meas = ap.add_argument_group("measured surface (the measured extra: pip install -e \".[measured]\")")
+    meas.add_argument("--from", dest="source", metavar="FILE",
+                      help="a measured height map: X3P or another format SurfaceTopography reads")
+    meas.add_argument("--detrend", choices=("plane", "curvature", "mean"), default=None,
+                      help="subtracted from the whole map (default plane; mean for --periodization none)")
+    meas.add_argument("--periodization", choices=("smooth", "synthesis", "none"), default=None,
+                      help="periodic-plus-smooth (default), IAAFT synthesis, or none (a periodic map)")
+    meas.add_argument("--fill-missing", action="store_true",
+                      help="fill undefined points by harmonic interpolation (default: refuse the file)")
+    meas.add_argument("--side", choices=("sheet", "tool"), default="sheet",
+                      help="a tool is turned over about x: h(x, y) -> -h(x, -y)")
     ap.add_argument("-o", "--output", required=True, help="output .npy file")
     return ap
 
@@ -77,20 +93,50 @@ def _contact_parser() -> argparse.ArgumentParser:
     return ap
 
 
+_GENERATION = ("hurst", "q_roll", "q_cut", "rms_slope", "rms_height", "slope_definition")
+_MEASURED = ("detrend", "periodization")
+
+
 def _surface(argv: list[str]) -> int:
-    args = _surface_parser().parse_args(argv)
+    ap = _surface_parser()
+    args = ap.parse_args(argv)
     import numpy as np
 
     from .surfaces import rms_height, rms_slope, self_affine_surface
 
-    h = self_affine_surface(args.n, args.size, args.hurst, args.q_roll, args.q_cut,
-                            rms_height=args.rms_height, rms_slope=args.rms_slope, seed=args.seed,
-                            slope_definition=args.slope_definition)
+    given = [f"--{k.replace('_', '-')}" for k in (_GENERATION if args.source else _MEASURED)
+             if getattr(args, k) is not None]
+    if args.source is None:
+        given += [flag for flag, on in (("--fill-missing", args.fill_missing), ("--side", args.side != "sheet")) if on]
+    if given:
+        why = ("not allowed with --from (they shape a generated surface)" if args.source
+               else "allowed only with --from FILE (a measured map)")
+        ap.error(f"{', '.join(given)}: {why}")
+    if args.source:
+        from .measured_surfaces import library_statistics, prepared_heights
+
+        detrend = args.detrend or ("mean" if args.periodization == "none" else "plane")
+        h, info = prepared_heights(args.source, args.n, args.size, detrend=detrend,
+                                   periodization=args.periodization or "smooth", fill_missing=args.fill_missing,
+                                   seed=args.seed, side=args.side)
+        lib = library_statistics(h, args.size)
+        record = {"n": args.n, "size": args.size, "seed": args.seed, "measured": info,
+                  "library": {k: v for k, v in lib.items() if not k.startswith("psd")}}
+    else:
+        missing = [f"--{k.replace('_', '-')}" for k in ("q_roll", "q_cut") if getattr(args, k) is None]
+        if args.rms_slope is None and args.rms_height is None:
+            missing.append("--rms-slope or --rms-height")
+        if missing:
+            ap.error(f"a generated surface needs {', '.join(missing)} (or --from FILE for a measured one)")
+        hurst = 0.8 if args.hurst is None else args.hurst
+        h = self_affine_surface(args.n, args.size, hurst, args.q_roll, args.q_cut,
+                                rms_height=args.rms_height, rms_slope=args.rms_slope, seed=args.seed,
+                                slope_definition=args.slope_definition or "spectral")
+        record = {"n": args.n, "size": args.size, "hurst": hurst, "q_roll": args.q_roll, "q_cut": args.q_cut,
+                  "seed": args.seed}
     out = args.output if args.output.endswith(".npy") else args.output + ".npy"
     np.save(out, h)
-    print(json.dumps({"n": args.n, "size": args.size, "hurst": args.hurst,
-                      "q_roll": args.q_roll, "q_cut": args.q_cut, "seed": args.seed,
-                      "rms_height": rms_height(h),
+    print(json.dumps({**record, "rms_height": rms_height(h),
                       "rms_slope_spectral": rms_slope(h, args.size, "spectral"),
                       "rms_slope_finite_difference": rms_slope(h, args.size, "finite_difference"),
                       "output": out}))

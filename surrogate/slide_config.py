@@ -29,11 +29,12 @@ from pathlib import Path
 from tribocosim.errors import ParameterError, check_range
 
 from .flake_body import DEFAULT_OIL_VISCOSITY, DampingRates
+from .measured_surfaces import MEASURED_KEYS, check_measured_keys
 
 #: keys left out of to_dict() while None (see the module docstring)
 OPTIONAL_KEYS = ("oil_viscosity", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", "dem_velocity",
                  "placement_pressure", "placement", "pair_spacing_px", "cluster_thresholds", "flake_solver",
-                 "relax_substeps")
+                 "relax_substeps", *MEASURED_KEYS)
 #: how the flakes are laid into the gap at the start of a slide (:func:`tribocosim.surrogate.flakes.random_placement`)
 PLACEMENTS = ("monolayer", "deposition")
 #: how the flakes move during a DEM phase (:mod:`tribocosim.surrogate.dem`, :mod:`tribocosim.surrogate.flake_relax`)
@@ -70,6 +71,16 @@ class SlideConfig:
         With a roll-off the shortest wavelength must span >= 4 pixels (wavelength_ratio >= 4/n).
     sheet_seed, tool_seed, flake_seed : int
         Seeds of the two surfaces and of the flake placement.
+    sheet_file, tool_file : str or None
+        A measured height map (any format SurfaceTopography reads) as the sheet or the tool instead of a
+        generated surface (:mod:`tribocosim.surrogate.measured_surfaces`; the ``measured`` extra); the
+        side's rms height, roll-off and seed (but for ``surface_periodization = "synthesis"``) do not apply.
+    sheet_file_sha256, tool_file_sha256 : str or None
+        SHA-256 of the file: a file whose bytes differ is refused (a sweep records it, and a campaign's case
+        id holds it instead of the file's path).
+    surface_detrend, surface_periodization, surface_fill_missing : str, str, bool or None
+        How the measured files are prepared: ``"plane"`` (None), ``"curvature"`` or ``"mean"``;
+        ``"smooth"`` (None), ``"synthesis"`` or ``"none"``; undefined points refused (None, False) or filled.
     n_flakes : int
         Number of flakes.
     flake_diameter, flake_thickness : float
@@ -183,6 +194,13 @@ class SlideConfig:
     bem_tol: float = 1e-8
     bem_max_iter: int = 10000
     threads: int = 1
+    sheet_file: str | None = None
+    tool_file: str | None = None
+    sheet_file_sha256: str | None = None
+    tool_file_sha256: str | None = None
+    surface_detrend: str | None = None
+    surface_periodization: str | None = None
+    surface_fill_missing: bool | None = None
 
     def __post_init__(self):
         _int("n", self.n, 8)
@@ -258,6 +276,7 @@ class SlideConfig:
                 raise ParameterError(f"cluster_thresholds = {self.cluster_thresholds!r}; allowed: a list of "
                                      f"thresholds [m] smaller in magnitude than flake_thickness = {self.flake_thickness!r}")
             object.__setattr__(self, "cluster_thresholds", tuple(float(x) for x in self.cluster_thresholds))
+        check_measured_keys(self)
         if self.n_slide_steps is not None:
             _int("n_slide_steps", self.n_slide_steps, 1)
         _int("snapshot_every", self.snapshot_every, 0)

@@ -26,12 +26,19 @@ doi:10.1088/2051-672X/aa51f8):
   ``((h[i+1, j] - h[i, j])^2 + (h[i, j+1] - h[i, j])^2) / dx^2`` averaged over the grid. The
   finite-difference value is the smaller one (each mode is weighted by
   ``(2 sin(q dx / 2) / dx)^2 <= q^2``).
-- Radially averaged PSD ``C(q) = L^2 |h_q|^2 / n^4``, normalised so that
-  ``h_rms^2 = sum_q C(q) / L^2 = (2 pi)^-2 * integral C(q) d^2q``.
+- PSD ``C(q) = L^2 |h_q|^2 / n^4``, normalised so that ``h_rms^2 = sum_q C(q) / L^2 = (2 pi)^-2 *
+  integral C(q) d^2q``: SurfaceTopography's ``power_spectrum_from_area`` (the ``measured`` extra;
+  :func:`tribocosim.surrogate.measured_surfaces.library_statistics`) computes it and its radial average,
+  with the RMS curvature.
 
 - Summit density: pixels higher than all 8 periodic neighbours, per unit area (the discrete summit
   definition of Greenwood, Proc. R. Soc. A 393 (1984) 133, doi:10.1098/rspa.1984.0050; it depends on
   the pixel size, so it is only comparable between maps of the same dx).
+
+The RMS height and both RMS slopes are computed here as well as by SurfaceTopography
+(``rms_height_from_area``, ``rms_gradient``, the second moment of the PSD) because the generator and the
+core install, which does not need that library, use them; tests/surrogate/test_measured_surfaces.py holds
+the two equal. The summit density and everything below are not in the library.
 
 Because the amplitudes are deterministic, the RMS height and both RMS slopes of a generated surface
 are functions of the PSD alone (the same for every seed): ``h_rms^2 = C0 sum_q C(q) / C0``,
@@ -218,41 +225,6 @@ def _slope(h: np.ndarray, size: float, definition: str) -> float:
         raise ParameterError(f"definition = {definition!r} is not allowed; "
                              f"allowed: {SLOPE_DEFINITIONS}")
     return float(np.sqrt(s2))
-
-
-def radial_psd(h, size: float) -> tuple[np.ndarray, np.ndarray]:
-    """Radially averaged 2D PSD ``C(q) = L^2 |h_q|^2 / n^4`` of a periodic height map.
-
-    Modes are binned by ``k = |q| L / (2 pi)`` into unit-wide rings centred on the integers
-    ``1 .. n // 2`` (rings that fit inside the grid's Nyquist circle).
-
-    Parameters
-    ----------
-    h : array_like, shape (n, n)
-        Heights [m].
-    size : float
-        Side length L [m].
-
-    Returns
-    -------
-    q : ndarray
-        Mean |q| of the modes in each non-empty ring [rad/m].
-    psd : ndarray
-        Mean C(q) in each ring [m^4].
-    """
-    h = validate_height_map(h, "h")
-    size = check_range("size", size, 0.0, low_inclusive=False, unit="m")
-    n = h.shape[0]
-    c = size**2 * np.abs(np.fft.fft2(h)) ** 2 / float(n) ** 4
-    kx = np.fft.fftfreq(n, d=1.0 / n)
-    k = np.hypot(kx[:, None], kx[None, :])
-    ring = np.rint(k).astype(np.int64).ravel()
-    keep = (ring >= 1) & (ring <= n // 2)
-    count = np.bincount(ring[keep], minlength=n // 2 + 1)
-    csum = np.bincount(ring[keep], weights=c.ravel()[keep], minlength=n // 2 + 1)
-    ksum = np.bincount(ring[keep], weights=k.ravel()[keep], minlength=n // 2 + 1)
-    ok = count > 0
-    return 2.0 * np.pi / size * ksum[ok] / count[ok], csum[ok] / count[ok]
 
 
 def surface_wavenumbers(size: float, wavelength_ratio: float,

@@ -23,6 +23,12 @@ by every slide. Example (SI units everywhere)::
     sheet_seed = 1
     tool_seed = 2                  # optional: wavelength_ratio, hurst, *_rms_height, *_rolloff_wavelength
 
+    [[surfaces]]                   # a measured sheet (any format SurfaceTopography reads; the measured extra)
+    sheet_file = "scans/sheet.x3p" # relative to the sweep file's folder
+    tool_seed = 2                  # a generated tool (or tool_file = "...")
+    # optional: surface_detrend = "plane" | "curvature" | "mean", surface_periodization = "smooth" |
+    #           "synthesis" | "none", surface_fill_missing = false (tribocosim.surrogate.measured_surfaces)
+
     [slide]                        # every other SlideConfig key (surrogate.slide_config)
     n = 64
     size = 250e-6
@@ -35,10 +41,12 @@ by every slide. Example (SI units everywhere)::
     target_relative_se = 0.10      # standard error of <A_p> / <A_p> at a node
     extra_seeds = [14, 15, 16]     # added one at a time (on every surface pair) while above target
 
-The keys that the grid sweeps (``pressure``, ``v0``, ``n_flakes``, ``flake_diameter``,
-``flake_seed``, ``sheet_seed``, ``tool_seed``) are refused in ``[slide]``. Every problem is reported
-as a :class:`~tribocosim.errors.ParameterError` naming the file, the line, the key, its value and
-what is allowed.
+A measured file's path is resolved against the sweep file's folder and its SHA-256 recorded with it
+(``sheet_file_sha256``, ``tool_file_sha256``): the case ids hold the files' contents, and a file that
+changes later is refused by the slide that reads it. The keys that the grid sweeps (``pressure``, ``v0``,
+``n_flakes``, ``flake_diameter``, ``flake_seed``, ``sheet_seed``, ``tool_seed``, and the files and their hashes)
+are refused in ``[slide]``. Every problem is reported as a :class:`~tribocosim.errors.ParameterError`
+naming the file, the line, the key, its value and what is allowed.
 
 Presets live in ``surrogate/presets/<name>.toml`` (:func:`preset_path`).
 """
@@ -53,15 +61,17 @@ from pathlib import Path
 
 from tribocosim.errors import ParameterError
 
+from .measured_surfaces import MEASURED_KEYS, file_sha256
 from .slide_config import SlideConfig
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 
 #: SlideConfig keys the grid sets per case (not allowed in [slide])
-SWEPT_KEYS = ("pressure", "v0", "n_flakes", "flake_diameter", "flake_seed", "sheet_seed", "tool_seed")
+SWEPT_KEYS = ("pressure", "v0", "n_flakes", "flake_diameter", "flake_seed", "sheet_seed", "tool_seed",
+              "sheet_file", "tool_file", "sheet_file_sha256", "tool_file_sha256")
 #: SlideConfig keys a [[surfaces]] entry may set besides the two seeds
 SURFACE_KEYS = ("sheet_seed", "tool_seed", "wavelength_ratio", "hurst", "sheet_rms_height",
-                "tool_rms_height", "sheet_rolloff_wavelength", "tool_rolloff_wavelength")
+                "tool_rms_height", "sheet_rolloff_wavelength", "tool_rolloff_wavelength", *MEASURED_KEYS)
 _TOP_KEYS = ("name", "description", "grid", "flakes", "surfaces", "slide", "table", "adaptive")
 _GRID_KEYS = ("pressure", "velocity", "seeds", "particle_free")
 _FLAKE_KEYS = ("count", "diameter", "min_pressure", "velocities", "seeds")
@@ -284,6 +294,23 @@ class _Checker:
         return tuple(sorted(value)) if not integer else tuple(value)
 
 
+def _measured_file(chk: _Checker, entry: dict, side: str, folder: Path, index: int) -> None:
+    """Resolve a [[surfaces]] entry's ``{side}_file`` against ``folder`` and record (or check) its SHA-256."""
+    key = f"{side}_file"
+    name = entry[key]
+    if not isinstance(name, str) or not name:
+        chk.fail("surfaces", key, f"= {name!r}; a file name is required", index)
+    path = (folder / name).resolve()
+    if not path.is_file():
+        chk.fail("surfaces", key, f"= {name!r}: {str(path)!r} is not a file", index)
+    digest = file_sha256(path)
+    recorded = entry.get(f"{key}_sha256")
+    if recorded is not None and recorded != digest:
+        chk.fail("surfaces", f"{key}_sha256", f"= {recorded!r}, but {str(path)!r} has SHA-256 {digest}: the "
+                 "file has changed", index)
+    entry[key], entry[f"{key}_sha256"] = str(path), digest
+
+
 def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     """Validate the TOML ``text`` of a sweep (``source`` names it in messages)."""
     chk = _Checker(text, source)
@@ -373,11 +400,15 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     surfaces = []
     for i, s in enumerate(surfaces_raw):
         chk.unknown("surfaces", s, SURFACE_KEYS, i)
-        for key in ("sheet_seed", "tool_seed"):
-            if key not in s:
-                chk.fail("surfaces", None, f"key {key!r} is missing", i)
-            if isinstance(s[key], bool) or not isinstance(s[key], int) or s[key] < 0:
+        s = dict(s)
+        for side in ("sheet", "tool"):
+            key = f"{side}_seed"
+            if key not in s and f"{side}_file" not in s:
+                chk.fail("surfaces", None, f"key {key!r} (or {side}_file) is missing", i)
+            if key in s and (isinstance(s[key], bool) or not isinstance(s[key], int) or s[key] < 0):
                 chk.fail("surfaces", key, f"= {s[key]!r}; an integer >= 0 is required", i)
+            if f"{side}_file" in s:
+                _measured_file(chk, s, side, Path(source).parent if source != "<string>" else Path.cwd(), i)
         try:
             SlideConfig(**{**slide, **s})
         except ParameterError as exc:
