@@ -92,8 +92,12 @@ def test_build_where_every_case_fails_reports_it(tmp_path, capsys):
     assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o"), "--workers", "2",
                                "--quiet"]) == 1
     err = capsys.readouterr().err
-    assert "8 failed" in err and "no finished case" in err
-    assert len(list((tmp_path / "o" / "cases").glob("*.error.json"))) == 8
+    errors = sorted((tmp_path / "o" / "cases").glob("*.error.json"))
+    assert len(errors) == 8 and "8 of 8 cases" in err and "8 failed; the error of each is in its file" in err
+    assert all(f"{e}: ConvergenceError" in err for e in errors), "each failed case named by its error file"
+    assert not (tmp_path / "o" / "friction_table.npz").exists()
+    assert surrogate_cli.main(["table", "--out", str(tmp_path / "o"), "--allow-failed"]) == 1
+    assert "no finished case" in capsys.readouterr().err
 
 
 def test_verify_reruns_a_sample_of_the_recorded_cases(built, tmp_path, capsys):
