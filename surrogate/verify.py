@@ -12,11 +12,14 @@ cluster rule and <A_c>/A0 with the recorded values. How depends on the code that
   process, and two plans of one size may round differently in the last bit, which the DEM can carry to another
   trajectory. A campaign and its check on one FFTW wisdom file (``TRIBOCOSIM_FFTW_WISDOM``) use the same plans;
 - another version of the mesoscale code (or a table whose cases come from several versions, when which one ran
-  a case is not recorded): the rerun may round differently and follow another trajectory of the same ensemble,
-  so equal values are ``identical`` and otherwise each value must lie within :data:`SPREAD_FACTOR` standard
-  deviations of the *other* members of its node (the recorded value itself left out, so that a wrong value does
-  not widen its own tolerance), and at least one contact pixel (verdict ``within_tolerance``); the report says
-  which code computed the cases and which reran them;
+  a case is not recorded): the rerun may round differently and follow another trajectory of the same ensemble.
+  Equal values are ``identical``; otherwise each value x (recorded x_r, rerun x_n) must satisfy
+  ``|x_n - x_r| <= max(1 pixel, min(SPREAD_FACTOR sigma, REL_CAP min(|x_r|, |x_n|)))`` (verdict
+  ``within_tolerance``), where sigma is the member standard deviation of the node's *other* members (the recorded
+  value left out, so that a wrong value does not widen its own tolerance) or, with fewer than two others, the
+  table's pooled relative member standard deviation (rms over the nodes with at least three members) times the
+  others' mean. The cap REL_CAP = 0.5 keeps a value off by a factor of 2 or more out of any tolerance. The
+  report says which code computed the cases and which reran them;
 - anything else fails (``differs``).
 
 The sample: the cheapest recorded case of every debris level (and one particle-free case), cheapest first, as
@@ -37,6 +40,8 @@ from .sweep import parse_sweep_dict
 
 #: a rerun by another code version lies within this many member standard deviations of its node's other members
 SPREAD_FACTOR = 2.0
+#: ... and at most this fraction of the smaller of the recorded and the rerun value (module docstring)
+REL_CAP = 0.5
 KEYS = (("a_p", "mean_particle_fraction"), ("a_p_clusters", "mean_particle_fraction_clusters"),
         ("a_c", "mean_contact_fraction"))
 
@@ -48,7 +53,7 @@ class Recorded:
     case: Case
     values: dict  # a_p, a_p_clusters, a_c as recorded
     wall_s: float
-    spread: dict  # a_p, a_p_clusters, a_c: member std of the node's other members (this case left out)
+    sigma: dict  # a_p, a_p_clusters, a_c: member std of the node without this case (module docstring)
 
 
 def recorded_cases(table) -> list[Recorded]:
@@ -64,6 +69,8 @@ def recorded_cases(table) -> list[Recorded]:
     for c in cases:
         lab = c["labels"]
         nodes.setdefault((lab["pressure"], lab["velocity"], lab["n_flakes"]), []).append(c)
+    pooled = {k: _pooled_relative_std([[m[k] for m in mem if m.get(k) is not None] for mem in nodes.values()])
+              for k, _ in KEYS}
     out = []
     for c in cases:
         lab = c["labels"]
@@ -73,8 +80,8 @@ def recorded_cases(table) -> list[Recorded]:
             raise TableError(f"case {c['case_id']} ({lab}) rebuilds to id {case.case_id}: the sweep recorded with "
                              "the table does not give the configuration that ran")
         others = [m for m in nodes[(lab["pressure"], lab["velocity"], lab["n_flakes"])] if m is not c]
-        spread = {k: _std([m[k] for m in others if m.get(k) is not None]) for k, _ in KEYS}
-        out.append(Recorded(case, {k: c.get(k) for k, _ in KEYS}, float(c.get("wall_s") or math.inf), spread))
+        sigma = {k: _sigma([m[k] for m in others if m.get(k) is not None], pooled[k]) for k, _ in KEYS}
+        out.append(Recorded(case, {k: c.get(k) for k, _ in KEYS}, float(c.get("wall_s") or math.inf), sigma))
     return out
 
 
@@ -84,6 +91,19 @@ def _std(values) -> float:
         return 0.0
     mean = sum(values) / n
     return math.sqrt(sum((x - mean) ** 2 for x in values) / (n - 1))
+
+
+def _pooled_relative_std(groups) -> float:
+    """rms of std/mean over the groups with at least three values and a positive mean (0 if none)."""
+    rel = [_std(g) / (sum(g) / len(g)) for g in groups if len(g) >= 3 and sum(g) > 0]
+    return math.sqrt(sum(r * r for r in rel) / len(rel)) if rel else 0.0
+
+
+def _sigma(others, pooled_rel: float) -> float:
+    """The member std of a node estimated without the case itself (module docstring)."""
+    if len(others) >= 2:
+        return _std(others)
+    return pooled_rel * abs(sum(others) / len(others)) if others else 0.0
 
 
 def sample_cases(recorded: list[Recorded], budget_s: float) -> list[Recorded]:
@@ -126,7 +146,8 @@ def verify_cases(sample: list[Recorded], executor, pixel: float, recorded_versio
         got = {k: outcome["summary"].get(name) for k, name in KEYS}
         keys = [k for k, _ in KEYS if rec.values[k] is not None and got[k] is not None]
         diffs = {k: abs(got[k] - rec.values[k]) for k in keys}
-        tolerance = {k: 0.0 if mode == "exact" else max(SPREAD_FACTOR * rec.spread[k], pixel) for k in keys}
+        tolerance = {k: 0.0 if mode == "exact" else tolerance_of(rec.values[k], got[k], rec.sigma[k], pixel)
+                     for k in keys}
         if all(got[k] == rec.values[k] for k in keys):
             verdict = "identical"
         elif mode == "tolerance" and all(diffs[k] <= tolerance[k] for k in keys):
@@ -139,6 +160,11 @@ def verify_cases(sample: list[Recorded], executor, pixel: float, recorded_versio
     return results
 
 
+def tolerance_of(recorded: float, rerun: float, sigma: float, pixel: float) -> float:
+    """The tolerance of a rerun by another code version (module docstring)."""
+    return max(pixel, min(SPREAD_FACTOR * sigma, REL_CAP * min(abs(recorded), abs(rerun))))
+
+
 def comparison(recorded_versions: list[str], rerun_by: str) -> tuple[str, str]:
     """("exact" or "tolerance", why) for a rerun by code ``rerun_by`` of cases computed by ``recorded_versions``."""
     if recorded_versions == [rerun_by]:
@@ -149,5 +175,5 @@ def comparison(recorded_versions: list[str], rerun_by: str) -> tuple[str, str]:
              "; which one computed this case is not recorded)")
     return "tolerance", (f"the recorded cases were computed by {which} and this rerun by {rerun_by}: another version "
                          f"may round differently and follow another trajectory of the node's ensemble, so each value "
-                         f"is compared with {SPREAD_FACTOR:g} standard deviations of the node's other members, at "
-                         "least one contact pixel")
+                         f"may differ by {SPREAD_FACTOR:g} member standard deviations of the node without the case, at "
+                         f"most {REL_CAP:g} of the smaller value and at least one contact pixel")
