@@ -156,9 +156,9 @@ def test_records_without_digest_are_checked_against_their_series(copy, capsys):
 
 # --- signals ------------------------------------------------------------------------------------------------------
 
-def _session(sid: int) -> list[str]:
-    """The live (not zombie) processes of session ``sid``, read from /proc."""
-    found = []
+def _session(sid: int) -> dict[int, str]:
+    """The live (not zombie) processes of session ``sid``, read from /proc: pid -> command line."""
+    found = {}
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
@@ -169,8 +169,18 @@ def _session(sid: int) -> list[str]:
             continue
         fields = stat[stat.rindex(")") + 2:].split()
         if int(fields[3]) == sid and fields[0] != "Z":
-            found.append(f"{entry.name} {cmd[:100]}")
+            found[int(entry.name)] = cmd[:100]
     return found
+
+
+def _session_after_exit(sid: int) -> dict[int, str]:
+    """The processes of session ``sid`` still alive 5 s after its leader ended (none should be)."""
+    for _ in range(50):
+        left = _session(sid)
+        if not left:
+            break
+        time.sleep(0.1)
+    return left
 
 
 @pytest.mark.parametrize("how", ["SIGINT", pytest.param("SIGINT twice", marks=pytest.mark.slow),
@@ -206,10 +216,14 @@ def test_build_stopped_by_a_signal_keeps_finished_cases_and_leaves_nothing_behin
         except subprocess.TimeoutExpired:
             pytest.fail(f"{how}: the build did not end within 30 s")
         elapsed = time.monotonic() - t0
+        left = _session_after_exit(proc.pid)
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+        for pid in [proc.pid] * (proc.poll() is None) + list(_session(proc.pid)):  # whatever this test started
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+        proc.wait()
     signum = signal.SIGINT if how.startswith("SIGINT") else getattr(signal, how)
     assert proc.returncode == (-signal.SIGKILL if how == "SIGKILL" else 128 + signum), err
     assert elapsed < 10.0, f"{how}: {elapsed:.1f} s to stop"
@@ -218,11 +232,5 @@ def test_build_stopped_by_a_signal_keeps_finished_cases_and_leaves_nothing_behin
         assert json.loads((out / "campaign.log").read_text().splitlines()[-1])["event"] == "interrupted"
     after = {p.name: p.read_bytes() for p in out.glob("cases/*")}
     assert after == finished, "the finished cases are kept as they were; nothing of the slides in progress"
-    left = _session(proc.pid)
-    for _ in range(50):
-        if not left:
-            break
-        time.sleep(0.1)
-        left = _session(proc.pid)
     assert not left, f"{how}: processes left behind: {left}"
     assert list(tmp.iterdir()) == [], f"{how}: left in the temporary folder: {list(tmp.iterdir())}"
