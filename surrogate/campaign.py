@@ -271,7 +271,13 @@ class CampaignStore:
         return check_case(self.case_path(cid), cid).record
 
     def write_manifest(self, sweep: Sweep | None, cases: list[Case]) -> None:
+        """Write ``OUT/campaign.json``; drop the temporary files of a writer that ended before its rename (a
+        process stopped at once: :mod:`tribocosim.surrogate.interrupt`)."""
         self.cases_dir.mkdir(parents=True, exist_ok=True)
+        for tmp in [*self.cases_dir.glob(".*.tmp"), *self.out.glob(".*.tmp")]:
+            pid = tmp.name.rsplit(".", 2)[-2]
+            if pid.isdigit() and not _alive(int(pid)):
+                tmp.unlink(missing_ok=True)
         write_json(self.out / "campaign.json", {
             "sweep": None if sweep is None else sweep.to_dict(),
             "cases": [{"case_id": c.case_id, "labels": c.labels} for c in cases],
@@ -316,6 +322,16 @@ class CampaignStore:
         with open(self.out / "campaign.log", "a") as fh:
             fh.write(line + "\n")
             fh.flush()
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _now() -> str:

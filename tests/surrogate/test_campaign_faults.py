@@ -3,7 +3,8 @@
 - campaign data are checked: a case record whose numbers were edited, a garbage or truncated series file, or a
   record without a digest that disagrees with its series is refused when a table is built (the message names the
   file) and computed again when the campaign resumes;
-- a table build that fails or exits 1 leaves the old table byte for byte, and names only files that exist;
+- a table build that fails or exits 1 leaves the old table byte for byte, and names only files that exist; a
+  resumed campaign drops the temporary files of a writer that died before its rename;
 - ``tribocosim surrogate build`` stopped by SIGINT (once or twice, to the process group as a terminal's Ctrl-C
   sends it), SIGTERM or SIGKILL (to the driver alone) ends within seconds with 128 + the signal's number, keeps
   every finished case intact, and leaves no process of its session and nothing in its temporary folder (SIGINT
@@ -152,6 +153,19 @@ def test_records_without_digest_are_checked_against_their_series(copy, capsys):
     path.write_text(json.dumps(rec, indent=1, sort_keys=True))
     assert _cli("table", "--out", out, "--table", copy / "legacy.npz") == 1
     assert f"{path} (no digest) gives mean_particle_fraction" in capsys.readouterr().err
+
+
+def test_a_resumed_campaign_drops_the_temporary_files_of_a_writer_that_died(copy):
+    """A process ended at once (a second Ctrl-C, SIGKILL) between writing a temporary file and renaming it."""
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    out = copy / "out"
+    stale = out / "cases" / f".0123456789abcdef.json.{dead.pid}.tmp"
+    live = out / "cases" / f".0123456789abcdef.npz.{os.getpid()}.tmp"
+    stale.write_text("{")
+    live.write_text("{")
+    assert _cli("build", "--sweep", copy / "sweep.toml", "--out", out, "--no-table", "--quiet") == 0
+    assert not stale.exists() and live.exists(), "only the files of a writer that is gone"
 
 
 # --- signals ------------------------------------------------------------------------------------------------------
