@@ -170,9 +170,13 @@ def comparison(recorded_versions: list[str], rerun_by: str) -> tuple[str, str]:
     if recorded_versions == [rerun_by]:
         return "exact", (f"the same mesoscale code ({rerun_by}) computed the recorded case: a rerun on the same FFT "
                          "plans is bit-identical")
-    which = (f"mesoscale code {recorded_versions[0]}" if len(recorded_versions) == 1 else
-             f"{len(recorded_versions)} versions of the mesoscale code ({', '.join(recorded_versions) or 'none recorded'}"
-             "; which one computed this case is not recorded)")
+    if not recorded_versions:
+        which = "a version of the mesoscale code the table does not record"
+    elif len(recorded_versions) == 1:
+        which = f"mesoscale code {recorded_versions[0]}"
+    else:
+        which = (f"{len(recorded_versions)} versions of the mesoscale code ({', '.join(recorded_versions)}; which "
+                 "one computed this case is not recorded)")
     return "tolerance", (f"the recorded cases were computed by {which} and this rerun by {rerun_by}: another version "
                          f"may round differently and follow another trajectory of the node's ensemble, so each value "
                          f"may differ by {SPREAD_FACTOR:g} member standard deviations of the node without the case, at "
