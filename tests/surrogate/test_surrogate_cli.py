@@ -18,11 +18,15 @@ TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace(
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
+    """The tiny campaign and its table, built with one FFTW wisdom file that every slide of this module plans from
+    (so that verify's reruns use the plans of the recorded slides: a slide is deterministic for given plans)."""
     d = tmp_path_factory.mktemp("cli")
     (d / "sweep.toml").write_text(TINY)
-    rc = tribocosim(["surrogate", "build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
-                     "--workers", "1", "--quiet"])
-    return d, rc
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("TRIBOCOSIM_FFTW_WISDOM", str(d / "fftw_wisdom.json"))
+        rc = tribocosim(["surrogate", "build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
+                         "--workers", "1", "--quiet"])
+        yield d, rc
 
 
 def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
