@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,6 +59,9 @@ def case_digest(record: dict, series: dict | None) -> str:
 
 def read_series(path: Path) -> dict:
     """Every array of a case's ``.npz`` (CaseRecordError if it cannot be read)."""
+    if not zipfile.is_zipfile(path):
+        raise CaseRecordError(f"case series {path} cannot be read: it is not an .npz file (no zip archive; "
+                              "truncated or overwritten)", path)
     try:
         with np.load(path, allow_pickle=False) as z:
             return {k: np.array(z[k]) for k in z.files}

@@ -92,7 +92,7 @@ def _describe_unfinished(unfinished: list[dict]) -> str:
         lines += [f"    {u['file']}: {u.get('error', {}).get('type')}: {u.get('error', {}).get('message')}"
                   for u in failed[:LIST_MAX]]
     if invalid:
-        lines.append(f"  {len(invalid)} refused (files that fail their digest check):")
+        lines.append(f"  {len(invalid)} refused (files that cannot be read or do not match their digest):")
         lines += [f"    {u['error']['message']}" for u in invalid[:LIST_MAX]]
     if missing:
         lines.append(f"  {len(missing)} missing (never computed, or stopped before they finished; no file): "
