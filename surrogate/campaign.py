@@ -10,16 +10,21 @@ Layout of the output folder ``OUT``:
 
 - ``OUT/campaign.json``: the sweep and the list of its cases (ids and labels);
 - ``OUT/cases/<id>.json``: one finished case: labels, configuration, ``summary()`` of the slide
-  (<A_p>/A0 of Eq. 22, <A_c>/A0, ...), wall time, host, code version and a computation token;
+  (<A_p>/A0 of Eq. 22, <A_c>/A0, ...), wall time, host, code version, a computation token and the
+  digest of the record and its series (:mod:`tribocosim.surrogate.case_record`);
   ``OUT/cases/<id>.npz``: its per-step series (A_c/A0, A_p/A0, blocked flakes, BEM iterations);
 - ``OUT/cases/<id>.error.json``: a failed case with its error and traceback;
-- ``OUT/campaign.log``: one JSON line per event (start, done, failed, skip).
+- ``OUT/campaign.log``: one JSON line per event (start, done, failed, invalid, interrupted, end).
 
 Each file is written to a temporary name and renamed (``os.replace``), the ``.json`` of a case
-last: a case counts as finished when its ``.json`` reads back with its id, so a campaign killed at
-any moment resumes by rerunning only the cases without one. Failed cases are retried by a rerun
-unless ``retry_failed=False``. If the environment variable ``TRIBOCOSIM_CASE_LOG`` names a file,
-every computed case appends its id there (an audit of computations across runs).
+last: a case counts as finished when its ``.json`` and ``.npz`` pass their digest check
+(:func:`tribocosim.surrogate.case_record.check_case`), so a campaign killed at any moment resumes by
+rerunning only the cases without such a pair. A case whose files fail the check (edited, truncated,
+garbage) is reported with the file and rerun; a table is never built from it (:func:`load_records`).
+Failed cases are retried by a rerun unless ``retry_failed=False``. A run stopped by a signal
+(:mod:`tribocosim.surrogate.interrupt`) keeps every case finished before it and discards the slides in
+progress. If the environment variable ``TRIBOCOSIM_CASE_LOG`` names a file, every computed case appends
+its id there (an audit of computations across runs).
 """
 
 from __future__ import annotations
@@ -39,9 +44,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.errors import TribocosimError
+from tribocosim.errors import CampaignInterrupted, CaseRecordError, TribocosimError
 
 from . import measured_surfaces
+from .case_record import DIGEST_KEY, CheckedCase, case_digest, check_case
 from .slide_config import SlideConfig
 from .sweep import Sweep
 
@@ -226,6 +232,16 @@ def write_json(path: Path, data) -> None:
     _atomic_write(Path(path), lambda tmp: tmp.write_text(json.dumps(data, indent=1, sort_keys=True)))
 
 
+@dataclass(frozen=True)
+class CaseState:
+    """What is on disk for one case: ``status`` "finished" (``checked`` holds the record), "invalid" (its files
+    fail :func:`~tribocosim.surrogate.case_record.check_case`: ``problem`` says which and why) or "missing"."""
+
+    status: str
+    checked: CheckedCase | None = None
+    problem: str | None = None
+
+
 class CampaignStore:
     """The files of a campaign folder (see the module docstring)."""
 
@@ -239,18 +255,31 @@ class CampaignStore:
     def error_path(self, cid: str) -> Path:
         return self.cases_dir / f"{cid}.error.json"
 
-    def is_finished(self, cid: str) -> bool:
-        """Whether a complete result of case ``cid`` is on disk."""
+    def state(self, cid: str) -> CaseState:
+        """Whether case ``cid`` has a finished result on disk whose files pass their digest check."""
         try:
-            return json.loads(self.case_path(cid).read_text()).get("case_id") == cid
-        except (OSError, ValueError):
-            return False
+            return CaseState("finished", check_case(self.case_path(cid), cid))
+        except FileNotFoundError:
+            return CaseState("missing")
+        except CaseRecordError as exc:
+            return CaseState("invalid", problem=str(exc))
+
+    def is_finished(self, cid: str) -> bool:
+        """Whether a complete, intact result of case ``cid`` is on disk."""
+        return self.state(cid).status == "finished"
 
     def read_case(self, cid: str) -> dict:
-        return json.loads(self.case_path(cid).read_text())
+        """The record of a finished case (CaseRecordError if its files fail their check)."""
+        return check_case(self.case_path(cid), cid).record
 
     def write_manifest(self, sweep: Sweep | None, cases: list[Case]) -> None:
+        """Write ``OUT/campaign.json``; drop the temporary files of a writer that ended before its rename (a
+        process stopped at once: :mod:`tribocosim.surrogate.interrupt`)."""
         self.cases_dir.mkdir(parents=True, exist_ok=True)
+        for tmp in [*self.cases_dir.glob(".*.tmp"), *self.out.glob(".*.tmp")]:
+            pid = tmp.name.rsplit(".", 2)[-2]
+            if pid.isdigit() and not _alive(int(pid)):
+                tmp.unlink(missing_ok=True)
         write_json(self.out / "campaign.json", {
             "sweep": None if sweep is None else sweep.to_dict(),
             "cases": [{"case_id": c.case_id, "labels": c.labels} for c in cases],
@@ -265,16 +294,22 @@ class CampaignStore:
                 from None
 
     def write_done(self, case: Case, outcome: dict) -> None:
-        """The series (.npz), then the record (.json, the 'finished' marker); drop an old error."""
+        """The series (.npz), then the record (.json, the 'finished' marker) with the digest of both; drop an old
+        error."""
         cid = case.case_id
         series = outcome.pop("series", None)
-        if series is not None:
+        arrays = None if series is None else {k: np.asarray(v) for k, v in series.items()}
+        record = {**outcome, "labels": case.labels, "config": case.config.to_dict(), "finished_at": _now(),
+                  "series_names": sorted(arrays or {})}
+        record[DIGEST_KEY] = case_digest(record, arrays)
+        npz = self.cases_dir / f"{cid}.npz"
+        if arrays is not None:
             def save(tmp):
                 with open(tmp, "wb") as fh:
-                    np.savez_compressed(fh, **{k: np.asarray(v) for k, v in series.items()})
-            _atomic_write(self.cases_dir / f"{cid}.npz", save)
-        record = {**outcome, "labels": case.labels, "config": case.config.to_dict(),
-                  "finished_at": _now()}
+                    np.savez_compressed(fh, **arrays)
+            _atomic_write(npz, save)
+        elif npz.exists():
+            npz.unlink()
         write_json(self.case_path(cid), record)
         if self.error_path(cid).exists():
             self.error_path(cid).unlink()
@@ -289,6 +324,16 @@ class CampaignStore:
         with open(self.out / "campaign.log", "a") as fh:
             fh.write(line + "\n")
             fh.flush()
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _now() -> str:
@@ -379,14 +424,29 @@ def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep |
         Progress bar with ETA on stderr.
     case_fn : callable
         The worker function (importable; default :func:`run_case`).
+
+    Raises
+    ------
+    CampaignInterrupted
+        When a signal stops the executor (:mod:`tribocosim.surrogate.interrupt`): the cases finished before it
+        are written, the slides in progress discarded; ``exc.report`` is this run's report so far.
     """
     store = CampaignStore(out)
     store.write_manifest(sweep, cases)
     by_id = {c.case_id: c for c in cases}
-    skipped = [cid for cid in by_id if store.is_finished(cid)]
+    states = {cid: store.state(cid) for cid in by_id}
+    skipped = [cid for cid, st in states.items() if st.status == "finished"]
+    for cid, st in states.items():
+        if st.status == "invalid":
+            store.log("invalid", cid, problem=st.problem)
+            _warn(stream, f"warning: {st.problem}; the case is computed again")
+    legacy = sum(1 for cid in skipped if states[cid].checked.legacy)
+    if legacy:
+        _warn(stream, f"warning: {legacy} finished case record(s) in {store.cases_dir} carry no digest (written "
+                      "before case digests): checked against their series only (tribocosim.surrogate.case_record)")
     done_before = set(skipped)
     todo = [cid for cid in by_id if cid not in done_before
-            and (retry_failed or not store.error_path(cid).exists())]
+            and (retry_failed or states[cid].status == "invalid" or not store.error_path(cid).exists())]
     left_failed = sorted(set(by_id) - done_before - set(todo))
     store.log("start", None, total=len(by_id), skipped=len(skipped), todo=len(todo),
               executor=executor.describe())
@@ -394,28 +454,46 @@ def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep |
     bar.render()
     computed, failed = [], list(left_failed)
     t0 = time.perf_counter()
-    for cid, outcome in executor.map_unordered(case_fn, [(cid, by_id[cid].payload()) for cid in todo]):
-        case = by_id[cid]
-        if isinstance(outcome, BaseException):
-            outcome = {"case_id": cid, "status": "failed",
-                       "error": {"type": type(outcome).__name__, "message": str(outcome),
-                                 "traceback": "".join(traceback.format_exception(outcome))}}
-        if outcome.get("status") == "done":
-            store.write_done(case, outcome)
-            store.log("done", cid, wall_s=outcome.get("wall_s"))
-            computed.append(cid)
-            bar.update(True)
-        else:
-            store.write_failed(case, outcome)
-            err = outcome.get("error", {})
-            store.log("failed", cid, error=f"{err.get('type')}: {err.get('message')}")
-            failed.append(cid)
-            bar.update(False)
+
+    def report() -> CampaignReport:
+        return CampaignReport(len(by_id), skipped, computed, failed, time.perf_counter() - t0, executor.describe())
+
+    try:
+        for cid, outcome in executor.map_unordered(case_fn, [(cid, by_id[cid].payload()) for cid in todo]):
+            case = by_id[cid]
+            if isinstance(outcome, BaseException):
+                outcome = {"case_id": cid, "status": "failed",
+                           "error": {"type": type(outcome).__name__, "message": str(outcome),
+                                     "traceback": "".join(traceback.format_exception(outcome))}}
+            if outcome.get("status") == "done":
+                store.write_done(case, outcome)
+                store.log("done", cid, wall_s=outcome.get("wall_s"))
+                computed.append(cid)
+                bar.update(True)
+            else:
+                store.write_failed(case, outcome)
+                err = outcome.get("error", {})
+                store.log("failed", cid, error=f"{err.get('type')}: {err.get('message')}")
+                failed.append(cid)
+                bar.update(False)
+    except (CampaignInterrupted, KeyboardInterrupt) as exc:
+        bar.render(final=True)
+        rep = report()
+        store.log("interrupted", None, reason=str(exc) or type(exc).__name__, computed=len(computed),
+                  failed=len(failed), not_finished=len(todo) - len(computed) - (len(failed) - len(left_failed)),
+                  wall_s=rep.wall_s)
+        exc.report = rep
+        raise
     bar.render(final=True)
-    report = CampaignReport(len(by_id), skipped, computed, failed, time.perf_counter() - t0,
-                            executor.describe())
-    store.log("end", None, computed=len(computed), failed=len(failed), wall_s=report.wall_s)
-    return report
+    rep = report()
+    store.log("end", None, computed=len(computed), failed=len(failed), wall_s=rep.wall_s)
+    return rep
+
+
+def _warn(stream, message: str) -> None:
+    out = sys.stderr if stream is None else stream
+    out.write(message + "\n")
+    out.flush()
 
 
 def run_sweep(sweep: Sweep, out: str | Path, executor, **kwargs) -> CampaignReport:
@@ -440,23 +518,42 @@ def run_sweep(sweep: Sweep, out: str | Path, executor, **kwargs) -> CampaignRepo
 
 
 def load_records(out: str | Path) -> tuple[dict, list[dict], list[dict]]:
-    """The manifest, the finished case records and the failed ones of a campaign folder.
+    """The manifest, the finished case records and the unfinished ones of a campaign folder.
 
-    Only the cases listed in ``OUT/campaign.json`` count (old files of another sweep are ignored).
+    Only the cases listed in ``OUT/campaign.json`` count (old files of another sweep are ignored). A finished
+    record passes its digest check (:func:`tribocosim.surrogate.case_record.check_case`) and has the labels the
+    manifest gives its case. Every other case is in the third list with ``status``: "failed" (its
+    ``.error.json``, whose path is ``file``), "invalid" (files that fail the check: ``file`` and
+    ``error.message`` say which and why) or "missing" (never computed, or stopped before it finished).
     """
     store = CampaignStore(out)
     manifest = store.read_manifest()
     done, failed = [], []
     for entry in manifest["cases"]:
-        cid = entry["case_id"]
-        if store.is_finished(cid):
-            rec = store.read_case(cid)
-            rec["labels"] = entry["labels"]
-            done.append(rec)
+        cid, labels = entry["case_id"], entry["labels"]
+        st = store.state(cid)
+        if st.status == "finished":
+            rec = st.checked.record
+            if not st.checked.legacy and rec.get("labels") != labels:
+                st = CaseState("invalid", problem=f"case record {store.case_path(cid)} has the labels "
+                                                  f"{rec.get('labels')}, but {store.out / 'campaign.json'} gives "
+                                                  f"its case {labels}")
+            else:
+                done.append({**rec, "labels": labels})
+                continue
+        if st.status == "invalid":
+            failed.append({"case_id": cid, "labels": labels, "status": "invalid", "file": str(store.case_path(cid)),
+                           "error": {"type": "CaseRecordError", "message": st.problem}})
         elif store.error_path(cid).exists():
-            failed.append(json.loads(store.error_path(cid).read_text()))
+            path = store.error_path(cid)
+            try:
+                err = json.loads(path.read_text())
+            except (OSError, ValueError) as exc:
+                err = {"case_id": cid, "labels": labels, "status": "failed",
+                       "error": {"type": type(exc).__name__, "message": f"{path} cannot be read: {exc}"}}
+            failed.append({**err, "status": "failed", "file": str(path)})
         else:
-            failed.append({"case_id": cid, "labels": entry["labels"], "status": "missing"})
+            failed.append({"case_id": cid, "labels": labels, "status": "missing"})
     return manifest, done, failed
 
 

@@ -3,8 +3,9 @@
 Subcommands::
 
     tribocosim surrogate build (--sweep FILE | --preset NAME) --out DIR [--workers N]
-                               [--scheduler tcp://HOST:PORT] [--table PATH] [--no-retry-failed] [--quiet]
-    tribocosim surrogate table --out DIR [--table PATH]   # fits + table from the finished cases only
+                               [--scheduler tcp://HOST:PORT] [--table PATH] [--no-retry-failed] [--allow-failed]
+                               [--quiet]
+    tribocosim surrogate table --out DIR [--table PATH] [--allow-failed]   # fits + table from the finished cases
     tribocosim surrogate show TABLE [--plot PNG | --no-plot]
     tribocosim surrogate compare TABLE_A TABLE_B          # node by node, against their standard errors
     tribocosim surrogate verify TABLE [--budget-s S] [--workers N]   # rerun a sample of its recorded cases
@@ -12,21 +13,28 @@ Subcommands::
 
 ``build`` runs every unfinished case (a rerun resumes an interrupted campaign and retries failed
 cases), then fits and writes the table (default ``DIR/friction_table.npz``) and ``DIR/fits.json``.
-Exit status: 0 on success; 1 on bad input or when cases failed (the table is still written when
-every grid point has a finished case); 2 on usage errors.
+The table is written only when every case of the campaign is finished and intact (``--allow-failed``: from the
+finished ones), to a temporary name that replaces the old table only once it reads back: a build or ``table``
+that fails leaves the old table as it was. SIGINT (Ctrl-C) or SIGTERM stops ``build`` within a second: the cases
+finished before it are kept, the slides in progress discarded (:mod:`tribocosim.surrogate.interrupt`).
+Exit status: 0 on success; 1 on bad input, when cases failed, are missing or refused (no table is written
+then, unless ``--allow-failed``); 2 on usage errors; 128 + the signal's number when a signal stopped it.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
 
-from tribocosim.errors import TribocosimError
+from tribocosim.errors import CampaignInterrupted, TribocosimError
 
 PROG = "tribocosim surrogate"
+#: at most this many files are named per kind of unfinished case
+LIST_MAX = 8
 
 
 def _usage() -> str:
@@ -39,26 +47,91 @@ def _usage() -> str:
             "  presets  list the sweep presets\n")
 
 
-def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None = None) -> int:
-    from tribocosim.components.stripdraw.table import read_table, write_table
+def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None = None, *,
+                allow_failed: bool = False, command: str = "table") -> int:
+    from tribocosim.components.stripdraw.table import read_table
 
-    from .campaign import load_records, write_json
-    from .table_build import build_table, describe, json_clean
+    from .campaign import load_records
+    from .case_record import DIGEST_KEY
+    from .table_build import build_table, describe
 
-    manifest, done, failed = load_records(out)
-    table, fits = build_table(done, manifest, failed=failed, campaign_info=campaign_info)
+    manifest, done, unfinished = load_records(out)
     path = table_path or out / "friction_table.npz"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    digest = write_table(path, table)
-    write_json(out / "fits.json", json_clean({"table": str(path), "content_hash": digest, **fits}))
+    legacy = sum(1 for r in done if DIGEST_KEY not in r)
+    if legacy:
+        print(f"{PROG} {command}: warning: {legacy} case record(s) carry no digest (written before case digests): "
+              "checked against their series only", file=sys.stderr)
+    if unfinished and not allow_failed:
+        kept = f"{path} is left as it was" if path.exists() else f"{path} is not written"
+        print(f"{PROG} {command}: error: {len(unfinished)} of {len(manifest['cases'])} cases of {out} are not "
+              f"finished; no table is built ({kept}):\n" + _describe_unfinished(unfinished)
+              + f"\nRun the campaign again (tribocosim surrogate build with its sweep and --out {out}: "
+              + _what_a_rerun_does(unfinished) + "), or build the table from the finished cases with --allow-failed.",
+              file=sys.stderr)
+        return 1
+    table, fits = build_table(done, manifest, failed=unfinished, campaign_info=campaign_info)
+    digest = _write_table(path, table, out / "fits.json", fits)
 
     print(describe(read_table(path)))
     print(f"wrote {path} (sha256 {digest[:16]}...)")
-    if failed:
-        print(f"{PROG}: warning: {len(failed)} case(s) failed or are missing; the table uses the "
-              f"remaining members (see {out / 'cases'}/*.error.json)", file=sys.stderr)
-        return 1
+    if unfinished:
+        print(f"{PROG} {command}: warning: the table uses the finished cases only (--allow-failed); "
+              f"{len(unfinished)} case(s) are not finished (listed in its metadata):\n"
+              + _describe_unfinished(unfinished), file=sys.stderr)
     return 0
+
+
+def _describe_unfinished(unfinished: list[dict]) -> str:
+    """One block per kind of unfinished case (load_records' statuses), naming the files that exist."""
+    lines = []
+    failed = [u for u in unfinished if u.get("status") == "failed"]
+    invalid = [u for u in unfinished if u.get("status") == "invalid"]
+    missing = [u for u in unfinished if u.get("status") not in ("failed", "invalid")]
+    if failed:
+        lines.append(f"  {len(failed)} failed; the error of each is in its file:")
+        lines += [f"    {u['file']}: {u.get('error', {}).get('type')}: {u.get('error', {}).get('message')}"
+                  for u in failed[:LIST_MAX]]
+    if invalid:
+        lines.append(f"  {len(invalid)} refused (files that cannot be read or do not match their digest):")
+        lines += [f"    {u['error']['message']}" for u in invalid[:LIST_MAX]]
+    if missing:
+        lines.append(f"  {len(missing)} missing (never computed, or stopped before they finished; no file): "
+                     + ", ".join(u["case_id"] for u in missing[:LIST_MAX]))
+    more = len(failed[LIST_MAX:]) + len(invalid[LIST_MAX:]) + len(missing[LIST_MAX:])
+    if more:
+        lines.append(f"  ({more} more not listed)")
+    return "\n".join(lines)
+
+
+def _what_a_rerun_does(unfinished: list[dict]) -> str:
+    kinds = {u.get("status") for u in unfinished}
+    parts = (["it computes the missing and refused cases"] if kinds - {"failed"} else []) + \
+        (["it retries the failed ones unless --no-retry-failed"] if "failed" in kinds else [])
+    return "; ".join(parts)
+
+
+def _write_table(path: Path, table, fits_path: Path, fits: dict) -> str:
+    """Write the table and its fits beside temporary names, read the table back (hash check), then rename both
+    over the old files; on any error the old files stay as they were and no temporary file is left."""
+    from tribocosim.components.stripdraw.table import read_table, write_table
+
+    from .campaign import write_json
+    from .table_build import json_clean
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.partial.npz")
+    fits_tmp = fits_path.with_name(f".{fits_path.name}.{os.getpid()}.partial")
+    try:
+        digest = write_table(tmp, table)
+        read_table(tmp)
+        write_json(fits_tmp, json_clean({"table": str(path), "content_hash": digest, **fits}))
+        os.replace(tmp, path)
+        os.replace(fits_tmp, fits_path)
+    finally:
+        for leftover in (tmp, fits_tmp, tmp.with_name(tmp.name + ".tmp.npz")):
+            if leftover.exists():
+                leftover.unlink()
+    return digest
 
 
 def _build(argv: list[str]) -> int:
@@ -71,11 +144,14 @@ def _build(argv: list[str]) -> int:
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://HOST:PORT")
     ap.add_argument("--table", default=None, help="table path (default OUT/friction_table.npz)")
     ap.add_argument("--no-retry-failed", action="store_true", help="leave earlier failed cases alone")
+    ap.add_argument("--allow-failed", action="store_true",
+                    help="build the table from the finished cases when others failed or are missing")
     ap.add_argument("--no-table", action="store_true", help="run the cases only")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
 
-    from .campaign import run_sweep
+    from . import interrupt
+    from .campaign import case_cpu_seconds, load_records, run_sweep
     from .executors import make_executor
     from .sweep import load_preset, load_sweep
 
@@ -87,14 +163,17 @@ def _build(argv: list[str]) -> int:
         return 1
     out = Path(args.out)
     t0 = time.perf_counter()
-    try:
-        report = run_sweep(sweep, out, executor, retry_failed=not args.no_retry_failed,
-                           progress=not args.quiet)
-    finally:
-        executor.close()
+    with interrupt.stop_on_signals():
+        try:
+            try:
+                report = run_sweep(sweep, out, executor, retry_failed=not args.no_retry_failed,
+                                   progress=not args.quiet)
+            finally:
+                executor.close()
+            interrupt.raise_if_stopped()
+        except CampaignInterrupted as exc:
+            return _interrupted(exc, out)
     print(report.summary(), file=sys.stderr)
-    from .campaign import case_cpu_seconds, load_records
-
     done = load_records(out)[1]
     print(f"campaign cost: {case_cpu_seconds(done) / 3600:.3g} core-hours in {len(done)} finished cases "
           f"(the sum of their wall times; this run {report.wall_s / 3600:.3g} h on {report.executor})", file=sys.stderr)
@@ -104,21 +183,40 @@ def _build(argv: list[str]) -> int:
             "cases_computed_this_run": len(report.computed),
             "cases_skipped_this_run": len(report.skipped)}
     try:
-        status = _make_table(out, Path(args.table) if args.table else None, info)
+        status = _make_table(out, Path(args.table) if args.table else None, info, allow_failed=args.allow_failed,
+                             command="build")
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
         return 1
     print(f"build wall time {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-    return 1 if report.failed else status
+    return status
+
+
+def _interrupted(exc: CampaignInterrupted, out: Path) -> int:
+    """Say what a stopped campaign keeps; the exit status 128 + the signal's number."""
+    from .campaign import load_records
+
+    report = getattr(exc, "report", None)
+    try:
+        manifest, done, _ = load_records(out)
+        kept = f"{len(done)} of {len(manifest['cases'])} cases of {out} are finished and kept"
+    except TribocosimError:
+        kept = f"the finished cases in {out} are kept"
+    this_run = f" ({len(report.computed)} computed in this run)" if report is not None else ""
+    print(f"{PROG} build: {exc}: {kept}{this_run}; the slides in progress were discarded. Run the same command "
+          "again to resume.", file=sys.stderr)
+    return 128 + exc.signum
 
 
 def _table(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog=f"{PROG} table", description="fits and table from finished cases")
     ap.add_argument("--out", required=True, help="campaign folder")
     ap.add_argument("--table", default=None, help="table path (default OUT/friction_table.npz)")
+    ap.add_argument("--allow-failed", action="store_true",
+                    help="build the table from the finished cases when others failed or are missing")
     args = ap.parse_args(argv)
     try:
-        return _make_table(Path(args.out), Path(args.table) if args.table else None)
+        return _make_table(Path(args.out), Path(args.table) if args.table else None, allow_failed=args.allow_failed)
     except TribocosimError as exc:
         print(f"{PROG} table: error: {exc}", file=sys.stderr)
         return 1
@@ -177,48 +275,81 @@ def _verify(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     from tribocosim.components.stripdraw.table import read_table
 
+    from . import interrupt
     from .campaign import write_json
     from .executors import make_executor
     from .table_build import json_clean
-    from .verify import recorded_cases, sample_cases, verify_cases
+    from .verify import code_versions, recorded_cases, sample_cases, verify_cases
 
     t0 = time.perf_counter()
-    try:
-        table = read_table(args.table)
-        sample = sample_cases(recorded_cases(table), args.budget_s)
-        n = table.metadata["campaign"]["sweep"]["slide"].get("n", 256)
-        executor = make_executor(args.workers)
+    with interrupt.stop_on_signals():
         try:
-            results = verify_cases(sample, executor, 1.0 / (n * n))
-        finally:
-            executor.close()
-    except TribocosimError as exc:
-        print(f"{PROG} verify: error: {exc}", file=sys.stderr)
-        return 1
+            table = read_table(args.table)
+            sample = sample_cases(recorded_cases(table), args.budget_s)
+            n = table.metadata["campaign"]["sweep"]["slide"].get("n", 256)
+            executor = make_executor(args.workers)
+            try:
+                results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table))
+            finally:
+                executor.close()
+        except CampaignInterrupted as exc:
+            print(f"{PROG} verify: {exc}; nothing compared", file=sys.stderr)
+            return 128 + exc.signum
+        except TribocosimError as exc:
+            print(f"{PROG} verify: error: {exc}", file=sys.stderr)
+            return 1
+    for reason in dict.fromkeys(r["reason"] for r in results if "reason" in r):
+        print(f"comparison: {reason}")
     for r in results:
         lab = r["labels"]
         diff = " ".join(f"{k} {v:.2e}/{r['tolerance'][k]:.2e}" for k, v in r.get("abs_diff", {}).items())
-        print(f"{r['verdict']:<13} P = {lab['pressure'] / 1e6:g} MPa, v = {lab['velocity']:g} m/s, beta = "
+        print(f"{r['verdict']:<16} P = {lab['pressure'] / 1e6:g} MPa, v = {lab['velocity']:g} m/s, beta = "
               f"{lab['beta']:.4g}, surface {lab['surface']}, seed {lab['seed']}: |diff|/tolerance {diff}"
               + (f" error: {r['error']}" if "error" in r else ""))
     bad = [r for r in results if r["verdict"] == "differs"]
     print(f"{PROG} verify: {len(results)} recorded cases rerun in {time.perf_counter() - t0:.1f} s: "
           f"{sum(r['verdict'] == 'identical' for r in results)} identical, "
-          f"{sum(r['verdict'] == 'within_spread' for r in results)} within the ensemble spread, {len(bad)} differ")
+          f"{sum(r['verdict'] == 'within_tolerance' for r in results)} within the tolerance for another code "
+          f"version, {len(bad)} differ")
     if args.json:
         write_json(Path(args.json), json_clean(results))
     return 1 if bad else 0
 
 
 def _presets(argv: list[str]) -> int:
+    """Each preset with its number of cases before adaptive placements, and the recorded cost of the table
+    shipped from it (the sum of its cases' wall times)."""
     from .campaign import expand_cases
     from .sweep import PRESET_DIR, load_sweep
 
+    shipped = _shipped_costs()
     for path in sorted(PRESET_DIR.glob("*.toml")):
         sw = load_sweep(path)
         n = len(expand_cases(sw))
-        print(f"{path.stem:<8} {n:>5} cases  {sw.description}")
+        cases = f"{n:>5} cases" + (" + adaptive" if sw.adaptive is not None else "")
+        print(f"{path.stem:<13} {cases:<21} {sw.description}")
+        if sw.name in shipped:
+            print(f"{'':<13} shipped as {shipped[sw.name]}")
     return 0
+
+
+def _shipped_costs() -> dict:
+    """Sweep name -> 'models/X.npz: N slides, H core-hours' of every table in models/ built from a campaign."""
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import MODELS_DIR
+
+    out = {}
+    for path in sorted(MODELS_DIR.glob("*.npz")):
+        try:
+            meta = read_table(path).metadata
+        except TribocosimError:
+            continue
+        name = meta.get("campaign", {}).get("sweep", {}).get("name")
+        cases = meta.get("cases")
+        if name and cases and name not in out:
+            hours = sum(c.get("wall_s") or 0.0 for c in cases) / 3600
+            out[name] = f"models/{path.name}: {len(cases)} slides, {hours:.3g} core-hours (recorded)"
+    return out
 
 
 COMMANDS = {"build": _build, "table": _table, "show": _show, "compare": _compare, "verify": _verify,
@@ -238,6 +369,9 @@ def main(argv: list[str] | None = None) -> int:
         return int(COMMANDS[args[0]](args[1:]) or 0)
     except SystemExit as exc:  # argparse
         return int(exc.code or 0)
+    except KeyboardInterrupt:
+        print(f"{PROG} {args[0]}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

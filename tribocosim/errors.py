@@ -12,6 +12,8 @@ One small hierarchy so that callers can catch what they can handle:
 - ``SceneError``: a co-simulation scene or sweep file with problems: all of them, each a
   :class:`Problem` (file, key, message), in ``.problems`` and in one message.
 - ``CosimStepError``: a co-simulation step that failed (names FMU, variable and time).
+- ``CaseRecordError``: a campaign case file that cannot be read or does not match its digest (names the file).
+- ``CampaignInterrupted``: a campaign stopped by a signal (SIGINT, SIGTERM); its finished cases are kept.
 """
 
 from __future__ import annotations
@@ -91,6 +93,23 @@ class RunFailed(CosimStepError):
     def __init__(self, message: str, result) -> None:
         super().__init__(message)
         self.result = result
+
+
+class CaseRecordError(TribocosimError):
+    """A campaign case file cannot be read, or its contents do not match the digest recorded with it."""
+
+    def __init__(self, message: str, path=None) -> None:
+        super().__init__(message)
+        self.path = path
+
+
+class CampaignInterrupted(TribocosimError):
+    """A campaign stopped on a signal; ``signum`` is the signal's number. The cases finished before it are on
+    disk; the slides in progress were discarded."""
+
+    def __init__(self, message: str, signum: int) -> None:
+        super().__init__(message)
+        self.signum = int(signum)
 
 
 def check_finite(name: str, value: float) -> float:

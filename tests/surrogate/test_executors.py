@@ -1,18 +1,24 @@
 """Tests of surrogate.executors: the local process pool and a real Dask LocalCluster on loopback
-return results and exceptions per case, and the Dask path builds the same friction table as the
-process pool from the same (tiny, real) campaign."""
+return results and exceptions per case, stop at once on a signal (surrogate.interrupt) after handing over
+what has finished, a crashed worker gives its case an outcome and is replaced, and the Dask path builds the
+same friction table as the process pool from the same (tiny, real) campaign."""
 
 from __future__ import annotations
 
 import math
+import multiprocessing
+import os
+import signal
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tribocosim.errors import ParameterError
+from tribocosim.errors import CampaignInterrupted, ParameterError
+from tribocosim.surrogate import interrupt
 from tribocosim.surrogate.campaign import expand_cases, load_records, run_campaign
-from tribocosim.surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, make_executor
+from tribocosim.surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, WorkerDied, make_executor
 from tribocosim.surrogate.sweep import parse_sweep
 from tribocosim.surrogate.table_build import build_table
 
@@ -29,6 +35,33 @@ def test_process_pool_yields_results_and_exceptions_per_item():
     assert list(ex.map_unordered(math.sqrt, [])) == []
     with pytest.raises(ParameterError, match="workers = 0"):
         ProcessPoolCaseExecutor(0)
+
+
+def _stop_after_first_result(executor, items):
+    """Send SIGINT to this process when the first result arrives; the keys received and the seconds from the
+    signal to CampaignInterrupted."""
+    got, sent = [], None
+    with interrupt.stop_on_signals():
+        with pytest.raises(CampaignInterrupted, match="stopped by SIGINT") as info:
+            for key, _ in executor.map_unordered(time.sleep, items):
+                got.append(key)
+                if sent is None:
+                    sent = time.monotonic()
+                    os.kill(os.getpid(), signal.SIGINT)
+    assert info.value.signum == signal.SIGINT
+    return got, time.monotonic() - sent
+
+
+def test_process_pool_stops_on_a_signal_and_kills_the_slides_in_progress():
+    got, elapsed = _stop_after_first_result(ProcessPoolCaseExecutor(2), [("fast", 0.0), ("slow", 60.0)])
+    assert got == ["fast"] and elapsed < 2.0, elapsed
+    assert multiprocessing.active_children() == [], "the worker of the slow item is gone"
+
+
+def test_process_pool_replaces_a_worker_that_dies_and_names_how():
+    out = dict(ProcessPoolCaseExecutor(1).map_unordered(os._exit, [("a", 3), ("b", 4)]))
+    assert isinstance(out["a"], WorkerDied) and "exited with status 3" in str(out["a"])
+    assert isinstance(out["b"], WorkerDied) and "exited with status 4" in str(out["b"]), "run by a new worker"
 
 
 def test_bad_scheduler_address_is_refused_with_the_expected_form():
@@ -55,6 +88,16 @@ def test_dask_executor_yields_results_and_exceptions(cluster):
         info = ex.describe()
         assert info["executor"] == "dask" and info["scheduler"].startswith("tcp://127.0.0.1:")
         assert info["workers"] == 1
+    finally:
+        ex.close()
+
+
+def test_dask_executor_stops_on_a_signal_and_cancels_what_runs(cluster):
+    ex = DaskCaseExecutor(address=cluster.scheduler_address)
+    try:
+        got, elapsed = _stop_after_first_result(ex, [("fast", 0.0), ("slow", 3.0)])
+        assert got == ["fast"] and elapsed < 2.0, elapsed
+        assert dict(ex.map_unordered(math.sqrt, [("a", 4.0)])) == {"a": 2.0}, "the client works on"
     finally:
         ex.close()
 

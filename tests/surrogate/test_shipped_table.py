@@ -11,6 +11,7 @@ of <A_p> at most 10 % of its mean (the preset's target), and no node above the l
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -91,3 +92,21 @@ def test_the_domain_size_variations_table_is_its_presets_and_fits_the_shipped_ro
     assert meta["campaign"]["sweep"]["slide"]["size"] == 128e-6
     assert set(domain.pressure) <= set(shipped.pressure) and set(domain.velocity) <= set(shipped.velocity)
     assert domain.beta[0] == shipped.beta[0] and domain.beta[-1] >= shipped.beta[-1]
+
+
+def test_the_quick_presets_stated_cost_is_the_shipped_tables_recorded_one(shipped, capsys):
+    """One statement of the quick build's cost, from the shipped table's recorded cases: their number and the sum of
+    their wall times, in the preset's comment, the table's physics page and ``tribocosim surrogate presets``."""
+    from tribocosim.surrogate import surrogate_cli
+    from tribocosim.surrogate.campaign import expand_cases
+    from tribocosim.surrogate.sweep import PRESET_DIR
+
+    cases = shipped.metadata["cases"]
+    slides, hours = len(cases), sum(c["wall_s"] for c in cases) / 3600
+    base = len(expand_cases(load_preset("quick")))
+    preset = " ".join((PRESET_DIR / "quick.toml").read_text().replace("#", " ").split())
+    assert f"{slides} slides ({base} base cases, {slides - base} adaptive placements), {hours:.3g} core-hours" in preset
+    page = " ".join((Path(__file__).parents[2] / "docs" / "physics" / "table_domain.md").read_text().split())
+    assert f"{slides} slides ({base} base, {slides - base} adaptive)" in page and f"{hours:.3g} core-hours" in page
+    assert surrogate_cli.main(["presets"]) == 0
+    assert f"models/friction_table.npz: {slides} slides, {hours:.3g} core-hours (recorded)" in capsys.readouterr().out

@@ -18,11 +18,15 @@ TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace(
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
+    """The tiny campaign and its table, built with one FFTW wisdom file that every slide of this module plans from
+    (so that verify's reruns use the plans of the recorded slides: a slide is deterministic for given plans)."""
     d = tmp_path_factory.mktemp("cli")
     (d / "sweep.toml").write_text(TINY)
-    rc = tribocosim(["surrogate", "build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
-                     "--workers", "1", "--quiet"])
-    return d, rc
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("TRIBOCOSIM_FFTW_WISDOM", str(d / "fftw_wisdom.json"))
+        rc = tribocosim(["surrogate", "build", "--sweep", str(d / "sweep.toml"), "--out", str(d / "out"),
+                         "--workers", "1", "--quiet"])
+        yield d, rc
 
 
 def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
@@ -92,14 +96,37 @@ def test_build_where_every_case_fails_reports_it(tmp_path, capsys):
     assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o"), "--workers", "2",
                                "--quiet"]) == 1
     err = capsys.readouterr().err
-    assert "8 failed" in err and "no finished case" in err
-    assert len(list((tmp_path / "o" / "cases").glob("*.error.json"))) == 8
+    errors = sorted((tmp_path / "o" / "cases").glob("*.error.json"))
+    assert len(errors) == 8 and "8 of 8 cases" in err and "8 failed; the error of each is in its file" in err
+    assert all(f"{e}: ConvergenceError" in err for e in errors), "each failed case named by its error file"
+    assert not (tmp_path / "o" / "friction_table.npz").exists()
+    assert surrogate_cli.main(["table", "--out", str(tmp_path / "o"), "--allow-failed"]) == 1
+    assert "no finished case" in capsys.readouterr().err
+
+
+def _sampled(table_path, budget_s: float) -> set[str]:
+    from tribocosim.surrogate.verify import recorded_cases, sample_cases
+
+    return {r.case.case_id for r in sample_cases(recorded_cases(read_table(table_path)), budget_s)}
+
+
+def _rewritten(table_path, out, edit) -> Path:
+    """The table with its metadata changed by ``edit`` (and a correct content hash)."""
+    import dataclasses
+
+    from tribocosim.components.stripdraw.table import write_table
+
+    t = read_table(table_path)
+    meta = json.loads(json.dumps(t.metadata))
+    edit(meta)
+    write_table(out, dataclasses.replace(t, metadata=meta))
+    return out
 
 
 def test_verify_reruns_a_sample_of_the_recorded_cases(built, tmp_path, capsys):
-    """The tiny table's cheapest case of every level rebuilt from its recorded sweep (same case ids) and rerun on
-    the same FFT plans: identical to its recorded results. A table whose recorded result was altered (rebuilt
-    with a correct hash) fails, naming the case."""
+    """The tiny table's cheapest case of every level rebuilt from its recorded sweep (same case ids) and rerun by
+    the code that computed it: bit-identical to its recorded results. A table whose recorded result was moved by
+    one contact pixel (rebuilt with a correct hash) fails, naming the case: the same code is compared exactly."""
     d, _ = built
     table_path = d / "out" / "friction_table.npz"
     out_json = tmp_path / "verify.json"
@@ -110,17 +137,52 @@ def test_verify_reruns_a_sample_of_the_recorded_cases(built, tmp_path, capsys):
     assert {r["labels"]["n_flakes"] for r in results} == {0, 2} and all(r["verdict"] == "identical" for r in results)
     assert "2 recorded cases rerun" in printed and "0 differ" in printed
 
-    from tribocosim.components.stripdraw.table import write_table
+    sampled = _sampled(table_path, 100)
 
-    t = read_table(table_path)
-    meta = json.loads(json.dumps(t.metadata))
-    for case in meta["cases"]:  # every member of the level moves by 0.05 A0, beyond its spread and 13 pixels
-        if case["labels"]["n_flakes"] == 2:
-            case["a_p"] += 0.05
-    import dataclasses
-    write_table(tmp_path / "altered.npz", dataclasses.replace(t, metadata=meta))
-    assert surrogate_cli.main(["verify", str(tmp_path / "altered.npz"), "--budget-s", "1e9", "--workers", "1"]) == 1
-    assert "differs" in capsys.readouterr().out
+    def move(meta):  # the sampled member with flakes moves by one contact pixel (1/16^2 of A0)
+        for case in meta["cases"]:
+            if case["case_id"] in sampled and case["labels"]["n_flakes"]:
+                case["a_p"] += 1.0 / 16**2
+
+    moved = _rewritten(table_path, tmp_path / "moved.npz", move)
+    assert surrogate_cli.main(["verify", str(moved), "--budget-s", "100", "--workers", "1",
+                               "--json", str(out_json)]) == 1
+    assert "1 differ" in capsys.readouterr().out
+    results = json.loads(out_json.read_text())
+    assert [r["labels"]["n_flakes"] for r in results if r["verdict"] == "differs"] == [2]
+    assert {r["mode"] for r in results} == {"exact"} and "the same mesoscale code" in results[0]["reason"]
+
+
+def test_verify_says_when_another_code_version_computed_the_cases(built, tmp_path, capsys):
+    """Cases recorded as computed by another version of the mesoscale code: the reruns are compared within the
+    stated tolerance, with the reason; equal values are still identical, and a recorded A_c that is twice the
+    rerun's is never within it (the tolerance leaves the recorded value out of the node's spread)."""
+    d, _ = built
+    table_path = d / "out" / "friction_table.npz"
+    out_json = tmp_path / "verify.json"
+    sampled = _sampled(table_path, 100)
+
+    def other(meta):
+        meta["case_source_digests"] = ["0123456789ab"]
+
+    def doubled(meta):
+        other(meta)
+        for case in meta["cases"]:
+            if case["case_id"] in sampled and case["labels"]["n_flakes"]:
+                case["a_c"] *= 2
+
+    assert surrogate_cli.main(["verify", str(_rewritten(table_path, tmp_path / "doubled.npz", doubled)),
+                               "--budget-s", "100", "--workers", "1", "--json", str(out_json)]) == 1
+    bad = [r for r in json.loads(out_json.read_text()) if r["verdict"] == "differs"]
+    assert len(bad) == 1 and bad[0]["abs_diff"]["a_c"] > bad[0]["tolerance"]["a_c"]
+    capsys.readouterr()
+
+    assert surrogate_cli.main(["verify", str(_rewritten(table_path, tmp_path / "other.npz", other)),
+                               "--budget-s", "100", "--workers", "1", "--json", str(out_json)]) == 0
+    printed = capsys.readouterr().out
+    assert "computed by mesoscale code 0123456789ab and this rerun by" in printed and "0 differ" in printed
+    results = json.loads(out_json.read_text())
+    assert {r["mode"] for r in results} == {"tolerance"} and all(r["verdict"] == "identical" for r in results)
 
 
 def test_direct_slide_check_of_a_table(built):
