@@ -221,7 +221,7 @@ COMPONENT = Component(
     observer=observer,
     native=Native(prefix="tc_stripdraw",
                   sources=("core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_friction.c",
-                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
+                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c", "resource_io/tc_sha256.c",
                            "resource_io/tc_arrays.c", "resource_io/tc_fields.c", "fmi/tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),

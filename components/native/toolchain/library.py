@@ -31,7 +31,8 @@ from tribocosim.errors import ParameterError, TribocosimError
 #: the C sources of the core library (the models and what they read and write; not the FMI layer)
 SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "core/tc_friction.c",
            "core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_linear.c", "core/tc_press.c",
-           "core/tc_machine.c", "resource_io/tc_table_file.c", "resource_io/tc_arrays.c", "resource_io/tc_fields.c")
+           "core/tc_machine.c", "resource_io/tc_table_file.c", "resource_io/tc_sha256.c", "resource_io/tc_arrays.c",
+           "resource_io/tc_fields.c")
 #: the status codes of tc_common.h
 TC_OK = 0
 TC_DISCARD = 1
