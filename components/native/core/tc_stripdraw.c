@@ -1015,9 +1015,13 @@ int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double gr
     return tc_stripdraw_step_poly(m, dt, normal_force, none, grip_velocity, none, msg);
 }
 
-/* TC_DISCARD naming the input when the inputs cannot be used (non-finite, a negative normal force) */
-static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
-    char r[TC_REPR_SIZE];
+/* TC_DISCARD naming the input when the inputs cannot be used: non-finite, a negative normal force, or a grip speed
+ * not below the bar's wave speed c = sqrt(E / rho) (the bar's elastic waves carry the pull to the pad; a grip that
+ * outruns them tears the strip, which the model does not describe; and since a coupling interval slides at most
+ * window_courant elements, the intervals of a step grow with |V0| dt: at 1e6 m/s a 1 ms step would need 3e5) */
+static int check_inputs(const tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
+    char r[TC_REPR_SIZE], w[TC_REPR_SIZE];
+    const double wave_speed = sqrt(m->p.youngs_modulus / m->p.density);
     if (!isfinite(normal_force))
         return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
                        tc_repr_double(normal_force, r));
@@ -1026,11 +1030,15 @@ static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
     if (!isfinite(grip_velocity))
         return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
                        tc_repr_double(grip_velocity, r));
+    if (!(fabs(grip_velocity) < wave_speed))
+        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s m/s is not below the strip's wave speed sqrt(E / rho) = "
+                       "%s m/s: the bar's elastic waves cannot carry a faster pull to the pad",
+                       tc_repr_double(grip_velocity, r), tc_repr_double(wave_speed, w));
     return TC_OK;
 }
 
 int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
-    int rc = check_inputs(normal_force, grip_velocity, msg);
+    int rc = check_inputs(m, normal_force, grip_velocity, msg);
     if (rc != TC_OK) return rc;
     m->normal_force = normal_force;
     m->grip_velocity = grip_velocity;
@@ -1048,13 +1056,24 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     if (!isfinite(dt))
         return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r));
     if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r));
-    int checked = check_inputs(normal_force, grip_velocity, msg);
+    int checked = check_inputs(m, normal_force, grip_velocity, msg);
     if (checked != TC_OK) return checked;
     for (int k = 0; k < 4; ++k)
         if (!isfinite(d[k]))
             return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
                            tc_repr_double(d[k], r));
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
+    /* the largest grip speed of the step's polynomial: at its end or at its vertex inside the step */
+    const double vertex = vg[2] != 0.0 ? -vg[1] / (2.0 * vg[2]) : -1.0;
+    double vmax = fabs(input_mean(vg, dt, dt));
+    if (vertex > 0.0 && vertex < dt) vmax = fmax(vmax, fabs(input_mean(vg, vertex, vertex)));
+    const double wave_speed = sqrt(m->p.youngs_modulus / m->p.density);
+    if (!(vmax < wave_speed)) {
+        char r2[TC_REPR_SIZE];
+        return tc_fail(msg, TC_DISCARD, "grip_velocity with its derivatives reaches %s m/s within the step of dt = %s "
+                       "s, not below the strip's wave speed sqrt(E / rho) = %.6g m/s", tc_repr_double(vmax, r),
+                       tc_repr_double(dt, r2), wave_speed);
+    }
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK && m->bar_in_backup) swap_bar(m); /* no interval was taken: the bar is as it was */
