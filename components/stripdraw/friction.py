@@ -46,9 +46,10 @@ import math
 import numpy as np
 
 from tribocosim.errors import ParameterError, TableDomainError
+from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.native.toolchain.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
-from tribocosim.components.stripdraw.table import AREAS, FrictionTable
+from tribocosim.components.stripdraw.table import AREAS, FrictionTable, read_table
 
 
 class NativeTable:
@@ -133,7 +134,10 @@ class FrictionLaw:
 
 
 def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None) -> FrictionLaw:
-    """The friction law that ``params.friction_model`` names (``table`` required for the table law)."""
+    """The friction law that ``params.friction_model`` names; the table law reads ``table``, by default the shipped
+    one (:data:`tribocosim.paths.DEFAULT_TABLE`)."""
+    if params.friction_model == "table" and table is None:
+        table = read_table(DEFAULT_TABLE)
     return FrictionLaw(params, table)
 
 
