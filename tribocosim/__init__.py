@@ -15,8 +15,8 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
     tribocosim.run("demo", "results")               # the CSV and JSON written into results/
 
     p = tribocosim.StripDrawParameters(tool_length=0.07)
-    model = tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p))  # the shipped table (DEFAULT_TABLE)
-    table = tribocosim.read_table("my_table.npz")  # another table: make_friction_law(p, table)
+    table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)  # the shipped friction table
+    model = tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p, table))
 """
 
 from __future__ import annotations

@@ -46,10 +46,9 @@ import math
 import numpy as np
 
 from tribocosim.errors import ParameterError, TableDomainError
-from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.native.toolchain.library import UBYTE_P, VP, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
-from tribocosim.components.stripdraw.table import AREAS, FrictionTable, read_table
+from tribocosim.components.stripdraw.table import AREAS, FrictionTable
 
 
 class NativeTable:
@@ -86,7 +85,9 @@ class FrictionLaw:
 
     def __init__(self, params: StripDrawParameters, table: FrictionTable | None = None):
         if params.friction_model == "table" and table is None:
-            raise ParameterError("friction_model = 'table' needs a friction table; none was given")
+            raise ParameterError("friction_model = 'table' needs a friction table; none was given (the shipped one: "
+                                 "make_friction_law(p, read_table(tribocosim.DEFAULT_TABLE)), or friction_model = "
+                                 "'closed_form' or 'constant')")
         self.params = params
         self.name = params.friction_model
         self.table = table if params.friction_model == "table" else None
@@ -134,10 +135,8 @@ class FrictionLaw:
 
 
 def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None) -> FrictionLaw:
-    """The friction law that ``params.friction_model`` names; the table law reads ``table``, by default the shipped
-    one (:data:`tribocosim.paths.DEFAULT_TABLE`)."""
-    if params.friction_model == "table" and table is None:
-        table = read_table(DEFAULT_TABLE)
+    """The friction law that ``params.friction_model`` names (``table`` required for the table law, the default one:
+    the shipped table is ``read_table(tribocosim.DEFAULT_TABLE)``)."""
     return FrictionLaw(params, table)
 
 

@@ -34,21 +34,9 @@ def test_table_law_matches_closed_form_on_its_nodes():
     assert_allclose(law.mu(PP, VV, BB)[0], ref.mu(PP, VV, BB)[0], atol=1e-15)
 
 
-def test_the_table_law_reads_the_shipped_table_unless_given_another():
-    """make_friction_law(p) with the default parameters (the table law) failed until the shipped table was passed:
-    it is the default; another table is passed as the second argument; the law itself still needs one."""
-    from tribocosim.components.stripdraw.friction import FrictionLaw
-    from tribocosim.components.stripdraw.table import read_table
-    from tribocosim.paths import DEFAULT_TABLE
-
-    p = StripDrawParameters()
-    shipped = make_friction_law(p, read_table(DEFAULT_TABLE))
-    q = (np.array([5e6, 20e6]), np.array([0.08, 0.3]), np.array([0.1, 0.4]))
-    assert np.array_equal(make_friction_law(p).mu(*q)[0], shipped.mu(*q)[0])
-    other = make_friction_law(p, closed_form_table(p))
-    assert not np.array_equal(other.mu(*q)[0], shipped.mu(*q)[0])
-    with pytest.raises(ParameterError, match="table"):
-        FrictionLaw(p)
+def test_table_law_needs_a_table_and_says_where_the_shipped_one_is():
+    with pytest.raises(ParameterError, match=r"needs a friction table.*read_table\(tribocosim.DEFAULT_TABLE\)"):
+        make_friction_law(StripDrawParameters(friction_model="table"))
 
 
 def _eq23_table(**changes):

@@ -35,7 +35,9 @@
  * polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly) and each
  * interval takes their means (input_mean); per interval mu is held on the nodes that can reach the pad (contact
  * nodes +- ceil(window_courant) + 1), the bar advanced, then beta updated from the nodal slip increments with
- * the contact weights averaged over the interval.
+ * the contact weights averaged over the interval, and the interface made consistent with the state's weights and
+ * limits (settle_interface: a node that entered the pad during the interval in contact, a node that slid at the
+ * interval's limit at the state's).
  *
  * Outputs are functions of the state at the communication point (a vanishing step changes them by a vanishing
  * amount): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
@@ -48,6 +50,7 @@
  */
 #include "tc_stripdraw.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -555,6 +558,32 @@ static int bar_at_rest(const tc_stripdraw *m) {
     return 1;
 }
 
+/* The interface at the end of an interval made consistent with the state's contact weights and friction limits, so
+ * that the outputs are those a vanishing next step gives (docs/model.md section 2): the interval decides contact
+ * and holds the limits from its start, so without this a node that entered the pad during it is not in contact at
+ * its end (its friction uncounted until the next step's first ~0.2 us load it to the limit: a jump of ~1e-3 of F_S
+ * at the start of every step, whatever its length), and a node that slid at the interval's limit sits below the
+ * state's limit (which the debris the interval made has moved) until the next step's first nanoseconds. So
+ *   - a node under the pad (w > 0) not in contact entered during the interval and slid in by its overlap w l_e:
+ *     in contact with the traction sign(dU) min(T_max, k_s w l_e) (at the limit unless it entered less than
+ *     T_max / k_s, 16 nm by default, ago);
+ *   - a node that slid at the interval's limit (slipped, over [lo, hi)) is at the state's limit, with its sign.
+ * The plastic slip Up = U - T / k_s carries the traction. */
+static void settle_interface(tc_stripdraw *m, const unsigned char *slipped, size_t lo, size_t hi) {
+    const double ks = m->ks;
+    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
+        if (!(m->w[i] > 0.0)) continue;
+        if (!m->contact[i]) {
+            if (m->dU[i] == 0.0) continue;
+            const double t = fmin(m->tmax[i], ks * m->w[i] * m->le);
+            m->contact[i] = 1;
+            m->Up[i] = m->U[i] - copysign(t, m->dU[i]) / ks;
+        } else if (i >= lo && i < hi && slipped[i]) {
+            m->Up[i] = m->U[i] - copysign(m->tmax[i], m->U[i] - m->Up[i]) / ks;
+        }
+    }
+}
+
 /* one coupling interval of length h at normal force fn (>= 0) and grip velocity vg */
 static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
@@ -622,7 +651,13 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w0_last = l0;
     update_weights(m);
     transport(m, pressure, speed, w0, f0, l0, du_finite);
+    unsigned char *slipped = (unsigned char *)m->giwork + m->n; /* of the interval's limits, over [lo, hi) */
+    const size_t lo = m->limit_lo, hi = m->limit_hi;
+    for (size_t i = lo; i < hi; ++i) /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
+        slipped[i] = m->contact[i] && fabs(m->ks * (m->U[i] - m->Up[i])) >=
+                                          m->tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * m->ks * fabs(m->U[i]);
     state_limits(m);
+    settle_interface(m, slipped, lo, hi);
     return TC_OK;
 }
 
