@@ -19,7 +19,9 @@ it (``tribocosim/components/<name>/component.py``, module attribute ``COMPONENT`
   problems of a parameter set that only the model can see, e.g. an unreadable table, as
   ``(parameter name or "", message)``, and the ranges its inputs accept as ``{input: Limit}``) and
   the set-points its outputs will follow (``setpoints``), which the scene checks match across
-  connections;
+  connections; the ranges its inputs can take whatever drives them (``input_limits(parameters) ->
+  {input: Limit}``: ranges that depend on several parameters, e.g. the strip's nominal pressure at most its
+  hardness), checked against a value held in the scene and against connected set-points;
   an ``observer`` for side outputs (the strip's field file); and its native implementation
   (``native``: C sources and the prefix of its C functions).
 
@@ -158,6 +160,7 @@ class Component:
     resources: tuple[tuple[str, str], ...] = ()
     check: Callable[[Any, Any, Path], tuple[list[tuple[str, str]], dict[str, Limit]]] | None = None
     setpoints: Callable[[Any], dict[str, list[SetPoint]]] | None = None
+    input_limits: Callable[[Any], dict[str, Limit]] | None = None
     observer: Callable[[Any, Any, dict], Any] | None = None
     native: Native | None = None
     default_experiment: tuple[float, float, float] = (0.0, 1.75, 1e-3)

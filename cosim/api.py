@@ -403,6 +403,7 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
     return {
         "scene": str(scene.path),
         "scene_sha256": hashlib.sha256(scene.path.read_bytes()).hexdigest(),
+        "overrides": dict(scene.overrides),
         "started": started,
         "versions": {"tribocosim": distribution_version("tribocosim"), "fmpy": distribution_version("fmpy")},
         "experiment": asdict(scene.experiment),

@@ -10,11 +10,12 @@ One import name for the whole project (the repository's folders are its subpacka
 The names below are imported on first use, so ``import tribocosim`` costs nothing::
 
     import tribocosim
-    result = tribocosim.run("demo")                 # a packaged scene name, or a scene file
+    result = tribocosim.run("demo")                 # a packaged scene name, or a scene file; nothing written
     result["strip.pull_force"], result.metadata["steps"]
+    tribocosim.run("demo", "results")               # the CSV and JSON written into results/
 
     p = tribocosim.StripDrawParameters(tool_length=0.07)
-    table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)
+    table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)  # the shipped friction table
     model = tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p, table))
 """
 
@@ -23,7 +24,7 @@ from __future__ import annotations
 from tribocosim.lazy import lazy_exports
 
 __getattr__, __all__ = lazy_exports(__name__, {
-    "run": "tribocosim.cosim.api",
+    "run": "tribocosim.cosim.apps.scripting",
     "Result": "tribocosim.cosim.api",
     "load_scene": "tribocosim.cosim.scene.validate",
     "StripDrawModel": "tribocosim.components.stripdraw.model",

@@ -52,6 +52,21 @@ def main(argv: list[str] | None = None) -> int:
     return int(module.main(rest) or 0)
 
 
+def _exit_on_termination() -> None:
+    """SIGTERM (and SIGHUP) end the process as an exception does: ``finally`` blocks and ``atexit`` handlers run, so
+    the folders the FMUs were extracted to are removed and a run's lock on its output folder is released (by
+    default Python dies at once and leaves them). The exit status is 128 + the signal's number, as a shell shows
+    it."""
+    import signal
+
+    def stop(signum, frame):
+        raise SystemExit(128 + signum)
+
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), stop)
+
+
 def console() -> None:
     """The console script: :func:`main`, then exit.
 
@@ -63,6 +78,7 @@ def console() -> None:
     extracted to (:mod:`tribocosim.cosim.api`, :mod:`tribocosim.cosim.ssp.reader`), the temporary folders of
     ``weakref.finalize`` (``tempfile.TemporaryDirectory``); then every output is flushed. ``os._exit`` skips only the
     module and object teardown and the C library's exit, where the heap corruption happens."""
+    _exit_on_termination()
     code = main()
     if "pythonfmu" in sys.modules:
         atexit._run_exitfuncs()  # the handlers Py_FinalizeEx would run first, in the same (reverse) order

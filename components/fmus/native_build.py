@@ -16,8 +16,9 @@ For each component with a native implementation (``Component.native``) the build
    aarch64-darwin}`` (FMI 3.0 platform tuples);
 3. zips ``modelDescription.xml``, the binaries and the resource files (the default friction table,
    in the resource form the C code reads: ``Native.convert_resource``) into ``<ModelIdentifier>.fmu``
-   (no ``.py`` file), checks it with ``fmpy.validate_fmu`` and moves
-   it into place atomically, next to a JSON record of its source digest.
+   (no ``.py`` file; every member with a fixed time stamp and permissions, so that two builds of the same sources
+   are byte-identical), checks it with ``fmpy.validate_fmu`` and moves it into place atomically, next to a JSON
+   record of its source digest and of the platforms whose binaries it holds.
 
 The GUID (FMI 3.0: instantiation token) is derived from the source digest (C sources, generated
 text, resources, compiler flags, zig version and FMI version), so a model description and a binary
@@ -280,26 +281,43 @@ def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORM
     return {name: _build_one(name, out, tuple(platforms), fmi_version) for name in selected}
 
 
+#: the time stamp of every member of a native FMU's zip: a fixed one (the earliest a zip can hold), so that two builds
+#: of the same sources give the same bytes
+ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+
+def _member(z: zipfile.ZipFile, name: str, data: bytes) -> None:
+    """Write one member with the fixed time stamp and permissions (rw-r--r--, a folder rwxr-xr-x)."""
+    info = zipfile.ZipInfo(name, date_time=ZIP_TIME)
+    info.compress_type = zipfile.ZIP_DEFLATED
+    info.external_attr = (0o40755 if name.endswith("/") else 0o100644) << 16
+    info.create_system = 3  # Unix, whatever the building machine: the permissions above are Unix ones
+    z.writestr(info, data)
+
+
 def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
     comp = component(name)
     digest = source_digest(name, fmi_version)
+    targets = _targets(platforms, fmi_version)
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp:
         stage = Path(tmp)
         compile_binaries(name, stage, platforms, digest, fmi_version)
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", description(comp, guid(digest), fmi_version))
-            for platform in _targets(platforms, fmi_version):
+            _member(z, "modelDescription.xml", description(comp, guid(digest), fmi_version).encode("utf-8"))
+            for platform in targets:
                 inside = binary_path(name, platform, fmi_version)
-                z.write(stage / inside, inside)
+                _member(z, inside, (stage / inside).read_bytes())
             for path in comp.resource_files:
                 if comp.native.convert_resource is not None:  # the form the C code reads
                     path = comp.native.convert_resource(path, stage)
-                z.write(path, f"resources/{path.name}")
+                _member(z, f"resources/{path.name}", path.read_bytes())
             if not comp.resource_files:
-                z.writestr("resources/", "")
+                _member(z, "resources/", b"")
+    # the platforms whose binaries the zip holds (FMI 2.0 has no ARM Linux folder, and darwin64 serves both Macs)
+    held = sorted(targets)
     return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
-                                                    "source_digest": digest, "platforms": list(platforms),
+                                                    "source_digest": digest, "platforms": held,
                                                     "python": sys.version.split()[0], "ziglang": compiler.zig_version()})
 
 

@@ -197,6 +197,28 @@ def check(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
     return problems, limits
 
 
+def input_limits(params: StripDrawParameters) -> dict:
+    """The ranges the inputs can take whatever drives them: a nominal pressure F_N / (L_T w_T) at most the
+    hardness (above it every asperity is flattened: no strip-draw contact), and a grip speed below the bar's wave
+    speed sqrt(E / rho) (its elastic waves carry the pull to the pad; the FMU refuses a faster grip)."""
+
+    def force_limit(force: float, label: str, instance: str) -> str | None:
+        pressure = params.pressure(force)
+        if pressure <= params.hardness:
+            return None
+        return (f"{label} on the {params.tool_length * 1e3:g} x {params.tool_width * 1e3:g} mm pad of '{instance}' is "
+                f"a nominal pressure of {pressure:.4g} Pa, above the strip's hardness {params.hardness:g} Pa (the "
+                f"largest normal force is {params.normal_force(params.hardness):.6g} N): no strip-draw contact")
+
+    def velocity_limit(v: float, label: str, instance: str) -> str | None:
+        if abs(v) < params.wave_speed:
+            return None
+        return (f"{label} is not below the wave speed sqrt(E / rho) = {params.wave_speed:.6g} m/s of the strip of "
+                f"'{instance}': its elastic waves cannot carry a faster pull to the pad")
+
+    return {"normal_force": force_limit, "grip_velocity": velocity_limit}
+
+
 def observer(model, files: StripDrawFiles, values: dict):
     """The field recorder when ``field_output`` names a file, else None."""
     if not files.field_output:
@@ -218,10 +240,11 @@ COMPONENT = Component(
     resources=(TABLE_RESOURCE,),
     build=build,
     check=check,
+    input_limits=input_limits,
     observer=observer,
     native=Native(prefix="tc_stripdraw",
                   sources=("core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_friction.c",
-                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
+                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c", "resource_io/tc_sha256.c",
                            "resource_io/tc_arrays.c", "resource_io/tc_fields.c", "fmi/tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),

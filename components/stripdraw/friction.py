@@ -85,7 +85,9 @@ class FrictionLaw:
 
     def __init__(self, params: StripDrawParameters, table: FrictionTable | None = None):
         if params.friction_model == "table" and table is None:
-            raise ParameterError("friction_model = 'table' needs a friction table; none was given")
+            raise ParameterError("friction_model = 'table' needs a friction table; none was given (the shipped one: "
+                                 "make_friction_law(p, read_table(tribocosim.DEFAULT_TABLE)), or friction_model = "
+                                 "'closed_form' or 'constant')")
         self.params = params
         self.name = params.friction_model
         self.table = table if params.friction_model == "table" else None
@@ -133,7 +135,8 @@ class FrictionLaw:
 
 
 def make_friction_law(params: StripDrawParameters, table: FrictionTable | None = None) -> FrictionLaw:
-    """The friction law that ``params.friction_model`` names (``table`` required for the table law)."""
+    """The friction law that ``params.friction_model`` names (``table`` required for the table law, the default one:
+    the shipped table is ``read_table(tribocosim.DEFAULT_TABLE)``)."""
     return FrictionLaw(params, table)
 
 

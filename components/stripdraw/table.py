@@ -37,8 +37,10 @@ metadata. A file whose hash or format version does not match is refused.
 
 The native code reads the table in its resource form (:func:`write_table_resource`): an array file
 (:mod:`tribocosim.components.native.resource_io.array_file`) with the axes, mu, the areas (version 2), ``beta_threshold``,
-``content_hash`` and ``provenance``, written from a verified table (the FMU build bundles it as
-``friction_table.tca``; a table file ``X.npz`` has its resource at ``X.tca``).
+``content_hash``, ``provenance`` and ``source_sha256`` (the SHA-256 of the bytes of the ``.npz`` it was written
+from), written from a verified table (the FMU build bundles it as ``friction_table.tca``; a table file ``X.npz`` has
+its resource at ``X.tca``). The native reader refuses ``X.tca`` when ``X.npz`` exists and its SHA-256 is not the
+recorded one: a table replaced after its resource was written is never served from the old resource.
 
 Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
 follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
@@ -347,9 +349,12 @@ def resource_entries(table: FrictionTable) -> dict:
 
 def write_table_resource(table_path: str | os.PathLike, out: str | os.PathLike | None = None) -> Path:
     """Read and verify the table file ``table_path`` and write its resource form to ``out`` (default: beside it,
-    with the suffix ``.tca``); returns the path written."""
+    with the suffix ``.tca``), with the SHA-256 of the file's bytes as ``source_sha256``; returns the path written."""
     from tribocosim.components.native.resource_io.array_file import write_arrays
 
     table_path = Path(table_path)
     target = Path(out) if out is not None else table_path.with_suffix(RESOURCE_SUFFIX)
-    return write_arrays(target, resource_entries(read_table(table_path)))
+    raw = table_path.read_bytes() if table_path.is_file() else None
+    entries = resource_entries(read_table(table_path))
+    entries["source_sha256"] = hashlib.sha256(raw).hexdigest()
+    return write_arrays(target, entries)

@@ -5,9 +5,13 @@ with a progress bar on stderr for runs longer than two seconds, writes the CSV a
 JSON, and prints a summary. ``--plot`` also writes a PNG of the recorded variables. A sweep file (a ``[sweep]`` table over a
 base scene, :mod:`tribocosim.cosim.apps.scene_sweep`) runs its cases in parallel processes instead.
 
+Before the run the output folder is made and checked writable, and locked against a second run into it
+(:mod:`tribocosim.cosim.apps.run_output`); the result JSON records the ``--set`` overrides (``overrides``).
+
 Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
 smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
-was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems.
+was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems, or its
+results cannot be written where asked (a file in the way, a folder that cannot be written, another run there).
 
 An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp.reader`) runs with its default experiment and
 our master; ``--set`` overrides the keys of the scene it is read as (``master.*``, ``experiment.*``, ...).
@@ -49,10 +53,16 @@ def main(argv: list[str] | None = None) -> int:
     from tribocosim.cosim.scene.schema import parse_overrides
     from tribocosim.paths import scene_file
 
+    from tribocosim.cosim.apps.run_output import OutputError, OutputFolder, run_files
+
+    png = None
     try:
         args.scene = scene_file(args.scene)
         if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
-            result = run_ssp(args.scene, args.out, parse_overrides(args.set), progress=not args.quiet)
+            out = Path(args.out) if args.out is not None else args.scene.resolve().parent
+            with OutputFolder(out, []):
+                result = run_ssp(args.scene, out, parse_overrides(args.set), progress=not args.quiet)
+                png = _plot(args, result)
         elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
@@ -60,12 +70,16 @@ def main(argv: list[str] | None = None) -> int:
 
             return sweep_main(args)
         else:
+            from tribocosim.cosim.api import default_out_dir
             from tribocosim.cosim.scene.component_checks import load_component_scene
 
             # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
             plan = load_component_scene(args.scene, parse_overrides(args.set))
-            result = run(plan, args.out, progress=not args.quiet)
-    except SceneError as exc:
+            out = Path(args.out) if args.out is not None else default_out_dir(plan.scene.path)
+            with OutputFolder(out, run_files(plan, out, args.plot)):  # writable, and no other run writes there
+                result = run(plan, out, progress=not args.quiet)
+                png = _plot(args, result)
+    except (SceneError, OutputError) as exc:
         print(f"tribocosim run: {exc}", file=sys.stderr)
         return 2
     except RunFailed as exc:
@@ -78,13 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
         return 1
+    except OSError as exc:  # the results could not be written after all (a full disk, the folder removed meanwhile)
+        print(f"tribocosim run: writing the results failed: {exc}", file=sys.stderr)
+        return 1
     meta = result.metadata
-    if args.plot and result.csv_path is not None:
-        from tribocosim.cosim.apps.plotting import plot_result
-
-        png = plot_result(result, result.csv_path.with_suffix(".png"))
-        if not args.quiet:
-            print(f"plot:     {png}")
+    if png is not None and not args.quiet:
+        print(f"plot:     {png}")
     if not args.quiet:
         st, wt = meta["steps"], meta["wall_time"]
         for w in meta["warnings"]:
@@ -102,6 +115,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"results:  {result.csv_path}")
         print(f"metadata: {result.metadata_path}")
     return 0
+
+
+def _plot(args, result):
+    """The PNG of the recorded variables when --plot asks for it (None otherwise)."""
+    if not args.plot or result.csv_path is None:
+        return None
+    from tribocosim.cosim.apps.plotting import plot_result
+
+    return plot_result(result, result.csv_path.with_suffix(".png"))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,8 +11,9 @@ A scene FMU given as ``component = "<name>"`` is the FMU of a component of
   component's own ``check`` runs (e.g. the strip's table and field file, the cap of beta), and
   every connection from an output with known set-points (``setpoints``: the press's force, the
   drive's velocity) to an input is matched against the range the input's port declares (``low``,
-  ``high``: the strip is pulled, grip_velocity >= 0) and the limits of ``check`` (the strip's table
-  axes).
+  ``high``: the strip is pulled, grip_velocity >= 0), the component's ``input_limits`` (the strip's
+  pressure at most its hardness, its grip slower than its waves) and the limits of ``check`` (the strip's
+  table axes); an input held at a scene value is matched against the first two, and must be finite.
 
 The monolithic reference of such a scene is :func:`tribocosim.cosim.apps.monolithic.reference_for_scene`.
 
@@ -23,6 +24,7 @@ This is, with :mod:`tribocosim.cosim.scene.fmucache`, where :mod:`tribocosim.cos
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from tribocosim.errors import ParameterError, Problem, SceneError
 
@@ -76,6 +78,7 @@ def component_problems(scene) -> list[Problem]:
     found = {name: comp for name, spec in scene.fmus.items() if (comp := component_of(spec)) is not None}
     limits: dict[str, dict] = {}
     setpoints: dict[str, dict] = {}
+    physical: dict[str, dict] = {}
     for name, comp in found.items():
         key = f"fmus.{name}.parameters"
         params, files = _split(comp, scene.fmus[name].parameters, problems.add, key)
@@ -87,23 +90,28 @@ def component_problems(scene) -> list[Problem]:
                 problems.add(f"{key}.{pname}" if pname else key, message)
         if comp.setpoints is not None:
             setpoints[name] = comp.setpoints(params)
+        if comp.input_limits is not None:
+            physical[name] = comp.input_limits(params)
     for name, comp in found.items():  # inputs held at a scene value
         given = scene.fmus[name].parameters
         for port in comp.inputs:
             value = given.get(port.name)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 label = f"{port.name} = {value:g}{_unit(port)}"
-                message = _outside_port(comp, given, port, float(value), label, f"{name}.{port.name}")
+                limit = physical.get(name, {}).get(port.name)
+                message = _outside_port(comp, given, port, float(value), label, f"{name}.{port.name}") or (
+                    limit(float(value), label, name) if limit else None)
                 if message:
                     problems.add(f"fmus.{name}.parameters.{port.name}", message)
     for link in scene.connections:  # set-points of one instance against the inputs of another
         src, dst = link.source, link.target
         comp = found.get(dst.instance)
         port = next((p for p in comp.inputs if p.name == dst.variable), None) if comp is not None else None
-        limit = limits.get(dst.instance, {}).get(dst.variable)
+        checks = [lim for lim in (limits.get(dst.instance, {}).get(dst.variable),
+                                  physical.get(dst.instance, {}).get(dst.variable)) if lim is not None]
         for sp in setpoints.get(src.instance, {}).get(src.variable, []):
             messages = (_outside_port(comp, scene.fmus[dst.instance].parameters, port, sp.value, sp.label, str(dst))
-                        if port is not None else None, limit(sp.value, sp.label, dst.instance) if limit else None)
+                        if port is not None else None, *(lim(sp.value, sp.label, dst.instance) for lim in checks))
             for message in messages:
                 if message:
                     problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
@@ -118,6 +126,8 @@ def _outside_port(comp, values: dict, port, value: float, label: str, where: str
     """Why ``value`` (``label``: how to name it) lies outside the range input ``port`` of component ``comp``
     declares (:class:`~tribocosim.components.description.Port` ``low``/``high``, bounds that name a parameter
     taken from ``values``), or None. ``where``: the input, ``instance.variable``."""
+    if not math.isfinite(value):
+        return f"{label} is not finite; a finite number is required"
     try:
         low, high = comp.bounds(port, values)
     except (ParameterError, TypeError, ValueError):  # a bad bound parameter is reported as that parameter

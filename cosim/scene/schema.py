@@ -70,6 +70,9 @@ OUTPUT_UPDATES = ("propagate", "none")
 
 _TOP_KEYS = ("experiment", "master", "fmus", "connections", "power_bonds", "output")
 _EXPERIMENT_KEYS = ("start", "stop", "step")
+#: the most communication steps of one run: (stop - start) / step (1e8 steps are hours to days of master time at tens
+#: of microseconds per step; stop = 1e30 s at 1 ms was accepted and announced an ETA of 4e28 s)
+MAX_STEPS = 1e8
 _MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive",
                 *(name for name, spec in ALGORITHMS.items() if spec.settings is not None))
 _FMU_KEYS = ("path", "component", "variant", "parameters", "feedthrough")
@@ -150,6 +153,8 @@ class Scene:
     connections: tuple[Connection, ...]
     power_bonds: tuple[PowerBond, ...]
     output: OutputSpec
+    #: the dotted keys set over the file's (``--set``), as given; recorded with the results
+    overrides: dict = field(default_factory=dict)
 
     @property
     def folder(self) -> Path:
@@ -238,6 +243,10 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         stop = start + 1.0
     elif step > stop - start:
         p.add("experiment.step", f"{step!r} is longer than the experiment ({stop - start!r} s)")
+    elif (stop - start) / step > MAX_STEPS:
+        p.add("experiment.stop", f"stop = {stop!r} s is {(stop - start) / step:.3g} steps of {step!r} s after start = "
+                                 f"{start!r} s; at most {MAX_STEPS:.0e} steps are allowed (a longer run: a longer step)")
+        stop = start + step
     experiment = Experiment(float(start), float(stop), float(step))
 
     master = _parse_master(p, p.table(doc, "master", "master"), experiment)
@@ -333,7 +342,8 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         if r:
             refs.append(r)
 
-    scene = Scene(path, experiment, master, fmus, tuple(connections), tuple(bonds), OutputSpec(ofile, tuple(refs)))
+    scene = Scene(path, experiment, master, fmus, tuple(connections), tuple(bonds), OutputSpec(ofile, tuple(refs)),
+                  dict(overrides or {}))
     if master.adaptive is not None and ESTIMATORS[master.adaptive.estimator].needs_bonds and not bonds:
         p.add("master.adaptive.estimator", f"'{master.adaptive.estimator}' needs at least one [[power_bonds]] entry")
     return scene, p.items

@@ -3,8 +3,9 @@
 :func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.schema.parse_scene`), reads the model
 description of every FMU it names (no shared library is loaded), and checks
 
-- FMU files: present, FMI 2.0, co-simulation;
-- parameters: known, settable (causality parameter or input), of the right type, inside a
+- FMU files: present, FMI 2.0, co-simulation, with a complete library for this machine
+  (:mod:`tribocosim.cosim.scene.binaries`: a truncated one crashed the process with a bus error);
+- parameters: known, settable (causality parameter or input), of the right type, finite, inside a
   declared min/max;
 - connections: known instances and variables, output -> input causality, compatible types,
   equal units where both sides declare one, one connection per input;
@@ -20,6 +21,7 @@ resolved.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +30,7 @@ from fmpy import read_model_description
 
 from tribocosim.errors import SceneError
 from tribocosim.cosim.engine.algorithms import ALGORITHMS
+from tribocosim.cosim.scene.binaries import fmu_binary_problem
 from tribocosim.cosim.scene.problems import Problems, known
 from tribocosim.cosim.engine.stepcontrol import ESTIMATORS
 from tribocosim.cosim.engine.system import VariableRef
@@ -164,6 +167,10 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
         if md.coSimulation is None:
             add(f"{key}.path", f"{fmu_path.name} has no co-simulation interface (model exchange only)")
             continue
+        broken = fmu_binary_problem(fmu_path, md.coSimulation.modelIdentifier)
+        if broken:
+            add(f"{key}.path", broken)
+            continue
         plan.fmus[name] = model = _fmu_model(name, fmu_path, md, spec.feedthrough)
         for pname, value in spec.parameters.items():
             _check_parameter(add, f"{key}.parameters.{pname}", model, pname, value)
@@ -266,6 +273,9 @@ def _check_parameter(add, key: str, model: FmuModel, pname: str, value) -> None:
     }.get(t, False)
     if not ok:
         add(key, f"{pname!r} is a {t}; got {value!r}")
+        return
+    if t == "Real" and not math.isfinite(value):
+        add(key, f"{pname} = {value!r} is not finite; a finite number is required")
         return
     if t in ("Real", "Integer"):
         lo = var.min if var.min is not None else getattr(var.declaredType, "min", None)

@@ -34,8 +34,8 @@ def test_table_law_matches_closed_form_on_its_nodes():
     assert_allclose(law.mu(PP, VV, BB)[0], ref.mu(PP, VV, BB)[0], atol=1e-15)
 
 
-def test_table_law_needs_a_table():
-    with pytest.raises(ParameterError, match="table"):
+def test_table_law_needs_a_table_and_says_where_the_shipped_one_is():
+    with pytest.raises(ParameterError, match=r"needs a friction table.*read_table\(tribocosim.DEFAULT_TABLE\)"):
         make_friction_law(StripDrawParameters(friction_model="table"))
 
 

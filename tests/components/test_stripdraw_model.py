@@ -8,6 +8,8 @@ from numpy.testing import assert_allclose
 
 from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
+from tribocosim.components.stripdraw.table import read_table
+from tribocosim.paths import DEFAULT_TABLE
 
 PAD = 0.035
 P_N = 10e6
@@ -194,3 +196,22 @@ def test_bad_parameters_name_the_parameter_and_the_range():
         StripDrawParameters(zeta=float("nan"))
     with pytest.raises(ParameterError, match="friction_model"):
         StripDrawParameters(friction_model="coulomb")
+
+
+@pytest.mark.parametrize("factor", [1e-6, 1.0, 5e3, 1e4])
+@pytest.mark.parametrize("pressure, tool_length, n_elements, dt", [(10e6, 0.035, 150, 5e-4), (30e6, 0.14, 600, 1e-3),
+                                                                   (30e6, 0.14, 150, 1e-2)])
+def test_the_implicit_solver_converges_over_the_declared_shear_stiffness_range(factor, pressure, tool_length,
+                                                                              n_elements, dt):
+    """The interface penalty's declared range is the range the implicit solve handles: from the softest to the
+    stiffest k_s, with the grip ramped to 0.08 m/s over 20 ms under the loaded pad (the start of every draw, where
+    the stick/slip set moves most), on the short and the long pad at up to 30 MPa, every step is taken. (A stiff
+    interface makes the potential along a Newton step kink at every node that changes between stick and slip; the
+    line search steps across them exactly, where backtracking stalls and the step was refused from k_s ~ 5e3 E/h_B.)"""
+    p = StripDrawParameters(shear_stiffness_factor=factor, tool_length=tool_length, n_elements=n_elements,
+                            draw_length=0.02)
+    model = StripDrawModel(p, make_friction_law(p, read_table(DEFAULT_TABLE)))
+    force = pressure * tool_length * p.tool_width
+    for k in range(int(round(0.03 / dt))):
+        model.step(dt, {"normal_force": force, "grip_velocity": 0.08 * min(1.0, k * dt / 0.02)})
+    assert model.outputs()["mu_mean"] > 0

@@ -115,6 +115,96 @@ def test_every_binary_is_built_for_its_platform_and_exports_every_function(every
             assert not missing, (name, folder, sorted(missing))
 
 
+def _load_commands(data: bytes) -> dict:
+    """A thin 64-bit Mach-O file's minimum macOS (LC_BUILD_VERSION minos) and install name (LC_ID_DYLIB)."""
+    (ncmds,) = struct.unpack_from("<I", data, 16)
+    pos, out = 32, {}
+    for _ in range(ncmds):
+        cmd, size = struct.unpack_from("<II", data, pos)
+        if cmd == 0x32:
+            (minos,) = struct.unpack_from("<I", data, pos + 12)
+            out["minos"] = (minos >> 16, (minos >> 8) & 0xFF)
+        elif cmd == 0xD:
+            (offset,) = struct.unpack_from("<I", data, pos + 8)
+            out["id"] = data[pos + offset:pos + size].split(b"\0")[0].decode()
+        pos += size
+    return out
+
+
+#: the oldest macOS each Mach-O architecture's binaries load on: 10.15 on Intel, 11.0 (the first) on Apple Silicon
+MACOS_MINIMUM = {"x86_64": (10, 15), "arm64": (11, 0)}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", (2, 3))
+def test_the_binaries_hold_no_build_path_and_load_on_older_macs(every_platform, version):
+    """The Mach-O slices required macOS 15 (zig's default, the newest) and named the build's temporary folder as
+    their install name (LC_ID_DYLIB); the ELF files carried debug information with the absolute paths of the sources.
+    Now each slice requires macOS 10.15 (x86_64) or 11.0 (arm64) and is named @rpath/<file>; no binary holds the
+    path of the installation or of a temporary folder; the FMU's JSON record lists the platforms its zip holds (the
+    FMI 2.0 one listed aarch64 platforms it has no folder for)."""
+    import json
+    import tempfile
+    import zipfile
+
+    ex = _exports()
+    native = str(compiler.NATIVE_DIR).encode()
+    for name in NAMES:
+        fmu = every_platform[version] / f"{name}.fmu"
+        with zipfile.ZipFile(fmu) as zf:
+            binaries = {m: zf.read(m) for m in zf.namelist() if m.startswith("binaries/") and not m.endswith("/")}
+        for member, data in binaries.items():
+            assert native not in data and tempfile.gettempdir().encode() + b"/tribocosim" not in data, member
+            if member.endswith(".so"):
+                assert b".debug_info" not in data and b".symtab" not in data, member
+            if member.endswith(".dylib"):
+                slices = (ex.fat_slices(data) if data[:4] == b"\xca\xfe\xba\xbe"
+                          else [(struct.unpack_from("<i", data, 4)[0], data)])
+                for cpu, part in slices:
+                    arch = ex.MACHO_CPUS[cpu]
+                    commands = _load_commands(part)
+                    assert commands == {"minos": MACOS_MINIMUM[arch], "id": f"@rpath/{Path(member).name}"}, (
+                        member, arch, commands)
+        record = json.loads((every_platform[version] / f"{name}.fmu.json").read_text())
+        folders = {m.split("/")[1] for m in binaries}
+        assert len(record["platforms"]) == len(folders), (record["platforms"], folders)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", (2, 3))
+def test_two_builds_of_the_same_sources_are_byte_identical(every_platform, tmp_path, version):
+    """Two builds differed (zip time stamps, the DLL's link time and CodeView GUID, the temporary build path in the
+    Mach-O install names and the ELF debug information): every FMU of every platform is now the same file."""
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "build", "--fmi", str(version), "--out",
+                           str(tmp_path)], capture_output=True, text=True, timeout=3600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    for name in NAMES:
+        assert (tmp_path / f"{name}.fmu").read_bytes() == (every_platform[version] / f"{name}.fmu").read_bytes(), name
+
+
+@pytest.mark.slow
+def test_the_scene_check_reads_every_platforms_library_and_refuses_a_truncated_one(every_platform):
+    """cosim/scene/binaries.py on the ELF, PE and Mach-O (universal and thin) libraries of the FMUs: whole, none
+    is refused; cut at a tenth, at half or by one byte of its content, each is, naming what lies beyond the end."""
+    import zipfile
+
+    from tribocosim.cosim.scene.binaries import truncation
+
+    seen = set()
+    for version in (2, 3):
+        with zipfile.ZipFile(every_platform[version] / "StripDraw.fmu") as zf:
+            for member in (m for m in zf.namelist() if m.startswith("binaries/") and not m.endswith("/")):
+                data = zf.read(member)
+                seen.add(data[:4])
+                assert truncation(data) is None, member
+                universal = data[:4] == b"\xca\xfe\xba\xbe"  # its last slice is padded to 16 KiB: cut into it
+                last = max(o + n for _, _, o, n, _ in (struct.unpack_from(">iiIII", data, 8 + 20 * k) for k in range(
+                    struct.unpack_from(">I", data, 4)[0]))) if universal else len(data)
+                for cut in (len(data) // 10, len(data) // 2, last - 1):
+                    assert truncation(data[:cut]), (member, cut)
+    assert {b"\x7fELF", b"\xca\xfe\xba\xbe", b"\xcf\xfa\xed\xfe"} <= seen and any(k[:2] == b"MZ" for k in seen)
+
+
 def _run_host(host: Path, folder: Path, md, steps, prefix=()) -> np.ndarray:
     vr = {v.name: v.valueReference for v in md.modelVariables}
     outputs = ",".join(f"{'i' if n == 'table_clamp_count' else 'r'}:{vr[n]}" for n in (

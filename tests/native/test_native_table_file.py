@@ -27,7 +27,7 @@ from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, resource_entries, write_table, write_table_resource
 
 SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
-           "resource_io/tc_arrays.c")
+           "resource_io/tc_sha256.c", "resource_io/tc_arrays.c")
 
 
 def read_resource(path):
@@ -102,6 +102,43 @@ def test_an_npz_name_reads_its_resource_beside_it(folder):
         read_resource(folder / "named.npz")
     write_table_resource(folder / "named.npz")
     core().lib.tc_table_free(read_resource(folder / "named.npz"))
+
+
+def test_a_table_replaced_after_its_resource_was_written_is_refused(folder):
+    """X.tca records the SHA-256 of the X.npz it was made from: another table saved as X.npz is refused (naming both
+    files and the command that rewrites the resource), not served from the old resource; the rewritten resource is
+    read again, and a resource without the record is refused while its .npz is there."""
+    import hashlib
+    import shutil
+
+    shutil.copy(DEFAULT_TABLE, folder / "swapped.npz")
+    write_table_resource(folder / "swapped.npz")
+    recorded = arrays.read_arrays(folder / "swapped.tca")["source_sha256"]
+    assert recorded == hashlib.sha256((folder / "swapped.npz").read_bytes()).hexdigest()
+    core().lib.tc_table_free(read_resource(folder / "swapped.npz"))
+    write_table(folder / "swapped.npz", closed_form_table())  # another table under the same name
+    with pytest.raises(ParameterError, match=r"swapped\.npz has changed since its resource form .*swapped\.tca was "
+                                             r"written.*tribocosim fmu table-resource .*swapped\.npz"):
+        read_resource(folder / "swapped.npz")
+    core().lib.tc_table_free(read_resource(folder / "swapped.tca"))  # the resource named as itself is not compared
+    write_table_resource(folder / "swapped.npz")
+    core().lib.tc_table_free(read_resource(folder / "swapped.npz"))
+    entries = arrays.read_arrays(folder / "swapped.tca")
+    del entries["source_sha256"]
+    arrays.write_arrays(folder / "swapped.tca", entries)
+    with pytest.raises(ParameterError, match=r"does not record which table it was made from"):
+        read_resource(folder / "swapped.npz")
+
+
+@pytest.mark.parametrize("size", [0, 3, 55, 56, 64, 119, 1000, 70000])
+def test_the_native_sha256_is_hashlibs(folder, size):
+    import hashlib
+
+    data = np.random.default_rng(size).integers(0, 256, size, dtype=np.uint8).tobytes()
+    (folder / "bytes.bin").write_bytes(data)
+    hexd = ctypes.create_string_buffer(65)
+    core().call(core().lib.tc_sha256_file, str(folder / "bytes.bin").encode(), hexd)
+    assert hexd.value.decode() == hashlib.sha256(data).hexdigest()
 
 
 def test_the_command_line_writes_the_resource(folder):

@@ -49,6 +49,6 @@ def test_import_tribocosim_is_lazy_and_offers_the_public_api():
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     mods, numba = proc.stdout.split("\n")[:2]
-    assert mods == "tribocosim.cosim.api tribocosim.components.stripdraw.model"
+    assert mods == "tribocosim.cosim.apps.scripting tribocosim.components.stripdraw.model"
     assert numba == "False", "the model is the native core: no numba"
     assert set(tribocosim.__all__) >= {"run", "StripDrawModel", "StripDrawParameters", "read_table", "FrictionTable"}

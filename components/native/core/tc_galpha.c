@@ -26,8 +26,9 @@
  * with x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i, z_i = u0_i - Up_i and dU_e = U_e+1 - U_e:
  * no difference of two displacements of the size of the draw is ever taken. The window is solved by
  * Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by a
- * backtracking (Armijo) line search on Pi_W; it is converged when a full Newton step lands on the set it
- * was built from (the problem is linear on that set, so that step was exact), or when the window's
+ * line search on Pi_W (the full step when it descends by the Armijo condition, else the exact minimiser along
+ * the step: Pi_W is piecewise quadratic along it, exact_step); it is converged when a full Newton step lands on the
+ * set it was built from (the problem is linear on that set, so that step was exact), or when the window's
  * residual is below ``rtol`` times the force scale (friction capacity + grip pull). The chains are then
  * back-substituted and every free node gets its Newmark update.
  *
@@ -50,6 +51,7 @@
  * bar and to the explicit scheme.
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "tc_galpha.h"
@@ -210,6 +212,64 @@ static void newton_step(const window_problem *w, const signed char *state, const
     for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
 }
 
+/* the derivative of Pi_W along the step s at d + alpha s: sum_i s_i r_i(d + alpha s) (dtr, T, state, f, r: work) */
+static double slope_at(const window_problem *w, const double *d, const double *s, double alpha, double *dtr, double *T,
+                       signed char *state, double *f, double *r) {
+    const size_t lo = w->lo, hi = w->hi;
+    for (size_t i = lo; i <= hi; ++i) dtr[i] = d[i] + alpha * s[i - lo];
+    (void)window_potential(w, dtr, T, state);
+    (void)window_residual(w, dtr, T, f, r);
+    double g = 0.0;
+    for (size_t i = lo; i <= hi; ++i) g += s[i - lo] * r[i];
+    return g;
+}
+
+static int compare_doubles(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The exact line search: the alpha in (0, 1] that minimises Pi_W(d + alpha s) for a descent direction s (slope0 =
+ * its derivative at alpha = 0, < 0). Along s, Pi_W is convex and piecewise quadratic: its derivative is piecewise
+ * linear and non-decreasing in alpha, with kinks where a node under the pad changes between stick and slip
+ * (x_i = z_i + d_i + alpha s_i = +-T_max,i / k_s). alpha = 1 when the derivative is still <= 0 there; else the kinks
+ * in (0, 1) are sorted (into kinks: 2 nw doubles), the two neighbours between which the derivative turns positive
+ * are found by bisection, and the derivative, linear between them, is set to zero. With a stiff interface (k_s w_T
+ * l_e many times k_e) a backtracking search stalls at the first node that changes state; this one steps across
+ * every change the direction implies. */
+static double exact_step(const window_problem *w, const double *d, const double *s, double slope0, double *kinks,
+                         double *dtr, double *T, signed char *state, double *f, double *r) {
+    const double g1 = slope_at(w, d, s, 1.0, dtr, T, state, f, r);
+    if (!(g1 > 0.0)) return 1.0;
+    size_t m = 0;
+    for (size_t i = w->lo; i <= w->hi; ++i) {
+        const double si = s[i - w->lo];
+        if (!(w->ov[i] > 0.0) || si == 0.0) continue;
+        const double x0 = w->z[i] + d[i], bound = w->tmax[i] / w->ks;
+        const double a[2] = {(bound - x0) / si, (-bound - x0) / si};
+        for (int k = 0; k < 2; ++k)
+            if (a[k] > 0.0 && a[k] < 1.0) kinks[m++] = a[k];
+    }
+    qsort(kinks, m, sizeof *kinks, compare_doubles);
+    /* points p_0 = 0, p_1..p_m = the kinks, p_m+1 = 1; the derivative is <= 0 at p_lo and > 0 at p_hi */
+    size_t plo = 0, phi = m + 1;
+    double glo = slope0, ghi = g1;
+    while (phi - plo > 1) {
+        const size_t mid = plo + (phi - plo) / 2;
+        const double g = slope_at(w, d, s, kinks[mid - 1], dtr, T, state, f, r);
+        if (g > 0.0) {
+            phi = mid;
+            ghi = g;
+        } else {
+            plo = mid;
+            glo = g;
+        }
+    }
+    const double alo = plo == 0 ? 0.0 : kinks[plo - 1], ahi = phi == m + 1 ? 1.0 : kinks[phi - 1];
+    const double alpha = alo + (ahi - alo) * (-glo / (ghi - glo));
+    return alpha > alo ? (alpha < ahi ? alpha : ahi) : alo;
+}
+
 /* x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i of a node (shift = dt V0, cA = dt^2 (1/2 - b)) */
 static inline double predictor_gap(double shift, double dt, double cA, double v, double a) {
     return shift - dt * v - cA * a;
@@ -351,12 +411,13 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
         newton_step(&w, state, r, step, tw, tw + nw);
         double slope = 0.0;
         for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
-        double alpha = 1.0, pot_t;
-        for (;;) { /* backtracking (Armijo) line search on Pi_W */
+        double alpha = 1.0;
+        for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + step[i];
+        double pot_t = window_potential(&w, dtr, T, state);
+        if (!(pot_t <= pot + 1e-4 * slope)) { /* the full step does not descend enough: the minimiser along it */
+            alpha = exact_step(&w, d, step, slope, tw, dtr, T, state, f, r);
             for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
             pot_t = window_potential(&w, dtr, T, state);
-            if (pot_t <= pot + 1e-4 * alpha * slope || alpha < 1e-12) break;
-            alpha *= 0.5;
         }
         for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
         pot = pot_t;

@@ -35,7 +35,9 @@
  * polynomials of the time into the step (held, or from their derivatives: tc_stripdraw_step_poly) and each
  * interval takes their means (input_mean); per interval mu is held on the nodes that can reach the pad (contact
  * nodes +- ceil(window_courant) + 1), the bar advanced, then beta updated from the nodal slip increments with
- * the contact weights averaged over the interval.
+ * the contact weights averaged over the interval, and the interface made consistent with the state's weights and
+ * limits (settle_interface: a node that entered the pad during the interval in contact, a node that slid at the
+ * interval's limit at the state's).
  *
  * Outputs are functions of the state at the communication point (a vanishing step changes them by a vanishing
  * amount): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
@@ -48,6 +50,7 @@
  */
 #include "tc_stripdraw.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -555,6 +558,32 @@ static int bar_at_rest(const tc_stripdraw *m) {
     return 1;
 }
 
+/* The interface at the end of an interval made consistent with the state's contact weights and friction limits, so
+ * that the outputs are those a vanishing next step gives (docs/model.md section 2): the interval decides contact
+ * and holds the limits from its start, so without this a node that entered the pad during it is not in contact at
+ * its end (its friction uncounted until the next step's first ~0.2 us load it to the limit: a jump of ~1e-3 of F_S
+ * at the start of every step, whatever its length), and a node that slid at the interval's limit sits below the
+ * state's limit (which the debris the interval made has moved) until the next step's first nanoseconds. So
+ *   - a node under the pad (w > 0) not in contact entered during the interval and slid in by its overlap w l_e:
+ *     in contact with the traction sign(dU) min(T_max, k_s w l_e) (at the limit unless it entered less than
+ *     T_max / k_s, 16 nm by default, ago);
+ *   - a node that slid at the interval's limit (slipped, over [lo, hi)) is at the state's limit, with its sign.
+ * The plastic slip Up = U - T / k_s carries the traction. */
+static void settle_interface(tc_stripdraw *m, const unsigned char *slipped, size_t lo, size_t hi) {
+    const double ks = m->ks;
+    for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
+        if (!(m->w[i] > 0.0)) continue;
+        if (!m->contact[i]) {
+            if (m->dU[i] == 0.0) continue;
+            const double t = fmin(m->tmax[i], ks * m->w[i] * m->le);
+            m->contact[i] = 1;
+            m->Up[i] = m->U[i] - copysign(t, m->dU[i]) / ks;
+        } else if (i >= lo && i < hi && slipped[i]) {
+            m->Up[i] = m->U[i] - copysign(m->tmax[i], m->U[i] - m->Up[i]) / ks;
+        }
+    }
+}
+
 /* one coupling interval of length h at normal force fn (>= 0) and grip velocity vg */
 static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg) {
     const tc_stripdraw_params *p = &m->p;
@@ -622,7 +651,13 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w0_last = l0;
     update_weights(m);
     transport(m, pressure, speed, w0, f0, l0, du_finite);
+    unsigned char *slipped = (unsigned char *)m->giwork + m->n; /* of the interval's limits, over [lo, hi) */
+    const size_t lo = m->limit_lo, hi = m->limit_hi;
+    for (size_t i = lo; i < hi; ++i) /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
+        slipped[i] = m->contact[i] && fabs(m->ks * (m->U[i] - m->Up[i])) >=
+                                          m->tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * m->ks * fabs(m->U[i]);
     state_limits(m);
+    settle_interface(m, slipped, lo, hi);
     return TC_OK;
 }
 
@@ -1015,9 +1050,13 @@ int tc_stripdraw_step(tc_stripdraw *m, double dt, double normal_force, double gr
     return tc_stripdraw_step_poly(m, dt, normal_force, none, grip_velocity, none, msg);
 }
 
-/* TC_DISCARD naming the input when the inputs cannot be used (non-finite, a negative normal force) */
-static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
-    char r[TC_REPR_SIZE];
+/* TC_DISCARD naming the input when the inputs cannot be used: non-finite, a negative normal force, or a grip speed
+ * not below the bar's wave speed c = sqrt(E / rho) (the bar's elastic waves carry the pull to the pad; a grip that
+ * outruns them tears the strip, which the model does not describe; and since a coupling interval slides at most
+ * window_courant elements, the intervals of a step grow with |V0| dt: at 1e6 m/s a 1 ms step would need 3e5) */
+static int check_inputs(const tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
+    char r[TC_REPR_SIZE], w[TC_REPR_SIZE];
+    const double wave_speed = sqrt(m->p.youngs_modulus / m->p.density);
     if (!isfinite(normal_force))
         return tc_fail(msg, TC_DISCARD, "normal_force = %s is not finite; a finite number is required",
                        tc_repr_double(normal_force, r));
@@ -1026,11 +1065,15 @@ static int check_inputs(double normal_force, double grip_velocity, tc_msg msg) {
     if (!isfinite(grip_velocity))
         return tc_fail(msg, TC_DISCARD, "grip_velocity = %s is not finite; a finite number is required",
                        tc_repr_double(grip_velocity, r));
+    if (!(fabs(grip_velocity) < wave_speed))
+        return tc_fail(msg, TC_DISCARD, "grip_velocity = %s m/s is not below the strip's wave speed sqrt(E / rho) = "
+                       "%s m/s: the bar's elastic waves cannot carry a faster pull to the pad",
+                       tc_repr_double(grip_velocity, r), tc_repr_double(wave_speed, w));
     return TC_OK;
 }
 
 int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg) {
-    int rc = check_inputs(normal_force, grip_velocity, msg);
+    int rc = check_inputs(m, normal_force, grip_velocity, msg);
     if (rc != TC_OK) return rc;
     m->normal_force = normal_force;
     m->grip_velocity = grip_velocity;
@@ -1048,13 +1091,24 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
     if (!isfinite(dt))
         return tc_fail(msg, TC_DISCARD, "dt = %s is not finite; a finite number is required", tc_repr_double(dt, r));
     if (dt <= 0) return tc_fail(msg, TC_DISCARD, "dt = %s s must be > 0", tc_repr_double(dt, r));
-    int checked = check_inputs(normal_force, grip_velocity, msg);
+    int checked = check_inputs(m, normal_force, grip_velocity, msg);
     if (checked != TC_OK) return checked;
     for (int k = 0; k < 4; ++k)
         if (!isfinite(d[k]))
             return tc_fail(msg, TC_DISCARD, "%s = %s is not finite; a finite number is required", names[k],
                            tc_repr_double(d[k], r));
     const double fn[3] = {normal_force, d[0], 0.5 * d[1]}, vg[3] = {grip_velocity, d[2], 0.5 * d[3]};
+    /* the largest grip speed of the step's polynomial: at its end or at its vertex inside the step */
+    const double vertex = vg[2] != 0.0 ? -vg[1] / (2.0 * vg[2]) : -1.0;
+    double vmax = fabs(input_mean(vg, dt, dt));
+    if (vertex > 0.0 && vertex < dt) vmax = fmax(vmax, fabs(input_mean(vg, vertex, vertex)));
+    const double wave_speed = sqrt(m->p.youngs_modulus / m->p.density);
+    if (!(vmax < wave_speed)) {
+        char r2[TC_REPR_SIZE];
+        return tc_fail(msg, TC_DISCARD, "grip_velocity with its derivatives reaches %s m/s within the step of dt = %s "
+                       "s, not below the strip's wave speed sqrt(E / rho) = %.6g m/s", tc_repr_double(vmax, r),
+                       tc_repr_double(dt, r2), wave_speed);
+    }
     backup_state(m);
     int rc = advance(m, dt, fn, vg, msg);
     if (rc == TC_OK && m->bar_in_backup) swap_bar(m); /* no interval was taken: the bar is as it was */

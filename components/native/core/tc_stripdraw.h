@@ -43,7 +43,8 @@ TC_API int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *tab
 TC_API void tc_stripdraw_free(tc_stripdraw *m);
 
 /* Advance by dt [s] with normal_force [N] (one pad, >= 0) and grip_velocity [m/s] held.
- * TC_DISCARD, state unchanged: non-finite or negative input, dt <= 0, a table lookup outside the table under
+ * TC_DISCARD, state unchanged: non-finite or negative input, a grip speed not below the wave speed sqrt(E / rho),
+ * dt <= 0, a table lookup outside the table under
  * the error policy, an implicit solve that fails after all step halvings, a non-finite bar state, or a
  * step so long that it would need more than TC_STRIPDRAW_MAX_INTERVALS coupling intervals (or, explicit,
  * TC_STRIPDRAW_MAX_SUBSTEPS central-difference steps). tc_stripdraw_refusal says which kind. */

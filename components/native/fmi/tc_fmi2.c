@@ -12,12 +12,19 @@
  *     then unusable (every later call that needs the model returns fmi2Error);
  *   - fmi2DoStep with a bad input or a step the model cannot take returns fmi2Discard with the state
  *     unchanged and a message naming the cause, the inputs and the time: the importer may shorten the step,
- *     change the input or restore a state, and retry. When a much shorter step is discarded too (the inputs
- *     are at fault), fmi2GetBooleanStatus(fmi2Terminated) is fmi2True until the next accepted step: the FMU
- *     asks the importer to stop, as FMI 2.0.4 section 4.2.3 lets a slave do after fmi2Discard (fmpy then ends
- *     the simulation at fmi2LastSuccessfulTime instead of retrying the step);
+ *     change the input or restore a state, and retry. When a step 2^-20 as long is discarded too, no step size
+ *     can complete it (the inputs are at fault): fmi2Error, "the simulation cannot be continued with this FMU
+ *     instance" (FMI 2.0.4 section 2.1.3) unless the importer restores an FMU state taken before, so that every
+ *     importer stops instead of retrying;
+ *   - a doStep that repeats a discarded one unchanged (same state, step size and inputs) is discarded at once, and
+ *     fmi2GetBooleanStatus(fmi2Terminated) is fmi2True: it would be discarded again, forever, so the FMU asks the
+ *     importer to stop, as FMI 2.0.4 section 4.2.3 lets a slave do after fmi2Discard (fmpy's simulate_fmu repeats
+ *     a discarded step unless the slave asks to end);
  *   - fmi2DoStep returns fmi2Warning, with a message, when an output has just left a range the model is built
- *     for (the strip drawn past draw_length, a nominal pressure above the hardness);
+ *     for (the strip drawn past draw_length, a nominal pressure above the hardness) or the step's inputs are
+ *     outside theirs (a grip moving backwards);
+ *   - in initialization mode, fmi2GetReal/fmi2GetInteger of an output computes it from the parameters and the
+ *     inputs set so far (its InitialUnknown dependencies);
  *   - the FMU state (get/set, serialize/deserialize) holds the parameters, inputs, outputs, time and the
  *     component's state image, so that a restored state replays bit-identically, also in another instance;
  *     deserializing bytes that are not such a state is fmi2Error, never a crash;
@@ -142,6 +149,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     c->core.emit = emit;
     c->logger = tmp.logger;
     c->environment = tmp.environment;
+    c->core.terminate_name = "fmi2Terminated";
     if (!tc_inst_init(&c->core, instanceName, path_from_uri(fmuResourceLocation), loggingOn)) {
         free(c);
         return NULL;
@@ -220,6 +228,15 @@ static int parameter_settable(tc_instance *c, const tc_variable *v) {
     return 0;
 }
 
+/* the position of the first output among the value references (nvr when there is none) */
+static size_t first_output(const tc_instance *c, const fmi2ValueReference vr[], size_t nvr) {
+    (void)c;
+    for (size_t k = 0; k < nvr; ++k)
+        if (vr[k] < (fmi2ValueReference)TC_N_VARIABLES && TC_VARIABLES[vr[k]].causality == TC_CAUSALITY_OUTPUT)
+            return k;
+    return nvr;
+}
+
 static fmi2Status get_numbers(fmi2Component comp, const fmi2ValueReference vr[], size_t nvr, int kind,
                               double *dst_real, fmi2Integer *dst_int, const char *function) {
     tc_instance *c = checked(comp, function);
@@ -227,6 +244,9 @@ static fmi2Status get_numbers(fmi2Component comp, const fmi2ValueReference vr[],
     for (size_t k = 0; k < nvr; ++k) {
         const tc_variable *v = variable(c, vr[k], kind, function);
         if (v == NULL) return fmi2Error;
+        if (v->causality == TC_CAUSALITY_OUTPUT && c->phase == TC_PHASE_INITIALIZATION && k == first_output(c, vr, nvr)
+            && tc_inst_initial_outputs(c, function) != TC_LOG_OK)
+            return fmi2Error;
         double x = tc_inst_number(c, v);
         if (dst_real) dst_real[k] = x;
         if (dst_int) dst_int[k] = (fmi2Integer)x;
@@ -383,7 +403,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2
     tc_instance *c = checked(comp, "fmi2GetBooleanStatus");
     if (c == NULL || value == NULL) return fmi2Error;
     if (s == fmi2Terminated) { /* FMI 2.0.4 section 4.2.3: after fmi2Discard, whether the slave wants to stop */
-        *value = c->terminate_requested ? fmi2True : fmi2False;
+        *value = c->terminate_requested || c->phase == TC_PHASE_FAILED ? fmi2True : fmi2False;
         return fmi2OK;
     }
     tc_inst_logf(c, TC_LOG_DISCARD, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);

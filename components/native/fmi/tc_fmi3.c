@@ -10,11 +10,16 @@
  *     is fmi3Error with a message naming the parameter, its value and what is allowed; the instance is then
  *     unusable. Setting a parameter after initialization is fmi3Error (they are fixed), the value unchanged;
  *   - fmi3DoStep with a bad input or a step the model cannot take returns fmi3Discard with the state unchanged
- *     (lastSuccessfulTime = the current time) and a message naming the cause, the inputs and the time; when a much
- *     shorter step is discarded too (the inputs are at fault) it sets terminateSimulation = fmi3True, "the FMU
- *     requests to stop the simulation" (FMI 3.0 section 4.2.1, fmi3DoStep), as it does when the instance failed.
- *     It returns fmi3Warning, with a message, when an output has just left a range the model is built for. It
- *     never asks for event handling and never returns early;
+ *     (lastSuccessfulTime = the current time) and a message naming the cause, the inputs and the time; when a step
+ *     2^-20 as long is discarded too, no step size can complete it (the inputs are at fault): fmi3Error with
+ *     terminateSimulation = fmi3True, "the FMU requests to stop the simulation" (FMI 3.0 section 4.2.1), as it
+ *     sets whenever the instance failed.
+ *     It returns fmi3Warning, with a message, when an output has just left a range the model is built for or the
+ *     step's inputs are outside theirs. A doStep that repeats a discarded one unchanged (same state, step size and
+ *     inputs) is discarded at once with terminateSimulation: it would be discarded again, forever. It never asks for event handling and never
+ *     returns early;
+ *   - in initialization mode, getting a scalar output computes it from the parameters and the inputs set so far
+ *     (its InitialUnknown dependencies);
  *   - FMU states (get/set, serialize/deserialize) replay bit-identically, also in another instance;
  *   - messages go to the importer's logMessage (errors and discards always, the rest when logging is on);
  *   - no global mutable state; the C library's memory, all of it freed by fmi3FreeInstance.
@@ -150,6 +155,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     c->core.emit = emit;
     c->logger = logMessage;
     c->environment = instanceEnvironment;
+    c->core.terminate_name = "terminateSimulation";
     if (!tc_inst_init(&c->core, instanceName, resources_folder(resourcePath), loggingOn)) {
         free(c);
         return NULL;
@@ -358,6 +364,14 @@ static fmi3Int32 to_int32(double x) {
     return (fmi3Int32)x;
 }
 
+/* whether the value references name a scalar output (computed in initialization mode when read) */
+static int reads_output(const fmi3ValueReference vr[], size_t nvr) {
+    for (size_t k = 0; k < nvr; ++k)
+        if (vr[k] < (fmi3ValueReference)TC_N_VARIABLES && TC_VARIABLES[vr[k]].causality == TC_CAUSALITY_OUTPUT)
+            return 1;
+    return 0;
+}
+
 fmi3Status fmi3GetFloat64(fmi3Instance inst, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                           fmi3Float64 values[], size_t nValues) {
     static const char *const function = "fmi3GetFloat64";
@@ -368,7 +382,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance inst, const fmi3ValueReference valueRefer
         fmi3ValueReference vr = valueReferences[k];
         int a = array_of(vr);
         if (a >= 0) {
-            if (c->core.component == NULL) {
+            if (c->core.component == NULL || c->core.phase == TC_PHASE_INITIALIZATION) {
                 tc_inst_logf(&c->core, TC_LOG_ERROR, "%s: %s is computed from fmi3ExitInitializationMode on%s",
                              function, array_name(a),
                              c->core.phase == TC_PHASE_FAILED ? " (the FMU is not usable)" : "");
@@ -382,6 +396,8 @@ fmi3Status fmi3GetFloat64(fmi3Instance inst, const fmi3ValueReference valueRefer
         }
     }
     if (!counted(c, function, nValueReferences, need, nValues)) return fmi3Error;
+    if (reads_output(valueReferences, nValueReferences) && tc_inst_initial_outputs(&c->core, function) != TC_LOG_OK)
+        return fmi3Error;
     for (size_t k = 0; k < nValueReferences; ++k) {
         fmi3ValueReference vr = valueReferences[k];
         int a = array_of(vr);
@@ -398,6 +414,9 @@ fmi3Status fmi3GetInt32(fmi3Instance inst, const fmi3ValueReference valueReferen
     for (size_t k = 0; k < nValueReferences; ++k)
         if (variable(c, valueReferences[k], TC_KIND_INTEGER, "fmi3GetInt32") == NULL) return fmi3Error;
     if (!counted(c, "fmi3GetInt32", nValueReferences, nValueReferences, nValues)) return fmi3Error;
+    if (reads_output(valueReferences, nValueReferences) &&
+        tc_inst_initial_outputs(&c->core, "fmi3GetInt32") != TC_LOG_OK)
+        return fmi3Error;
     for (size_t k = 0; k < nValueReferences; ++k)
         values[k] = to_int32(tc_inst_number(&c->core, &TC_VARIABLES[valueReferences[k]]));
     return fmi3OK;

@@ -37,14 +37,16 @@ typedef struct tc_variable {
     int n_choices;
 } tc_variable;
 
-/* A range an output is built for (the component's Port low/high): outside it after a step, the FMU warns. */
+/* A range an output or an input is built for (the component's Port low/high): an output outside it after a step,
+ * or an input outside it in a step, is warned by the FMU. */
 typedef struct tc_bound {
-    int output;          /* index among the outputs */
+    int output;          /* index among the outputs, or among the inputs when input is 1 */
     int side;            /* -1: the output must be >= the bound, +1: <= */
     double value;        /* the bound, when parameter < 0 */
     int parameter;       /* index of the parameter whose value is the bound, or -1 */
     const char *bound;   /* the bound as declared: the parameter's name or the number */
     const char *why;     /* what lies outside */
+    int input;           /* 1: the bound of an input (checked on the inputs of an accepted step) */
 } tc_bound;
 
 /* The value of one parameter: Real and Integer in `number`, String in `text` (owned by the instance) and,

@@ -123,6 +123,8 @@ int tc_inst_reset(tc_instance *c) {
     free_component(c);
     c->failure[0] = '\0';
     c->terminate_requested = 0;
+    c->refused = 0;
+    c->generation += 1;
     memset(c->outside, 0, sizeof c->outside);
     if (!set_defaults(c)) return 0;
     c->phase = TC_PHASE_INSTANTIATED;
@@ -194,6 +196,25 @@ int tc_inst_make_component(tc_instance *c) {
     if (tc_component_note(c->component)[0]) tc_inst_logf(c, TC_LOG_OK, "%s", tc_component_note(c->component));
     memset(c->outside, 0, sizeof c->outside); /* outputs outside a range from the start are warned at the first step */
     c->terminate_requested = 0;
+    c->refused = 0;
+    c->generation += 1;
+    return TC_LOG_OK;
+}
+
+int tc_inst_initial_outputs(tc_instance *c, const char *function) {
+    if (c->phase != TC_PHASE_INITIALIZATION) return TC_LOG_OK;
+    const int logging = c->logging_on;
+    c->logging_on = 0; /* the component's note is logged when initialization ends */
+    const int made = tc_inst_make_component(c);
+    c->logging_on = logging;
+    if (made != TC_LOG_OK) { /* the parameters can still be changed: not a failed instance yet */
+        c->phase = TC_PHASE_INITIALIZATION;
+        c->failure[0] = '\0';
+        tc_inst_logf(c, TC_LOG_ERROR, "%s: the outputs cannot be computed in initialization mode (%s)", function,
+                     c->message);
+        return TC_LOG_ERROR;
+    }
+    if (tc_component_start(c->component, c->inputs, msg_of(c)) == TC_OK) tc_component_outputs(c->component, c->outputs);
     return TC_LOG_OK;
 }
 
@@ -235,10 +256,13 @@ static double bound_value(const tc_instance *c, const tc_bound *b) {
     return b->parameter >= 0 ? c->values[b->parameter].number : b->value;
 }
 
+/* Whether output or input k of TC_BOUNDS is outside its bound by more than 1e-9 of the bound (a draw of exactly
+ * draw_length ends 2.2e-15 m beyond it after 1750 steps: round-off, not a longer draw). */
 static int is_outside(const tc_instance *c, int k) {
     const tc_bound *b = &TC_BOUNDS[k];
-    double y = c->outputs[b->output], limit = bound_value(c, b);
-    return b->side < 0 ? y < limit : y > limit;
+    const double y = b->input ? c->inputs[b->output] : c->outputs[b->output], limit = bound_value(c, b);
+    const double slack = 1e-9 * fabs(limit);
+    return b->side < 0 ? y < limit - slack : y > limit + slack;
 }
 
 /* Which outputs are outside their bounds now (after a restored state: no warning for what it already held). */
@@ -247,7 +271,7 @@ static void note_outside(tc_instance *c) {
 }
 
 /* After an accepted step that ends at c->time: TC_LOG_WARNING, logged, for each output that has just left a range
- * it is built for; TC_LOG_OK otherwise. */
+ * it is built for and each input of the step that has; TC_LOG_OK otherwise. */
 static int check_bounds(tc_instance *c) {
     char a[TC_REPR_SIZE], b[TC_REPR_SIZE], t[TC_REPR_SIZE];
     int status = TC_LOG_OK;
@@ -255,12 +279,15 @@ static int check_bounds(tc_instance *c) {
         int out = is_outside(c, k);
         if (out && !c->outside[k]) {
             const tc_bound *bd = &TC_BOUNDS[k];
-            const tc_variable *v = &TC_VARIABLES[TC_N_PARAMETERS + TC_N_INPUTS + bd->output];
+            const tc_variable *v = &TC_VARIABLES[TC_N_PARAMETERS + (bd->input ? 0 : TC_N_INPUTS) + bd->output];
             const char *unit = strcmp(v->unit, "1") != 0 ? v->unit : "";
-            tc_inst_logf(c, TC_LOG_WARNING, "at t = %s s %s = %s%s%s is %s %s = %s%s%s, the %s %s the model is built "
+            const double y = bd->input ? c->inputs[bd->output] : c->outputs[bd->output];
+            tc_inst_logf(c, TC_LOG_WARNING, "%s t = %s s %s = %s%s%s is %s %s%s%s%s%s, the %s %s the model is built "
                          "for (%s); the results from here on are outside what it describes",
-                         tc_repr_double(c->time, t), v->name, tc_repr_double(c->outputs[bd->output], a),
-                         unit[0] ? " " : "", unit, bd->side < 0 ? "below" : "above", bd->bound,
+                         bd->input ? "in the step to" : "at", tc_repr_double(c->time, t), v->name,
+                         tc_repr_double(y, a),
+                         unit[0] ? " " : "", unit, bd->side < 0 ? "below" : "above",
+                         bd->parameter >= 0 ? bd->bound : "", bd->parameter >= 0 ? " = " : "",
                          tc_repr_double(bound_value(c, bd), b), unit[0] ? " " : "", unit,
                          bd->side < 0 ? "least" : "largest", v->name, bd->why);
             status = TC_LOG_WARNING;
@@ -287,6 +314,14 @@ static int discarded_at_any_step(tc_instance *c, double dt) {
     return rc == TC_DISCARD;
 }
 
+/* whether doStep(t, dt) repeats the last discarded call unchanged: the same state, time, step and inputs */
+static int repeats_refusal(const tc_instance *c, double t, double dt) {
+    return c->refused && c->refused_generation == c->generation && memcmp(&c->refused_t, &t, sizeof t) == 0 &&
+           memcmp(&c->refused_dt, &dt, sizeof dt) == 0 &&
+           memcmp(c->refused_inputs, c->inputs, sizeof c->inputs) == 0 &&
+           memcmp(c->refused_derivatives, c->input_derivatives, sizeof c->input_derivatives) == 0;
+}
+
 int tc_inst_do_step(tc_instance *c, double t, double dt) {
     char a[TC_REPR_SIZE], b[TC_REPR_SIZE], shown[1024] = "", text[4096];
     if (c->phase == TC_PHASE_FAILED) {
@@ -297,6 +332,20 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         tc_inst_logf(c, TC_LOG_ERROR, "doStep refused: the FMU has not left initialization mode");
         return TC_LOG_ERROR;
     }
+    if (repeats_refusal(c, t, dt)) {
+        c->terminate_requested = 1;
+        tc_inst_logf(c, TC_LOG_DISCARD, "doStep from t = %s s by %s s repeats a step this FMU discarded, unchanged (the "
+                     "same state, step size and inputs), so it is discarded again (%s); the FMU asks to end the "
+                     "simulation (%s): retry from a restored state with a shorter step or other inputs instead",
+                     tc_repr_double(t, a), tc_repr_double(dt, b), c->refusal,
+                     c->terminate_name ? c->terminate_name : "terminate");
+        return TC_LOG_DISCARD;
+    }
+    c->refused = 0;
+    c->refused_t = t;
+    c->refused_dt = dt;
+    memcpy(c->refused_inputs, c->inputs, sizeof c->inputs);
+    memcpy(c->refused_derivatives, c->input_derivatives, sizeof c->input_derivatives);
     int rc = tc_component_step(c->component, dt, c->inputs, c->input_derivatives, msg_of(c));
     memset(c->input_derivatives, 0, sizeof c->input_derivatives); /* they were for this step */
     c->terminate_requested = 0;
@@ -313,13 +362,17 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         snprintf(text, sizeof text, "doStep from t = %s s by %s s rejected: %s %s%s%sthe FMU state is unchanged%s",
                  tc_repr_double(t, a), tc_repr_double(dt, b), c->message, shown[0] ? "(inputs " : "", shown,
                  shown[0] ? "); " : "; ",
-                 c->terminate_requested ? "; a step 2^-20 as long is rejected too, so the inputs are at fault: the "
-                                          "FMU asks to end the simulation (fmi2Terminated, terminateSimulation)"
-                                        : "");
-        tc_inst_logf(c, rc == TC_DISCARD ? TC_LOG_DISCARD : TC_LOG_ERROR, "%s", text);
-        if (rc == TC_DISCARD) return TC_LOG_DISCARD;
-        return tc_inst_fail(c, text);
+                 c->terminate_requested ? "; a step 2^-20 as long is rejected too, so no step size can complete it "
+                                          "(the inputs are at fault): the simulation cannot go on (an error; a host "
+                                          "may restore an FMU state taken before)" : "");
+        if (rc != TC_DISCARD || c->terminate_requested) return tc_inst_fail(c, text);
+        tc_inst_logf(c, TC_LOG_DISCARD, "%s", text);
+        c->refused = 1;
+        c->refused_generation = c->generation;
+        snprintf(c->refusal, sizeof c->refusal, "%s", c->message);
+        return TC_LOG_DISCARD;
     }
+    c->generation += 1;
     tc_component_outputs(c->component, c->outputs);
     c->time = t + dt;
     if (tc_component_after_step(c->component, msg_of(c)) != TC_OK) {
@@ -448,6 +501,8 @@ int tc_inst_set_state(tc_instance *c, const void *state) {
     memcpy(c->outputs, s->outputs, sizeof c->outputs);
     memcpy(c->failure, s->failure, sizeof c->failure);
     c->terminate_requested = 0;
+    c->refused = 0;
+    c->generation += 1;
     if (s->has_component) note_outside(c);
     return TC_LOG_OK;
 }

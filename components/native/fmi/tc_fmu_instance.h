@@ -9,12 +9,21 @@
  *     component; a bad parameter or file fails the instance (TC_LOG_ERROR, a message naming the parameter, its
  *     value and what is allowed), after which every call that needs the model is an error;
  *   - tc_inst_do_step with a bad input or a step the model cannot take is TC_LOG_DISCARD with the state
- *     unchanged and a message naming the cause, the inputs and the time. When a step 2^-20 as long is
- *     discarded too (tried, then the state restored), no smaller step can help: the inputs are invalid, and
- *     terminate_requested tells the host to stop (FMI 2.0 fmi2Terminated, FMI 3.0 terminateSimulation);
+ *     unchanged and a message naming the cause, the inputs and the time: a shorter step may be taken. When a step
+ *     2^-20 as long is discarded too (tried, then the state restored), no step size can complete it (the inputs
+ *     are invalid): TC_LOG_ERROR, the instance failed (FMI: "the simulation cannot be continued with this FMU
+ *     instance", unless a host restores an FMU state taken before), so that every host stops;
+ *   - a doStep that repeats a discarded one unchanged (the same state, time, step size, inputs and input
+ *     derivatives) is TC_LOG_DISCARD at once, with terminate_requested: the model is deterministic, so it would be
+ *     discarded again, and a host that repeats it would repeat it forever (the standard's redo is a restored state
+ *     and a shorter step, FMI 2.0.4 section 4.2.3); the message says what was refused and why;
  *   - an accepted step after which an output has left a range it is built for (TC_BOUNDS: the strip drawn past
- *     draw_length, a nominal pressure above the hardness) is TC_LOG_WARNING with a message naming the output,
- *     its value, the bound and the time, once each time the output leaves the range;
+ *     draw_length, a nominal pressure above the hardness), or whose inputs are outside the range they are built
+ *     for (a grip moving backwards), is TC_LOG_WARNING with a message naming the variable, its value, the bound
+ *     and the time, once each time the variable leaves the range; a value within 1e-9 (relative) of its bound is
+ *     on it (the round-off of a displacement summed over many steps);
+ *   - in initialization mode, the outputs read (fmi2GetReal...) are computed from the parameters and the inputs
+ *     set so far (the model description's InitialUnknowns and their dependencies);
  *   - an FMU state (tc_inst_get_state...) holds the parameters, inputs, outputs, time and the component's
  *     state image, so that a restored state replays bit-identically, also in another instance; deserializing
  *     bytes that are not such a state is an error, never a crash;
@@ -52,7 +61,15 @@ struct tc_instance {
     double input_derivatives[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)]; /* per input: 1st, 2nd; for the next step */
     double outputs[TC_N_OUTPUTS];
     tc_component *component;
-    int terminate_requested; /* the last doStep was discarded for its inputs: no smaller step can help */
+    int terminate_requested; /* the FMU asks to end the simulation (after the last doStep) */
+    const char *terminate_name; /* how the wrapper's standard names the request ("fmi2Terminated"...) */
+    unsigned long generation;   /* counts the changes of the model's state: accepted steps, restored states */
+    int refused;                /* the last doStep was discarded; its call: */
+    unsigned long refused_generation;
+    double refused_t, refused_dt;
+    double refused_inputs[TC_N_INPUTS > 0 ? TC_N_INPUTS : 1];
+    double refused_derivatives[2 * (TC_N_INPUTS > 0 ? TC_N_INPUTS : 1)];
+    char refusal[1024]; /* why it was discarded */
     unsigned char outside[TC_N_BOUNDS > 0 ? TC_N_BOUNDS : 1]; /* the output is outside bound k (TC_BOUNDS) */
     char message[2048];
     char failure[2048]; /* why the instance is unusable */
@@ -80,6 +97,11 @@ int tc_inst_reset(tc_instance *c);
 int tc_inst_fail(tc_instance *c, const char *what);
 /* Check the parameters and make the component, outputs from it (TC_LOG_OK), or fail (TC_LOG_ERROR). */
 int tc_inst_make_component(tc_instance *c);
+/* In initialization mode: the outputs from the parameters and the inputs set so far (the component made for them,
+ * then made again when initialization ends); TC_LOG_ERROR, logged naming `function` and the bad parameter, when it
+ * cannot be made (the instance stays in initialization mode, where the parameter can still be set). Other phases:
+ * TC_LOG_OK, nothing done. */
+int tc_inst_initial_outputs(tc_instance *c, const char *function);
 /* Leave initialization: make the component, keep the start time, step from here on. */
 int tc_inst_exit_initialization(tc_instance *c);
 /* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */

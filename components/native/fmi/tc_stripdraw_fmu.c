@@ -89,11 +89,15 @@ int tc_component_create(const tc_param_value *values, const char *resources, tc_
         if (is_absolute(file)) snprintf(path, n, "%s", file);
         else snprintf(path, n, "%s/%s", resources, file);
         rc = tc_table_read(path, &c->table, msg);
+        char *read = rc == TC_OK ? malloc(n) : NULL; /* the file read: the resource form of a .npz */
+        if (rc == TC_OK && read == NULL) rc = tc_fail(msg, TC_NOMEM, "out of memory for the table path");
         if (rc == TC_OK) {
+            tc_table_resource_path(path, read, n);
             snprintf(c->table_hash, sizeof c->table_hash, "%s", c->table->content_hash);
-            snprintf(c->note, sizeof c->note, "friction table %s: provenance %s, content hash %s", path,
+            snprintf(c->note, sizeof c->note, "friction table %s: provenance %s, content hash %s", read,
                      c->table->provenance, c->table->content_hash);
         }
+        free(read);
         free(path);
         if (rc != TC_OK) {
             tc_component_free(c);

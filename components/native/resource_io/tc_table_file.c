@@ -8,7 +8,10 @@
  * tc_table_from_arrays checks them (increasing finite axes, finite values >= 0, the threshold in (0, 1]).
  *
  * A path ending in ".npz" names the table whose resource is the same path ending in ".tca" (so the FMU parameter
- * table_file may name the table as the Python side does).
+ * table_file may name the table as the Python side does). The resource records the SHA-256 of the bytes of the
+ * .npz it was made from (the text source_sha256); when the named .npz exists, its SHA-256 must be that one, so that
+ * a table replaced after its resource was written is refused instead of served from the old resource. A .npz that
+ * does not exist (an FMU's resources/ carry the resource form alone) is not checked; a .tca named as such neither.
  */
 #include "tc_table_file.h"
 
@@ -17,6 +20,7 @@
 #include <string.h>
 
 #include "tc_arrays.h"
+#include "tc_sha256.h"
 
 static const char *const AREAS[4] = {"contact_area", "particle_area", "contact_area_std", "particle_area_std"};
 
@@ -86,6 +90,39 @@ static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_
     return TC_OK;
 }
 
+/* whether path ends in suffix */
+static int ends_with(const char *path, const char *suffix) {
+    const size_t n = strlen(path), k = strlen(suffix);
+    return n >= k && strcmp(path + n - k, suffix) == 0;
+}
+
+void tc_table_resource_path(const char *path, char *out, size_t size) {
+    if (size == 0) return;
+    snprintf(out, size, "%s", path);
+    const size_t n = strlen(out);
+    if (ends_with(path, ".npz") && n == strlen(path)) memcpy(out + n - 4, ".tca", 4);
+}
+
+/* TC_ERROR unless the resource a (read from file) was made from the bytes of the table npz, when npz exists */
+static int check_source(const tc_arrays *a, const char *npz, const char *file, tc_msg msg) {
+    FILE *f = fopen(npz, "rb");
+    if (f == NULL) return TC_OK; /* no source beside the resource (an FMU's resources/): nothing to compare */
+    fclose(f);
+    char actual[65];
+    int rc = tc_sha256_file(npz, actual, msg);
+    if (rc != TC_OK) return rc;
+    const tc_array_entry *recorded = tc_arrays_find(a, "source_sha256");
+    if (recorded == NULL || recorded->kind != TC_ARRAY_TEXT)
+        return tc_fail(msg, TC_ERROR, "friction table %s: its resource form %s does not record which table it was "
+                       "made from, so it cannot be checked against it; rewrite it with: tribocosim fmu "
+                       "table-resource %s", npz, file, npz);
+    if (strcmp(recorded->text, actual) != 0)
+        return tc_fail(msg, TC_ERROR, "friction table %s has changed since its resource form %s was written (the "
+                       "resource was made from a file with SHA-256 %.16s..., the table now has %.16s...); rewrite "
+                       "it with: tribocosim fmu table-resource %s", npz, file, recorded->text, actual, npz);
+    return TC_OK;
+}
+
 int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
     if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_table_read needs somewhere to put the table");
     *out = NULL;
@@ -93,14 +130,14 @@ int tc_table_read(const char *path, tc_table **out, tc_msg msg) {
     const size_t len = strlen(path);
     char *file = malloc(len + 1);
     if (file == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the table path");
-    memcpy(file, path, len + 1);
-    if (len >= 4 && strcmp(file + len - 4, ".npz") == 0) memcpy(file + len - 4, ".tca", 4);
+    tc_table_resource_path(path, file, len + 1);
     tc_arrays *a = NULL;
     int rc = tc_arrays_read(file, "friction table", &a, msg);
+    if (rc == TC_OK && strcmp(file, path) != 0) rc = check_source(a, path, file, msg);
     if (rc == TC_OK) rc = from_arrays(a, file, out, msg);
-    else if (rc == TC_ERROR && strcmp(file, path) != 0)
+    else if (rc == TC_ERROR && a == NULL && strcmp(file, path) != 0)
         rc = tc_fail(msg, TC_ERROR, "friction table %s: the native model reads its resource form %s, which cannot be "
-                     "read (write it with: tribocosim fmu table-resource TABLE.npz)", path, file);
+                     "read (write it with: tribocosim fmu table-resource %s)", path, file, path);
     tc_arrays_free(a);
     free(file);
     return rc;

@@ -3,23 +3,27 @@
 ``python -m ziglang cc`` is clang with zig's bundled C libraries, so one pip-installed toolchain
 cross-compiles for every platform an FMU has a binary for:
 
-==============  ============================================  ============
-platform        zig target                                    library
-==============  ============================================  ============
-linux64         ``x86_64-linux-gnu.2.17``                     ``.so``
-win64           ``x86_64-windows-gnu``                        ``.dll``
-darwin64        ``x86_64-macos`` and ``aarch64-macos``        ``.dylib``, universal (both slices)
-x86_64-darwin   ``x86_64-macos``                              ``.dylib``
-aarch64-linux   ``aarch64-linux-gnu.2.17``                    ``.so``
-aarch64-darwin  ``aarch64-macos``                             ``.dylib``
-==============  ============================================  ============
+==============  ==================================================  ============
+platform        zig target                                          library
+==============  ==================================================  ============
+linux64         ``x86_64-linux-gnu.2.17``                           ``.so``
+win64           ``x86_64-windows-gnu``                              ``.dll``
+darwin64        ``x86_64-macos.10.15`` and ``aarch64-macos.11.0``   ``.dylib``, universal (both slices)
+x86_64-darwin   ``x86_64-macos.10.15``                              ``.dylib``
+aarch64-linux   ``aarch64-linux-gnu.2.17``                          ``.so``
+aarch64-darwin  ``aarch64-macos.11.0``                              ``.dylib``
+==============  ==================================================  ============
 
 FMI 2.0 knows one macOS folder, darwin64, for every Mac: its binary is a universal Mach-O that holds an x86_64
 and an arm64 slice (Apple Silicon loads the arm64 one), each compiled by zig and joined by
 :func:`write_universal`, a fat-header writer (zig ships no ``lipo``). FMI 3.0 has a folder per platform tuple,
-thin binaries each. (glibc 2.17: the library loads on any Linux from 2012 on.) Flags: C11, ``-O2``, all warnings
-as errors, the baseline instruction set of each target (no ``-march=native``: a shipped FMU runs on any machine of
-its architecture). The first build for a target compiles zig's C library for it once (minutes for win64), kept in
+thin binaries each. (glibc 2.17: the library loads on any Linux from 2012 on; macOS 10.15 on Intel, 11.0, the
+first with Apple Silicon, on arm64: zig's default, the newest macOS, made the libraries refuse every older one.)
+Flags: C11, ``-O2``, all warnings as errors, the baseline instruction set of each target (no ``-march=native``: a
+shipped FMU runs on any machine of its architecture), no debug information (``-g0``; zig's C compiler adds it by
+default, with the absolute paths of the sources) and, on ELF, no symbol table beyond the exported functions (``-s``),
+and a Mach-O library's install name is ``@rpath/<its file name>`` (not the build's temporary path). So a binary
+holds no path of the machine that built it, and two builds of the same sources are byte-identical. The first build for a target compiles zig's C library for it once (minutes for win64), kept in
 zig's cache folder.
 """
 
@@ -37,15 +41,15 @@ from tribocosim.errors import TribocosimError
 PLATFORMS = {
     "linux64": ("x86_64-linux-gnu.2.17", ".so"),
     "win64": ("x86_64-windows-gnu", ".dll"),
-    "darwin64": (("x86_64-macos", "aarch64-macos"), ".dylib"),
-    "x86_64-darwin": ("x86_64-macos", ".dylib"),
+    "darwin64": (("x86_64-macos.10.15", "aarch64-macos.11.0"), ".dylib"),
+    "x86_64-darwin": ("x86_64-macos.10.15", ".dylib"),
     "aarch64-linux": ("aarch64-linux-gnu.2.17", ".so"),
-    "aarch64-darwin": ("aarch64-macos", ".dylib"),
+    "aarch64-darwin": ("aarch64-macos.11.0", ".dylib"),
 }
 
 #: the warning and language flags every native source is compiled with
-CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wno-sign-conversion",
-          "-Werror", "-fno-fast-math", "-fvisibility=hidden")
+CFLAGS = ("-std=c11", "-O2", "-g0", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion",
+          "-Wno-sign-conversion", "-Werror", "-fno-fast-math", "-fvisibility=hidden")
 
 #: the native package: its C sources are package data, in one folder per role
 NATIVE_DIR = Path(__file__).resolve().parents[1]
@@ -122,13 +126,13 @@ def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64"
         slices = [out.with_name(f".{out.name}.{t}") for t in target]
         try:
             for t, part in zip(target, slices):
-                _compile(sources, part, t, platform, include_dirs, defines, extra_flags)
+                _compile(sources, part, t, platform, include_dirs, defines, extra_flags, out.name)
             write_universal(slices, out)
         finally:
             for part in slices:
                 part.unlink(missing_ok=True)
         return out
-    return _compile(sources, out, target, platform, include_dirs, defines, extra_flags)
+    return _compile(sources, out, target, platform, include_dirs, defines, extra_flags, out.name)
 
 
 def _command(target: str, include_dirs, defines, extra_flags) -> list[str]:
@@ -144,11 +148,63 @@ def _run(cmd: list[str], out: Path, what: str) -> Path:
     return out
 
 
-def _compile(sources, out: Path, target: str, platform: str, include_dirs, defines, extra_flags) -> Path:
+def _link_flags(target: str, name: str) -> list[str]:
+    """The flags of a shared library for a target: position-independent code off Windows, the install name
+    ``@rpath/<name>`` of a Mach-O library, no symbol table beyond the exported one in an ELF library."""
+    if "windows" in target:
+        return []
+    if "macos" in target:
+        return ["-fPIC", f"-Wl,-install_name,@rpath/{name}"]
+    return ["-fPIC", "-s"]
+
+
+def _compile(sources, out: Path, target: str, platform: str, include_dirs, defines, extra_flags, name: str) -> Path:
     posix = "windows" not in target
-    cmd = [*_command(target, include_dirs, defines, extra_flags), "-shared", *(["-fPIC"] if posix else []),
+    cmd = [*_command(target, include_dirs, defines, extra_flags), "-shared", *_link_flags(target, name),
            "-o", str(out), *(str(s) for s in sources), *(["-lm"] if posix else [])]
-    return _run(cmd, out, f"{out.name} for {platform} ({target})")
+    _run(cmd, out, f"{out.name} for {platform} ({target})")
+    return out if posix else reproducible_pe(out)
+
+
+def reproducible_pe(path: str | os.PathLike) -> Path:
+    """Replace the fields of a PE library (a Windows DLL) that zig's linker fills from the clock with a hash of the
+    rest of the file, as ``lld-link /Brepro`` does, so that two builds of the same sources are byte-identical.
+
+    The fields (Microsoft PE format: COFF file header, optional header data directory 6 "Debug",
+    IMAGE_DEBUG_DIRECTORY, the CodeView "RSDS" record): the header's TimeDateStamp (4 bytes at PE + 8), each debug
+    directory entry's TimeDateStamp (4 bytes at 4 of its 28), and the CodeView record's GUID (16 bytes after
+    "RSDS"). They are set to 0, the file hashed (SHA-256), then the stamps set to the hash's first 4 bytes and the
+    GUID to its first 16. The optional header's CheckSum is 0 (not computed) and stays so."""
+    import hashlib
+
+    path = Path(path)
+    d = bytearray(path.read_bytes())
+    (pe,) = struct.unpack_from("<I", d, 60)
+    nsections, optional_size = struct.unpack_from("<H", d, pe + 6)[0], struct.unpack_from("<H", d, pe + 20)[0]
+    opt = pe + 24
+    directories = opt + (112 if struct.unpack_from("<H", d, opt)[0] == 0x20B else 96)  # PE32+ or PE32
+    debug_rva, debug_size = struct.unpack_from("<II", d, directories + 8 * 6)
+    stamps, guids = [pe + 8], []
+    for k in range(nsections):
+        vsize, va, _, raw = struct.unpack_from("<IIII", d, opt + optional_size + 40 * k + 8)
+        if debug_size and va <= debug_rva < va + vsize:
+            first = debug_rva - va + raw
+            for entry in range(first, first + debug_size, 28):
+                stamps.append(entry + 4)
+                kind, size, _, data = struct.unpack_from("<IIII", d, entry + 12)
+                if kind == 2 and size >= 20 and d[data:data + 4] == b"RSDS":  # CodeView
+                    guids.append(data + 4)
+    for at in stamps:
+        d[at:at + 4] = bytes(4)
+    for at in guids:
+        d[at:at + 16] = bytes(16)
+    digest = hashlib.sha256(d).digest()
+    for at in stamps:
+        d[at:at + 4] = digest[:4]
+    for at in guids:
+        d[at:at + 16] = digest[:16]
+    path.write_bytes(bytes(d))
+    return path
 
 
 #: Mach-O: the 64-bit header's magic (little-endian) and the fat header's (big-endian)

@@ -12,7 +12,7 @@ Two headers, written into a build folder next to the sources:
     the parameters, then the inputs, then the outputs, in the order and with the names, units,
     start values, ranges and choices of the model description), ``TC_P_<name>`` indices of the
     parameters, and ``<prefix>_fill_params(values, p)`` that fills the model's struct from the
-    FMU's parameter values; ``TC_BOUNDS``, the ranges the outputs are built for (:func:`output_bounds`);
+    FMU's parameter values; ``TC_BOUNDS``, the ranges the outputs and inputs are built for (:func:`port_bounds`);
     for FMI 3.0 the value references of the variables only it has
     (:func:`fmi3_variables`: ``TC_VR_TIME``, and with array outputs ``TC_N_ARRAYS``, ``TC_ARRAYS``,
     ``TC_A_<name>``, ``TC_VR_ARRAY_SIZE``, ``TC_VR_ARRAYS``). The generic FMI wrappers
@@ -117,23 +117,26 @@ def initial_dependencies(vs: list[dict], output: dict, base: int) -> str:
     return " ".join(str(k + base) for k, v in enumerate(vs) if v["causality"] == "input" and v["name"] in names)
 
 
-def output_bounds(comp: Component) -> list[dict]:
-    """The ranges the component's outputs are built for (``Port.low``/``high``): per bound the output's index,
-    the side (-1 low, +1 high), the value or the index of the parameter that holds it (-1: the value), and why.
-    The native FMU warns when an output leaves one after a step (tc_fmu_instance.c)."""
+def port_bounds(comp: Component) -> list[dict]:
+    """The ranges the component's outputs and inputs are built for (``Port.low``/``high``): per bound the port's
+    index among the outputs (or the inputs: ``input`` 1), the side (-1 low, +1 high), the value or the index of the
+    parameter that holds it (-1: the value), and why. The native FMU warns when an output leaves one after a step, or
+    a step takes an input outside one (tc_fmu_instance.c)."""
     index = {v["name"]: v["index"] for v in variables(comp) if v["causality"] == "parameter"}
     out = []
-    for k, port in enumerate(comp.outputs):
-        for side, bound in ((-1, port.low), (+1, port.high)):
-            if bound is None:
-                continue
-            if isinstance(bound, str) and bound not in index:
-                raise TribocosimError(f"component {comp.name}: the bound {bound!r} of {port.name} is not a parameter")
-            out.append({"output": k, "name": port.name, "side": side,
-                        "value": 0.0 if isinstance(bound, str) else float(bound),
-                        "parameter": index[bound] if isinstance(bound, str) else -1,
-                        "bound": bound if isinstance(bound, str) else repr(float(bound)),
-                        "why": port.why or port.description})
+    for is_input, ports in ((0, comp.outputs), (1, comp.inputs)):
+        for k, port in enumerate(ports):
+            for side, bound in ((-1, port.low), (+1, port.high)):
+                if bound is None:
+                    continue
+                if isinstance(bound, str) and bound not in index:
+                    raise TribocosimError(f"component {comp.name}: the bound {bound!r} of {port.name} is not a "
+                                          "parameter")
+                out.append({"output": k, "name": port.name, "side": side,
+                            "value": 0.0 if isinstance(bound, str) else float(bound),
+                            "parameter": index[bound] if isinstance(bound, str) else -1,
+                            "bound": bound if isinstance(bound, str) else repr(float(bound)),
+                            "why": port.why or port.description, "input": is_input})
     return out
 
 
@@ -234,13 +237,14 @@ def model_header(comp: Component, guid: str) -> str:
             f"{int(high is not None)}, {_c_double(low if low is not None else 0)}, "
             f"{_c_double(high if high is not None else 0)}, {choices[0]}, {choices[1]}}},")
     lines += ["};", ""]
-    bounds = output_bounds(comp)
-    lines += ["/* the ranges the outputs are built for (output index, side -1 low / +1 high, value, parameter index or",
-              " * -1 for the value, why): an output outside one after a step is a warning */",
+    bounds = port_bounds(comp)
+    lines += ["/* the ranges the outputs and inputs are built for (output or input index, side -1 low / +1 high, value,",
+              " * parameter index or -1 for the value, why, 1 for an input): an output outside one after a step, or an",
+              " * input outside one in an accepted step, is a warning */",
               f"#define TC_N_BOUNDS {len(bounds)}",
               "static const tc_bound TC_BOUNDS[TC_N_BOUNDS > 0 ? TC_N_BOUNDS : 1] = {"]
     lines += [f"    {{{b['output']}, {b['side']}, {_c_double(b['value'])}, {b['parameter']}, {_c_string(b['bound'])}, "
-              f"{_c_string(b['why'])}}}," for b in bounds] or ["    {0, 0, 0.0, -1, \"\", \"\"},"]
+              f"{_c_string(b['why'])}, {b['input']}}}," for b in bounds] or ["    {0, 0, 0.0, -1, \"\", \"\", 0},"]
     lines += ["};", ""]
     lines += _fmi3_lines(comp)
     lines += [f"/* {comp.parameters.__name__} from the FMU's parameter values (choices by index) */",

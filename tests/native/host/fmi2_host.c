@@ -291,9 +291,12 @@ int main(int argc, char **argv) {
         free(saved);
         fprintf(stderr, "fmi2_host: replay from step %ld bit-identical\n", replay);
     }
-    if (fuzz > 0) { /* random abuse: no crash, allowed statuses, a discarded step changes nothing */
-        long discards = 0, oks = 0;
-        double before[64], after[64];
+    if (fuzz > 0) { /* random abuse: no crash, allowed statuses, a discarded step changes nothing, and an instance
+                     * failed by a step no size can complete is usable again from a state taken before */
+        long discards = 0, oks = 0, errors = 0;
+        double before[64], after[64], fuzz_t0 = t;
+        fmi2FMUstate fuzz_start = NULL;
+        if (f.get_state(c, &fuzz_start) != fmi2OK) die("fuzz: fmi2GetFMUstate failed");
         quiet_logs = 1;
         for (long k = 0; k < fuzz; ++k) {
             unsigned long long r = next_random(&seed);
@@ -318,13 +321,20 @@ int main(int argc, char **argv) {
                 } else if (st == fmi2Discard) {
                     ++discards;
                     if (memcmp(before, after, n_outputs * sizeof(double)) != 0) die("fuzz: a discarded step changed the outputs");
+                } else if (st == fmi2Error) {
+                    ++errors;
+                    if (memcmp(before, after, n_outputs * sizeof(double)) != 0) die("fuzz: a failed step changed the outputs");
+                    if (f.set_state(c, fuzz_start) != fmi2OK) die("fuzz: fmi2SetFMUstate after fmi2Error failed");
+                    t = fuzz_t0;
                 } else {
                     fprintf(stderr, "fmi2_host: fuzz: fmi2DoStep returned %d\n", (int)st);
                     return 7;
                 }
             }
         }
-        fprintf(stderr, "fmi2_host: fuzz: %ld calls, %ld steps taken, %ld discarded\n", fuzz, oks, discards);
+        f.free_state(c, &fuzz_start);
+        fprintf(stderr, "fmi2_host: fuzz: %ld calls, %ld steps taken, %ld discarded, %ld failed and restored\n", fuzz,
+                oks, discards, errors);
     }
     if (f.terminate(c) != fmi2OK) die("fmi2Terminate failed");
     f.free_instance(c);

@@ -374,8 +374,12 @@ int main(int argc, char **argv) {
         f.free_instance(second.c);
         fprintf(stderr, "fmi3_host: replay from step %ld bit-identical\n", replay);
     }
-    if (fuzz > 0) { /* random abuse: no crash, allowed statuses, a discarded step changes nothing */
-        long discards = 0, oks = 0;
+    if (fuzz > 0) { /* random abuse: no crash, allowed statuses, a discarded step changes nothing, and an instance
+                     * failed by a step no size can complete is usable again from a state taken before */
+        long discards = 0, oks = 0, errors = 0;
+        double fuzz_t0 = t;
+        fmi3FMUState fuzz_start = NULL;
+        if (f.get_state(r.c, &fuzz_start) != fmi3OK) die("fuzz: fmi3GetFMUState failed");
         double *before = malloc((width + 1) * sizeof(double)), *after = malloc((width + 1) * sizeof(double));
         if (before == NULL || after == NULL) die("out of memory");
         h.quiet = 1;
@@ -414,6 +418,13 @@ int main(int argc, char **argv) {
                     if (memcmp(before, after, width * sizeof(double)) != 0)
                         die("fuzz: a discarded step changed the outputs");
                     if (last != t) die("fuzz: lastSuccessfulTime of a discarded step is not the current time");
+                } else if (st == fmi3Error) {
+                    ++errors;
+                    if (memcmp(before, after, width * sizeof(double)) != 0)
+                        die("fuzz: a failed step changed the outputs");
+                    if (!terminate) die("fuzz: a failed step does not ask to end the simulation");
+                    if (f.set_state(r.c, fuzz_start) != fmi3OK) die("fuzz: fmi3SetFMUState after fmi3Error failed");
+                    t = fuzz_t0;
                 } else {
                     fprintf(stderr, "fmi3_host: fuzz: fmi3DoStep returned %d\n", (int)st);
                     return 7;
@@ -422,9 +433,11 @@ int main(int argc, char **argv) {
             }
             if (st != fmi3OK && st != fmi3Error) die("fuzz: odd status of a get or set");
         }
+        f.free_state(r.c, &fuzz_start);
         free(before);
         free(after);
-        fprintf(stderr, "fmi3_host: fuzz: %ld calls, %ld steps taken, %ld discarded\n", fuzz, oks, discards);
+        fprintf(stderr, "fmi3_host: fuzz: %ld calls, %ld steps taken, %ld discarded, %ld failed and restored\n", fuzz,
+                oks, discards, errors);
     }
     if (f.terminate(r.c) != fmi3OK) die("fmi3Terminate failed");
     f.free_instance(r.c);
