@@ -120,7 +120,8 @@ class _Row:
         free = [self.points[0.0], *pts]
         sig_ac = [max(q.ac_std / math.sqrt(q.n) if q.n > 1 else 0.0, 1.0 / n_pixels) for q in free]
         self.fits = {
-            "particle_area": fit_beta_forms(self.simulated, [q.ap_mean for q in pts], [_sigma(q, n_pixels) for q in pts]),
+            "particle_area": fit_beta_forms(self.simulated, [q.ap_mean for q in pts],
+                                            [_sigma(q, n_pixels) for q in pts]),
             "particle_area_clusters": fit_beta_forms(self.simulated, [q.apc_mean for q in pts], sig_c),
             "contact_area": ({"affine": fit_affine([0.0, *self.simulated], [q.ac_mean for q in free], sig_ac)}
                              if self.simulated else {}),

@@ -242,7 +242,8 @@ class FrictionTable:
         return self.interpolate_array(self.mu, pressure, velocity, beta, policy)
 
     def interpolate_array(self, values: np.ndarray, pressure, velocity, beta, policy: str = "clamp"):
-        """One array with the table's shape (``mu``, an area, a standard error ...) interpolated as :meth:`interpolate`."""
+        """One array with the table's shape (``mu``, an area, a standard error ...) interpolated as
+        :meth:`interpolate`."""
         if policy not in ("clamp", "error"):
             raise ParameterError(f"table policy = {policy!r} is not allowed; choose clamp or error")
         values = np.ascontiguousarray(values, dtype=np.float64)
@@ -287,7 +288,8 @@ class NativeTable:
             self._arrays += areas
             c.call(c.lib.tc_table_set_areas, self.handle, *(ptr(a) for a in areas))
         if table.version >= 3:
-            extras = [np.ascontiguousarray(table.array(k), dtype=float) for k in ("simulated", "particle_area_clusters")]
+            extras = [np.ascontiguousarray(table.array(k), dtype=float)
+                      for k in ("simulated", "particle_area_clusters")]
             self._arrays += extras
             c.call(c.lib.tc_table_set_extras, self.handle, *(ptr(a) for a in extras))
         if table.version >= 4:

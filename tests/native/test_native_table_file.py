@@ -187,8 +187,8 @@ def _variants(entries):
     yield "negative mu", {**entries, "mu": -entries["mu"]}, "finite and >= 0"
     yield "threshold", {**entries, "beta_threshold": 1.5}, r"beta_threshold = 1\.5"
     yield "newer version", {**entries, "format_version": 5.0}, "format version 5; this reader takes versions 1 to 4"
-    yield ("version of other arrays", {k: v for k, v in entries.items() if k not in ("simulated", "particle_area_clusters")},
-           "says format version 4 and holds the arrays of version 2")
+    version2 = {k: v for k, v in entries.items() if k not in ("simulated", "particle_area_clusters")}
+    yield "version of other arrays", version2, "says format version 4 and holds the arrays of version 2"
     yield "magic", b"TCARRAYX" + good[8:], "not an array file"
     yield "version", good[:8] + (2).to_bytes(4, "little") + good[12:], "format version 2"
     yield "truncated", good[:-9], "truncated"

@@ -34,11 +34,19 @@
  * or not; a node alone of its kind takes every neighbour): the value in a cell whose nodes were all simulated depends
  * on simulated nodes only. On a piece between nodes of different kinds (whose lookups read an unsimulated node and
  * are counted) the two slopes are limited to the square 0 <= d / m <= 3 of the piece's secant m, where a cubic
- * Hermite piece is monotone (Fritsch and Carlson), so that it too stays between its end values. The table is interpolated so in x = ln P, node by node, to the (v, beta) rows of the
- * query's velocity cell, each row node marked unsimulated when a pressure node it read (weight above
- * TC_TABLE_READ_WEIGHT) is; then so in beta along each row, and linearly in |v| between the two rows:
+ * Hermite piece is monotone (Fritsch and Carlson), so that it too stays between its end values.
+ *
+ * The table is interpolated so in x = ln P, node by node, to the two (v, beta) rows of the query's velocity cell: their
+ * values at the beta nodes, and their slopes along beta (each table row's slopes, taken along it, interpolated in ln P
+ * the same way). Each row is then the cubic Hermite pieces in beta through those values with those slopes, limited to
+ * the square of each piece's secant (at a node pressure they are in it already: the row's own PCHIP), and the two rows
+ * are blended linearly in |v|:
  *
  *     m = (1 - tv) row_iv(beta) + tv row_{iv + sv}(beta).
+ *
+ * The result is continuous in (P, v, beta), C1 in ln P and in beta where no limit acts, exact at the nodes, and no
+ * piece leaves the values at its ends: monotone in beta wherever the rows' values at the beta nodes are (at every
+ * node pressure where the data are; between pressure nodes where the columns keep the order of the rows).
  */
 #include "tc_table_lookup.h"
 
@@ -120,7 +128,8 @@ static int reads_unsimulated(const tc_table *t, size_t ip, double tp, size_t iv,
         for (int b = 0; b < 2; ++b)
             for (int c = 0; c < 2; ++c)
                 if (wp[a] * wv[b] * wb[c] > TC_TABLE_READ_WEIGHT &&
-                    t->unsimulated[((ip + (size_t)a) * t->n_velocity + iv + (size_t)b) * t->n_beta + ib + (size_t)c] != 0)
+                    t->unsimulated[((ip + (size_t)a) * t->n_velocity + iv + (size_t)b) * t->n_beta + ib + (size_t)c] !=
+                        0)
                     return 1;
     return 0;
 }
@@ -135,7 +144,9 @@ typedef struct {
 
 static double sgn(double v) { return (double)((v > 0) - (v < 0)); }
 
-static double secant(const line *L, size_t k) { return (L->y[(k + 1) * L->ys] - L->y[k * L->ys]) / (L->x[k + 1] - L->x[k]); }
+static double secant(const line *L, size_t k) {
+    return (L->y[(k + 1) * L->ys] - L->y[k * L->ys]) / (L->x[k + 1] - L->x[k]);
+}
 
 static int same_kind(const line *L, size_t a, size_t b) { return L->u == NULL || L->u[a * L->us] == L->u[b * L->us]; }
 
@@ -187,7 +198,8 @@ static double limited(double d, double m) {
     return fabs(d) > 3.0 * fabs(m) ? 3.0 * m : d;
 }
 
-/* the slopes of the piece from node k to k + 1 of a line, from its nodes' slopes d0, d1 */
+/* the slopes of the piece from node k to k + 1 of a line from its nodes' slopes d0, d1: limited where the nodes are of
+ * different kinds */
 static void piece_slopes(const line *L, size_t k, double *d0, double *d1) {
     if (same_kind(L, k, k + 1)) return;
     const double m = secant(L, k);
@@ -202,47 +214,63 @@ static double piece(const line *L, size_t k, double d0, double d1, double t) {
 }
 
 
-/* The two (v, beta) rows of the velocity cell (iv, iv + sv) of one array at the pressure (ip, tp), interpolated
- * monotone cubic in ln P, with their kinds and their slopes along beta. */
+/* The two (v, beta) rows of the velocity cell (iv, iv + sv) of one array at the pressure (ip, tp): their values at the
+ * beta nodes and their slopes along beta, both interpolated monotone cubic in ln P from the table's rows (the slopes
+ * of a table row taken along it, from each node's neighbours of its kind). */
 typedef struct {
-    double y[2][TC_TABLE_BETA_MAX], u[2][TC_TABLE_BETA_MAX], d[2][TC_TABLE_BETA_MAX];
+    double y[2][TC_TABLE_BETA_MAX], d[2][TC_TABLE_BETA_MAX];
 } cubic_rows;
 
-/* one row of the rows as a line along beta */
-static line row_line(const tc_table *t, const cubic_rows *r, int row) {
-    const line b = {t->beta, r->y[row], t->unsimulated != NULL ? r->u[row] : NULL, 1, 1, t->n_beta};
-    return b;
-}
+#define P_WINDOW 6 /* the pressure rows the slopes at ip and ip + 1 of a column read: ip - 2 to ip + 3 */
 
 static void cubic_rows_at(const tc_table *t, const double *values, size_t ip, double tp, size_t iv, size_t sv,
                           cubic_rows *r) {
     const size_t nP = t->n_pressure, nv = t->n_velocity, nb = t->n_beta, plane = nv * nb;
     const double *u = t->unsimulated;
+    const size_t lo = ip >= 2 ? ip - 2 : 0, hi = ip + 3 < nP ? ip + 3 : nP - 1;
+    double rs[P_WINDOW][TC_TABLE_BETA_MAX]; /* the slopes along beta of the table rows lo..hi */
     for (size_t row = 0; row < 2; ++row) {
         const size_t j = iv + row * sv;
+        for (size_t i = lo; i <= hi; ++i) {
+            const size_t at = i * plane + j * nb;
+            const line b = {t->beta, values + at, u != NULL ? u + at : NULL, 1, 1, nb};
+            for (size_t k = 0; k < nb; ++k) rs[i - lo][k] = slope_at(&b, k);
+        }
         for (size_t k = 0; k < nb; ++k) {
             const size_t at = j * nb + k;
             if (nP == 1) {
                 r->y[row][k] = values[at];
-                r->u[row][k] = u != NULL ? u[at] : 0.0;
+                r->d[row][k] = rs[0][k];
                 continue;
             }
             const line col = {t->log_pressure, values + at, u != NULL ? u + at : NULL, plane, plane, nP};
             r->y[row][k] = piece(&col, ip, slope_at(&col, ip), slope_at(&col, ip + 1), tp);
-            r->u[row][k] = u != NULL && ((1.0 - tp > TC_TABLE_READ_WEIGHT && u[ip * plane + at] != 0) ||
-                                         (tp > TC_TABLE_READ_WEIGHT && u[(ip + 1) * plane + at] != 0)) ? 1.0 : 0.0;
+            const line dcol = {t->log_pressure + lo, &rs[0][k], u != NULL ? u + lo * plane + at : NULL,
+                               TC_TABLE_BETA_MAX, plane, hi - lo + 1};
+            r->d[row][k] = piece(&dcol, ip - lo, slope_at(&dcol, ip - lo), slope_at(&dcol, ip - lo + 1), tp);
         }
-        const line b = row_line(t, r, (int)row);
-        for (size_t k = 0; k < nb; ++k) r->d[row][k] = slope_at(&b, k);
     }
+}
+
+/* the slopes of the piece from beta node k to k + 1 of a row, limited to the square 0 <= d / m <= 3 of its secant m
+ * (where a cubic Hermite piece is monotone: at a table row the slopes are in it already) */
+static void row_piece_slopes(const tc_table *t, const cubic_rows *r, int row, size_t k, double *d0, double *d1) {
+    const double m = (r->y[row][k + 1] - r->y[row][k]) / (t->beta[k + 1] - t->beta[k]);
+    *d0 = limited(r->d[row][k], m);
+    *d1 = limited(r->d[row][k + 1], m);
 }
 
 /* the rows' value at the beta cell (ib, tb), linear in v between them */
 static double cubic_value(const tc_table *t, const cubic_rows *r, double tv, size_t ib, double tb) {
     double at[2];
     for (int row = 0; row < 2; ++row) {
-        const line b = row_line(t, r, row);
-        at[row] = t->n_beta == 1 ? r->y[row][0] : piece(&b, ib, r->d[row][ib], r->d[row][ib + 1], tb);
+        if (t->n_beta == 1) {
+            at[row] = r->y[row][0];
+            continue;
+        }
+        double d0, d1;
+        row_piece_slopes(t, r, row, ib, &d0, &d1);
+        at[row] = hermite(r->y[row][ib], r->y[row][ib + 1], d0, d1, t->beta[ib + 1] - t->beta[ib], tb);
     }
     return tv == 0.0 ? at[0] : (1.0 - tv) * at[0] + tv * at[1];
 }
@@ -448,12 +476,7 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
     for (size_t k = 0; k < nb; ++k) y[k] = wa * r.y[0][k] + wb * r.y[1][k];
     for (size_t k = 0; k + 1 < nb; ++k) {
         double ends[2][2];
-        for (int row = 0; row < 2; ++row) {
-            const line b = row_line(table, &r, row);
-            ends[row][0] = r.d[row][k];
-            ends[row][1] = r.d[row][k + 1];
-            piece_slopes(&b, k, &ends[row][0], &ends[row][1]);
-        }
+        for (int row = 0; row < 2; ++row) row_piece_slopes(table, &r, row, k, &ends[row][0], &ends[row][1]);
         dl[k] = wa * ends[0][0] + wb * ends[1][0];
         dr[k] = wa * ends[0][1] + wb * ends[1][1];
     }
