@@ -375,7 +375,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
 
 
 def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> FrictionTable:
-    """The table :func:`build_table` makes from the cases a version 3 table records (``metadata["cases"]``, or the
+    """The table :func:`build_table` makes from the cases a version 3 or 4 table records (``metadata["cases"]``, or the
     subset ``cases`` of them) with its recorded sweep and surface statistics: what the table was built from, without
     the campaign folder."""
     cases = metadata["cases"] if cases is None else cases
@@ -384,7 +384,9 @@ def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> Fr
                             "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}} for c in cases]
     manifest = {"sweep": metadata["campaign"]["sweep"],
                 "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
-    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"])
+    built = {"sweep", "cases_total", "cases_finished", "cases_failed", "case_cpu_seconds"}
+    info = {k: v for k, v in metadata["campaign"].items() if k not in built}  # the executor's, as recorded
+    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"], campaign_info=info)
     return table
 
 

@@ -29,11 +29,11 @@ def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
     d, rc = built
     assert rc == 0
     table = read_table(d / "out" / "friction_table.npz")
-    assert table.provenance == "mesoscale" and table.mu.shape == (2, 3, 2) and table.version == 3
+    assert table.provenance == "mesoscale" and table.mu.shape == (2, 3, 2) and table.version == 4
     assert len(list((d / "out" / "cases").glob("*.json"))) == 2 * 2 * 4
     fits = json.loads((d / "out" / "fits.json").read_text())
     assert fits["content_hash"] == table.metadata["content_hash"]
-    assert {"beta_forms", "caps", "contact_area"} <= set(fits)
+    assert {"rows", "summary", "unsimulated", "caps", "contact_area"} <= set(fits)
     camp = table.metadata["campaign"]
     assert camp["executor"] == {"executor": "process-pool", "workers": 1} and camp["cases_failed"] == []
     # a rerun computes nothing and rebuilds the same numbers
@@ -50,7 +50,7 @@ def test_show_prints_summary_and_plots(built, tmp_path, capsys):
     png = tmp_path / "mu.png"
     assert surrogate_cli.main(["show", str(d / "out" / "friction_table.npz"), "--plot", str(png)]) == 0
     out = capsys.readouterr().out
-    assert "provenance=mesoscale" in out and "A_p(beta) per (P, v): form" in out
+    assert "provenance=mesoscale" in out and "particle_area(beta) per (P, v), goodness of fit" in out
     assert "mu at v = 0.08 m/s" in out and png.stat().st_size > 1000
 
 
