@@ -125,8 +125,8 @@ def test_verify_reruns_a_sample_of_the_recorded_cases(built, tmp_path, capsys):
 
 def test_direct_slide_check_of_a_table(built):
     """surrogate.table_check on the tiny table: at a node with the table's own placements the direct slides are
-    the members behind it, and with one debris level the fitted line passes through their mean: no difference,
-    the check passes; a point outside the table's axes is refused."""
+    the members behind it, whose ensemble mean the node holds: no difference in A_p or in mu, the check passes; a
+    point outside the table's axes is refused."""
     from tribocosim.errors import TableDomainError
     from tribocosim.surrogate.executors import make_executor
     from tribocosim.surrogate.table_check import run_check
@@ -139,6 +139,7 @@ def test_direct_slide_check_of_a_table(built):
         on_node = run_check(t, ex, points=((5e6, 50.0, beta),), seeds=(1, 2, 3))[0]
         assert on_node.members == 3 and on_node.all_nodes_simulated and on_node.passed
         assert on_node.direct == pytest.approx(on_node.table, rel=1e-12)
+        assert on_node.mu_direct == pytest.approx(on_node.mu_table, rel=1e-12)
         with pytest.raises(TableDomainError, match="beta = .* is outside the table"):
             run_check(t, ex, points=((5e6, 50.0, 1.5 * beta),), seeds=(1,))
     finally:
