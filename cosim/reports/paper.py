@@ -163,14 +163,14 @@ def _drops(runs: Runs, params: dict, scales: list[float]) -> list[float]:
 
 def ensemble_rel_stderr(table, contact_area: str) -> float:
     """Relative standard error of the table's A_p (and A_c with ``mesoscale``) at 25 MPa and the test's velocity,
-    averaged over the debris levels simulated there: the tabulated values' standard errors (version 3), else the
-    member spread over the square root of the members (version 2); 0 without either."""
+    averaged over the debris levels whose lookups there read simulated nodes only: the tabulated values' standard
+    errors (versions 3 and 4), else the member spread over the square root of the members (version 2); 0 without
+    either."""
     if table.version < 2:
         return 0.0
     names = ("particle_area", "contact_area") if contact_area == "mesoscale" else ("particle_area",)
     if table.version >= 3:
-        sim, _ = table.interpolate_array(table.array("simulated"), CAL_PRESSURE, V0, table.beta)
-        betas = table.beta[(table.beta > 0) & (sim == 1.0)]
+        betas = np.array([b for b in table.beta if b > 0 and not table.reads_unsimulated(CAL_PRESSURE, V0, b)])
         errors = {name: table.array(name + "_se") for name in names}
         members = None
     else:
