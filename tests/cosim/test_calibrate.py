@@ -167,6 +167,7 @@ def test_round_trip_of_the_particle_area_and_the_debris_balance_at_once(tmp_path
                                     "pressure,tool_length,passes,mu_bar,mu_bar_std,debris_g_m2,debris_g_m2_std"))
     f = calibrate(data, {**params, "particle_area_scale": 1.0, "archard_k": 1e-4, "debris_carry_over": 1.0},
                   tuple(truth), workers=2)
+    print(f"\nfitted {dict(zip(f.names, f.values))} +- {f.stderr} (truth {truth}); chi^2 {f.chi2:.3g} on {f.dof}")
     assert f.succeeded, f.status()
     for name, value, se in zip(f.names, f.values, f.stderr):
         assert abs(value - truth[name]) <= 3 * se, (name, value, se)

@@ -1,4 +1,5 @@
-/* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0) and release. */
+/* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0), the
+ * version 4 form (ln P, the shares A_p / A_c) and release. */
 #include "tc_table.h"
 
 #include <math.h>

@@ -275,8 +275,8 @@ static double cubic_value(const tc_table *t, const cubic_rows *r, double tv, siz
     return tv == 0.0 ? at[0] : (1.0 - tv) * at[0] + tv * at[1];
 }
 
-static void cubic_lookup(const tc_table *t, const double *values, const double *values_b, size_t ip, double tp, int outp,
-                         size_t n, const double *velocity, const double *beta, double *out, double *out_b,
+static void cubic_lookup(const tc_table *t, const double *values, const double *values_b, size_t ip, double tp,
+                         int outp, size_t n, const double *velocity, const double *beta, double *out, double *out_b,
                          unsigned char *clamped) {
     const size_t nv = t->n_velocity, nb = t->n_beta, sv = nv > 1 ? 1 : 0;
     cubic_rows ra, rb;
@@ -297,7 +297,8 @@ static void cubic_lookup(const tc_table *t, const double *values, const double *
         const int outb = locate_near(t->beta, nb, beta[k], ib, &ib, &tb);
         out[k] = cubic_value(t, &ra, tv, ib, tb);
         if (values_b != NULL) out_b[k] = cubic_value(t, &rb, tv, ib, tb);
-        if (clamped != NULL) clamped[k] = (unsigned char)(outp || outv || outb || reads_unsimulated(t, ip, tp, iv, tv, ib, tb));
+        if (clamped != NULL)
+            clamped[k] = (unsigned char)(outp || outv || outb || reads_unsimulated(t, ip, tp, iv, tv, ib, tb));
     }
 }
 
