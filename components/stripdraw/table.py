@@ -214,8 +214,13 @@ class FrictionTable:
 
     @functools.cached_property
     def native(self) -> "NativeTable":
-        """The table in the native core, where every lookup is made (made on first use)."""
+        """The table in the native core, where every lookup is made (made on first use; not pickled)."""
         return NativeTable(self)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("native", None)
+        return state
 
     def interpolate(self, pressure, velocity, beta, policy: str = "clamp") -> tuple[np.ndarray, np.ndarray]:
         """mu at the query points (broadcast together), interpolated as the format version says (module docstring).
