@@ -20,7 +20,10 @@
   beta_s = 1/c is the level at which A_p is half its linear value, c = 0 is the linear form). Each fit
   gives chi^2 = sum ((y_k - f(beta_k)) / sigma_k)^2, Akaike's AIC = chi^2 + 2 k (k parameters, Gaussian
   errors of known sigma), the parameters' covariance (absolute sigma) and the standard error of the
-  fitted value at any beta (first-order propagation).
+  fitted value at any beta (first-order propagation). Its goodness of fit: the normalised residuals
+  (y_k - f(beta_k)) / sigma_k, the degrees of freedom N - k, chi^2 / (N - k) and the probability of a chi^2 at least
+  as large if the form were right (the chi^2 distribution's survival function); it passes at significance a when
+  N - k >= 1 and that probability is at least a. :func:`fit_affine` fits A_c = c0 + c1 beta the same way.
 
 Everything here is plain arithmetic on the case records: no I/O.
 """
@@ -33,6 +36,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy.optimize import curve_fit
+from scipy.stats import chi2 as chi2_distribution
 
 from tribocosim.errors import ParameterError
 
@@ -245,10 +249,12 @@ BETA_FORMS = ("linear", "langmuir")
 
 
 def beta_form(name: str, beta, params) -> np.ndarray:
-    """The form ``name`` at ``beta`` with ``params`` ((a,) or (a, c))."""
+    """The form ``name`` at ``beta`` with ``params`` ((a,) or (a, c); ``affine``: (c0, c1))."""
     b = np.asarray(beta, float)
     if name == "linear":
         return params[0] * b
+    if name == "affine":
+        return params[0] + params[1] * b
     return params[0] * b / (1.0 + params[1] * b)
 
 
@@ -257,6 +263,8 @@ def _beta_form_gradient(name: str, beta, params) -> np.ndarray:
     b = np.atleast_1d(np.asarray(beta, float))
     if name == "linear":
         return b[None, :]
+    if name == "affine":
+        return np.stack([np.ones_like(b), b])
     den = 1.0 + params[1] * b
     return np.stack([b / den, -params[0] * b * b / den**2])
 
@@ -271,6 +279,26 @@ class BetaFit:
     chi2: float
     aic: float
     n_points: int
+    residuals: tuple = ()  # (y_k - f(beta_k)) / sigma_k at the fitted levels
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom: points minus parameters."""
+        return self.n_points - len(self.params)
+
+    @property
+    def chi2_per_dof(self) -> float:
+        """chi^2 / (N - k); NaN without a degree of freedom."""
+        return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+    @property
+    def p_value(self) -> float:
+        """The probability of a chi^2 at least this large if the form were right; NaN without a degree of freedom."""
+        return float(chi2_distribution.sf(self.chi2, self.dof)) if self.dof > 0 else math.nan
+
+    def passes(self, significance: float) -> bool:
+        """The goodness-of-fit test: at least one degree of freedom and ``p_value >= significance``."""
+        return self.dof > 0 and self.p_value >= significance
 
     def __call__(self, beta) -> np.ndarray:
         return beta_form(self.form, beta, self.params)
@@ -283,7 +311,8 @@ class BetaFit:
 
     def to_dict(self) -> dict:
         return {"form": self.form, "params": list(self.params), "covariance": list(self.covariance),
-                "chi2": self.chi2, "aic": self.aic, "n_points": self.n_points}
+                "chi2": self.chi2, "aic": self.aic, "n_points": self.n_points, "dof": self.dof,
+                "chi2_per_dof": self.chi2_per_dof, "p_value": self.p_value, "residuals": list(self.residuals)}
 
 
 def fit_beta_forms(beta, y, sigma) -> dict:
@@ -297,7 +326,7 @@ def fit_beta_forms(beta, y, sigma) -> dict:
     a = float(np.sum(w * b * yv) / np.sum(w * b * b))
     var = 1.0 / float(np.sum(w * b * b))
     chi2 = float(np.sum(w * (yv - a * b) ** 2))
-    out["linear"] = BetaFit("linear", (a,), (var,), chi2, chi2 + 2.0, int(b.size))
+    out["linear"] = BetaFit("linear", (a,), (var,), chi2, chi2 + 2.0, int(b.size), _residuals(yv, a * b, sg))
     best = None
     if b.size >= 2 and a > 0:
         for c0 in (0.0, 1.0 / b.max(), 10.0 / b.max()):
@@ -315,8 +344,29 @@ def fit_beta_forms(beta, y, sigma) -> dict:
     if best is not None and np.all(np.isfinite(best[2])):
         c2, popt, pcov = best
         out["langmuir"] = BetaFit("langmuir", (float(popt[0]), float(popt[1])),
-                                  tuple(float(x) for x in np.asarray(pcov).ravel()), c2, c2 + 4.0, int(b.size))
+                                  tuple(float(x) for x in np.asarray(pcov).ravel()), c2, c2 + 4.0, int(b.size),
+                                  _residuals(yv, beta_form("langmuir", b, popt), sg))
     return out
+
+
+def _residuals(y, fitted, sigma) -> tuple:
+    return tuple(float(x) for x in (np.asarray(y) - np.asarray(fitted)) / np.asarray(sigma))
+
+
+def fit_affine(x, y, sigma) -> BetaFit:
+    """y = c0 + c1 x by weighted least squares (standard errors ``sigma`` > 0, at least two distinct x): the form
+    ``affine`` with its chi^2, covariance and goodness of fit (module docstring)."""
+    xv, yv, sg = (np.asarray(v, float) for v in (x, y, sigma))
+    if xv.size < 2 or np.ptp(xv) == 0 or np.any(~(sg > 0)):
+        raise ParameterError("an affine fit needs two distinct x and standard errors > 0")
+    w = 1.0 / sg**2
+    design = np.stack([np.ones_like(xv), xv], axis=1)
+    cov = np.linalg.inv(design.T @ (w[:, None] * design))
+    params = cov @ (design.T @ (w * yv))
+    fitted = design @ params
+    c2 = float(np.sum(w * (yv - fitted) ** 2))
+    return BetaFit("affine", (float(params[0]), float(params[1])), tuple(float(v) for v in cov.ravel()), c2, c2 + 4.0,
+                   int(xv.size), _residuals(yv, fitted, sg))
 
 
 @dataclass(frozen=True)

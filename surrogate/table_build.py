@@ -1,34 +1,37 @@
 """The friction table mu(P, v, beta) from a finished campaign (Sec. 4, 6; docs/model.md section 4).
 
-The table (format version 3, :mod:`tribocosim.components.stripdraw.table`) holds, at every node (P, v, beta),
-A_c/A0 and A_p/A0 with their standard errors, where the node was simulated, A_p of the paper's cluster rule
-alone, and mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by the particle-free mu0, Eq. 6), so that mu at
-beta = 0 is mu0 at every pressure. The strip-draw model computes mu from the areas, with A_c from the table
-(``contact_area = "mesoscale"``) or from Eq. 8 (``"eq8"``).
+The table (format version 4, :mod:`tribocosim.components.stripdraw.table`) serves what the slides measured. At
+every simulated node (P, v, beta) it holds the ensemble means of <A_c>/A0, <A_p>/A0 of every load-bearing flake and
+of the paper's cluster rule alone (Eq. 22) with their ensemble standard errors (member std / sqrt(members); one
+contact pixel, 1/n^2 of A0, for a node of one member), mu = mu0 (1 - A_p / A_c) of the means (Eq. 7 with tau0 set
+by the particle-free mu0, Eq. 6; mu0 at beta = 0 at every pressure) and its standard error (the members' A_p and
+A_c, their variances and covariance, propagated to first order through the ratio of the means).
 
 Axes: the campaign's pressures; its velocities, below them a v = 0 row when the sweep asks for the quasi-static
 row (``[table] quasi_static_row``: the values of the slowest velocity, the plateau where the damping per pixel
 of sliding is large; docs/physics/table_domain.md measures it); beta = 0 and every debris level of the sweep.
 No node lies above the largest simulated level.
 
-Values. At each (P, v) the simulated levels' ensemble means of <A_p>/A0 (Eq. 22), with their standard errors
-(member std / sqrt(members)), are fitted with each form of :data:`tribocosim.surrogate.fit.BETA_FORMS`
-(Eq. 23's line through the origin and the saturating a beta / (1 + c beta)); the form with the smaller total
-Akaike criterion over every (P, v) is the table's (both forms' chi^2 and AIC per (P, v) and in total are in the
-metadata, ``fits.beta_forms``). The tabulated A_p is that fit at every beta node, its standard error the
-fit's; A_p of the cluster rule alone is fitted with the same form. A_c is the ensemble mean where the node
-was simulated (particle-free cases at beta = 0) and a weighted line in beta through the row's simulated nodes
-elsewhere. ``simulated`` marks the nodes with slides; the others come from the fit of their (P, v) row and a
-strip draw that reads them counts the lookup (docs/model.md section 4).
+Nodes a (P, v) row did not simulate (``simulated`` = 0; a lookup that reads one is counted, docs/model.md section 4)
+are filled from the row's simulated levels when a fit of every area passes the goodness-of-fit test against the
+ensemble standard errors at :data:`FIT_SIGNIFICANCE`: A_p and A_p of the cluster rule by a form of
+:data:`tribocosim.surrogate.fit.BETA_FORMS` (Eq. 23's line through the origin, the saturating a beta / (1 + c beta);
+the smaller AIC when both pass), A_c by a line in beta through the particle-free node and the levels. Otherwise
+the row's unsimulated nodes hold the values and standard errors of its nearest simulated level below (a clamp to the
+simulated range: the areas fill together or not at all, since a share A_p / A_c of a fit over a held value would be
+neither). Every fit of every row, with chi^2, its degrees of freedom, chi^2 / dof, the
+probability and the normalised residuals, and what filled each unsimulated node are in the metadata (``fits.rows``,
+``fits.unsimulated``).
 
 For reference the metadata also give tau0 = mu0 / s_c, with s_c the through-origin slope of <A_c>/A0 against
 P of the particle-free cases (:func:`tribocosim.surrogate.fit.fit_contact`), the cap of beta at s = 1 at every
-(P, v) (Eq. 24: where the fitted A_p reaches A_c, or none inside the axis), and alpha = <A_p>/A0 / (beta P / E*)
-per node.
+(P, v) (Eq. 24: where the interpolated share A_p / A_c reaches 1, or none inside the axis), and alpha =
+<A_p>/A0 / (beta P / E*) per node.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import asdict
@@ -38,8 +41,14 @@ import numpy as np
 from tribocosim.errors import TableError
 from tribocosim.components.stripdraw.table import UNITS, FrictionTable, mu_of_areas
 
-from .fit import BETA_FORMS, BetaFit, _key, ensemble, fit_alpha, fit_beta_forms, fit_contact
+from .fit import BETA_FORMS, EnsemblePoint, _key, ensemble, fit_affine, fit_alpha, fit_beta_forms, fit_contact
 from .slide_config import SlideConfig
+
+#: a fit fills the unsimulated nodes of its row only when the probability of a chi^2 at least as large as its own
+#: (against the ensemble standard errors, with its degrees of freedom) is at least this
+FIT_SIGNIFICANCE = 0.05
+#: the quantities a row's fits may fill, with the forms tried
+FILLED = {"particle_area": BETA_FORMS, "particle_area_clusters": BETA_FORMS, "contact_area": ("affine",)}
 
 
 def surface_statistics(slide: dict, surfaces: list[dict]) -> dict:
@@ -72,11 +81,32 @@ def _sigma(point, n_pixels: int) -> float:
     return max(point.ap_std / math.sqrt(point.n) if point.n > 1 else 0.0, floor)
 
 
-class _RowFit:
-    """The fits of one (P, v) row: A_p and A_p by the cluster rule in beta, A_c linear in beta."""
+def _se(std: float, n: int, n_pixels: int) -> float:
+    """The ensemble standard error of a node's mean: std / sqrt(n), one contact pixel for one member."""
+    return std / math.sqrt(n) if n > 1 else 1.0 / n_pixels
+
+
+def _mu_se(q: EnsemblePoint, mu0: float, n_pixels: int) -> float:
+    """Standard error of mu = mu0 (1 - <A_p> / <A_c>) at a simulated node: the members' variances and covariance of
+    A_p and A_c propagated to first order through the ratio (one contact pixel of A_c for one member)."""
+    if q.ac_mean <= 0:
+        return 0.0
+    share = q.ap_mean / q.ac_mean
+    if q.n < 2:
+        return mu0 * share / (n_pixels * q.ac_mean)
+    ap = np.array([m[1] for m in q.members])
+    ac = np.array([m[2] for m in q.members])
+    cov = np.cov(ap, ac, ddof=1)
+    var = (cov[0, 0] - 2.0 * share * cov[0, 1] + share**2 * cov[1, 1]) / (q.ac_mean**2 * q.n)
+    return mu0 * math.sqrt(max(var, 0.0))
+
+
+class _Row:
+    """One (P, v) row: its simulated levels' ensemble statistics, and the fits that may fill the levels it did not
+    simulate (module docstring)."""
 
     def __init__(self, ens: dict, p: float, v: float, levels: list, n_pixels: int):
-        self.p, self.v = p, v
+        self.p, self.v, self.n_pixels = p, v, n_pixels
         self.points = {b: ens.get((_key(p), _key(v), _key(b))) for b in [0.0, *levels]}
         self.simulated = [b for b in levels if self.points[b] is not None]
         if not self.simulated:
@@ -85,60 +115,86 @@ class _RowFit:
         if self.points[0.0] is None:
             raise TableError(f"no finished particle-free case at P = {p:g} Pa, v = {v:g} m/s")
         pts = [self.points[b] for b in self.simulated]
-        sig = [_sigma(q, n_pixels) for q in pts]
-        self.forms = fit_beta_forms(self.simulated, [q.ap_mean for q in pts], sig)
-        sig_c = [max(q.apc_std / math.sqrt(q.n) if q.n > 1 else 0.0, 1.0 / (n_pixels * math.sqrt(q.n))) for q in pts]
-        self.forms_clusters = fit_beta_forms(self.simulated, [q.apc_mean for q in pts], sig_c)
-        # A_c: a weighted line in beta through the particle-free node and the simulated levels
-        bs = np.array([0.0, *self.simulated])
-        acs = np.array([self.points[b].ac_mean for b in bs])
-        w = np.array([1.0 / max(self.points[b].ac_std / math.sqrt(self.points[b].n) if self.points[b].n > 1
-                                else 0.0, 1.0 / n_pixels) ** 2 for b in bs])
-        design = np.stack([np.ones_like(bs), bs], axis=1)
-        cov = np.linalg.pinv(design.T @ (w[:, None] * design))
-        self.ac_line = cov @ (design.T @ (w * acs))
-        self.ac_cov = cov
+        floor = [1.0 / (n_pixels * math.sqrt(q.n)) for q in pts]
+        sig_c = [max(q.apc_std / math.sqrt(q.n) if q.n > 1 else 0.0, f) for q, f in zip(pts, floor)]
+        free = [self.points[0.0], *pts]
+        sig_ac = [max(q.ac_std / math.sqrt(q.n) if q.n > 1 else 0.0, 1.0 / n_pixels) for q in free]
+        self.fits = {
+            "particle_area": fit_beta_forms(self.simulated, [q.ap_mean for q in pts],
+                                            [_sigma(q, n_pixels) for q in pts]),
+            "particle_area_clusters": fit_beta_forms(self.simulated, [q.apc_mean for q in pts], sig_c),
+            "contact_area": ({"affine": fit_affine([0.0, *self.simulated], [q.ac_mean for q in free], sig_ac)}
+                             if self.simulated else {}),
+        }
+        best = {}
+        for name, forms in FILLED.items():
+            passing = [self.fits[name][f] for f in forms if f in self.fits[name]
+                       and self.fits[name][f].passes(FIT_SIGNIFICANCE)]
+            best[name] = min(passing, key=lambda f: f.aic) if passing else None
+        # the areas fill together or not at all: a share A_p / A_c of a fit over a held value would be neither
+        self.fill = best if all(f is not None for f in best.values()) else {name: None for name in FILLED}
 
-    def contact(self, beta: float) -> tuple[float, float]:
-        """A_c/A0 and its standard error at ``beta``: the node's mean where simulated, else the line."""
-        q = self.points.get(beta)
-        if q is not None and (beta == 0.0 or beta in self.simulated):
-            return q.ac_mean, (q.ac_std / math.sqrt(q.n) if q.n > 1 else 0.0)
-        g = np.array([1.0, beta])
-        return float(g @ self.ac_line), float(math.sqrt(max(g @ self.ac_cov @ g, 0.0)))
+    def node(self, beta: float, mu0: float) -> dict:
+        """The values of the node at ``beta``: the ensemble's where simulated, else per quantity the passing fit or
+        the nearest simulated level below (``sources``)."""
+        if beta == 0.0 or beta in self.simulated:
+            q = self.points[beta]
+            return {"contact_area": q.ac_mean, "contact_area_se": _se(q.ac_std, q.n, self.n_pixels),
+                    "contact_area_std": q.ac_std, "particle_area": q.ap_mean,
+                    "particle_area_se": _se(q.ap_std, q.n, self.n_pixels) if beta > 0 else 0.0,
+                    "particle_area_std": q.ap_std, "particle_area_clusters": q.apc_mean,
+                    "particle_area_clusters_se": _se(q.apc_std, q.n, self.n_pixels) if beta > 0 else 0.0,
+                    "mu_se": _mu_se(q, mu0, self.n_pixels), "simulated": 1.0, "members": q.n}
+        held = self.node(max(b for b in [0.0, *self.simulated] if b < beta), mu0)
+        out = {"simulated": 0.0, "members": 0, "sources": {}}
+        for name in FILLED:
+            fit = self.fill[name]
+            if fit is None:
+                out[name], out[name + "_se"] = held[name], held[name + "_se"]
+                out["sources"][name] = "held"
+            else:
+                out[name], out[name + "_se"] = max(float(fit(beta)), 0.0), float(fit.stderr(beta)[0])
+                out["sources"][name] = fit.form
+        out["contact_area_std"], out["particle_area_std"] = out["contact_area_se"], out["particle_area_se"]
+        ap, ac = out["particle_area"], out["contact_area"]
+        out["mu_se"] = (mu0 * ap / ac * math.hypot(out["particle_area_se"] / ap, out["contact_area_se"] / ac)
+                        if ap > 0 and ac > 0 else 0.0)
+        return out
+
+    def fits_record(self) -> dict:
+        """Every fit of the row with its goodness of fit, and what fills the row's unsimulated nodes."""
+        return {"pressure": self.p, "velocity": self.v, "levels": self.simulated,
+                **{name: {f: fit.to_dict() for f, fit in forms.items()} for name, forms in self.fits.items()},
+                "fills": {name: (f.form if f is not None else "held") for name, f in self.fill.items()}}
 
 
-def _choose_form(rows: list[_RowFit]) -> tuple[str, dict]:
-    """The form of A_p(beta) with the smaller total AIC over the rows where every form was fitted, and the
-    evidence (per-row and total chi^2 and AIC of every form)."""
-    both = [r for r in rows if all(f in r.forms for f in BETA_FORMS)]
-    total = {f: float(sum(r.forms[f].aic for r in both)) for f in BETA_FORMS}
-    chi2 = {f: float(sum(r.forms[f].chi2 for r in both)) for f in BETA_FORMS}
-    points = int(sum(r.forms["linear"].n_points for r in both))
-    form = min(BETA_FORMS, key=lambda f: total[f]) if both else "linear"
-    evidence = {
-        "chosen": form,
-        "criterion": "Akaike AIC = chi^2 + 2 k summed over the (P, v) rows with at least two simulated levels "
-                     "(k parameters per row, chi^2 with the ensemble standard errors)",
-        "total_aic": total, "total_chi2": chi2, "rows_compared": len(both), "points": points,
-        "parameters_per_row": {"linear": 1, "langmuir": 2},
-        "rows": [{"pressure": r.p, "velocity": r.v, "levels": r.simulated,
-                  **{f: r.forms[f].to_dict() for f in BETA_FORMS if f in r.forms}} for r in rows],
-    }
-    return form, evidence
+def _fit_summary(rows: list[_Row]) -> dict:
+    """Per quantity and form: chi^2 and degrees of freedom summed over the rows, chi^2 / dof, and the rows that pass."""
+    out = {}
+    for name, forms in FILLED.items():
+        out[name] = {}
+        for form in forms:
+            fits = [r.fits[name][form] for r in rows if form in r.fits[name] and r.fits[name][form].dof > 0]
+            chi2, dof = sum(f.chi2 for f in fits), sum(f.dof for f in fits)
+            out[name][form] = {"chi2": chi2, "dof": dof, "chi2_per_dof": chi2 / dof if dof else None,
+                               "rows_tested": len(fits),
+                               "rows_passing": sum(f.passes(FIT_SIGNIFICANCE) for f in fits)}
+    return out
 
 
-def _fit_of(forms: dict, form: str) -> BetaFit:
-    return forms.get(form) or forms["linear"]
+def _caps(table: FrictionTable, mu0: float, pressures, velocities) -> list[float | None]:
+    """The cap of beta at s = 1 (Eq. 24) at every (P, v): where the table's interpolated share reaches 1
+    (tc_law_beta_cap), None when it does not below 1."""
+    from tribocosim.components.stripdraw.friction import make_friction_law
+    from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
-
-def _cap(row: _RowFit, fit: BetaFit, top: float) -> float | None:
-    """The smallest beta in (0, top] where the fitted A_p reaches A_c (s = 1), or None."""
-    grid = np.linspace(0.0, top, 2001)[1:]
-    d = fit(grid) - np.array([row.contact(float(b))[0] if b in row.points else float(np.array([1.0, b]) @ row.ac_line)
-                              for b in grid])
-    hit = np.flatnonzero(d >= 0.0)
-    return float(grid[hit[0]]) if hit.size else None
+    law = make_friction_law(StripDrawParameters(mu0=mu0), table)
+    caps = []
+    for p in pressures:
+        for v in velocities:
+            c = law.beta_cap(p, v)
+            caps.append(c if c < 1.0 else None)
+    return caps
 
 
 def build_table(records: list[dict], manifest: dict, *, failed: list | None = None,
@@ -201,70 +257,72 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     def level_at(f, p, v):
         return p >= f.get("min_pressure", 0.0) and (f.get("velocities") is None or v in f["velocities"])
 
-    rows = {(p, v): _RowFit(ens, p, v, sorted({_key(f["beta"]) for f in flakes if level_at(f, p, v)}), n_pixels)
+    rows = {(p, v): _Row(ens, p, v, sorted({_key(f["beta"]) for f in flakes if level_at(f, p, v)}), n_pixels)
             for p in pressures for v in v_grid}
-    form, evidence = _choose_form(list(rows.values()))
 
     shape = (len(pressures), len(vel_axis), len(beta_axis))
-    arr = {name: np.zeros(shape) for name in ("mu", "ap", "ap_se", "ap_std", "ac", "ac_se", "ac_std", "apc",
-                                              "apc_se", "simulated", "n")}
-    caps, nodes = [], []
+    names = ("contact_area", "contact_area_se", "contact_area_std", "particle_area", "particle_area_se",
+             "particle_area_std", "particle_area_clusters", "particle_area_clusters_se", "mu_se", "simulated",
+             "members")
+    arr = {name: np.zeros(shape) for name in names}
+    nodes, unsimulated = [], []
     for i, p in enumerate(pressures):
         for j, v in enumerate(vel_axis):
-            v_row = v if v > 0 or not qs_row else v_grid[0]
-            row = rows[(p, v_row)]
-            fit = _fit_of(row.forms, form)
-            fit_c = _fit_of(row.forms_clusters, form)
+            row = rows[(p, v if v > 0 or not qs_row else v_grid[0])]
             for k, b in enumerate(beta_axis):
-                simulated = b == 0.0 or b in row.simulated
-                q = row.points.get(b) if simulated else None
-                ac, ac_se = row.contact(b)
-                if b == 0.0:
-                    ap = ap_se = apc = apc_se = 0.0
-                else:
-                    ap, ap_se = float(fit(b)), float(fit.stderr(b)[0])
-                    apc, apc_se = max(0.0, float(fit_c(b))), float(fit_c.stderr(b)[0])
-                arr["ap"][i, j, k], arr["ap_se"][i, j, k] = max(ap, 0.0), ap_se
-                arr["apc"][i, j, k], arr["apc_se"][i, j, k] = apc, apc_se
-                arr["ac"][i, j, k], arr["ac_se"][i, j, k] = max(ac, 0.0), ac_se
-                arr["ap_std"][i, j, k] = q.ap_std if q is not None else ap_se
-                arr["ac_std"][i, j, k] = q.ac_std if q is not None else ac_se
-                arr["simulated"][i, j, k] = 1.0 if simulated else 0.0
-                arr["n"][i, j, k] = q.n if q is not None else 0
-                if q is not None and b > 0:
-                    x = b * p / e_star
+                node = row.node(b, mu0)
+                for name in names:
+                    arr[name][i, j, k] = node[name]
+                if node["simulated"] == 0.0:
+                    unsimulated.append({"pressure": p, "velocity": v, "beta": b, **node["sources"]})
+                elif b > 0:
+                    q = row.points[b]
                     nodes.append({"pressure": p, "velocity": v, "beta": b, "members": q.n,
-                                  "a_p": q.ap_mean, "a_p_se": q.ap_se if q.n > 1 else None,
-                                  "a_p_fit": ap, "a_p_fit_se": ap_se, "a_c": q.ac_mean,
-                                  "a_p_clusters": q.apc_mean, "alpha": q.ap_mean / x,
+                                  "a_p": q.ap_mean, "a_p_se": q.ap_se if q.n > 1 else None, "a_c": q.ac_mean,
+                                  "a_p_clusters": q.apc_mean, "mu_se": node["mu_se"],
+                                  "alpha": q.ap_mean / (b * p / e_star),
                                   "relative_se": (q.ap_se / q.ap_mean) if q.n > 1 and q.ap_mean > 0 else None})
-            caps.append({"pressure": p, "velocity": v, "beta_cap_s1": _cap(row, fit, beta_axis[-1]),
-                         "simulated_max_beta": max(row.simulated)})
-    arr["mu"] = mu_of_areas(mu0, arr["ap"], arr["ac"])
-    cap_values = [c["beta_cap_s1"] for c in caps if c["beta_cap_s1"] is not None]
-    beta_thres = min(1.0, max(cap_values)) if cap_values and len(cap_values) == len(caps) else 1.0
+    mu = mu_of_areas(mu0, arr["particle_area"], arr["contact_area"])
+    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), mu, {"beta_threshold": 1.0},
+                          contact_area=arr["contact_area"], particle_area=arr["particle_area"],
+                          contact_area_std=arr["contact_area_std"], particle_area_std=arr["particle_area_std"],
+                          extras={name: arr[name] for name in ("simulated", "contact_area_se", "particle_area_se",
+                                                               "particle_area_clusters", "particle_area_clusters_se",
+                                                               "mu_se")})
+    cap_values = _caps(table, mu0, pressures, v_grid)
+    caps = [{"pressure": p, "velocity": v, "beta_cap_s1": c, "simulated_max_beta": max(rows[(p, v)].simulated)}
+            for (p, v), c in zip([(p, v) for p in pressures for v in v_grid], cap_values)]
+    beta_thres = min(1.0, max(cap_values)) if all(c is not None for c in cap_values) else 1.0
 
     alpha_diag = [{"velocity": a.velocity, "alpha": a.alpha, "alpha_stderr": a.alpha_stderr,
                    "alpha_member_std": a.alpha_member_std, "r2": a.r2, "n_points": a.n_points}
                   for a in fit_alpha(ens, e_star)]
-    fits = {"beta_forms": evidence, "contact_area": asdict(contact),
-            "alpha_eq23_per_velocity": alpha_diag,
-            "caps": caps}
+    fits = {"significance": FIT_SIGNIFICANCE,
+            "test": "a fit passes when P(chi^2_dof >= its chi^2) >= significance, chi^2 against the ensemble standard "
+                    "errors (A_p: at least one contact pixel per member), dof = levels - parameters >= 1",
+            "summary": _fit_summary(list(rows.values())),
+            "rows": [r.fits_record() for r in rows.values()],
+            "unsimulated": unsimulated,
+            "contact_area": asdict(contact), "alpha_eq23_per_velocity": alpha_diag, "caps": caps}
     meta = {
         "provenance": "mesoscale",
         "title": f"friction table from the mesoscale campaign '{sweep['name']}'",
-        "law": "mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by mu0, Eq. 6); A_p(beta) at every (P, v) the fitted "
-               f"form '{form}' of the simulated levels' ensemble means of <A_p>/A0 (Eq. 22), A_c the ensemble "
-               "mean where simulated; see surrogate.table_build",
+        "law": "mu = mu0 (1 - A_p / A_c) (Eq. 7 with tau0 set by mu0, Eq. 6); at every simulated node the ensemble "
+               "means of <A_p>/A0 and <A_c>/A0 (Eq. 22) with their ensemble standard errors; unsimulated nodes "
+               "filled by their row's fit where it passes its goodness-of-fit test, else held at the row's nearest "
+               "simulated level below (fits.unsimulated); interpolated monotone cubic in ln P and beta, linearly "
+               "in v; see surrogate.table_build",
         "a_p_definition": "<A_p>/A0 = SlideResult.summary()['mean_particle_fraction']: traction > 0 under every "
                           "load-bearing flake (the cluster rule of Fig. 8, the pinch and hold rules of "
                           "tribocosim.surrogate.coupling); particle_area_clusters: the cluster rule alone "
                           "('mean_particle_fraction_clusters'); A_c from 'mean_contact_fraction'",
-        "a_p_form": form,
+        "interpolation": "monotone cubic (Fritsch-Butland PCHIP; the slopes of a node from its neighbours of the same "
+                         "kind, simulated or not) in ln P, then in beta, linear in v; the strip-draw law interpolates "
+                         "the share A_p / A_c (A_p under contact_area = eq8): components/native/core/tc_table_lookup.c",
         "beta_threshold": beta_thres,
-        "beta_threshold_note": "the largest cap of beta at s = 1 over the (P, v) nodes (Eq. 24: where the fitted "
-                               "A_p reaches A_c), 1 when some (P, v) has none inside the axis; the strip-draw "
-                               "model finds the cap at each (P, v) from the tabulated areas",
+        "beta_threshold_note": "the largest cap of beta at s = 1 over the (P, v) nodes (Eq. 24: where the "
+                               "interpolated share A_p / A_c reaches 1), 1 when some (P, v) has none below 1; the "
+                               "strip-draw model finds the cap at each (P, v) from the table",
         "calibration": {"mu0": mu0, "tau0": tau0, "tau0_unit": "Pa",
                         "tau0_source": "for reference: tau0 = mu0 / s_c, s_c the through-origin slope of "
                                        f"<A_c>/A0 vs P of the {contact.source}; mu uses mu0 and the areas"},
@@ -279,7 +337,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
                                    "damping per pixel of the physical one (surrogate.slide_config)."},
             "beta": {"unit": UNITS["beta"], "levels": levels, "simulated_max": levels[-1],
                      "note": "beta = N pi (d/2)^2 / L^2 (Eq. 10); 0: particle-free cases. Nodes a (P, v) row did "
-                             "not simulate hold its fit (simulated = 0)."},
+                             "not simulate (simulated = 0) are filled as fits.unsimulated says."},
             "order": ["pressure", "velocity", "beta"],
         },
         "fits": fits,
@@ -294,9 +352,9 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
             **(campaign_info or {}),
         },
         "surfaces": surface_stats,
-        "ensemble": {"n_members": arr["n"].astype(int).tolist(), "nodes": nodes,
+        "ensemble": {"n_members": arr["members"].astype(int).tolist(), "nodes": nodes,
                      "note": "members per node (0: not simulated) and, per simulated node with flakes, the "
-                             "ensemble mean of <A_p>/A0, its standard error and the fitted value"},
+                             "ensemble mean of <A_p>/A0 and its standard error (the tabulated values)"},
         "cases": [{"case_id": r["case_id"], "labels": r["labels"],
                    "a_p": r["summary"]["mean_particle_fraction"],
                    "a_p_clusters": r["summary"].get("mean_particle_fraction_clusters"),
@@ -313,17 +371,11 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
-    table = FrictionTable(np.array(pressures), np.array(vel_axis), np.array(beta_axis), arr["mu"], json_clean(meta),
-                          contact_area=arr["ac"], particle_area=arr["ap"], contact_area_std=arr["ac_std"],
-                          particle_area_std=arr["ap_std"],
-                          extras={"simulated": arr["simulated"], "contact_area_se": arr["ac_se"],
-                                  "particle_area_se": arr["ap_se"], "particle_area_clusters": arr["apc"],
-                                  "particle_area_clusters_se": arr["apc_se"]})
-    return table, json_clean(fits)
+    return dataclasses.replace(table, metadata=json_clean(meta)), json_clean(fits)
 
 
 def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> FrictionTable:
-    """The table :func:`build_table` makes from the cases a version 3 table records (``metadata["cases"]``, or the
+    """The table :func:`build_table` makes from the cases a version 3 or 4 table records (``metadata["cases"]``, or the
     subset ``cases`` of them) with its recorded sweep and surface statistics: what the table was built from, without
     the campaign folder."""
     cases = metadata["cases"] if cases is None else cases
@@ -332,7 +384,9 @@ def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> Fr
                             "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}} for c in cases]
     manifest = {"sweep": metadata["campaign"]["sweep"],
                 "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
-    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"])
+    built = {"sweep", "cases_total", "cases_finished", "cases_failed", "case_cpu_seconds"}
+    info = {k: v for k, v in metadata["campaign"].items() if k not in built}  # the executor's, as recorded
+    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"], campaign_info=info)
     return table
 
 
@@ -402,11 +456,11 @@ def describe(table: FrictionTable) -> str:
     if cal:
         lines.append(f"  mu0 = {cal['mu0']:g}, tau0 = {cal['tau0'] / 1e6:.4g} MPa ({cal['tau0_source']})")
     fits = m.get("fits")
-    if fits and "beta_forms" in fits:
-        bf = fits["beta_forms"]
-        lines.append(f"  A_p(beta) per (P, v): form '{bf['chosen']}' (total AIC "
-                     + ", ".join(f"{f} {_f(a, '.1f')}" for f, a in bf["total_aic"].items())
-                     + f" over {bf['rows_compared']} rows, {bf['points']} points)")
+    if fits and "rows" in fits:
+        for name, forms in fits.get("summary", {}).items():
+            lines.append(f"  {name}(beta) per (P, v), goodness of fit at significance {fits['significance']:g}: "
+                         + "; ".join(f"{f} chi^2/dof {_f(g['chi2_per_dof'], '.3g')} ({g['rows_passing']} of "
+                                     f"{g['rows_tested']} rows pass)" for f, g in forms.items()))
         for a in fits.get("alpha_eq23_per_velocity", []):
             lines.append(f"    Eq. 23 at v = {_f(a['velocity'], 'g')} m/s: alpha = {_f(a['alpha'], '.4g')} +- "
                          f"{_f(a['alpha_stderr'], '.2g')}, R^2 = {_f(a['r2'], '.3f')} ({a['n_points']} points)")
@@ -417,9 +471,9 @@ def describe(table: FrictionTable) -> str:
             if cap["velocity"] == table.velocity[-1] or cap["velocity"] == 0.08:
                 lines.append(f"    cap at s = 1, P = {cap['pressure'] / 1e6:g} MPa, v = {cap['velocity']:g} m/s: "
                              f"{_f(cap['beta_cap_s1'], '.3g')} (simulated up to {cap['simulated_max_beta']:.3g})")
-    if table.version == 3:
+    if table.version >= 3:
         sim = table.array("simulated")
-        lines.append(f"  simulated nodes {int(sim.sum())} of {sim.size} (the others hold their row's fit)")
+        lines.append(f"  simulated nodes {int(sim.sum())} of {sim.size} (the others: fits.unsimulated)")
     ax = m.get("axes", {}).get("velocity", {})
     if ax.get("note"):
         lines.append(f"  velocity note: {ax['note']}")

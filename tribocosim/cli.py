@@ -17,7 +17,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("tribocosim.cosim.apps.run_cli", "run a co-simulation scene (TOML) or SSP package (.ssp)"),
     "ssp": ("tribocosim.cosim.apps.ssp_cli", "SSP 1.0 packages: export a scene (ssp export SCENE -o RIG.ssp)"),
     "report": ("tribocosim.cosim.apps.report_cli", "error-vs-run-time, stability and paper-figure reports"),
-    "calibrate": ("tribocosim.cosim.apps.calibrate", "fit the particle-borne area (and zeta) to measured mu_bar"),
+    "calibrate": ("tribocosim.cosim.apps.calibrate", "fit the particle-borne area and the debris balance to measured "
+                  "mu_bar and debris"),
     "fmu": ("tribocosim.components.fmus.fmu_cli", "build the project's FMUs"),
     "meso": ("tribocosim.surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
     "surrogate": ("tribocosim.surrogate.surrogate_cli", "campaigns and the friction table"),

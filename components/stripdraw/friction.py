@@ -20,9 +20,10 @@ A_c (``contact_area``):
     which is the regime of the paper's macro figures (Eq. 9).
 
 The cap of beta (Eq. 24) is where s A_p reaches A_c: :meth:`FrictionLaw.beta_cap` finds it on the
-table's beta axis at the interval's pressure and sliding velocity (A_p and A_c are piecewise linear
-in beta there, so the crossing is exact), limited to 1; the largest of these caps at the table's
-(P, v) nodes bounds beta everywhere (``beta_threshold``: the initial debris is checked against it).
+table's beta axis at the interval's pressure and sliding velocity (format versions 2-3: A_p and A_c are
+piecewise linear in beta there, and the crossing is solved exactly; version 4: the first crossing of the
+interpolated share's monotone cubic pieces, bisected to 1e-12 in beta), limited to 1; the largest of these caps
+at the table's (P, v) nodes bounds beta everywhere (``beta_threshold``: the initial debris is checked against it).
 
 Laws (``friction_model``), each a :class:`FrictionLaw` with ``mu(pressure, velocity, beta) -> (mu, clamped)``,
 ``beta_cap(pressure, velocity)`` and ``beta_threshold``:
@@ -46,35 +47,9 @@ import math
 import numpy as np
 
 from tribocosim.errors import ParameterError, TableDomainError
-from tribocosim.components.native.toolchain.library import UBYTE_P, VP, core, ptr
+from tribocosim.components.native.toolchain.library import UBYTE_P, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
-from tribocosim.components.stripdraw.table import AREAS, FrictionTable
-
-
-class NativeTable:
-    """A friction table in the native core (``tc_table``), made from a :class:`FrictionTable`'s arrays."""
-
-    def __init__(self, table: FrictionTable):
-        c = self._core = core()
-        self.handle = VP()
-        self._arrays = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in ("pressure", "velocity", "beta",
-                                                                                    "mu")]
-        p, v, b, mu = self._arrays
-        c.call(c.lib.tc_table_from_arrays, p.size, v.size, b.size, ptr(p), ptr(v), ptr(b), ptr(mu),
-               table.beta_threshold, ctypes.byref(self.handle))
-        if table.version >= 2:
-            areas = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in AREAS]
-            self._arrays += areas
-            c.call(c.lib.tc_table_set_areas, self.handle, *(ptr(a) for a in areas))
-        if table.version >= 3:
-            extras = [np.ascontiguousarray(table.array(k), dtype=float) for k in ("simulated", "particle_area_clusters")]
-            self._arrays += extras
-            c.call(c.lib.tc_table_set_extras, self.handle, *(ptr(a) for a in extras))
-
-    def __del__(self):
-        if getattr(self, "handle", None):
-            self._core.lib.tc_table_free(self.handle)
-            self.handle = None
+from tribocosim.components.stripdraw.table import FrictionTable
 
 
 class FrictionLaw:
@@ -93,7 +68,7 @@ class FrictionLaw:
         self.table = table if params.friction_model == "table" else None
         c = self._core = core()
         self._struct = c.struct(params)
-        self._native = NativeTable(self.table) if self.table is not None else None
+        self._native = self.table.native if self.table is not None else None
         c.call(c.lib.tc_law_check, ctypes.byref(self._struct), self.native_table)
 
     @property

@@ -1,7 +1,8 @@
 """The friction table format: mu(P, v, beta) on a rectilinear grid, in one ``.npz`` file.
 
 This module is the only owner of the format: the surrogate writes tables through
-:func:`write_table`, the strip-draw model and its FMU read them through :func:`read_table`.
+:func:`write_table`, the strip-draw model and its FMU read them through :func:`read_table`; lookups go through the
+native core (``components/native/core/tc_table_lookup.c``, the code the FMU runs; :class:`NativeTable`).
 
 File layout (numpy ``.npz``, read with ``allow_pickle=False``):
 
@@ -21,31 +22,39 @@ key                        shape / type                   meaning
 ``particle_area_se``       (nP, nv, nb) float64, >= 0     version 3: standard error of ``particle_area``
 ``particle_area_clusters`` (nP, nv, nb) float64, >= 0     version 3: A_p/A0 of the paper's cluster rule alone
 ``particle_area_clusters_se`` (nP, nv, nb) float64, >= 0  version 3: its standard error
+``mu_se``                  (nP, nv, nb) float64, >= 0     version 4: standard error of ``mu``
 ``metadata``               0-d str (JSON object)          see below
 =========================  =============================  ===========================================
 
 Version 2 carries the contact areas behind mu, so that the strip-draw model can compute
 mu = mu0 (1 - A_p / A_c) with either contact-area convention (docs/model.md section 4); version 3 adds
-where the values were simulated (the others come from the fit of A_p(beta) and are counted when read,
-docs/model.md section 4), the standard errors of the tabulated areas, and the flake-borne area of the
-paper's blocking rule alone (Fig. 8) beside that of every load-bearing flake; versions 1 (mu only) and 2
-stay readable. ``metadata`` always holds ``format`` (``"tribocosim-friction-table"``),
-``format_version`` (1, 2 or 3), ``units`` (array -> unit), ``provenance`` (``"closed_form"`` or
-``"mesoscale"``), ``beta_threshold`` (the cap of beta, Eq. 24) and ``content_hash``: the SHA-256
-of the axes and arrays (float64, little-endian, C order) and of the canonical JSON of the other
-metadata. A file whose hash or format version does not match is refused.
+where the values were simulated (a lookup that reads another node is counted, docs/model.md section 4), the
+standard errors of the tabulated areas, and the flake-borne area of the paper's blocking rule alone (Fig. 8) beside
+that of every load-bearing flake. Version 4 holds, at every simulated node, the ensemble means of the slides with
+their ensemble standard errors (``mu_se`` added: that of mu = mu0 (1 - A_p / A_c) from the members' A_p and A_c),
+and is interpolated monotone cubic (below). Versions 1 to 3 stay readable and are read as before (multilinear).
+``metadata`` always holds ``format`` (``"tribocosim-friction-table"``), ``format_version`` (1 to 4), ``units``
+(array -> unit), ``provenance`` (``"closed_form"`` or ``"mesoscale"``), ``beta_threshold`` (the cap of beta, Eq. 24)
+and ``content_hash``: the SHA-256 of the axes and arrays (float64, little-endian, C order) and of the canonical JSON
+of the other metadata. A file whose hash or format version does not match is refused.
 
 The native code reads the table in its resource form (:func:`write_table_resource`): an array file
-(:mod:`tribocosim.components.native.resource_io.array_file`) with the axes, mu, the areas (version 2), ``beta_threshold``,
-``content_hash``, ``provenance`` and ``source_sha256`` (the SHA-256 of the bytes of the ``.npz`` it was written
-from), written from a verified table (the FMU build bundles it as ``friction_table.tca``; a table file ``X.npz`` has
-its resource at ``X.tca``). The native reader refuses ``X.tca`` when ``X.npz`` exists and its SHA-256 is not the
-recorded one: a table replaced after its resource was written is never served from the old resource.
+(:mod:`tribocosim.components.native.resource_io.array_file`) with the axes, the value arrays, ``format_version``,
+``beta_threshold``, ``content_hash``, ``provenance`` and ``source_sha256`` (the SHA-256 of the bytes of the ``.npz``
+it was written from), written from a verified table (the FMU build bundles it as ``friction_table.tca``; a table
+file ``X.npz`` has its resource at ``X.tca``). The native reader refuses ``X.tca`` when ``X.npz`` exists and its
+SHA-256 is not the recorded one: a table replaced after its resource was written is never served from the old
+resource.
 
-Interpolation is trilinear in (P, v, beta) and exact on the grid nodes. Queries outside the axes
-follow a policy: ``"clamp"`` (evaluate at the nearest edge and count the clamped lookups, so the
-caller can report them) or ``"error"`` (raise :class:`~tribocosim.errors.TableDomainError`). A query
-within ``AXIS_END_TOLERANCE`` (1e-9, relative) of an axis end is on the end.
+Interpolation (``tc_table_lookup.c`` states the equations): versions 1 to 3 multilinear in (P, v, beta); version 4
+monotone cubic (Fritsch-Butland PCHIP, the slopes of a node from its neighbours of the same kind, simulated or
+not) in ln P, then in beta, and linear in v; every version reproduces the nodes exactly. The strip-draw law
+interpolates what mu is linear in (docs/model.md section 4). A lookup reads the corners of its cell whose weight
+(the product of the local coordinates, in ln P on a version 4 pressure axis) exceeds ``READ_WEIGHT`` (1e-9); a
+lookup that reads an unsimulated node or is outside an axis is flagged (clamped). Queries outside the axes follow a
+policy: ``"clamp"`` (evaluate at the nearest edge and flag them, so the caller can count them) or ``"error"``
+(raise :class:`~tribocosim.errors.TableDomainError`). A query within ``AXIS_END_TOLERANCE`` (1e-9, relative) of an
+axis end is on the end.
 """
 
 from __future__ import annotations
@@ -57,13 +66,16 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import ctypes
+import functools
+
 import numpy as np
 
 from tribocosim.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
-FORMAT_VERSION = 3  # written when the table carries the version 3 arrays; 1 and 2 are still read and written
-VERSIONS = (1, 2, 3)
+FORMAT_VERSION = 4  # written when the table carries the version 4 arrays; 1 to 3 are still read and written
+VERSIONS = (1, 2, 3, 4)
 AXES = ("pressure", "velocity", "beta")
 #: a query within this of an axis end (relative to the end) is on the end, not outside the table: the round-off of
 #: the inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15 on either side);
@@ -72,7 +84,14 @@ AXIS_END_TOLERANCE = 1e-9
 AREAS = ("contact_area", "particle_area", "contact_area_std", "particle_area_std")
 #: the version 3 arrays (all of them, or none)
 EXTRAS = ("simulated", "contact_area_se", "particle_area_se", "particle_area_clusters", "particle_area_clusters_se")
-UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1", **{a: "1" for a in (*AREAS, *EXTRAS)}}
+#: the arrays version 4 adds to version 3's
+EXTRAS_4 = ("mu_se",)
+UNITS = {"pressure": "Pa", "velocity": "m/s", "beta": "1", "mu": "1",
+         **{a: "1" for a in (*AREAS, *EXTRAS, *EXTRAS_4)}}
+#: a lookup reads a node when its weight exceeds this (relative: the weights of a lookup sum to 1; tc_table_lookup.h)
+READ_WEIGHT = 1e-9
+#: the longest beta axis a version 4 table may have (TC_TABLE_BETA_MAX of tc_table.h)
+BETA_MAX_4 = 64
 
 
 def _as_axis(name: str, values) -> np.ndarray:
@@ -104,7 +123,8 @@ class FrictionTable:
         Version 2: the ensemble means of A_c/A0 and A_p/A0 and their member standard deviations,
         same shape as ``mu`` (all four, or none).
     extras : dict, optional
-        Version 3 (with the version 2 areas): every array of :data:`EXTRAS` by name, same shape as ``mu``.
+        Version 3 (with the version 2 areas): every array of :data:`EXTRAS` by name, same shape as ``mu``;
+        version 4: those and :data:`EXTRAS_4`.
     """
 
     pressure: np.ndarray
@@ -126,9 +146,9 @@ class FrictionTable:
         if given and len(given) != len(AREAS):
             raise ParameterError(f"table areas: {given} given; a version 2 table needs all of {list(AREAS)}")
         extras = dict(self.extras or {})
-        if extras and (sorted(extras) != sorted(EXTRAS) or not given):
+        if extras and (sorted(extras) not in (sorted(EXTRAS), sorted(EXTRAS + EXTRAS_4)) or not given):
             raise ParameterError(f"table extras: {sorted(extras)} given; a version 3 table needs the version 2 "
-                                 f"areas and all of {list(EXTRAS)}")
+                                 f"areas and all of {list(EXTRAS)}, a version 4 table also {list(EXTRAS_4)}")
         for name in ("mu", *given, *extras):
             arr = np.ascontiguousarray(extras[name] if name in extras else getattr(self, name), dtype=np.float64)
             if arr.shape != shape:
@@ -142,6 +162,10 @@ class FrictionTable:
         if extras and not np.all((extras["simulated"] == 0) | (extras["simulated"] == 1)):
             raise ParameterError("table simulated must be 0 or 1 at every node")
         object.__setattr__(self, "extras", extras)
+        if self.version == 4 and not (self.pressure[0] > 0 and self.beta.size <= BETA_MAX_4):
+            raise ParameterError(f"a version 4 table interpolates in ln P on at most {BETA_MAX_4} beta nodes; this "
+                                 f"one's pressure axis starts at {self.pressure[0]!r} Pa and it has {self.beta.size} "
+                                 "beta nodes")
         bt = self.metadata.get("beta_threshold")
         if bt is None or not (0 < float(bt) <= 1):
             raise ParameterError(f"table metadata beta_threshold = {bt!r}; a value in (0, 1] is required")
@@ -149,12 +173,15 @@ class FrictionTable:
 
     @property
     def version(self) -> int:
-        """The format version: 3 with the version 3 arrays, 2 with the areas, else 1."""
-        return 3 if self.extras else 2 if self.contact_area is not None else 1
+        """The format version: 4 with the version 4 arrays, 3 with the version 3 arrays, 2 with the areas, else 1."""
+        if self.extras:
+            return 4 if EXTRAS_4[0] in self.extras else 3
+        return 2 if self.contact_area is not None else 1
 
     def arrays(self) -> tuple[str, ...]:
-        """The names of the value arrays this table holds (``mu``, the areas in version 2, the extras in 3)."""
-        return ("mu", *AREAS, *EXTRAS)[: {1: 1, 2: 1 + len(AREAS), 3: 1 + len(AREAS) + len(EXTRAS)}[self.version]]
+        """The names of the value arrays this table holds (``mu``, the areas in version 2, the extras in 3 and 4)."""
+        return ("mu", *AREAS, *EXTRAS, *EXTRAS_4)[: {1: 1, 2: 1 + len(AREAS), 3: 1 + len(AREAS) + len(EXTRAS),
+                                                      4: 1 + len(AREAS) + len(EXTRAS) + len(EXTRAS_4)}[self.version]]
 
     def array(self, name: str) -> np.ndarray:
         """One of :meth:`arrays` by name."""
@@ -188,8 +215,18 @@ class FrictionTable:
         h.update(json.dumps(meta, sort_keys=True, separators=(",", ":")).encode())
         return h.hexdigest()
 
+    @functools.cached_property
+    def native(self) -> "NativeTable":
+        """The table in the native core, where every lookup is made (made on first use; not pickled)."""
+        return NativeTable(self)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("native", None)
+        return state
+
     def interpolate(self, pressure, velocity, beta, policy: str = "clamp") -> tuple[np.ndarray, np.ndarray]:
-        """Trilinear interpolation of mu at the query points (broadcast together).
+        """mu at the query points (broadcast together), interpolated as the format version says (module docstring).
 
         Parameters
         ----------
@@ -203,7 +240,7 @@ class FrictionTable:
         mu : ndarray
             Interpolated friction coefficients.
         clamped : ndarray of bool
-            Which queries were outside the axes (and clamped).
+            Which queries were outside the axes (and clamped) or read a node the campaign did not simulate.
 
         Raises
         ------
@@ -213,56 +250,88 @@ class FrictionTable:
         return self.interpolate_array(self.mu, pressure, velocity, beta, policy)
 
     def interpolate_array(self, values: np.ndarray, pressure, velocity, beta, policy: str = "clamp"):
-        """Trilinear interpolation of one of the table's arrays (``mu`` or an area), as :meth:`interpolate`."""
+        """One array with the table's shape (``mu``, an area, a standard error ...) interpolated as
+        :meth:`interpolate`."""
         if policy not in ("clamp", "error"):
             raise ParameterError(f"table policy = {policy!r} is not allowed; choose clamp or error")
-        p = np.asarray(pressure, float)
-        v = np.abs(np.asarray(velocity, float))
-        b = np.asarray(beta, float)
-        if p.ndim == 0:
-            # one pressure for all queries (the strip-draw case): interpolate in P once, then
-            # bilinearly in (v, beta)
-            ip, tp, outp = self._locate("pressure", p, policy)
-            ip, tp = int(ip), float(tp)
-            plane = values[ip] if self.pressure.size == 1 else (1.0 - tp) * values[ip] + tp * values[ip + 1]
-            v, b = np.broadcast_arrays(v, b)
-            iv, tv, outv = self._locate("velocity", v, policy)
-            ib, tb, outb = self._locate("beta", b, policy)
-            sv = min(1, self.velocity.size - 1)
-            sb = min(1, self.beta.size - 1)
-            out = ((1.0 - tv) * ((1.0 - tb) * plane[iv, ib] + tb * plane[iv, ib + sb])
-                   + tv * ((1.0 - tb) * plane[iv + sv, ib] + tb * plane[iv + sv, ib + sb]))
-            return out, outv | outb | bool(outp)
-        p, v, b = np.broadcast_arrays(p, v, b)
-        located = [self._locate(name, q, policy) for name, q in zip(AXES, (p, v, b))]
-        (ip, tp, op), (iv, tv, ov), (ib, tb, ob) = located
-        out = np.zeros(p.shape)
-        sp, sv, sb = (min(1, getattr(self, n).size - 1) for n in AXES)
-        for dp in (0, sp):
-            wp = tp if dp else 1.0 - tp
-            for dv in (0, sv):
-                wv = tv if dv else 1.0 - tv
-                for db in (0, sb):
-                    wb = tb if db else 1.0 - tb
-                    out += wp * wv * wb * values[ip + dp, iv + dv, ib + db]
-        return out, op | ov | ob
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        if values.shape != self.mu.shape:
+            raise ParameterError(f"an array of shape {values.shape} cannot be interpolated in a table of shape "
+                                 f"{self.mu.shape}")
+        p, v, b = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (pressure, velocity, beta)))
+        out, clamped = self.native.lookup(values, p, v, b, policy == "error")
+        return (out if out.ndim else float(out)), clamped
 
-    def _locate(self, name: str, q: np.ndarray, policy: str):
-        """Cell index, local coordinate in [0, 1] and out-of-range mask of queries on one axis."""
-        axis = getattr(self, name)
-        out = (q < axis[0] - AXIS_END_TOLERANCE * abs(axis[0])) | (q > axis[-1] + AXIS_END_TOLERANCE * abs(axis[-1]))
-        if policy == "error" and np.any(out):
-            bad = float(np.asarray(q)[out].flat[0]) if np.ndim(q) else float(q)
-            raise TableDomainError(
-                f"friction table lookup {name} = {bad!r} {UNITS[name]} is outside the table's "
-                f"range [{axis[0]:g}, {axis[-1]:g}] {UNITS[name]}"
-            )
-        qc = np.minimum(np.maximum(q, axis[0]), axis[-1])
-        if axis.size == 1:
-            return np.zeros(np.shape(q), dtype=np.intp), np.zeros(np.shape(q)), out
-        i = np.minimum(np.searchsorted(axis, qc, side="right") - 1, axis.size - 2)
-        t = (qc - axis[i]) / (axis[i + 1] - axis[i])
-        return i, t, out
+    def read_nodes(self, pressure: float, velocity: float, beta: float) -> tuple[list, bool]:
+        """The nodes a lookup at one point reads (``[((i, j, k), weight), ...]``, the weights above
+        :data:`READ_WEIGHT`) and whether the point is outside an axis (located then at the nearest edge)."""
+        return self.native.read_nodes(pressure, velocity, beta)
+
+    def reads_unsimulated(self, pressure: float, velocity: float, beta: float) -> bool:
+        """Whether a lookup at one point reads a node the campaign did not simulate (a version 3 or 4 table)."""
+        if self.version < 3:
+            return False
+        sim = self.extras["simulated"]
+        return any(sim[node] == 0.0 for node, _ in self.read_nodes(pressure, velocity, beta)[0])
+
+
+class NativeTable:
+    """A friction table in the native core (``tc_table``), made from a :class:`FrictionTable`'s arrays: every lookup
+    of the strip-draw model, its FMU and of :meth:`FrictionTable.interpolate` is made here."""
+
+    def __init__(self, table: FrictionTable):
+        from tribocosim.components.native.toolchain.library import VP, core, ptr
+
+        c = self._core = core()
+        self._ptr = ptr
+        self.handle = VP()
+        self.shape = table.mu.shape
+        self._arrays = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in ("pressure", "velocity", "beta",
+                                                                                    "mu")]
+        p, v, b, mu = self._arrays
+        c.call(c.lib.tc_table_from_arrays, p.size, v.size, b.size, ptr(p), ptr(v), ptr(b), ptr(mu),
+               table.beta_threshold, ctypes.byref(self.handle))
+        if table.version >= 2:
+            areas = [np.ascontiguousarray(getattr(table, k), dtype=float) for k in AREAS]
+            self._arrays += areas
+            c.call(c.lib.tc_table_set_areas, self.handle, *(ptr(a) for a in areas))
+        if table.version >= 3:
+            extras = [np.ascontiguousarray(table.array(k), dtype=float)
+                      for k in ("simulated", "particle_area_clusters")]
+            self._arrays += extras
+            c.call(c.lib.tc_table_set_extras, self.handle, *(ptr(a) for a in extras))
+        if table.version >= 4:
+            c.call(c.lib.tc_table_set_cubic, self.handle)
+
+    def lookup(self, values: np.ndarray, p: np.ndarray, v: np.ndarray, b: np.ndarray, refuse: bool):
+        """``values`` (C-contiguous, the table's shape) at the points (same shape), one native call per pressure;
+        ``(out, clamped)``. TableDomainError outside the axes when ``refuse``."""
+        from tribocosim.components.native.toolchain.library import UBYTE_P
+
+        c, ptr = self._core, self._ptr
+        out = np.empty(p.shape)
+        clamped = np.zeros(p.shape, dtype=bool)
+        for value in np.unique(p):
+            at = p == value
+            vq, bq = np.ascontiguousarray(v[at]), np.ascontiguousarray(b[at])
+            o, flags = np.empty(vq.size), np.zeros(vq.size, dtype=np.uint8)
+            c.call(c.lib.tc_table_lookup, self.handle, ptr(values), float(value), vq.size, ptr(vq), ptr(bq),
+                   int(refuse), ptr(o), ptr(flags, UBYTE_P), discard=TableDomainError)
+            out[at], clamped[at] = o, flags.astype(bool)
+        return out, clamped
+
+    def read_nodes(self, pressure: float, velocity: float, beta: float) -> tuple[list, bool]:
+        """:meth:`FrictionTable.read_nodes` (tc_table_read_nodes)."""
+        nodes, weights, out = (ctypes.c_size_t * 8)(), (ctypes.c_double * 8)(), ctypes.c_int(0)
+        n = self._core.lib.tc_table_read_nodes(self.handle, float(pressure), float(velocity), float(beta), nodes,
+                                               weights, ctypes.byref(out))
+        return [(tuple(int(x) for x in np.unravel_index(nodes[k], self.shape)), float(weights[k])) for k in range(n)], \
+            bool(out.value)
+
+    def __del__(self):
+        if getattr(self, "handle", None):
+            self._core.lib.tc_table_free(self.handle)
+            self.handle = None
 
 
 def mu_of_areas(mu0: float, particle_area, contact_area) -> np.ndarray:
@@ -311,7 +380,8 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
             if not isinstance(meta, dict):
                 raise ValueError("metadata is not a JSON object")
             version = meta.get("format_version")
-            names = (*AXES, "mu", *(AREAS if version in (2, 3) else ()), *(EXTRAS if version == 3 else ()))
+            names = (*AXES, "mu", *(AREAS if version in (2, 3, 4) else ()), *(EXTRAS if version in (3, 4) else ()),
+                     *(EXTRAS_4 if version == 4 else ()))
             arrays = {k: np.array(data[k]) for k in names if version in VERSIONS}
     except Exception as exc:  # noqa: BLE001 - any parse failure is a malformed file
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
@@ -324,7 +394,7 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
     try:
         table = FrictionTable(arrays["pressure"], arrays["velocity"], arrays["beta"], arrays["mu"], meta,
                               **{a: arrays[a] for a in AREAS if a in arrays},
-                              extras={a: arrays[a] for a in EXTRAS if a in arrays})
+                              extras={a: arrays[a] for a in (*EXTRAS, *EXTRAS_4) if a in arrays})
     except (ParameterError, ValueError, TypeError) as exc:  # also members that are not float arrays
         raise TableError(f"friction table {path} is malformed: {exc}") from exc
     if table.content_hash() != meta.get("content_hash"):
@@ -337,10 +407,12 @@ RESOURCE_SUFFIX = ".tca"
 
 
 def resource_entries(table: FrictionTable) -> dict:
-    """The entries of the table's resource form: axes, value arrays, ``beta_threshold``, ``content_hash``,
-    ``provenance`` (what the native model reads; further entries may be added without a change to its reader)."""
+    """The entries of the table's resource form: axes, value arrays, ``format_version``, ``beta_threshold``,
+    ``content_hash``, ``provenance`` (what the native model reads; further entries may be added without a change to
+    its reader)."""
     entries = {name: getattr(table, name) for name in AXES}
     entries.update({name: table.array(name) for name in table.arrays()})
+    entries["format_version"] = float(table.version)
     entries["beta_threshold"] = table.beta_threshold
     entries["content_hash"] = str(table.metadata.get("content_hash", ""))
     entries["provenance"] = table.provenance

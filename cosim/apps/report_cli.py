@@ -54,7 +54,9 @@ def _paper(args) -> int:
     for c in failed:
         print(f"tribocosim report paper: the table fails its direct-slide check at P = {c['pressure'] / 1e6:g} MPa, "
               f"v = {c['velocity']:g} m/s, beta = {c['beta']:.3g}: direct {c['a_p_direct']:.4g}, table "
-              f"{c['a_p_table']:.4g}, {c['difference_over_combined_se']:+.2f} combined standard errors"
+              f"{c['a_p_table']:.4g}, {c['difference_over_combined_se']:+.2f} combined standard errors; mu "
+              f"{c.get('mu_direct', float('nan')):.4g} against {c.get('mu_table', float('nan')):.4g}, "
+              f"{c.get('mu_difference_over_combined_se', float('nan')):+.2f}"
               + ("" if c["all_nodes_simulated"] else "; the interpolation reads nodes the campaign did not simulate"),
               file=sys.stderr)
     return 1 if failed else 0

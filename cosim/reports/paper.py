@@ -45,6 +45,7 @@ import numpy as np
 from tribocosim.errors import TribocosimError
 from tribocosim.cosim.apps.stripdraw_experiment import V0, Point, draw, run_points
 from tribocosim.cosim.reports import paper_physics as pp
+from tribocosim.cosim.reports import paper_text
 from tribocosim.cosim.reports.paper_physics import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
 
 PAPER_DROP_1PASS = 0.35  # Sec. 2.1: 35 % at 25 MPa after one pass, 35 x 35 mm pad
@@ -162,14 +163,14 @@ def _drops(runs: Runs, params: dict, scales: list[float]) -> list[float]:
 
 def ensemble_rel_stderr(table, contact_area: str) -> float:
     """Relative standard error of the table's A_p (and A_c with ``mesoscale``) at 25 MPa and the test's velocity,
-    averaged over the debris levels simulated there: the tabulated values' standard errors (version 3), else the
-    member spread over the square root of the members (version 2); 0 without either."""
+    averaged over the debris levels whose lookups there read simulated nodes only: the tabulated values' standard
+    errors (versions 3 and 4), else the member spread over the square root of the members (version 2); 0 without
+    either."""
     if table.version < 2:
         return 0.0
     names = ("particle_area", "contact_area") if contact_area == "mesoscale" else ("particle_area",)
     if table.version >= 3:
-        sim, _ = table.interpolate_array(table.array("simulated"), CAL_PRESSURE, V0, table.beta)
-        betas = table.beta[(table.beta > 0) & (sim == 1.0)]
+        betas = np.array([b for b in table.beta if b > 0 and not table.reads_unsimulated(CAL_PRESSURE, V0, b)])
         errors = {name: table.array(name + "_se") for name in names}
         members = None
     else:
@@ -354,211 +355,20 @@ def _clamps_by_scene(figures: dict) -> dict[str, int]:
 # ---- the report ------------------------------------------------------------------------------------------
 
 
-def _pct(x: float) -> str:
-    return f"{100 * x:.1f} %"
-
-
-def _row_values(m: dict, cal: Calibration | None, grid: Grid) -> dict[str, str]:
-    at = m["drop_at_mpa"]
-    return {
-        "scale": (f"{cal.scale:.4g} +- {cal.stderr:.2g}" if cal else "1"),
-        "drop1": _pct(m["drop_1pass"]) + (" (calibrated)" if cal else ""),
-        "drop3": _pct(m["drop_by_pass"][grid.passes]),
-        "pads": " / ".join(_pct(m["drop_by_pad"][p]) for p in grid.pads),
-        "order": f"{'yes' if m['pad_order_holds'][0] == m['pad_order_holds'][1] else 'no'} "
-                 f"({m['pad_order_holds'][0]} of {m['pad_order_holds'][1]} pressures)",
-        "zeta": ("falls: " if m["zeta_falls"] else "does not fall: ")
-                + " / ".join(f"{m['mu_by_zeta'][z]:.4f}" for z in grid.zetas),
-        "k": ("falls" if m["k_falls"] else "does not fall") + ", "
-             + ("saturates" if m["k_saturates"] else "does not saturate") + ": "
-             + " / ".join(f"{m['mu_by_k'][K]:.4f}" for K in grid.ks),
-        "mu_low": f"{m['mu_low']:.4f}",
-        "beta": f"{m['beta_max_3pass']:.3g} ({m['beta_max']:.3g})",
-        "clamps": str(m["table_clamps"]),
-        "_at": at,
-    }
-
-
-def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_star: float = 55e9) -> float | None:
-    """A_c of Eq. 8 (kappa P / (h'_rms E*), the strip model's defaults) over the table's particle-free A_c at 25 MPa
-    and the test's velocity."""
-    if table.version < 2:
-        return None
-    ac, _ = table.interpolate_array(table.contact_area, CAL_PRESSURE, V0, 0.0)
-    return float(kappa * CAL_PRESSURE / (rms_slope * e_star) / ac) if ac > 0 else None
-
-
-def markdown(results: dict, cals: dict, grid: Grid, table, table_path: Path, header: str, files: list[str]) -> str:
-    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
-    configs = list(results)
-    values = {c: _row_values(results[c]["metrics"], cals.get(c.contact_area) if c.calibrated else None, grid)
-              for c in configs}
-    at = grid.pressures[-2] if 25 not in grid.pressures else 25
-    pads = " / ".join(f"{1000 * p:g}" for p in grid.pads)
-    rows = [
-        ("A_p scale s (+- standard error)", "-", "scale"),
-        (f"mu_bar drop at {at} MPa, 1 pass, 35 mm pad", "35 %", "drop1"),
-        (f"mu_bar drop at {at} MPa after {grid.passes} passes, 35 mm pad", "up to 72 %", "drop3"),
-        (f"mu_bar drop at {at} MPa, 1 pass, {pads} mm pads", "grows with pad length (Fig. 19b)", "pads"),
-        ("pad ordering mu(35) > mu(70) > mu(140) above 1 MPa", "yes (Figs. 2a, 19b)", "order"),
-        (f"mu_bar at {grid.trend_at:g} MPa for zeta = " + " / ".join(f"{z:g}" for z in grid.zetas),
-         "falls with zeta (Fig. 17b)", "zeta"),
-        (f"mu_bar at {grid.trend_at:g} MPa for K = " + " / ".join(f"{K:g}" for K in grid.ks),
-         "falls with K and saturates (Fig. 18b)", "k"),
-        (f"mu_bar at {min(grid.pressures)} MPa, 35 mm pad", "-", "mu_low"),
-        (f"largest beta after {grid.passes} passes at {at} MPa (in any test)", "-", "beta"),
-        ("table lookups outside the table's axes or simulated range (clamped)", "-", "clamps"),
-    ]
-    lines = [header, "", "| quantity | paper | " + " | ".join(c.label for c in configs) + " |",
-             "|---|---|" + "---|" * len(configs)]
-    for title, paper, key in rows:
-        lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
-    ratio = table_contact_ratio(table)
-    lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
-              "one-pass drop at 25 MPa is fitted (by s, per convention); every other entry is a prediction. "
-              f"The table's beta axis ends at {table.beta[-1]:.4g}."
-              + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
-                 f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
-                 if ratio and "eq8" in cals and "mesoscale" in cals else ""), ""]
-    for conv, cal in cals.items():
-        lines.append(f"- `{conv}`: s = {cal.scale:.6g}, standard error {cal.stderr:.3g} (quote of the 35 %: "
-                     f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
-                     f"{cal.stderr_ensemble:.3g}); drop reached {_pct(cal.drop)} in {cal.evaluations} strip-draw "
-                     "tests.")
-    from tribocosim.paths import DEFAULT_TABLE
-
-    shipped = Path(table_path).resolve() == Path(DEFAULT_TABLE).resolve()
-    table_text = "`models/friction_table.npz` (the shipped one)" if shipped else f"`{table_path}`"
-    lines += ["", f"Friction table: {table_text}. Figures: " + ", ".join(f"[{f}]({f})" for f in files)
-              + "; every test's mu_bar: [paper.csv](paper.csv), the numbers: [paper.json](paper.json).", ""]
-    return "\n".join(lines)
-
-
-def physics_markdown(extra: dict, cals: dict, grid: Grid, results: dict) -> list[str]:
-    """The sections after the paper-vs-model table (paper_physics): options, budget, speed, alpha, checks."""
-
-    lines = ["", "## Multi-pass options", "",
-             "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
-             "to 72 % after three. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
-             "drop, and the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
-             "pad).", "",
-             "| option | why these values | s | drop 1 / 2 / 3 passes at 25 MPa | 3-pass minus 2-pass | 140 mm pad, 1 pass "
-             "| debris after pass 1 / 2 / 3 [g/m^2] | clamped lookups |", "|---|---|---|---|---|---|---|---|"]
-    for opt in pp.OPTIONS:
-        r = extra["options"].get(opt.name, {})
-        if "error" in r:
-            lines.append(f"| {opt.label} | {opt.why} | cannot be calibrated: {r['error']} | | | | | |")
-            continue
-        lines.append(f"| {opt.label} | {opt.why} | {r['scale']:.4g} | " + " / ".join(_pct(d) for d in r["drops"])
-                     + f" | {100 * r['spacing_3_2']:.1f} points | {_pct(r['drop_140'])} | "
-                     + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
-    rows = extra["budget"]
-    nominal = extra["options"]["paper"]
-    cal = cals["mesoscale"]
-    lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
-              "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
-              "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
-              "(a two-sided range: half the difference of its ends). The quote of the 35 % "
-              f"alone gives s a standard error of {cal.stderr_quote:.2g}.", "",
-              "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
-    for r in rows:
-        if "error" in r:
-            lines.append(f"| {r['quantity']} | {r['range']} | {r['error']} | | |")
-        else:
-            s_cell = (f"{r['scale']:.3g}" if "scale" in r
-                      else f"s = {r['scale_value']:.3g} scales another A_p: not in the total")
-            lines.append(f"| {r['quantity']} | {r['range']} | {s_cell} | {100 * r['drop3']:.1f} | "
-                         f"{100 * r['drop140']:.1f} |")
-    tot = extra["budget_total"]
-    missing = extra["budget_not_varied"]
-    for m in missing:
-        lines.append(f"| {m['quantity']} | {m['range']} | not varied: {m['why']} | - | - |")
-    not_in = f", without the {', '.join(m['quantity'] for m in missing)}" if missing else ""
-    lines += [f"| **total** (quadrature, with the quote{not_in}) | | **{tot['scale']:.3g}** | "
-              f"**{100 * tot['drop3']:.1f}** | **{100 * tot['drop140']:.1f}** |", "",
-              f"So s = {cal.scale:.3g} +- {tot['scale']:.2g}, the 3-pass drop {_pct(nominal['drops'][2])} +- "
-              f"{100 * tot['drop3']:.1f} points (the paper: up to 72 %), the 140 mm pad's one-pass drop "
-              f"{_pct(nominal['drop_140'])} +- {100 * tot['drop140']:.1f} points"
-              + (f"; the {', '.join(m['quantity'] for m in missing)} is not varied, so these ranges leave "
-                 f"{'it' if len(missing) == 1 else 'them'} out." if missing else ".")]
-    lines.append("")
-    lines += ["## Drawing speed", "",
-              f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g} +- {tot['scale']:.2g}: the range in brackets), "
-              "and the drop against 1 MPa at the same speed. The paper's alpha(v) (Fig. 15) rises with the sliding "
-              "speed, which would make the debris effect grow from 0.08 to 0.5 m/s; here A_p is simulated at "
-              f"{' / '.join(f'{v:g}' for v in extra['simulated_velocities']) or 'no recorded'} m/s "
-              "(docs/physics/table_domain.md).", "",
-              "| V0 [m/s] | mu_bar, 1 pass | drop, 1 pass | mu_bar, 3 passes | drop, 3 passes |", "|---|---|---|---|---|"]
-    for r in extra["speed"]:
-        lines.append(f"| {r['velocity']:g} | {r['mu_1']:.4f} [{r['mu_1_band'][0]:.4f}, {r['mu_1_band'][1]:.4f}] | "
-                     f"{_pct(r['drop_1'])} | {r['mu_3']:.4f} [{r['mu_3_band'][0]:.4f}, {r['mu_3_band'][1]:.4f}] | "
-                     f"{_pct(r['drop_3'])} |")
-    by_v = {r["velocity"]: r for r in extra["speed"]}
-    if 0.08 in by_v and 0.5 in by_v and by_v[0.08]["drop_1"] > 0:
-        lines += ["", f"The one-pass drop at 0.5 m/s is {by_v[0.5]['drop_1'] / by_v[0.08]['drop_1']:.3f} times that at "
-                      f"0.08 m/s, the three-pass drop {by_v[0.5]['drop_3'] / by_v[0.08]['drop_3']:.3f} times."]
-    lines += ["", "## alpha of both observables", ""]
-    if not extra["alpha"]["load_bearing"]:
-        lines.append("The friction table is format version 2: it holds A_p of every load-bearing flake only, not that "
-                     "of the paper's cluster rule; a version 3 table gives alpha of both here.")
-    else:
-        lines += ["Eq. 23's alpha = A_p / A0 / (beta P / E*) at the table's first debris level, mean over the pressures "
-                  "(+- standard error), for every load-bearing flake and for the paper's cluster rule alone:", "",
-                  "| v [m/s] | every load-bearing flake | cluster rule alone |", "|---|---|---|"]
-    for a, c in zip(extra["alpha"]["load_bearing"], extra["alpha"]["clusters"]):
-        lines.append(f"| {a['velocity']:g} | {a['alpha']:.4g} +- {a['stderr']:.2g} | {c['alpha']:.3g} +- "
-                     f"{c['stderr']:.2g} |")
-    study = extra["alpha"].get("study")
-    if study:
-        lines += ["", f"The alpha(v) study ({study.get('source', 'docs/physics/alpha_velocity.md')}), 1-50 m/s, "
-                      "mean +- standard error:", "", "| setting | observable | " + " | ".join(
-                          f"{float(v):g} m/s" for v in study["velocities"]) + " | alpha(50)/alpha(1) |",
-                  "|---|---|" + "---|" * (len(study["velocities"]) + 1)]
-        for name, entry in study["settings"].items():
-            for key, label in (("all", "every load-bearing flake"), ("clusters", "cluster rule alone")):
-                cells = [f"{entry[key][str(v)][0]:.3g} +- {entry[key][str(v)][1]:.2g}" if str(v) in entry[key] else "-"
-                         for v in study["velocities"]]
-                ratio = entry["ratio_50_1"][key]
-                lines.append(f"| {entry['label']} | {label} | " + " | ".join(cells)
-                             + f" | {ratio[0]:.3g} +- {ratio[1]:.2g} |")
-    lines += ["", "## The friction table's checks", ""]
-    checks = extra.get("direct_slides", [])
-    if checks:
-        lines += ["Direct slides at points between the table's nodes (the table's own sweep settings) against the "
-                  "table's interpolation: within two combined standard errors?", "",
-                  "| P [MPa] | v [m/s] | beta | members | A_p/A0 direct | A_p/A0 table | difference / combined SE | "
-                  "nodes read all simulated | passes |", "|---|---|---|---|---|---|---|---|---|"]
-        for c in checks:
-            lines.append(f"| {c['pressure'] / 1e6:g} | {c['velocity']:g} | {c['beta']:.3g} | {c['members']} | "
-                         f"{c['a_p_direct']:.4g} +- {c['a_p_direct_se']:.2g} | {c['a_p_table']:.4g} +- "
-                         f"{c['a_p_table_se']:.2g} | {c['difference_over_combined_se']:+.2f} | "
-                         f"{'yes' if c['all_nodes_simulated'] else 'no'} | {'yes' if c['passed'] else 'NO'} |")
-    else:
-        lines.append("The table is not version 3 with its campaign recorded: no direct-slide check.")
-    m = results[Config("mesoscale", True)]["metrics"]
-    lines += ["", "Clamped lookups (outside the table's axes or its simulated range) in every test of the calibrated "
-                  "column, by figure: " + ", ".join(f"{k}: {v}" for k, v in _clamps_per_figure(m).items()) + ".", "",
-              "mu_bar(P) on the three pads (calibrated column):", "",
-              "| P [MPa] | " + " | ".join(f"{1000 * pad:g} mm" for pad in grid.pads) + " |",
-              "|---|" + "---|" * len(grid.pads)]
-    for P in grid.pressures:
-        lines.append(f"| {P:g} | " + " | ".join(f"{m['mu_by_pad'][pad][P]:.4f}" for pad in grid.pads) + " |")
-    return lines
-
-
-def _clamps_per_figure(m: dict) -> dict[str, int]:
-    out = {name: 0 for name in FIGURES}
-    for scene, count in m["table_clamps_by_scene"].items():
-        out[scene.split(":")[0]] += count
-    return out
-
-
 FIGURES = {  # name: (title, series key, legend label)
     "fig19b": ("Fig. 19b: pad length", "tool_length", lambda v: f"{1000 * v:g} mm pad"),
     "fig2b": ("Fig. 2b: passes (35 mm pad)", "pass", lambda v: f"pass {v}"),
     "fig17b": ("Fig. 17b: zeta (35 mm pad, K 1e-4)", "zeta", lambda v: f"zeta {v:g}"),
     "fig18b": ("Fig. 18b: Archard K (70 mm pad, zeta 0)", "archard_k", lambda v: f"K {v:g}"),
 }
+
+
+def clamps_per_figure(m: dict) -> dict[str, int]:
+    """Clamped lookups per figure of one configuration's metrics."""
+    out = {name: 0 for name in FIGURES}
+    for scene, count in m["table_clamps_by_scene"].items():
+        out[scene.split(":")[0]] += count
+    return out
 
 
 def plot(results: dict, out: Path) -> list[str]:
@@ -634,8 +444,9 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     files = plot(results, out)
     header = (f"# The paper's macro results ({'quick' if quick else 'full'} report)\n\nGenerated by `tribocosim report "
               f"paper{' --quick' if quick else ''}` in {wall:.0f} s ({runs.evaluations} strip-draw passes).")
-    text = markdown(results, cals, grid, table, table_path, header, files)
-    text += "\n".join(physics_markdown(extra, cals, grid, results)) + "\n"
+    text = paper_text.markdown(results, cals, grid, table, table_path, header, files)
+    calibrated = results[Config("mesoscale", True)]["metrics"]
+    text += "\n".join(paper_text.physics_markdown(extra, cals, grid, calibrated, clamps_per_figure(calibrated))) + "\n"
     (out / "paper.md").write_text(text, encoding="utf-8")
     summary = {
         "mode": "quick" if quick else "full", "wall_time": wall, "table": str(table_path),
@@ -647,7 +458,11 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
         "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
                               for k, v in extra["options"].items()}),
         "budget": _jsonable(extra["budget"]), "budget_total": _jsonable(extra["budget_total"]),
+        "budget_intervals": _jsonable(extra["budget_intervals"]),
         "budget_not_varied": _jsonable(extra["budget_not_varied"]),
+        "observable": _jsonable({"choice": {k: v for k, v in extra["observable"]["choice"].items()
+                                            if k != "calibration"},
+                                 "evidence": extra["observable"]["evidence"]}),
         "speed": _jsonable(extra["speed"]), "alpha": _jsonable(extra["alpha"]),
         "direct_slides": _jsonable(extra["direct_slides"]),
     }
@@ -656,8 +471,9 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
 
 
 def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
-    """The multi-pass options, the uncertainty budget, the drawing-speed prediction, alpha of both observables and
-    the direct-slide check (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
+    """The multi-pass options, the uncertainty budget with its intervals, the observable chosen (the other choice's
+    predictions and the evidence), the drawing-speed prediction, alpha of both observables and the direct-slide check
+    (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
     from tribocosim.paths import DEFAULT_TABLE
 
     params = config_params(base, Config("mesoscale", True))
@@ -676,20 +492,30 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
             if v.table == pp.DOMAIN_VARIANT and v.table not in tables:
                 continue  # no table on another domain size: named as not varied (pp.inputs_not_varied)
             if v.table is not None and v.table not in tables:
-                varied[v.name] = {"error": "needs a version 3 table that records its campaign"}
+                needs = "version 4" if v.table == pp.FORM_VARIANT else "version 3 or 4"
+                varied[v.name] = {"error": f"needs a {needs} table that records its campaign"}
                 continue
             p = {**params, **({"table_file": tables[v.table]} if v.table else {}), **v.parameters}
             varied[v.name] = pp.calibrated_predictions(runs, p, table, calibrate)
     rows = pp.budget(options["paper"], varied)
     total = {key: pp.budget_total(rows, key, cal.stderr_quote if key == "scale" else 0.0)
              for key in ("scale", "drop3", "drop140")}
+    nominal = options["paper"]
+    intervals = {"scale": pp.band(cal.scale, total["scale"], 0.0, math.inf),
+                 "drop3": pp.band(nominal["drops"][2], total["drop3"]),
+                 "drop140": pp.band(nominal["drop_140"], total["drop140"])}
+    if log:
+        log("the observable: the other choice and the evidence ...")
+    observable = {"choice": pp.calibrated_predictions(runs, {**params, **pp.OBSERVABLE_CHOICE}, table, calibrate),
+                  "evidence": pp.observable_evidence(runs, params, table, calibrate)}
     if log:
         log("drawing speed ...")
     speed = pp.speed_prediction(runs, params, cal.scale, total["scale"])
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
     checks = pp.direct_slide_check(table, workers, quick, log)
-    return {"options": options, "budget": rows, "budget_total": total, "budget_not_varied": pp.inputs_not_varied(table, tables),
+    return {"options": options, "budget": rows, "budget_total": total, "budget_intervals": intervals,
+            "budget_not_varied": pp.inputs_not_varied(table, tables), "observable": observable,
             "speed": speed, "alpha": alpha, "direct_slides": checks,
             "simulated_velocities": pp.simulated_velocities(table)}
 

@@ -15,15 +15,21 @@ predicted.
   spacing, the 140 mm pad's drop and the debris weighed after each pass are what would tell them apart.
 - Uncertainty budget (:data:`VARIATIONS`): every chosen input varied over a stated range, s recalibrated, and the
   change of s and of each prediction recorded; the total is the quadrature sum of the half-ranges (a one-sided
-  variation counts whole). The slides' domain size is varied with the shipped table of the same slides on a
-  128 um domain at the rows the 3-pass test reads (:data:`DOMAIN_TABLE`).
+  variation counts whole), and a prediction's band is the interval it spans, clipped to [0, 100 %]
+  (:func:`band`). The slides' domain size is varied with the shipped table of the same slides on a 128 um domain at
+  the rows the 3-pass test reads (:data:`DOMAIN_TABLE`); the table's form with the table whose simulated nodes hold
+  their row's fit instead of the ensemble means (:func:`with_fitted_rows`).
+- The observable (:func:`observable_evidence`): A_p of every load-bearing flake or of the paper's cluster rule alone
+  is a model choice, not an input with a range: it is reported beside the budget with its evidence (the alpha of
+  Eq. 23 the paper's own macro model needs for the 35 % drop, against the alpha_eff each observable's share gives at
+  that model's contact area) and with the predictions of the other choice, and is not summed into the total.
 - Drawing speed (:data:`SPEEDS`): mu_bar at 0.02-0.5 m/s after 1 and 3 passes at 25 MPa, with the band of s's
   total standard error. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
   the debris effect grow with the drawing speed; the report names the velocities the table simulated.
 - alpha of both observables (every load-bearing flake, the paper's cluster rule alone): the table's Eq. 23 slope
-  at small beta per velocity row (the initial slope of the fitted form, alpha = a E* / P, mean over the
-  pressures with its standard error), and the alpha(v) study of docs/physics/alpha_velocity.md when its results
-  are shipped (``models/alpha_velocity.json``).
+  at its first debris level per velocity row (alpha = A_p / A0 / (beta P / E*), mean over the pressures with its
+  standard error), and the alpha(v) study of docs/physics/alpha_velocity.md when its results are shipped
+  (``models/alpha_velocity.json``).
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test a
 #: (128^2 pixels of 1 um) at 1, 20 and 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um``)
 DOMAIN_TABLE = "friction_table_128um.npz"
 DOMAIN_VARIANT = "domain_128"  # its variant's name in table_variants
+FORM_VARIANT = "fitted_rows"  # the table with its rows' fits at the simulated nodes (with_fitted_rows)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,9 +94,6 @@ class Variation:
     parameters: dict = dataclasses.field(default_factory=dict)
     table: str | None = None  # a table variant (:func:`table_variants`)
     pair: str | None = None  # the name of the other end of a two-sided range
-    #: False where the variation changes the A_p that s scales (another observable): its s is another quantity,
-    #: reported beside the budget and left out of the total of s
-    same_scale: bool = True
 
 
 VARIATIONS = (
@@ -106,11 +110,13 @@ VARIATIONS = (
     Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
     Variation("domain_128", "domain size of the slides", "128 um instead of 256 um at 1, 20 and 30 MPa (0.08 m/s)",
               table=DOMAIN_VARIANT),
-    Variation("rule", "blocking rule", "A_p of the paper's cluster rule alone", {"particle_area_rule": "clusters"},
-              same_scale=False),
+    Variation("form", "form of the table", "each row's fit (smaller AIC) at its simulated nodes instead of the "
+              "ensemble means", table=FORM_VARIANT),
     Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
               {"friction_velocity": "slip_rate"}),
 )
+#: the model choice reported beside the budget: the observable, as the parameters that choose the other one
+OBSERVABLE_CHOICE = {"particle_area_rule": "clusters"}
 
 
 def inputs_not_varied(table, variants: dict) -> list[dict]:
@@ -127,34 +133,59 @@ def inputs_not_varied(table, variants: dict) -> list[dict]:
 
 def with_rows_of(table, other):
     """``table`` with the areas of ``other`` on the (pressure, velocity) rows both tables have: A_p, A_c, their
-    standard errors and the simulated flags interpolated linearly in beta onto ``table``'s beta axis (which
-    ``other``'s must span), mu = mu0 (1 - A_p / A_c) there. Version 3 tables."""
+    standard errors (and mu's, version 4) interpolated in beta onto ``table``'s beta axis (which ``other``'s must
+    span) by ``other``'s own interpolation, a node simulated where that lookup reads no unsimulated node of
+    ``other``, mu = mu0 (1 - A_p / A_c) there. Version 3 or 4 tables."""
     from tribocosim.errors import TableError
 
     if other.beta[0] > table.beta[0] or other.beta[-1] < table.beta[-1]:
         raise TableError(f"the beta axis [{other.beta[0]:g}, {other.beta[-1]:g}] does not span the table's "
                          f"[{table.beta[0]:g}, {table.beta[-1]:g}]")
-    names = ("particle_area", "contact_area", "particle_area_se", "contact_area_se", "simulated")
-    arrays = {name: table.array(name).copy() for name in names}
+    names = ("particle_area", "contact_area", "particle_area_se", "contact_area_se",
+             *(("mu_se",) if table.version >= 4 and other.version >= 4 else ()))
+    arrays = {name: table.array(name).copy() for name in (*names, "simulated")}
     for i, p in enumerate(table.pressure):
         for j, v in enumerate(table.velocity):
             if p not in other.pressure or v not in other.velocity:
                 continue
             for name in names:
                 arrays[name][i, j] = other.interpolate_array(other.array(name), p, v, table.beta, "error")[0]
-    arrays["simulated"] = (arrays["simulated"] == 1.0).astype(float)  # a node between an unsimulated one is not
+            arrays["simulated"][i, j] = [0.0 if other.reads_unsimulated(p, v, b) else 1.0 for b in table.beta]
+    names = (*names, "simulated")
     ap, ac = arrays["particle_area"], arrays["contact_area"]
     mu = mu_of_areas(table.metadata["calibration"]["mu0"], ap, ac)
     extras = {**table.extras, **{k: arrays[k] for k in names if k in table.extras}}
     return dataclasses.replace(table, particle_area=ap, contact_area=ac, mu=mu, extras=extras)
 
 
+def with_fitted_rows(table):
+    """``table`` (version 4, with its fits recorded) with A_p at every simulated node with flakes replaced by its
+    (P, v) row's fit of A_p(beta) of the smaller AIC (the quasi-static row: the slowest row's), mu recomputed: the
+    form the table would have if it held a fit where the slides were run. The unsimulated nodes are as they were."""
+    from tribocosim.surrogate.fit import beta_form
+
+    rows = {(r["pressure"], r["velocity"]): r for r in table.metadata["fits"]["rows"]}
+    slowest = min(v for _, v in rows)
+    ap = table.particle_area.copy()
+    sim = table.array("simulated") == 1.0
+    for i, p in enumerate(table.pressure):
+        for j, v in enumerate(table.velocity):
+            row = rows.get((float(p), float(v) if v > 0 else slowest))
+            if row is None:
+                continue
+            best = min(row["particle_area"].values(), key=lambda f: f["aic"])
+            at = sim[i, j] & (table.beta > 0)
+            ap[i, j, at] = np.maximum(beta_form(best["form"], table.beta[at], best["params"]), 0.0)
+    return dataclasses.replace(table, particle_area=ap,
+                               mu=mu_of_areas(table.metadata["calibration"]["mu0"], ap, table.contact_area))
+
+
 def table_variants(table, folder: Path, domain_table: Path | None = None) -> dict[str, str]:
     """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
     (``ensemble_low``/``ensemble_high``), the table rebuilt from the recorded cases of each surface pair alone
-    (``pair_0``, ``pair_1``; a version 3 table that records its campaign), and the table with the rows of the
+    (``pair_0``, ``pair_1``; a version 3 or 4 table that records its campaign), the table with the rows of the
     slides on another domain size (:data:`DOMAIN_VARIANT`: :func:`with_rows_of` the table ``domain_table``, when
-    given).
+    given), and the table with its rows' fits at the simulated nodes (:data:`FORM_VARIANT`, a version 4 table).
     Returns name -> path."""
     from tribocosim.components.stripdraw.table import read_table, write_table
 
@@ -179,6 +210,9 @@ def table_variants(table, folder: Path, domain_table: Path | None = None) -> dic
         if domain_table is not None:
             out[DOMAIN_VARIANT] = str(folder / f"{DOMAIN_VARIANT}.npz")
             write_table(out[DOMAIN_VARIANT], with_rows_of(table, read_table(domain_table)))
+        if table.version >= 4 and "rows" in meta.get("fits", {}):
+            out[FORM_VARIANT] = str(folder / f"{FORM_VARIANT}.npz")
+            write_table(out[FORM_VARIANT], with_fitted_rows(table))
     return out
 
 
@@ -216,8 +250,7 @@ def calibrated_predictions(runs, params: dict, table, calibrate, log=None) -> di
 
 def budget(nominal: dict, varied: dict) -> list[dict]:
     """The budget's rows: per quantity varied, the change of s, of the 3-pass drop and of the 140 mm drop; two-sided
-    ranges as half the difference of their ends, one-sided ones whole. A variation that changes the A_p s scales
-    (``same_scale`` False) gives its s itself (``scale_value``) instead of a change of s."""
+    ranges as half the difference of their ends, one-sided ones whole."""
     keys = {"scale": lambda r: r["scale"], "drop3": lambda r: r["drops"][2], "drop140": lambda r: r["drop_140"]}
     rows, seen = [], set()
     for v in VARIATIONS:
@@ -232,9 +265,7 @@ def budget(nominal: dict, varied: dict) -> list[dict]:
             rows.append(row)
             continue
         for key, get in keys.items():
-            if key == "scale" and not v.same_scale:
-                row["scale_value"] = get(results[0])
-            elif len(results) == 2:
+            if len(results) == 2:
                 row[key] = 0.5 * abs(get(results[1]) - get(results[0]))
             else:
                 row[key] = abs(get(results[0]) - get(nominal))
@@ -247,10 +278,45 @@ def budget_total(rows: list[dict], key: str, ensemble_quote: float = 0.0) -> flo
     return math.sqrt(ensemble_quote**2 + sum(r[key] ** 2 for r in rows if key in r))
 
 
+def band(value: float, half_width: float, low: float = 0.0, high: float = 1.0) -> tuple[float, float]:
+    """The interval value -+ half_width clipped to [low, high] (a drop lies in [0, 100 %], a scale s above 0)."""
+    return max(low, value - half_width), min(high, value + half_width)
+
+
+def observable_evidence(runs, params: dict, table, calibrate) -> dict:
+    """What speaks for each observable at the level the macro model reads (the choice of :data:`OBSERVABLE_CHOICE`).
+
+    - ``alpha_needed``: the alpha of Eq. 23 the paper's own macro model needs for the 35 % one-pass drop: the
+      closed-form law (A_c of Eq. 8 with kappa, A_p / A0 = alpha beta P / E* linear in beta, Eq. 9) with its alpha
+      times the scale ``calibrate`` fits (mu = mu0 (1 - s alpha beta h'_rms / kappa): only s alpha enters).
+    - per observable, ``alpha_eff``: the table's share A_p / A_c at its first debris level at the test's 0.08 m/s
+      times Eq. 8's A_c, as an alpha of Eq. 23: alpha_eff = (A_p / A_c) kappa / (h'_rms beta); at 25 MPa (the
+      calibration) and its range over the table's pressures.
+    """
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    cal = calibrate(runs, {**params, "friction_model": "closed_form", "particle_area_scale": 1.0}, table)
+    kappa, slope = (float(params.get(n, COMPONENT.defaults[n])) for n in ("kappa", "rms_slope"))
+    alpha_b = float(params.get("alpha_b", COMPONENT.defaults["alpha_b"]))
+    out = {"alpha_needed": cal.scale * alpha_b, "alpha_b": alpha_b, "scale": cal.scale, "kappa": kappa,
+           "rms_slope": slope, "beta": float(table.beta[1]), "velocity": 0.08}
+    for rule, name in (("load_bearing", "particle_area"), ("clusters", "particle_area_clusters")):
+        if name not in table.arrays():
+            continue
+        share = np.where(table.contact_area > 0, table.array(name) / np.where(table.contact_area > 0,
+                                                                               table.contact_area, 1.0), 0.0)
+        at_nodes = table.interpolate_array(share, table.pressure, 0.08, table.beta[1])[0]
+        at_cal = float(table.interpolate_array(share, CAL_PRESSURE, 0.08, table.beta[1])[0])
+        factor = kappa / (slope * table.beta[1])
+        out[rule] = {"alpha_eff_25mpa": at_cal * factor, "alpha_eff_min": float(at_nodes.min() * factor),
+                     "alpha_eff_max": float(at_nodes.max() * factor)}
+    return out
+
+
 def table_alpha(table, rule: str = "particle_area") -> list[dict]:
-    """Eq. 23's alpha at small beta per velocity row of a version 3 table: the initial slope of the A_p(beta) fit,
-    alpha = (dA_p/dbeta at beta = 0) E* / P, from the table's first debris level (A_p / beta there), mean over the
-    pressures with its standard error; the cluster rule's the same way."""
+    """Eq. 23's alpha at small beta per velocity row of a version 3 or 4 table: alpha = A_p / A0 / (beta P / E*)
+    at the table's first debris level, mean over the pressures with its standard error; the cluster rule's the same
+    way."""
     if table.version < 3:
         return []
     e_star = table.metadata.get("e_star", 55e9)
@@ -317,10 +383,10 @@ def speed_prediction(runs, params: dict, scale: float, scale_se: float) -> list[
 
 
 def direct_slide_check(table, workers: int | None, quick: bool, log=None) -> list[dict]:
-    """The table against direct slides between its nodes (surrogate.table_check), three placements per surface pair:
-    both points in the full report (12 slides), the moderate-debris point alone in the quick one (CI; 6 slides: a
-    slide of the point at beta = 0.4 carries three times the flakes and costs several times more). The quick check
-    is the full one's first point, slide for slide (seeded), so the two cannot disagree on it."""
+    """The table against direct slides between its nodes (surrogate.table_check), three placements per surface pair,
+    on A_p and on mu: every point in the full report (6 slides a point), the moderate-debris point alone in the quick
+    one (CI: a slide at beta = 0.4 or above carries three or more times the flakes and costs several times more). The
+    quick check is the full one's first point, slide for slide (seeded), so the two cannot disagree on it."""
     from tribocosim.surrogate.executors import make_executor
     from tribocosim.surrogate.table_check import POINTS, SEEDS, run_check
 

@@ -32,14 +32,17 @@ def test_budget_takes_half_a_two_sided_range_and_a_one_sided_change_whole():
     assert pp.budget_total(list(rows.values()), "scale", 0.1) == pytest.approx(math.sqrt(0.75**2 + 0.2**2 + 0.1**2))
 
 
-def test_budget_reports_the_s_of_another_observable_beside_the_total_and_its_predictions_in_it():
-    nominal = _result(1.0, 0.7, 0.6)
-    rows = pp.budget(nominal, {"h_low": _result(0.8, 0.75, 0.62), "rule": _result(500.0, 0.4, 0.3)})
-    rule = next(r for r in rows if r["quantity"] == "blocking rule")
-    assert "scale" not in rule and rule["scale_value"] == 500.0
-    assert (rule["drop3"], rule["drop140"]) == pytest.approx((0.3, 0.3))
-    assert pp.budget_total(rows, "scale") == pytest.approx(0.2)
-    assert pp.budget_total(rows, "drop3") == pytest.approx(math.hypot(0.05, 0.3))
+def test_the_observable_is_not_a_row_of_the_budget_and_the_table_form_is():
+    assert "particle_area_rule" not in {k for v in pp.VARIATIONS for k in v.parameters}
+    assert pp.OBSERVABLE_CHOICE == {"particle_area_rule": "clusters"}
+    assert [v.table for v in pp.VARIATIONS if v.quantity == "form of the table"] == [pp.FORM_VARIANT]
+
+
+@pytest.mark.parametrize("value, half, interval", [(0.946, 0.591, (0.355, 1.0)), (0.2, 0.5, (0.0, 0.7)),
+                                                   (0.5, 0.1, (0.4, 0.6))])
+def test_bands_are_intervals_clipped_to_0_and_100_percent(value, half, interval):
+    assert pp.band(value, half) == pytest.approx(interval)
+    assert pp.band(1.28, 2.0, 0.0, math.inf) == pytest.approx((0.0, 3.28))
 
 
 def _v3_table(alpha=400.0, clusters=0.01):
@@ -155,3 +158,60 @@ def test_options_calibrate_on_the_one_pass_drop_and_a_sink_leaves_less_debris(tm
     assert d[2] > d[1] > d[0] > 0
     assert all(s < b for s, b in zip(sink["debris_g_m2"], base["debris_g_m2"]))
     assert sink["scale"] > base["scale"]  # less debris under the pad needs a larger A_p scale for the same 35 %
+
+
+def _v4_table(alpha=400.0):
+    """_v3_table with a bent A_p (not the fit's form) and the fits a version 4 build records per row."""
+    from tribocosim.surrogate.fit import fit_beta_forms
+
+    t = _v3_table(alpha)
+    ap = t.particle_area * (1.0 + 3.0 * t.beta)[None, None, :]
+    meta = dict(t.metadata)
+    rows = []
+    for i, p in enumerate(t.pressure):
+        for v in (0.08, 0.5):
+            j = int(np.flatnonzero(t.velocity == v)[0])
+            forms = fit_beta_forms(t.beta[1:], ap[i, j, 1:], 0.05 * ap[i, j, 1:])
+            rows.append({"pressure": float(p), "velocity": v,
+                         "particle_area": {f: fit.to_dict() for f, fit in forms.items()}})
+    meta["fits"] = {"rows": rows}
+    return dataclasses.replace(t, particle_area=ap, metadata=meta,
+                               extras={**t.extras, "mu_se": np.zeros_like(ap)}), rows
+
+
+def test_the_table_form_variant_holds_each_rows_fit_at_its_simulated_nodes():
+    """A_p at every simulated node with flakes is its row's fit of smaller AIC (the v = 0 row the slowest row's);
+    the particle-free nodes and A_c are as they were, mu follows."""
+    from tribocosim.surrogate.fit import beta_form
+
+    t, rows = _v4_table()
+    f = pp.with_fitted_rows(t)
+    for row in rows:
+        i = int(np.flatnonzero(t.pressure == row["pressure"])[0])
+        best = min(row["particle_area"].values(), key=lambda x: x["aic"])
+        want = beta_form(best["form"], t.beta[1:], best["params"])
+        for v in ((0.0, 0.08) if row["velocity"] == 0.08 else (0.5,)):
+            j = int(np.flatnonzero(t.velocity == v)[0])
+            np.testing.assert_allclose(f.particle_area[i, j, 1:], want, rtol=1e-12)
+    assert not np.allclose(f.particle_area, t.particle_area)
+    assert np.array_equal(f.particle_area[:, :, 0], t.particle_area[:, :, 0])
+    assert np.array_equal(f.contact_area, t.contact_area)
+    np.testing.assert_allclose(f.mu, 0.15 * (1 - f.particle_area / f.contact_area), rtol=1e-12)
+
+
+def test_observable_evidence_gives_the_alpha_the_macro_model_needs_and_each_shares_alpha_eff(tmp_path):
+    """alpha_needed: the closed-form law with alpha_b = alpha_needed and s = 1 gives the 35 % drop again (only s alpha
+    enters); alpha_eff = (A_p / A_c) kappa / (h'_rms beta) at the first level, from the table's values."""
+    from tribocosim.components.stripdraw.table import write_table
+
+    t = _v3_table(alpha=3000.0, clusters=0.001)
+    write_table(tmp_path / "t.npz", t)
+    runs = paper.Runs(workers=1)
+    params = paper.config_params({"table_file": str(tmp_path / "t.npz")}, paper.Config("mesoscale", True))
+    ev = pp.observable_evidence(runs, params, t, paper.calibrate)
+    closed = {**params, "friction_model": "closed_form", "alpha_b": ev["alpha_needed"], "particle_area_scale": 1.0}
+    assert paper._drops(runs, closed, [1.0])[0] == pytest.approx(0.35, abs=2e-4)
+    i = int(np.flatnonzero(t.pressure == 30e6)[0])
+    share = t.particle_area[i, 1, 1] / t.contact_area[i, 1, 1]
+    assert ev["load_bearing"]["alpha_eff_max"] == pytest.approx(share * 2.0 / (0.34 * t.beta[1]), rel=1e-12)
+    assert ev["clusters"]["alpha_eff_25mpa"] == pytest.approx(0.001 * ev["load_bearing"]["alpha_eff_25mpa"], rel=1e-9)

@@ -57,6 +57,23 @@ def test_ensemble_standard_error_is_std_over_root_members_relative_to_the_mean()
     assert paper.ensemble_rel_stderr(single, "eq8") == 0.0  # one member: no spread to speak of
 
 
+def test_ensemble_standard_error_of_a_version_4_table_is_its_tabulated_standard_errors():
+    """The relative standard errors the table holds (A_p 5 %, A_c 2 %) at the levels whose lookups at 25 MPa read
+    simulated nodes only (the top level is not simulated at 30 MPa and is left out)."""
+    p, v, b = np.array([1e6, 20e6, 30e6]), np.array([0.0, 0.08]), np.array([0.0, 0.05, 0.1, 0.2])
+    full = np.ones((3, 2, 4))
+    ap, ac = 0.02 * full * b, 0.1 * full
+    sim = full.copy()
+    sim[2, :, 3] = 0.0
+    extras = {"simulated": sim, "contact_area_se": 0.02 * ac, "particle_area_se": 0.05 * ap,
+              "particle_area_clusters": 0 * ap, "particle_area_clusters_se": 0 * ap, "mu_se": 0 * ap}
+    table = FrictionTable(p, v, b, 0.15 * (1 - ap / ac), {"beta_threshold": 1.0}, contact_area=ac, particle_area=ap,
+                          contact_area_std=0 * ac, particle_area_std=0 * ap, extras=extras)
+    assert table.version == 4
+    assert paper.ensemble_rel_stderr(table, "eq8") == pytest.approx(0.05, rel=1e-9)
+    assert paper.ensemble_rel_stderr(table, "mesoscale") == pytest.approx(math.hypot(0.05, 0.02), rel=1e-9)
+
+
 def _figures(grid, mu):
     """Rows of every figure from ``mu(figure, series value, pass, pressure_mpa)``."""
     extra = {"beta_max": 0.1, "table_clamps": 0}

@@ -59,10 +59,26 @@ def folder(tmp_path_factory):
     return tmp_path_factory.mktemp("tables")
 
 
-@pytest.mark.parametrize("which", ["shipped", "closed_form", "version1"])
+def _version4_table():
+    """A version 4 table on the shipped axes with the shipped areas and a staircase of unsimulated nodes."""
+    from tribocosim.components.stripdraw.table import FrictionTable
+
+    t = read_table(DEFAULT_TABLE)
+    extras = {name: t.array(name) for name in ("simulated", "contact_area_se", "particle_area_se",
+                                               "particle_area_clusters", "particle_area_clusters_se")}
+    extras["mu_se"] = np.zeros_like(t.mu)
+    return FrictionTable(t.pressure, t.velocity, t.beta, t.mu, t.metadata, contact_area=t.contact_area,
+                         particle_area=t.particle_area, contact_area_std=t.contact_area_std,
+                         particle_area_std=t.particle_area_std, extras=extras)
+
+
+@pytest.mark.parametrize("which", ["shipped", "version4", "closed_form", "version1"])
 def test_the_resource_reads_back_as_the_table(folder, which):
     if which == "shipped":
         source = DEFAULT_TABLE
+    elif which == "version4":
+        source = folder / "version4.npz"
+        write_table(source, _version4_table())
     else:
         t = closed_form_table()
         if which == "version1":
@@ -81,7 +97,11 @@ def test_the_resource_reads_back_as_the_table(folder, which):
         law = make_friction_law(params, table)
         ours = law_mu(handle, params, grid)
         assert np.array_equal(ours, law_mu(law.native_table, params, grid)), "the resource is the .npz's table"
-        if table.version >= 2:  # an oracle in NumPy: mu0 (1 - A_p / A_c) of FrictionTable.interpolate_array
+        if table.version >= 4:  # the law interpolates the share A_p / A_c
+            share = np.where(table.contact_area > 0, table.particle_area / np.where(table.contact_area > 0,
+                                                                                   table.contact_area, 1.0), 0.0)
+            ref = np.array([params.mu0 * max(0.0, 1.0 - table.interpolate_array(share, *q)[0]) for q in zip(*grid)])
+        elif table.version >= 2:  # an oracle in NumPy: mu0 (1 - A_p / A_c) of FrictionTable.interpolate_array
             ap = np.concatenate([table.interpolate_array(table.particle_area, pk, grid[1][grid[0] == pk],
                                                          grid[2][grid[0] == pk])[0] for pk in np.unique(grid[0])])
             ac = np.concatenate([table.interpolate_array(table.contact_area, pk, grid[1][grid[0] == pk],
@@ -164,6 +184,31 @@ def test_unknown_entries_are_skipped(folder):
     core().lib.tc_table_free(read_resource(folder / "grown.tca"))
 
 
+def test_a_resource_without_its_format_version_reads_as_the_version_of_its_arrays(folder):
+    """A resource written before version 4 (no format_version entry) reads as before: multilinear, its version that
+    of its arrays; the same arrays saying version 4 read monotone cubic."""
+    entries = resource_entries(_version4_table())
+    old = {k: v for k, v in entries.items() if k not in ("format_version", "mu_se")}
+    arrays.write_arrays(folder / "old.tca", old)
+    arrays.write_arrays(folder / "new.tca", entries)
+    params = StripDrawParameters()
+    grid = (np.full(50, 7e6), np.full(50, 0.08), np.linspace(0.0, 0.3, 50))
+    handles = [read_resource(folder / name) for name in ("old.tca", "new.tca")]
+    try:
+        mu_old, mu_new = (law_mu(h, params, grid) for h in handles)
+    finally:
+        for h in handles:
+            core().lib.tc_table_free(h)
+    assert not np.allclose(mu_old, mu_new, rtol=1e-6), "the two versions interpolate differently"
+    resource = _version4_table()
+    t3 = type(resource)(resource.pressure, resource.velocity, resource.beta, resource.mu, resource.metadata,
+                        contact_area=resource.contact_area, particle_area=resource.particle_area,
+                        contact_area_std=resource.contact_area_std, particle_area_std=resource.particle_area_std,
+                        extras={k: v for k, v in resource.extras.items() if k != "mu_se"})
+    assert np.array_equal(mu_old, make_friction_law(params, t3).mu(*grid)[0])
+    assert np.array_equal(mu_new, make_friction_law(params, resource).mu(*grid)[0])
+
+
 def _variants(entries):
     """(label, entries or raw bytes, the message expected)."""
     good = arrays.encode(entries)
@@ -178,15 +223,19 @@ def _variants(entries):
     yield "axis order", {**entries, "beta": entries["beta"][::-1].copy()}, "strictly increasing"
     yield "negative mu", {**entries, "mu": -entries["mu"]}, "finite and >= 0"
     yield "threshold", {**entries, "beta_threshold": 1.5}, r"beta_threshold = 1\.5"
+    yield "newer version", {**entries, "format_version": 5.0}, "format version 5; this reader takes versions 1 to 4"
+    version2 = {k: v for k, v in entries.items() if k not in ("simulated", "particle_area_clusters")}
+    yield "version of other arrays", version2, "says format version 4 and holds the arrays of version 2"
     yield "magic", b"TCARRAYX" + good[8:], "not an array file"
     yield "version", good[:8] + (2).to_bytes(4, "little") + good[12:], "format version 2"
     yield "truncated", good[:-9], "truncated"
     yield "empty", b"", "not an array file"
 
 
-@pytest.mark.parametrize("case", range(11))
+@pytest.mark.parametrize("case", range(13))
 def test_a_bad_resource_is_refused_naming_path_and_problem(folder, case):
-    label, content, message = list(_variants(resource_entries(read_table(DEFAULT_TABLE))))[case]
+    entries = resource_entries(_version4_table())
+    label, content, message = list(_variants(entries))[case]
     path = folder / f"bad{case}.tca"
     path.write_bytes(content if isinstance(content, bytes) else arrays.encode(content))
     with pytest.raises(ParameterError, match=message) as exc:

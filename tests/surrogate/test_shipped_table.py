@@ -1,4 +1,4 @@
-"""The friction table shipped in models/ is the quick preset's mesoscale table (format version 3), and it is
+"""The friction table shipped in models/ is the quick preset's mesoscale table (format version 4), and it is
 reproducible: its recorded sweep is the current preset, the table build makes exactly its arrays from its recorded
 cases, and a recorded case rerun from the preset gives its recorded result.
 
@@ -30,7 +30,7 @@ def shipped():
 
 def test_shipped_table_is_the_quick_presets_table(shipped):
     meta = shipped.metadata
-    assert shipped.provenance == "mesoscale" and shipped.version == 3
+    assert shipped.provenance == "mesoscale" and shipped.version == 4
     recorded = {k: v for k, v in meta["campaign"]["sweep"].items() if k != "source"}  # a path
     current = json.loads(json.dumps(load_preset("quick").to_dict()))
     current.pop("source", None)

@@ -33,11 +33,11 @@ def test_build_writes_cases_fits_and_a_verified_table(built, capsys):
     d, rc = built
     assert rc == 0
     table = read_table(d / "out" / "friction_table.npz")
-    assert table.provenance == "mesoscale" and table.mu.shape == (2, 3, 2) and table.version == 3
+    assert table.provenance == "mesoscale" and table.mu.shape == (2, 3, 2) and table.version == 4
     assert len(list((d / "out" / "cases").glob("*.json"))) == 2 * 2 * 4
     fits = json.loads((d / "out" / "fits.json").read_text())
     assert fits["content_hash"] == table.metadata["content_hash"]
-    assert {"beta_forms", "caps", "contact_area"} <= set(fits)
+    assert {"rows", "summary", "unsimulated", "caps", "contact_area"} <= set(fits)
     camp = table.metadata["campaign"]
     assert camp["executor"] == {"executor": "process-pool", "workers": 1} and camp["cases_failed"] == []
     # a rerun computes nothing and rebuilds the same numbers
@@ -54,7 +54,7 @@ def test_show_prints_summary_and_plots(built, tmp_path, capsys):
     png = tmp_path / "mu.png"
     assert surrogate_cli.main(["show", str(d / "out" / "friction_table.npz"), "--plot", str(png)]) == 0
     out = capsys.readouterr().out
-    assert "provenance=mesoscale" in out and "A_p(beta) per (P, v): form" in out
+    assert "provenance=mesoscale" in out and "particle_area(beta) per (P, v), goodness of fit" in out
     assert "mu at v = 0.08 m/s" in out and png.stat().st_size > 1000
 
 
@@ -187,8 +187,8 @@ def test_verify_says_when_another_code_version_computed_the_cases(built, tmp_pat
 
 def test_direct_slide_check_of_a_table(built):
     """surrogate.table_check on the tiny table: at a node with the table's own placements the direct slides are
-    the members behind it, and with one debris level the fitted line passes through their mean: no difference,
-    the check passes; a point outside the table's axes is refused."""
+    the members behind it, whose ensemble mean the node holds: no difference in A_p or in mu, the check passes; a
+    point outside the table's axes is refused."""
     from tribocosim.errors import TableDomainError
     from tribocosim.surrogate.executors import make_executor
     from tribocosim.surrogate.table_check import run_check
@@ -201,6 +201,7 @@ def test_direct_slide_check_of_a_table(built):
         on_node = run_check(t, ex, points=((5e6, 50.0, beta),), seeds=(1, 2, 3))[0]
         assert on_node.members == 3 and on_node.all_nodes_simulated and on_node.passed
         assert on_node.direct == pytest.approx(on_node.table, rel=1e-12)
+        assert on_node.mu_direct == pytest.approx(on_node.mu_table, rel=1e-12)
         with pytest.raises(TableDomainError, match="beta = .* is outside the table"):
             run_check(t, ex, points=((5e6, 50.0, 1.5 * beta),), seeds=(1,))
     finally:

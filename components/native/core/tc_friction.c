@@ -43,6 +43,16 @@ static const double *particle_area(const tc_stripdraw_params *p, const tc_table 
     return table->particle_area;
 }
 
+/* the share A_p / A_c of the rule the parameters name (version 4 tables) */
+static const double *particle_share(const tc_stripdraw_params *p, const tc_table *table) {
+    if (p->particle_area_rule == TC_STRIPDRAW_PARTICLE_AREA_RULE_CLUSTERS) return table->share_clusters;
+    return table->share;
+}
+
+static double eq8_area(const tc_stripdraw_params *p, double pressure) {
+    return p->kappa * pressure / (p->rms_slope * p->e_star);
+}
+
 /* the share of the particle-free shear that the flake-borne contact lacks: (1 - r) s, so that
  * mu = mu0 [(1 - s A_p / A_c) + r s A_p / A_c] = mu0 (1 - (1 - r) s A_p / A_c) */
 static double shear_loss(const tc_stripdraw_params *p) {
@@ -53,15 +63,30 @@ static double shear_loss(const tc_stripdraw_params *p) {
 static void contact_area(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
                          const double *velocity, const double *beta, double *ac) {
     if (p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8) {
-        const double eq8 = p->kappa * pressure / (p->rms_slope * p->e_star);
+        const double eq8 = eq8_area(p, pressure);
         for (size_t k = 0; k < n; ++k) ac[k] = eq8;
         return;
     }
     (void)tc_table_lookup(table, table->contact_area, pressure, n, velocity, beta, TC_TABLE_CLAMP, ac, NULL, NO_MSG);
 }
 
+/* The cap of a version 4 table at (P, v): the first beta where s times the interpolated share reaches 1 (mesoscale)
+ * or s times the interpolated A_p reaches A_c of Eq. 8, limited to 1; 1 when it never does. */
+static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
+    const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
+    const double level = eq8 ? eq8_area(p, pressure) : 1.0, s = p->particle_area_scale;
+    if (!(s > 0)) return 1.0;
+    double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX], at;
+    (void)tc_table_beta_line(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, velocity, y,
+                             dl, dr, NO_MSG);
+    if (!tc_table_first_crossing(table->n_beta, table->beta, y, dl, dr, level / s * (1.0 - TC_REACH_RTOL), &at))
+        return 1.0;
+    return fmin(1.0, at);
+}
+
 /* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */
 static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
+    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) return crossing_cubic(p, table, pressure, velocity);
     const double *b = table->beta;
     double d_prev = 0.0;
     for (size_t k = 0; k < table->n_beta; ++k) {
@@ -122,20 +147,22 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
     default: {
         if (!with_areas(p, table))
             return tc_table_lookup(table, table->mu, pressure, n, velocity, beta, p->table_policy, mu, clamped, msg);
-        /* mu = mu0 (1 - (1 - r) s A_p / A_c); A_p (and the table's A_c) located once per query */
+        /* mu = mu0 (1 - (1 - r) s A_p / A_c) */
         const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
+        const double loss = shear_loss(p);
+        if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) { /* the share (or A_p over Eq. 8's A_c) interpolated */
+            int rc = tc_table_lookup(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, n,
+                                     velocity, beta, p->table_policy, mu, clamped, msg);
+            if (rc != TC_OK) return rc;
+            const double ac = eq8 ? eq8_area(p, pressure) : 1.0;
+            for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * (ac > 0 ? mu[k] / ac : 0.0));
+            return TC_OK;
+        }
+        /* A_p (and the table's A_c) located once per query */
         int rc = tc_table_lookup2(table, particle_area(p, table), eq8 ? NULL : table->contact_area, pressure, n,
                                   velocity, beta, p->table_policy, mu, ac_work, clamped, msg);
         if (rc != TC_OK) return rc;
-        if (clamped != NULL && table->unsimulated != NULL)
-            for (size_t k = 0; k < n; ++k) { /* a lookup that reads a node the campaign did not simulate counts too */
-                double off;
-                (void)tc_table_lookup(table, table->unsimulated, pressure, 1, velocity + k, beta + k, TC_TABLE_CLAMP,
-                                      &off, NULL, NO_MSG);
-                clamped[k] |= off > 0.0;
-            }
         if (eq8) contact_area(p, table, pressure, n, velocity, beta, ac_work);
-        const double loss = shear_loss(p);
         for (size_t k = 0; k < n; ++k) {
             const double share = ac_work[k] > 0 ? mu[k] / ac_work[k] : 0.0;
             mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * share);

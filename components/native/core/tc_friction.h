@@ -9,12 +9,16 @@
  *                   mu = mu0 (1 - s alpha(v) beta h'_rms / kappa) (Eq. 9), alpha(v) = b (1 - exp(-|v| / v_ref))
  *                   when v_ref > 0, else b; cap kappa / (s b h'_rms), limited to 1;
  *   - table:        A_p (and A_c under contact_area = mesoscale) interpolated in a friction table (tc_table.h);
- *                   A_c = kappa P / (h'_rms E*) under contact_area = eq8; mu >= 0. A lookup of a version 3 table
- *                   whose interpolation reads a node the campaign did not simulate (simulated = 0) is flagged
- *                   like one outside the axes. A table without the areas
- *                   (format version 1) gives its mu as it is. The cap of beta at (P, v) is where s A_p reaches
- *                   A_c along the table's beta axis (both piecewise linear in beta: the crossing is exact),
- *                   limited to 1; the law's threshold is the largest such cap over the table's (P > 0, v) nodes.
+ *                   A_c = kappa P / (h'_rms E*) under contact_area = eq8; mu >= 0. A lookup that reads a node the
+ *                   campaign did not simulate (simulated = 0, with a weight above TC_TABLE_READ_WEIGHT) is flagged
+ *                   like one outside the axes. A table without the areas (format version 1) gives its mu as it is.
+ *                   Versions 2 and 3 interpolate A_p and A_c multilinearly and divide; version 4 interpolates (monotone
+ *                   cubic, tc_table_lookup.h) what mu is linear in: the share A_p / A_c (mesoscale) or A_p (eq8).
+ *                   The cap of beta at (P, v) is where s A_p reaches A_c along the table's beta axis, limited to 1:
+ *                   versions 2-3 solve the linear pieces exactly; version 4 finds the first crossing of s times the
+ *                   interpolated share (or A_p) with 1 (or A_c of Eq. 8) on its cubic pieces by bisection of their
+ *                   monotone parts, to within TC_TABLE_CROSSING_TOL in beta and from below. The law's threshold is
+ *                   the largest such cap over the table's (P > 0, v) nodes.
  * The velocity v is the grip speed or each node's slip rate (the caller chooses, friction_velocity).
  */
 #ifndef TC_FRICTION_H

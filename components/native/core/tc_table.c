@@ -1,4 +1,5 @@
-/* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0) and release. */
+/* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0), the
+ * version 4 form (ln P, the shares A_p / A_c) and release. */
 #include "tc_table.h"
 
 #include <math.h>
@@ -35,6 +36,9 @@ void tc_table_free(tc_table *table) {
     free(table->particle_area_std);
     free(table->unsimulated);
     free(table->particle_area_clusters);
+    free(table->log_pressure);
+    free(table->share);
+    free(table->share_clusters);
     free(table);
 }
 
@@ -88,6 +92,7 @@ int tc_table_set_areas(tc_table *table, const double *contact_area, const double
         *dst[a] = copy;
     }
     table->format_version = 2;
+    table->interpolation = TC_TABLE_MULTILINEAR;
     return TC_OK;
 }
 
@@ -113,5 +118,42 @@ int tc_table_set_extras(tc_table *table, const double *simulated, const double *
     table->unsimulated = unsim;
     table->particle_area_clusters = clusters;
     table->format_version = 3;
+    table->interpolation = TC_TABLE_MULTILINEAR;
+    return TC_OK;
+}
+
+int tc_table_set_cubic(tc_table *table, tc_msg msg) {
+    if (table->format_version < 3)
+        return tc_fail(msg, TC_ERROR, "table version 4 needs the version 3 arrays; this table is version %d",
+                       table->format_version);
+    if (!(table->pressure[0] > 0))
+        return tc_fail(msg, TC_ERROR, "table version 4 interpolates in log P: its pressure axis must be > 0, it starts "
+                       "at %.17g Pa", table->pressure[0]);
+    if (table->n_beta > TC_TABLE_BETA_MAX)
+        return tc_fail(msg, TC_ERROR, "table version 4 takes at most %d beta nodes; this table has %zu",
+                       TC_TABLE_BETA_MAX, table->n_beta);
+    const size_t n = table->n_pressure * table->n_velocity * table->n_beta;
+    double *logp = malloc(table->n_pressure * sizeof *logp), *share = malloc(n * sizeof *share),
+           *clusters = malloc(n * sizeof *clusters);
+    if (logp == NULL || share == NULL || clusters == NULL) {
+        free(logp);
+        free(share);
+        free(clusters);
+        return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
+    }
+    for (size_t i = 0; i < table->n_pressure; ++i) logp[i] = log(table->pressure[i]);
+    for (size_t i = 0; i < n; ++i) {
+        const double ac = table->contact_area[i];
+        share[i] = ac > 0 ? table->particle_area[i] / ac : 0.0;
+        clusters[i] = ac > 0 ? table->particle_area_clusters[i] / ac : 0.0;
+    }
+    free(table->log_pressure);
+    free(table->share);
+    free(table->share_clusters);
+    table->log_pressure = logp;
+    table->share = share;
+    table->share_clusters = clusters;
+    table->interpolation = TC_TABLE_MONOTONE_CUBIC;
+    table->format_version = 4;
     return TC_OK;
 }

@@ -6,6 +6,10 @@
  * (C order of the (nP, nv, nb) array). Lookups outside the axes follow a policy: TC_TABLE_CLAMP
  * (evaluate at the nearest edge and flag the lookup) or TC_TABLE_ERROR (refuse, naming the quantity,
  * its value and the table's range).
+ *
+ * Interpolation: multilinear in (P, v, beta) for format versions 1-3; format version 4 interpolates monotone
+ * cubic (Fritsch-Butland PCHIP) in log P and in beta and linearly in v (tc_table_lookup.c), and the strip-draw law
+ * reads the share A_p / A_c of each observable, which the table computes from its areas (tc_table_set_cubic).
  */
 #ifndef TC_TABLE_H
 #define TC_TABLE_H
@@ -15,6 +19,10 @@
 #include "tc_common.h"
 
 enum tc_table_policy { TC_TABLE_CLAMP = 0, TC_TABLE_ERROR = 1 };
+enum tc_table_interpolation { TC_TABLE_MULTILINEAR = 0, TC_TABLE_MONOTONE_CUBIC = 1 };
+
+/* the longest beta axis the monotone cubic interpolation takes (its lines are kept on the stack) */
+#define TC_TABLE_BETA_MAX 64
 
 typedef struct tc_table {
     size_t n_pressure, n_velocity, n_beta;
@@ -28,8 +36,13 @@ typedef struct tc_table {
     /* format version 3 (NULL before): 1 - simulated (1 where the node holds its row's fit, not slides), and A_p/A0
      * of the paper's cluster rule alone, same layout as mu */
     double *unsimulated, *particle_area_clusters;
+    /* format version 4 (NULL before): ln P of the pressure axis, and the shares A_p / A_c of every load-bearing
+     * flake and of the cluster rule alone (0 where A_c = 0), same layout as mu */
+    double *log_pressure, *share, *share_clusters;
+    int interpolation;      /* TC_TABLE_MONOTONE_CUBIC in version 4, else TC_TABLE_MULTILINEAR */
     double beta_threshold;  /* metadata "beta_threshold": the cap of beta (Eq. 24), in (0, 1] */
-    int format_version;     /* 3 with the version 3 arrays, 2 with the areas, else 1 */
+    int format_version;     /* 4 with the monotone cubic interpolation, 3 with the version 3 arrays, 2 with the
+                               areas, else 1 */
     char content_hash[65];  /* the table's content hash (SHA-256, lowercase hex), "" when not known */
     char provenance[32];    /* where the values come from ("mesoscale", "closed_form", ...) */
 } tc_table;
@@ -48,6 +61,11 @@ TC_API int tc_table_set_areas(tc_table *table, const double *contact_area, const
  * the table version 3. */
 TC_API int tc_table_set_extras(tc_table *table, const double *simulated, const double *particle_area_clusters,
                                tc_msg msg);
+
+/* Make a version 3 table version 4: interpolated monotone cubic in log P and beta (tc_table_lookup.h), its shares
+ * A_p / A_c computed. TC_ERROR (the table unchanged) unless the pressure axis is > 0 and the beta axis has at most
+ * TC_TABLE_BETA_MAX nodes. */
+TC_API int tc_table_set_cubic(tc_table *table, tc_msg msg);
 
 TC_API void tc_table_free(tc_table *table);
 

@@ -1,7 +1,12 @@
-/* Lookups in the friction table mu(P, v, beta) (tc_table.h): trilinear, at one pressure for many (velocity, beta)
- * queries, in mu or in any array of the table with its layout. Outside the axes they follow the table policy:
- * TC_TABLE_CLAMP evaluates at the nearest edge and flags the query, TC_TABLE_ERROR refuses, naming the quantity, its
- * value and the table's range. */
+/* Lookups in the friction table mu(P, v, beta) (tc_table.h), at one pressure for many (velocity, beta) queries, in
+ * mu or in any array of the table with its layout: multilinear (format versions 1-3) or monotone cubic in log P and
+ * beta and linear in v (version 4; tc_table_lookup.c states the equations). Outside the axes they follow the table
+ * policy: TC_TABLE_CLAMP evaluates at the nearest edge and flags the query, TC_TABLE_ERROR refuses, naming the
+ * quantity, its value and the table's range.
+ *
+ * A lookup reads the corners of its cell whose weight, the product of the local coordinates (1 - t or t per axis, t in
+ * log P on a version 4 table's pressure axis), exceeds TC_TABLE_READ_WEIGHT; the weights of a lookup sum to 1. A
+ * lookup is flagged (clamped) when it is outside an axis or reads a node the campaign did not simulate. */
 #ifndef TC_TABLE_LOOKUP_H
 #define TC_TABLE_LOOKUP_H
 
@@ -10,14 +15,19 @@
 #include "tc_common.h"
 #include "tc_table.h"
 
-/* mu at one pressure for n (velocity, beta) queries (interpolate in P once, then bilinearly in (|v|, beta)).
- * clamped[k] (may be NULL) is set to 1 when query k (or the pressure) was outside the axes. Under TC_TABLE_ERROR
- * an outside query returns TC_DISCARD, naming the quantity, its value and the table's range, and writes
- * nothing. */
+/* a node is read by a lookup when its weight exceeds this (relative: the weights of a lookup sum to 1) */
+#define TC_TABLE_READ_WEIGHT 1e-9
+/* the crossing of a line with a level (tc_table_first_crossing) is found to within this in the line's x, from below */
+#define TC_TABLE_CROSSING_TOL 1e-12
+
+/* mu at one pressure for n (velocity, beta) queries (interpolate in P once, then in (|v|, beta)).
+ * clamped[k] (may be NULL) is set to 1 when query k (or the pressure) was outside the axes or read a node the
+ * campaign did not simulate. Under TC_TABLE_ERROR a query outside the axes returns TC_DISCARD, naming the quantity,
+ * its value and the table's range, and writes nothing. */
 TC_API int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity,
                        const double *beta, int policy, double *mu, unsigned char *clamped, tc_msg msg);
 
-/* The same lookup in any array of the table with its layout (mu, or an area array of a version 2 table). */
+/* The same lookup in any array of the table with its layout (mu, an area array, a share). */
 TC_API int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n,
                            const double *velocity, const double *beta, int policy, double *out,
                            unsigned char *clamped, tc_msg msg);
@@ -28,5 +38,25 @@ TC_API int tc_table_lookup(const tc_table *table, const double *values, double p
 TC_API int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure,
                             size_t n, const double *velocity, const double *beta, int policy, double *out,
                             double *out_b, unsigned char *clamped, tc_msg msg);
+
+/* The nodes a lookup at (P, |v|, beta) reads (the corners of its cell with a weight above TC_TABLE_READ_WEIGHT):
+ * their flat indices into the (nP, nv, nb) arrays and their weights, at most 8; returns their count. *outside (may be
+ * NULL) is set to whether the query is outside an axis (it is then located at the nearest edge). */
+TC_API size_t tc_table_read_nodes(const tc_table *table, double pressure, double velocity, double beta,
+                                  size_t nodes[8], double weights[8], int *outside);
+
+/* The line of one array of a version 4 table along beta at (P, |v|), clamped to the axes: its values at the beta
+ * nodes, y[n_beta], and the slopes of each piece at its left and right end, dl[n_beta - 1] and dr[n_beta - 1]: the
+ * piecewise cubic Hermite a lookup evaluates in beta. TC_ERROR for a table of another version. */
+TC_API int tc_table_beta_line(const tc_table *table, const double *values, double pressure, double velocity,
+                              double *y, double *dl, double *dr, tc_msg msg);
+
+/* The first x at which the piecewise cubic Hermite line through (x[k], y[k]) with the piece end slopes dl[k], dr[k]
+ * (k < n - 1) reaches level: returns 1 and sets *at (x[0] when y[0] >= level; else within TC_TABLE_CROSSING_TOL below
+ * the crossing, where the line is still below level), or 0 when the line stays below level. Each piece is split at
+ * the zeros of its derivative into monotone parts, and the first part that reaches level is bisected: the first
+ * crossing is found even where the line is not monotone. */
+TC_API int tc_table_first_crossing(size_t n, const double *x, const double *y, const double *dl, const double *dr,
+                                   double level, double *at);
 
 #endif

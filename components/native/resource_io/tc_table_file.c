@@ -3,9 +3,11 @@
  *
  * Entries used: the axes pressure, velocity, beta (1-D), mu (nP, nv, nb), the areas contact_area, particle_area,
  * contact_area_std, particle_area_std (all four or none: format version 2 of the table), simulated and
- * particle_area_clusters (both or none: version 3), the scalar beta_threshold and the texts content_hash and
- * provenance. Other entries are ignored. The values are checked as
- * tc_table_from_arrays checks them (increasing finite axes, finite values >= 0, the threshold in (0, 1]).
+ * particle_area_clusters (both or none: version 3), the scalar beta_threshold, the texts content_hash and
+ * provenance, and the scalar format_version (4: the version 3 arrays interpolated monotone cubic, tc_table.h;
+ * without it the version is that of the arrays, 1 to 3, as written before version 4 existed). Other entries are
+ * ignored. The values are checked as tc_table_from_arrays checks them (increasing finite axes, finite values >= 0,
+ * the threshold in (0, 1]); a format version this reader does not know is refused.
  *
  * A path ending in ".npz" names the table whose resource is the same path ending in ".tca" (so the FMU parameter
  * table_file may name the table as the Python side does). The resource records the SHA-256 of the bytes of the
@@ -71,6 +73,20 @@ static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_
     if (n_extras == 1 || (n_extras == 2 && n_areas != 4))
         return tc_fail(msg, TC_ERROR, "friction table %s is malformed: version 3 needs simulated, "
                        "particle_area_clusters and the 4 area arrays", path);
+    const tc_array_entry *fv = tc_arrays_find(a, "format_version");
+    double version = 0.0; /* 0: not given */
+    if (fv != NULL) {
+        if (fv->kind != TC_ARRAY_FLOAT64 || fv->count != 1)
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: 'format_version' is not a scalar", path);
+        version = fv->values[0];
+        if (!(version == 1.0 || version == 2.0 || version == 3.0 || version == 4.0))
+            return tc_fail(msg, TC_ERROR, "friction table %s has format version %g; this reader takes versions 1 to 4 "
+                           "(a newer tribocosim wrote it: read it with that version)", path, version);
+        const double held = n_extras == 2 ? 3.0 : n_areas == 4 ? 2.0 : 1.0;
+        if (version != held && !(version == 4.0 && held == 3.0))
+            return tc_fail(msg, TC_ERROR, "friction table %s is malformed: it says format version %g and holds the "
+                           "arrays of version %g", path, version, held);
+    }
     char detail[300];
     tc_msg d = {detail, sizeof detail};
     tc_table *t = NULL;
@@ -79,6 +95,7 @@ static int from_arrays(const tc_arrays *a, const char *path, tc_table **out, tc_
     if (rc == TC_OK && n_areas == 4)
         rc = tc_table_set_areas(t, areas[0]->values, areas[1]->values, areas[2]->values, areas[3]->values, d);
     if (rc == TC_OK && n_extras == 2) rc = tc_table_set_extras(t, extras[0]->values, extras[1]->values, d);
+    if (rc == TC_OK && version == 4.0) rc = tc_table_set_cubic(t, d);
     if (rc != TC_OK) {
         tc_table_free(t);
         return tc_fail(msg, rc, "friction table %s is malformed: %s", path, detail);

@@ -1,0 +1,338 @@
+"""The fit behind ``tribocosim calibrate``: strip-draw parameters by weighted least squares on measured mu_bar and
+debris (docs/model.md section 4).
+
+Data (:func:`read_measurements`): one row per test, ``pressure`` [Pa], ``tool_length`` [m], ``passes`` (1, 2, 3...: a
+later pass starts from the debris the previous one left), and any of the observables of :data:`OBSERVABLES` after
+that pass, each with an optional standard deviation (``<name>_std``): ``mu_bar`` (the steady-state friction
+coefficient), ``debris_g_m2`` (the debris left on the strip that passed under the pad, weighed per unit area
+[g/m^2]), ``beta`` (its coverage, the area fraction of flakes). Every row is simulated with the pure strip-draw model
+(:func:`tribocosim.cosim.apps.stripdraw_experiment.draw`, one draw per pressure and pad gives all its passes).
+
+Parameters (:data:`FITTABLE`): the scale s of the table's A_p (``particle_area_scale``), and the debris balance: the
+production K / H (``archard_k``, the hardness fixed: only K / H enters, Eq. 33-37), the share of the debris the tool
+carries (``zeta``), the share kept between passes (``debris_carry_over``) or a sink (``debris_sink_length``), each
+within its bounds (the strip-draw parameter's declared range; a sink length above 0). Residuals
+r_i = (model_i - measured_i) / sigma_i; Gauss-Newton with a forward-difference Jacobian J (steps of 1e-3 times the
+value or the parameter's scale), the step solved in units of the parameters' scales without the directions the data
+do not see (below :data:`SINGULAR_RATIO` of the largest singular value), clipped to the bounds and halved while it
+does not lower sum r^2. Covariance C = (J^T J)^-1, scaled by chi^2 / (N - n) when the data give no standard deviations
+(one observable only: without them observables of different units cannot be weighed against each other).
+
+The outcome (:class:`Fit`) says what the data determine:
+
+- converged: an iteration that changes every parameter by at most 1e-6 of its value (of its scale below it) or 1 %
+  of its standard error; a fit that reaches the iteration limit without it is not converged;
+- at a bound: a parameter on its bound whose unconstrained Gauss-Newton step points beyond it; the data ask for a
+  value the model does not allow (measured mu_bar above mu0 needs s < 0), so the fit has failed, whatever its
+  changes; its standard error is not given;
+- separable: the singular values of the Jacobian with each column in units of its parameter's scale; the data
+  cannot separate the parameters when the smallest is below 1e-6 of the largest (a direction the residuals do not
+  see: fewer independent data than parameters, or a parameter the data do not touch), when two parameters'
+  correlation C_ij / sqrt(C_ii C_jj) exceeds 0.99 in magnitude (only a combination of them is determined), or when a
+  bounded parameter's standard error exceeds the width of its range (the data barely touch it: the debris left on
+  the strip hardly depends on zeta, which moves the debris under the pad).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+
+from tribocosim.errors import ParameterError
+
+KEYS = ("pressure", "tool_length", "passes")
+#: measured quantity -> (the strip draw's pass result it is, the check of a value, what is allowed)
+OBSERVABLES = {
+    "mu_bar": ("mu_bar", lambda x: 0 < x < 1, "it must lie in (0, 1)"),
+    "debris_g_m2": ("debris_g_m2", lambda x: x >= 0, "it must be >= 0 [g/m^2]"),
+    "beta": ("beta_left", lambda x: 0 <= x <= 1, "it must lie in [0, 1]"),
+}
+#: fittable parameter -> (lower bound, upper bound, scale: the size of a change that matters)
+FITTABLE = {
+    "particle_area_scale": (0.0, 1e6, 1.0),
+    "archard_k": (0.0, 1.0, 1e-4),
+    "zeta": (0.0, 1.0, 0.1),
+    "debris_carry_over": (0.0, 1.0, 0.1),
+    "debris_sink_length": (1e-4, 1e3, 0.01),
+}
+#: the start of a sink length given as 0 (no sink): one draw length [m]
+SINK_START = 0.14
+RTOL = 1e-6
+STDERR_FRACTION = 0.01
+MAX_ITERATIONS = 20
+#: the data cannot separate the parameters below this ratio of the Jacobian's singular values, or above this
+#: correlation of two parameters
+SINGULAR_RATIO, CORRELATION_MAX = 1e-6, 0.99
+
+
+@dataclasses.dataclass(frozen=True)
+class Measurement:
+    """One row of the data file: its test and the observables measured after its pass (name -> value, std)."""
+
+    pressure: float
+    tool_length: float
+    passes: int
+    values: dict
+    stds: dict
+    row: int
+
+    @property
+    def mu_bar(self) -> float | None:
+        return self.values.get("mu_bar")
+
+
+def read_measurements(path: str | Path) -> list[Measurement]:
+    """The rows of a measurement file; ParameterError naming the file, row and column of a bad value."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise ParameterError(f"measurement file {path} cannot be read: {exc}") from exc
+    reader = csv.DictReader(text.splitlines())
+    header = [h.strip() for h in (reader.fieldnames or [])]
+    missing = [c for c in KEYS if c not in header]
+    measured = [c for c in OBSERVABLES if c in header]
+    if missing or not measured:
+        need = ", ".join(missing) if missing else f"an observable ({', '.join(OBSERVABLES)})"
+        raise ParameterError(f"{path}: missing column(s) {need}; the header needs {', '.join(KEYS)} and at least one "
+                             f"of {', '.join(OBSERVABLES)} (each with an optional <name>_std); it has "
+                             f"{', '.join(header) or 'nothing'}")
+    rows = []
+    for k, raw in enumerate(reader, start=2):  # line 1 is the header
+        rec = {key.strip(): (value or "").strip() for key, value in raw.items() if key is not None}
+        if not any(rec.values()):
+            continue
+
+        def number(name: str, check, allowed: str, integer: bool = False):
+            text = rec.get(name, "")
+            try:
+                x = float(text)
+                if integer and x != int(x):
+                    raise ValueError
+            except (ValueError, OverflowError):
+                raise ParameterError(f"{path}, row {k}, column {name}: {text!r} is not "
+                                     f"{'an integer' if integer else 'a number'}") from None
+            if not (np.isfinite(x) and check(x)):
+                raise ParameterError(f"{path}, row {k}, column {name}: {text} is not allowed; {allowed}")
+            return int(x) if integer else x
+
+        values, stds = {}, {}
+        for name in measured:
+            if not rec.get(name):
+                continue
+            _, check, allowed = OBSERVABLES[name]
+            values[name] = number(name, check, allowed)
+            if rec.get(name + "_std"):
+                stds[name] = number(name + "_std", lambda x: x > 0, "it must be > 0")
+        if not values:
+            raise ParameterError(f"{path}, row {k}: no measured value; give at least one of {', '.join(measured)}")
+        rows.append(Measurement(number("pressure", lambda x: x > 0, "it must be > 0 [Pa]"),
+                                number("tool_length", lambda x: x > 0, "it must be > 0 [m]"),
+                                number("passes", lambda x: x >= 1, "it must be an integer >= 1", integer=True),
+                                values, stds, k))
+    if not rows:
+        raise ParameterError(f"{path}: no data rows")
+    kinds = {n for r in rows for n in r.values}
+    unweighted = [(r.row, n) for r in rows for n in r.values if n not in r.stds]
+    if len(kinds) > 1 and unweighted:
+        row, name = unweighted[0]
+        raise ParameterError(f"{path}, row {row}: {name} has no {name}_std; data that mix observables "
+                             f"({', '.join(sorted(kinds))}) need the standard deviation of every value to weigh them")
+    return rows
+
+
+@dataclasses.dataclass
+class Fit:
+    """The outcome of :func:`fit` (module docstring)."""
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    stderr: np.ndarray  # NaN for a parameter at its bound
+    residuals: list[dict]  # per row and observable: measured, model, residual (model - measured)
+    iterations: int
+    evaluations: int
+    converged: bool
+    last_change: np.ndarray
+    at_bound: dict  # name -> "lower" or "upper"
+    singular_values: np.ndarray  # of the Jacobian in units of the parameters' scales
+    correlation: np.ndarray
+    separable: bool
+    inseparable: list[str]  # what the data cannot separate, in words
+    chi2: float
+    dof: int
+
+    @property
+    def succeeded(self) -> bool:
+        """Converged, inside the bounds, and every parameter separated by the data."""
+        return self.converged and not self.at_bound and self.separable
+
+    def as_dict(self) -> dict:
+        return {n: {"value": float(v), "stderr": None if not math.isfinite(e) else float(e),
+                    **({"at_bound": self.at_bound[n]} if n in self.at_bound else {})}
+                for n, v, e in zip(self.names, self.values, self.stderr)}
+
+    def status(self) -> str:
+        if self.at_bound:
+            return "at bound"
+        if not self.converged:
+            return "not converged"
+        if not self.separable:
+            return "not separable"
+        return "converged"
+
+
+def start_values(parameters: dict, names, defaults: dict) -> np.ndarray:
+    """The start of every fitted parameter: its value in ``parameters`` (or the default), moved inside its bounds
+    (a zero scale s starts at 1, a zero sink length, no sink, at :data:`SINK_START`)."""
+    theta = np.array([float(parameters.get(n, defaults[n])) for n in names])
+    for j, n in enumerate(names):
+        if n == "particle_area_scale" and theta[j] == 0:
+            theta[j] = 1.0
+        if n == "debris_sink_length" and theta[j] == 0:
+            theta[j] = SINK_START
+        lo, hi, _ = FITTABLE[n]
+        theta[j] = min(max(theta[j], lo), hi)
+    return theta
+
+
+def fit(data: list[Measurement], parameters: dict, names: tuple[str, ...], model, log=None,
+        max_iterations: int = MAX_ITERATIONS) -> Fit:
+    """Least-squares fit of the parameters ``names`` to ``data`` (module docstring).
+
+    ``model(list of parameter dicts) -> list of {(row, observable): value}`` evaluates the strip-draw model for every
+    measurement at each parameter set (:func:`strip_draw_model`); ``parameters`` holds the start values and the
+    parameters held fixed.
+    """
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    unknown = [n for n in names if n not in FITTABLE]
+    if unknown or not names or len(set(names)) != len(names):
+        raise ParameterError(f"--fit {' '.join(names)}: fit one or more of {', '.join(FITTABLE)}, each once")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) or max_iterations < 1:
+        raise ParameterError(f"max_iterations = {max_iterations!r} is not allowed; an integer >= 1 is required")
+    keys = [(d.row, n) for d in data for n in d.values]
+    if len(keys) < len(names):
+        raise ParameterError(f"{len(keys)} measured value(s) cannot determine {len(names)} parameters "
+                             f"({', '.join(names)}): measure more tests or passes, or fit fewer")
+    measured = np.array([d.values[n] for d in data for n in d.values])
+    sigma = np.array([d.stds.get(n, 1.0) for d in data for n in d.values])
+    weighted = all(n in d.stds for d in data for n in d.values)
+    lo, hi, scale = (np.array([FITTABLE[n][i] for n in names]) for i in range(3))
+    theta = start_values(parameters, names, COMPONENT.defaults)
+    evaluations = 0
+
+    def run(thetas):
+        nonlocal evaluations
+        evaluations += len(thetas)
+        out = model([{**parameters, **dict(zip(names, map(float, th)))} for th in thetas])
+        return [np.array([o[k] for k in keys]) for o in out]
+
+    def cost(values):
+        return float(np.sum(((values - measured) / sigma) ** 2))
+
+    current = run([theta])[0]
+    it, converged, change, delta = 0, False, np.zeros_like(theta), np.zeros_like(theta)
+    J = np.zeros((len(keys), len(names)))
+    stderr = np.full(len(names), np.inf)
+    for it in range(1, max_iterations + 1):
+        steps = 1e-3 * np.maximum(np.abs(theta), scale)
+        probes = []
+        for j in range(len(names)):
+            t = theta.copy()
+            t[j] = t[j] + steps[j] if t[j] + steps[j] <= hi[j] else t[j] - steps[j]
+            probes.append(t)
+        cols = run(probes)
+        J = np.column_stack([(c - current) / (p[j] - theta[j]) for j, (c, p) in enumerate(zip(cols, probes))])
+        r = (current - measured) / sigma
+        # the step in units of the parameters' scales, directions the data do not see (singular values below
+        # SINGULAR_RATIO of the largest) left out
+        step, *_ = np.linalg.lstsq(J / sigma[:, None] * scale[None, :], -r, rcond=SINGULAR_RATIO)
+        delta = step * scale
+        new = np.clip(theta + delta, lo, hi)
+        trial = run([new])[0]
+        if cost(trial) > cost(current) * (1 + 1e-12):  # no progress: half steps
+            for _ in range(6):
+                new = 0.5 * (theta + new)
+                trial = run([new])[0]
+                if cost(trial) <= cost(current):
+                    break
+        change = new - theta
+        stderr = _stderr(J, sigma, (trial - measured) / sigma, weighted)
+        converged = bool(np.all((np.abs(change) <= RTOL * np.maximum(np.abs(theta), scale))
+                                | (np.abs(change) <= STDERR_FRACTION * stderr)))
+        theta, current = new, trial
+        if log:
+            log(f"  iteration {it}: " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, theta))
+                + f", chi^2 {cost(current):.4g}")
+        if converged:
+            break
+    at_bound = {n: ("lower" if theta[j] <= lo[j] else "upper") for j, n in enumerate(names)
+                if (theta[j] <= lo[j] and delta[j] < 0) or (theta[j] >= hi[j] and delta[j] > 0)}
+    r = (current - measured) / sigma
+    stderr = _stderr(J, sigma, r, weighted)
+    stderr[[names.index(n) for n in at_bound]] = np.nan
+    singular, correlation, inseparable = separability(J / sigma[:, None], names, scale)
+    inseparable += [f"the data do not determine {n}: its standard error {e:.3g} exceeds its range [{a:g}, {b:g}]"
+                    for n, e, a, b in zip(names, stderr, lo, hi) if np.isfinite(b - a) and e > b - a]
+    rows = [{"row": k[0], "observable": k[1], "measured": float(m), "model": float(v), "residual": float(v - m),
+             "std": float(s) if weighted else None} for k, m, v, s in zip(keys, measured, current, sigma)]
+    return Fit(tuple(names), theta, stderr, rows, it, evaluations, converged, change, at_bound, singular,
+               correlation, not inseparable, inseparable, float(np.sum(r**2)), len(keys) - len(names))
+
+
+def _stderr(J, sigma, r, weighted: bool) -> np.ndarray:
+    """sqrt(diag((J^T J)^-1)) of the weighted problem, scaled by chi^2 / (N - n) unless the data give their standard
+    deviations."""
+    Jw = J / sigma[:, None]
+    cov = np.linalg.pinv(Jw.T @ Jw)
+    if not weighted:
+        cov = cov * float(np.sum(r**2)) / max(1, J.shape[0] - J.shape[1])
+    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+
+
+def separability(Jw: np.ndarray, names, scale) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The singular values of the weighted Jacobian in units of the parameters' scales, the parameters' correlation
+    matrix, and what the data cannot separate, in words (module docstring)."""
+    Js = Jw * np.asarray(scale)[None, :]
+    u, s, vt = np.linalg.svd(Js, full_matrices=False)
+    problems = []
+    if s.size and (s[-1] <= SINGULAR_RATIO * s[0] or not np.all(np.isfinite(s))):
+        v = vt[-1]
+        weights = ", ".join(f"{n} {c:+.2f}" for n, c in zip(names, v) if abs(c) > 0.1)
+        problems.append(f"the data do not determine the combination ({weights}) of the parameters in units of their "
+                        f"scales (smallest singular value {s[-1]:.3g}, largest {s[0]:.3g})")
+    cov = np.linalg.pinv(Js.T @ Js)
+    d = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+    corr = cov / np.outer(d, d)
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if abs(corr[i, j]) > CORRELATION_MAX and not problems:
+                problems.append(f"the data cannot separate {names[i]} and {names[j]} (correlation {corr[i, j]:+.4f}): "
+                                "only a combination of them is determined")
+    return s, corr, problems
+
+
+def strip_draw_model(data: list[Measurement], workers: int | None = None):
+    """``model(parameter sets)`` for :func:`fit`: every (pressure, pad) of ``data`` drawn once per parameter set with
+    as many passes as its rows need (in parallel processes), each row's observables read from its pass."""
+    from tribocosim.cosim.apps.stripdraw_experiment import Point, draw, run_points
+
+    tests = {}
+    for d in data:
+        tests[(d.pressure, d.tool_length)] = max(tests.get((d.pressure, d.tool_length), 0), d.passes)
+
+    def model(parameter_sets: list[dict]) -> list[dict]:
+        points = [Point(p, pad, n, params) for params in parameter_sets for (p, pad), n in tests.items()]
+        done = run_points(points, workers, draw)
+        out = []
+        for s in range(len(parameter_sets)):
+            passes = dict(zip(tests, done[s * len(tests):(s + 1) * len(tests)]))
+            out.append({(d.row, n): passes[(d.pressure, d.tool_length)][d.passes - 1][OBSERVABLES[n][0]]
+                        for d in data for n in d.values})
+        return out
+
+    return model

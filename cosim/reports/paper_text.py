@@ -1,0 +1,250 @@
+"""The text of the paper report (``paper.md``): the paper-vs-model table and the sections of
+:mod:`tribocosim.cosim.reports.paper_physics` (options, the uncertainty budget and the observable chosen beside it,
+the drawing speed, alpha of both observables, the table's checks), from the numbers
+:func:`tribocosim.cosim.reports.paper.run_report` computed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tribocosim.cosim.apps.stripdraw_experiment import V0
+from tribocosim.cosim.reports import paper_physics as pp
+from tribocosim.cosim.reports.paper_physics import CAL_PRESSURE
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def _row_values(m: dict, cal, grid) -> dict[str, str]:
+    at = m["drop_at_mpa"]
+    return {
+        "scale": (f"{cal.scale:.4g} +- {cal.stderr:.2g}" if cal else "1"),
+        "drop1": _pct(m["drop_1pass"]) + (" (calibrated)" if cal else ""),
+        "drop3": _pct(m["drop_by_pass"][grid.passes]),
+        "pads": " / ".join(_pct(m["drop_by_pad"][p]) for p in grid.pads),
+        "order": f"{'yes' if m['pad_order_holds'][0] == m['pad_order_holds'][1] else 'no'} "
+                 f"({m['pad_order_holds'][0]} of {m['pad_order_holds'][1]} pressures)",
+        "zeta": ("falls: " if m["zeta_falls"] else "does not fall: ")
+                + " / ".join(f"{m['mu_by_zeta'][z]:.4f}" for z in grid.zetas),
+        "k": ("falls" if m["k_falls"] else "does not fall") + ", "
+             + ("saturates" if m["k_saturates"] else "does not saturate") + ": "
+             + " / ".join(f"{m['mu_by_k'][K]:.4f}" for K in grid.ks),
+        "mu_low": f"{m['mu_low']:.4f}",
+        "beta": f"{m['beta_max_3pass']:.3g} ({m['beta_max']:.3g})",
+        "clamps": str(m["table_clamps"]),
+        "_at": at,
+    }
+
+
+def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_star: float = 55e9) -> float | None:
+    """A_c of Eq. 8 (kappa P / (h'_rms E*), the strip model's defaults) over the table's particle-free A_c at 25 MPa
+    and the test's velocity."""
+    if table.version < 2:
+        return None
+    ac, _ = table.interpolate_array(table.contact_area, CAL_PRESSURE, V0, 0.0)
+    return float(kappa * CAL_PRESSURE / (rms_slope * e_star) / ac) if ac > 0 else None
+
+
+def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
+    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
+    configs = list(results)
+    values = {c: _row_values(results[c]["metrics"], cals.get(c.contact_area) if c.calibrated else None, grid)
+              for c in configs}
+    at = grid.pressures[-2] if 25 not in grid.pressures else 25
+    pads = " / ".join(f"{1000 * p:g}" for p in grid.pads)
+    rows = [
+        ("A_p scale s (+- standard error)", "-", "scale"),
+        (f"mu_bar drop at {at} MPa, 1 pass, 35 mm pad", "35 %", "drop1"),
+        (f"mu_bar drop at {at} MPa after {grid.passes} passes, 35 mm pad", "up to 72 %", "drop3"),
+        (f"mu_bar drop at {at} MPa, 1 pass, {pads} mm pads", "grows with pad length (Fig. 19b)", "pads"),
+        ("pad ordering mu(35) > mu(70) > mu(140) above 1 MPa", "yes (Figs. 2a, 19b)", "order"),
+        (f"mu_bar at {grid.trend_at:g} MPa for zeta = " + " / ".join(f"{z:g}" for z in grid.zetas),
+         "falls with zeta (Fig. 17b)", "zeta"),
+        (f"mu_bar at {grid.trend_at:g} MPa for K = " + " / ".join(f"{K:g}" for K in grid.ks),
+         "falls with K and saturates (Fig. 18b)", "k"),
+        (f"mu_bar at {min(grid.pressures)} MPa, 35 mm pad", "-", "mu_low"),
+        (f"largest beta after {grid.passes} passes at {at} MPa (in any test)", "-", "beta"),
+        ("table lookups outside the table's axes or simulated range (clamped)", "-", "clamps"),
+    ]
+    lines = [header, "", "| quantity | paper | " + " | ".join(c.label for c in configs) + " |",
+             "|---|---|" + "---|" * len(configs)]
+    for title, paper, key in rows:
+        lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
+    ratio = table_contact_ratio(table)
+    lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
+              "one-pass drop at 25 MPa is fitted (by s, per convention); every other entry is a prediction. "
+              f"The table's beta axis ends at {table.beta[-1]:.4g}."
+              + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
+                 f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
+                 if ratio and "eq8" in cals and "mesoscale" in cals else ""), ""]
+    for conv, cal in cals.items():
+        lines.append(f"- `{conv}`: s = {cal.scale:.6g}, standard error {cal.stderr:.3g} (quote of the 35 %: "
+                     f"{cal.stderr_quote:.3g}, through d drop/ds = {cal.slope:.4g}; ensemble means of the table: "
+                     f"{cal.stderr_ensemble:.3g}); drop reached {_pct(cal.drop)} in {cal.evaluations} strip-draw "
+                     "tests.")
+    from tribocosim.paths import DEFAULT_TABLE
+
+    shipped = Path(table_path).resolve() == Path(DEFAULT_TABLE).resolve()
+    table_text = "`models/friction_table.npz` (the shipped one)" if shipped else f"`{table_path}`"
+    lines += ["", f"Friction table: {table_text}. Figures: " + ", ".join(f"[{f}]({f})" for f in files)
+              + "; every test's mu_bar: [paper.csv](paper.csv), the numbers: [paper.json](paper.json).", ""]
+    return "\n".join(lines)
+
+
+def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> list[str]:
+    """The sections after the paper-vs-model table (paper_physics): options, budget, the observable chosen, speed,
+    alpha, checks; ``m`` the calibrated mesoscale column's metrics, ``clamps`` its clamped lookups per figure."""
+
+    lines = ["", "## Multi-pass options", "",
+             "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
+             "to 72 % after three. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
+             "drop, and the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
+             "pad).", "",
+             "| option | why these values | s | drop 1 / 2 / 3 passes at 25 MPa | 3-pass minus 2-pass | 140 mm pad, 1 pass "
+             "| debris after pass 1 / 2 / 3 [g/m^2] | clamped lookups |", "|---|---|---|---|---|---|---|---|"]
+    for opt in pp.OPTIONS:
+        r = extra["options"].get(opt.name, {})
+        if "error" in r:
+            lines.append(f"| {opt.label} | {opt.why} | cannot be calibrated: {r['error']} | | | | | |")
+            continue
+        lines.append(f"| {opt.label} | {opt.why} | {r['scale']:.4g} | " + " / ".join(_pct(d) for d in r["drops"])
+                     + f" | {100 * r['spacing_3_2']:.1f} points | {_pct(r['drop_140'])} | "
+                     + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
+    rows = extra["budget"]
+    nominal = extra["options"]["paper"]
+    cal = cals["mesoscale"]
+    lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
+              "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
+              "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
+              "(a two-sided range: half the difference of its ends; a one-sided change whole). The quote of the 35 % "
+              f"alone gives s a standard error of {cal.stderr_quote:.2g}. The observable A_p stands for is a model "
+              "choice, not an input with a range: it is stated with its evidence in the next section and not summed "
+              "here.", "",
+              "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['quantity']} | {r['range']} | {r['error']} | | |")
+        else:
+            lines.append(f"| {r['quantity']} | {r['range']} | {r['scale']:.3g} | {100 * r['drop3']:.1f} | "
+                         f"{100 * r['drop140']:.1f} |")
+    tot, band = extra["budget_total"], extra["budget_intervals"]
+    missing = extra["budget_not_varied"]
+    for m_ in missing:
+        lines.append(f"| {m_['quantity']} | {m_['range']} | not varied: {m_['why']} | - | - |")
+    not_in = f", without the {', '.join(m_['quantity'] for m_ in missing)}" if missing else ""
+    lines += [f"| **total** (quadrature, with the quote{not_in}) | | **{tot['scale']:.3g}** | "
+              f"**{100 * tot['drop3']:.1f}** | **{100 * tot['drop140']:.1f}** |", "",
+              f"So s = {cal.scale:.3g} (interval {band['scale'][0]:.3g} to {band['scale'][1]:.3g}), the 3-pass drop "
+              f"{_pct(nominal['drops'][2])} (interval {_pct(band['drop3'][0])} to {_pct(band['drop3'][1])}; the "
+              f"paper: up to 72 %), the 140 mm pad's one-pass drop {_pct(nominal['drop_140'])} (interval "
+              f"{_pct(band['drop140'][0])} to {_pct(band['drop140'][1])}): the value -+ the total, clipped to "
+              "[0, 100 %]"
+              + (f"; the {', '.join(m_['quantity'] for m_ in missing)} is not varied, so these intervals leave "
+                 f"{'it' if len(missing) == 1 else 'them'} out." if missing else "."), ""]
+    lines += observable_markdown(extra["observable"], nominal)
+    lines += ["## Drawing speed", "",
+              f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g}, over its interval {band['scale'][0]:.3g} to "
+              f"{band['scale'][1]:.3g}: the range in brackets), and the drop against 1 MPa at the same speed. The "
+              "table's A_p (every load-bearing flake, the default observable) is simulated at "
+              f"{' / '.join(f'{v:g}' for v in extra['simulated_velocities']) or 'no recorded'} m/s, where it does not "
+              "depend on v0 (docs/physics/table_domain.md); the paper's alpha(v) (Fig. 15, its cluster rule, "
+              "1-50 m/s), rising with v0, would make the debris effect grow from 0.08 to 0.5 m/s, which nothing "
+              "simulated here at these speeds shows.", "",
+              "| V0 [m/s] | mu_bar, 1 pass | drop, 1 pass | mu_bar, 3 passes | drop, 3 passes |", "|---|---|---|---|---|"]
+    for r in extra["speed"]:
+        lines.append(f"| {r['velocity']:g} | {r['mu_1']:.4f} [{r['mu_1_band'][0]:.4f}, {r['mu_1_band'][1]:.4f}] | "
+                     f"{_pct(r['drop_1'])} | {r['mu_3']:.4f} [{r['mu_3_band'][0]:.4f}, {r['mu_3_band'][1]:.4f}] | "
+                     f"{_pct(r['drop_3'])} |")
+    by_v = {r["velocity"]: r for r in extra["speed"]}
+    if 0.08 in by_v and 0.5 in by_v and by_v[0.08]["drop_1"] > 0:
+        lines += ["", f"The one-pass drop at 0.5 m/s is {by_v[0.5]['drop_1'] / by_v[0.08]['drop_1']:.3f} times that at "
+                      f"0.08 m/s, the three-pass drop {by_v[0.5]['drop_3'] / by_v[0.08]['drop_3']:.3f} times."]
+    lines += ["", "## alpha of both observables", ""]
+    if not extra["alpha"]["load_bearing"]:
+        lines.append("The friction table is format version 2: it holds A_p of every load-bearing flake only, not that "
+                     "of the paper's cluster rule; a version 3 or 4 table gives alpha of both here.")
+    else:
+        lines += ["Eq. 23's alpha = A_p / A0 / (beta P / E*) at the table's first debris level, mean over the pressures "
+                  "(+- standard error), for every load-bearing flake (the observable the model uses) and for the "
+                  "paper's cluster rule alone (the observable of the paper's Fig. 15):", "",
+                  "| v [m/s] | every load-bearing flake | cluster rule alone |", "|---|---|---|"]
+    for a, c in zip(extra["alpha"]["load_bearing"], extra["alpha"]["clusters"]):
+        lines.append(f"| {a['velocity']:g} | {a['alpha']:.4g} +- {a['stderr']:.2g} | {c['alpha']:.3g} +- "
+                     f"{c['stderr']:.2g} |")
+    study = extra["alpha"].get("study")
+    if study:
+        lines += ["", f"The alpha(v) study ({study.get('source', 'docs/physics/alpha_velocity.md')}), 1-50 m/s, "
+                      "mean +- standard error:", "", "| setting | observable | " + " | ".join(
+                          f"{float(v):g} m/s" for v in study["velocities"]) + " | alpha(50)/alpha(1) |",
+                  "|---|---|" + "---|" * (len(study["velocities"]) + 1)]
+        for name, entry in study["settings"].items():
+            for key, label in (("all", "every load-bearing flake"), ("clusters", "cluster rule alone")):
+                cells = [f"{entry[key][str(v)][0]:.3g} +- {entry[key][str(v)][1]:.2g}" if str(v) in entry[key] else "-"
+                         for v in study["velocities"]]
+                ratio = entry["ratio_50_1"][key]
+                lines.append(f"| {entry['label']} | {label} | " + " | ".join(cells)
+                             + f" | {ratio[0]:.3g} +- {ratio[1]:.2g} |")
+        ratios = [e["ratio_50_1"]["all"][0] for e in study["settings"].values()]
+        cluster = [v[0] for e in study["settings"].values() for v in e["clusters"].values()]
+        lines += ["", f"Every load-bearing flake: alpha(50)/alpha(1) from {min(ratios):.3g} to {max(ratios):.3g} over "
+                      "the settings, below 1 wherever the oil damps the flakes (docs/physics/alpha_velocity.md). The "
+                      f"cluster rule alone: alpha {max(cluster):.2g} at most, zero in {sum(c == 0 for c in cluster)} of "
+                      f"{len(cluster)} cells: too sparse to test the shape of Fig. 15; where it is non-zero at the least "
+                      "damping it grows with v0, as Fig. 15 does, within the standard errors shown."]
+    lines += ["", "## The friction table's checks", ""]
+    checks = extra.get("direct_slides", [])
+    if checks:
+        lines += ["Direct slides at points between the table's nodes (the table's own sweep settings) against the "
+                  "table's interpolation, on A_p and on mu = mu0 (1 - A_p / A_c): within two combined standard errors?",
+                  "", "| P [MPa] | v [m/s] | beta | members | A_p/A0 direct | A_p/A0 table | A_p: difference / combined "
+                  "SE | mu direct | mu table | mu: difference / combined SE | nodes read all simulated | passes |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for c in checks:
+            mu = (f"{c['mu_direct']:.4g} +- {c['mu_direct_se']:.2g} | {c['mu_table']:.4g} +- {c['mu_table_se']:.2g} | "
+                  f"{c['mu_difference_over_combined_se']:+.2f}" if c.get("mu_table_se") is not None
+                  and c["mu_table_se"] == c["mu_table_se"] else "- | - | -")
+            lines.append(f"| {c['pressure'] / 1e6:g} | {c['velocity']:g} | {c['beta']:.3g} | {c['members']} | "
+                         f"{c['a_p_direct']:.4g} +- {c['a_p_direct_se']:.2g} | {c['a_p_table']:.4g} +- "
+                         f"{c['a_p_table_se']:.2g} | {c['difference_over_combined_se']:+.2f} | {mu} | "
+                         f"{'yes' if c['all_nodes_simulated'] else 'no'} | {'yes' if c['passed'] else 'NO'} |")
+    else:
+        lines.append("The table is not version 3 or 4 with its campaign recorded: no direct-slide check.")
+    lines += ["", "Clamped lookups (outside the table's axes or its simulated range) in every test of the calibrated "
+                  "column, by figure: " + ", ".join(f"{k}: {v}" for k, v in clamps.items()) + ".", "",
+              "mu_bar(P) on the three pads (calibrated column):", "",
+              "| P [MPa] | " + " | ".join(f"{1000 * pad:g} mm" for pad in grid.pads) + " |",
+              "|---|" + "---|" * len(grid.pads)]
+    for P in grid.pressures:
+        lines.append(f"| {P:g} | " + " | ".join(f"{m['mu_by_pad'][pad][P]:.4f}" for pad in grid.pads) + " |")
+    return lines
+
+
+def observable_markdown(observable: dict, nominal: dict) -> list[str]:
+    """The section on the observable: the choice, its evidence, and the predictions of the other choice."""
+    ev, other = observable["evidence"], observable["choice"]
+    lines = ["## Model choice: the observable", "",
+             "Which flakes carry A_p in Eq. 7 is a choice of the model (`particle_area_rule`): every load-bearing "
+             "flake (the default: the cluster rule of Fig. 8, pinched and held flakes; docs/model.md section 4) or the "
+             "paper's cluster rule alone. It is not an input with a range, so it is not summed into the budget. The "
+             "evidence, at the level the paper's macro model reads:", ""]
+    lines.append(f"- The paper's own macro model (A_c of Eq. 8 with kappa = {ev['kappa']:g}, h'_rms = "
+                 f"{ev['rms_slope']:g}, Eq. 23 linear in beta, Eq. 9: the closed-form law) needs alpha = "
+                 f"{ev['alpha_needed']:.3g} at {ev['velocity']:g} m/s for the 35 % one-pass drop at 25 MPa.")
+    for rule, label in (("load_bearing", "every load-bearing flake"), ("clusters", "the cluster rule alone")):
+        e = ev.get(rule)
+        if e:
+            lines.append(f"- The share A_p / A_c of {label} in the table at its first debris level (beta = "
+                         f"{ev['beta']:.3g}, {ev['velocity']:g} m/s) times Eq. 8's A_c gives alpha_eff = "
+                         f"(A_p / A_c) kappa / (h'_rms beta) = {e['alpha_eff_25mpa']:.3g} at 25 MPa "
+                         f"({e['alpha_eff_min']:.3g} to {e['alpha_eff_max']:.3g} over the table's pressures).")
+    lines += ["", "At the contact area the macro model reads, the load-bearing share gives the alpha that model needs, "
+              "the cluster rule's is orders of magnitude below it.", ""]
+    if "error" in other:
+        lines += [f"With the cluster rule alone the 35 % cannot be reached: {other['error']}", ""]
+    else:
+        lines += [f"With the cluster rule alone, s = {other['scale']:.4g} is needed for the 35 % (against "
+                  f"{nominal['scale']:.4g}), and the model predicts the 3-pass drop {_pct(other['drops'][2])} (against "
+                  f"{_pct(nominal['drops'][2])}) and the 140 mm pad's one-pass drop {_pct(other['drop_140'])} (against "
+                  f"{_pct(nominal['drop_140'])}).", ""]
+    return lines
