@@ -196,9 +196,10 @@ def test_a_vanishing_step_changes_the_outputs_by_a_vanishing_amount(integrator):
 @pytest.mark.parametrize("rho_inf", [0.5, 0.0])
 def test_the_outputs_at_a_communication_point_do_not_depend_on_the_steps_that_reach_it(rho_inf):
     """From one state, the end of 1 ms reached in one step, after a first step of 1e-15 s, 1 ns or 0.3 us, or with a
-    last step of 1 ns, or in two or ten steps: friction and debris agree within 1e-6 relative, and within 1e-5 in
-    ten steps of 0.1 ms (the coupling intervals then follow the shorter steps: the first-order error of holding mu
-    over an interval). A 1 ns step moved friction_force by 8.6e-5 and a 0.3 us step by 1.5e-4, more than a whole
+    last step of 1 ns: friction and debris agree within 1e-6 relative; in two or ten equal steps within 1e-5 (the
+    coupling intervals then follow the shorter steps: the first-order error of holding mu over an interval, which
+    for two steps is about (1 - 1/2) / (1 - 1/10) = 0.56 of that for ten: 1.0e-6 and 1.8e-6 of beta_mean on the
+    shipped table). A 1 ns step moved friction_force by 8.6e-5 and a 0.3 us step by 1.5e-4, more than a whole
     1 ms step: a node that had entered the pad during the step before was not in contact at its end (its friction
     uncounted until the next step's first ~0.2 us, T_max / (k_s V), loaded it), and a node sliding at its
     interval's limit sat below the state's limit (the debris made in the interval had moved it). The bar's pull
@@ -220,7 +221,7 @@ def test_the_outputs_at_a_communication_point_do_not_depend_on_the_steps_that_re
             out = m.step(h, inputs)
         ends[name] = out
     for name, out in ends.items():
-        tol = 1e-5 if name == "ten" else 1e-6
+        tol = 1e-5 if name in ("two", "ten") else 1e-6
         for k in ("friction_force", "mu_mean", "beta_max", "beta_mean", "sliding_distance"):
             assert out[k] == pytest.approx(ends["one"][k], rel=tol), (name, k)
         assert out["pull_force"] == pytest.approx(ends["one"][k := "pull_force"], rel=3e-4), (name, k)
