@@ -286,6 +286,7 @@ class NativeLoop:
             s.current_time = c.current_time
         if status == TCM_FMI_ERROR:
             slave = sysm.slaves[st.failed_slave]
+            slave._check(st.failed_function.decode(), st.failed_status)  # raises, and notes an error or fatal
             label = _LABELS[st.failed_status] if 0 <= st.failed_status < len(_LABELS) else "illegal status"
             raise CosimStepError(slave._failure(st.failed_function.decode(), f"status {st.failed_status}, {label}"))
         if status == TCM_STOPPED:

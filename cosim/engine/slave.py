@@ -50,6 +50,14 @@ LOG = logging.getLogger("tribocosim.cosim")
 #: do_step outcomes
 OK = 0
 DISCARD = 2
+#: the FMI statuses after which the instance's life cycle is cut short (FMI 2.0, section 2.1.3 and Fig. 7)
+ERROR, FATAL = 3, 4
+
+#: the shared libraries of FMUs that returned fmi2Fatal in this process: "the model computations are irreparably
+#: corrupted for all FMU instances" and no function of any of them may be called again, fmi2FreeInstance included
+#: (PythonFMU 0.7 returns fmi2Fatal on a Python exception after releasing the objects its instance holds, and
+#: releases them again in fmi2FreeInstance: freeing such an instance corrupts this interpreter's heap)
+_FATAL_LIBRARIES: set[str] = set()
 
 #: FMI functions called on hot paths without fmpy's Python wrapper
 _HOT = ("fmi2SetReal", "fmi2GetReal", "fmi2SetInteger", "fmi2GetInteger", "fmi2SetBoolean", "fmi2GetBoolean",
@@ -145,6 +153,7 @@ class FmpySlave:
         self.calls = {"doStep": 0, "getFMUstate": 0, "setFMUstate": 0}
         self.messages: deque[str] = deque(maxlen=20)
         self.current_time = float("nan")
+        self.worst_status = OK
         self._fmu = None
         self._dll: dict[str, Any] = {}
         self._arrays: dict[tuple, Any] = {}
@@ -154,6 +163,9 @@ class FmpySlave:
         """Return ``status`` if ok/warning (or discard from doStep); raise CosimStepError otherwise."""
         if status <= 1 or (status == DISCARD and function == "fmi2DoStep"):
             return status
+        self.worst_status = max(self.worst_status, status)
+        if status >= FATAL and self._fmu is not None:
+            _FATAL_LIBRARIES.add(self._library())
         label = _LABELS[status] if 0 <= status < len(_LABELS) else "illegal status"
         raise CosimStepError(self._failure(function, f"status {status}, {label}"))
 
@@ -240,17 +252,29 @@ class FmpySlave:
         """Leave initialization mode (the FMU is then in step mode)."""
         self._call("fmi2ExitInitializationMode", self._fmu.exitInitializationMode)
 
+    def _library(self) -> str:
+        """The path of the instance's shared library (the key of :data:`_FATAL_LIBRARIES`)."""
+        return str(getattr(self._fmu.dll, "_name", id(self._fmu.dll)))
+
     def terminate(self) -> None:
-        """``fmi2Terminate`` and free the instance (errors while freeing are logged only)."""
+        """End the instance as the FMI 2.0 state machine allows: ``fmi2Terminate`` and ``fmi2FreeInstance`` after a
+        run; only ``fmi2FreeInstance`` once a call returned fmi2Error; nothing once any instance of its library
+        returned fmi2Fatal (the instance is left to the process: see :data:`_FATAL_LIBRARIES`). Errors while
+        freeing are logged only."""
         if self._fmu is None:
             return
+        fatal = self._library() in _FATAL_LIBRARIES
         try:
-            self._call("fmi2Terminate", self._fmu.terminate)
+            if not fatal and self.worst_status < ERROR:
+                self._call("fmi2Terminate", self._fmu.terminate)
         finally:
-            try:
-                self._fmu.freeInstance()
-            except Exception as exc:  # pragma: no cover
-                LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
+            if fatal:
+                LOG.warning("FMU %s: not freed: an instance of its library returned fmi2Fatal", self.name)
+            else:
+                try:
+                    self._fmu.freeInstance()
+                except Exception as exc:  # pragma: no cover
+                    LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
             self._fmu = None
             self._dll = {}
 

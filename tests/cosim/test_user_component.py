@@ -68,3 +68,39 @@ def test_a_bad_profile_file_stops_the_run_at_initialization_naming_it(example, t
     message = str(exc.value)
     assert "FMU instance 'drive': fmi2ExitInitializationMode failed" in message, message
     assert f"{bad}, row 3: time = 0.0 s" in message and "increasing times" in message, message
+
+
+_FAILED_RUNS_THEN_COLLECT = """
+import gc, sys
+from tribocosim.cosim import run
+from tribocosim.errors import RunFailed
+for _ in range(3):
+    try:
+        run(sys.argv[1], write=False)
+    except RunFailed as exc:
+        assert "status 4, fatal" in str(exc), exc
+    else:
+        raise SystemExit("the run did not fail")
+    gc.collect()
+junk = [[{"k": [i] * 3} for i in range(1000)] for _ in range(200)]
+del junk
+gc.collect()
+print("sound")
+"""
+
+
+def test_a_python_component_that_failed_leaves_the_interpreter_sound(example, tmp_path):
+    """PythonFMU answers a Python exception with fmi2Fatal after releasing the Python objects its instance holds,
+    and releases them again in fmi2FreeInstance. FMI 2.0 (section 2.1.3) allows no call on any instance of an FMU
+    after fmi2Fatal, so the run leaves the instance unfreed: runs that failed so, then full garbage collections,
+    in a fresh interpreter end normally (freeing it ended the process with a segmentation fault)."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,velocity\n0.0,0.0\n0.0,0.1\n")
+    scene = (example / "measured_drive.toml").read_text().replace(
+        'path = "MeasuredDrive.fmu"',
+        f'path = "{example / "MeasuredDrive.fmu"}"\nparameters = {{ profile_file = "{bad}" }}')
+    (tmp_path / "bad.toml").write_text(scene)
+    proc = subprocess.run([sys.executable, "-c", _FAILED_RUNS_THEN_COLLECT, str(tmp_path / "bad.toml")],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and proc.stdout.strip() == "sound", (proc.returncode, proc.stdout, proc.stderr)
+    assert "not freed: an instance of its library returned fmi2Fatal" in proc.stderr, proc.stderr
