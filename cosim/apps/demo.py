@@ -124,7 +124,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     from tribocosim.cosim.api import run
     from tribocosim.cosim.apps.plotting import plot_demo
     from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
-    from tribocosim.cosim.scene.component_checks import load_component_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -141,7 +141,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
             base.fmus["press"].parameters["force_setpoint"])
         over["fmus.press.parameters.force_setpoint"] = strip_parameters(parse_scene(demo_scene(), over)[0]).normal_force(p)
     over.update(overrides or {})
-    plan = load_component_scene(demo_scene(), over)
+    plan = load_scene(demo_scene(), over)
     result = run(plan, out)
     t = result.time
     steady = t >= t[-1] - 0.2 * (t[-1] - t[0])

@@ -22,16 +22,10 @@ from pathlib import Path
 
 from tribocosim.errors import SceneError, TribocosimError
 from tribocosim.components.native.toolchain.library import cache_dir
+from tribocosim.cosim.scene.binaries import host_platform
 
 
-def host_platform() -> str:
-    """The FMI 2.0 platform folder of this machine (a cached native FMU carries only its binary)."""
-    import sys
-
-    return "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
-
-
-def component_fmu(component: str, cache: Path | None = None, variant: str | None = None) -> Path:
+def component_fmu(component: str, cache: Path | None = None) -> Path:
     """Return the path of the cached FMU of ``component``, building it if needed.
 
     Parameters
@@ -40,9 +34,6 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         Component name (``"stripdraw"``) or model identifier (``"StripDraw"``), case-insensitive.
     cache : Path, optional
         Cache folder (default :func:`cache_dir`).
-    variant : {"native"}, optional
-        The FMU's implementation: C (in the cache with this machine's binary only), the only one the project
-        builds.
 
     Raises
     ------
@@ -57,7 +48,6 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         raise SceneError(f"unknown component {component!r}; this installation builds: "
                          f"{', '.join(c.name for c in registry.components().values())}")
     name = comp.model_identifier
-    variant = variant or "native"
     if comp.native is None:
         raise SceneError(f"component {component!r} has no native implementation: the project builds its FMUs in C; "
                          "a component written in Python is a pythonfmu FMU of its own, named by path = ... "
@@ -67,7 +57,7 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         digest = native_build.source_digest(name)
     except TribocosimError as exc:
         raise SceneError(f"component {component!r}: {exc}") from exc
-    entry = root / f"{name}-{variant}-{digest[:16]}"
+    entry = root / f"{name}-native-{digest[:16]}"
     fmu = entry / f"{name}.fmu"
     if fmu.is_file():
         return fmu

@@ -24,7 +24,7 @@ from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
 from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
-from tribocosim.cosim.scene.component_checks import load_component_scene
+from tribocosim.cosim.scene.validate import load_scene
 from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
@@ -56,7 +56,7 @@ def by(rows, key, **where):
 @pytest.fixture(scope="module")
 def demo_run():
     """The demo scene at the cheap settings (Jacobi, 1 ms)."""
-    return run(load_component_scene(DEMO, CHEAP), write=False)
+    return run(load_scene(DEMO, CHEAP), write=False)
 
 
 def test_shipped_scenes_and_sweeps_are_valid():
@@ -66,7 +66,7 @@ def test_shipped_scenes_and_sweeps_are_valid():
             sweep = load_sweep(path)
             assert sweep.scene.is_file() and sweep.cases(), path.name
         else:
-            load_component_scene(path)  # raises SceneError on any problem
+            load_scene(path)  # raises SceneError on any problem
     names = {p.stem for p in SCENES.glob("*.toml")}
     assert {"demo", "pressure_sweep", "multipass", "zeta_sweep", "archard_sweep", "stiff_drive"} <= names
 
@@ -220,8 +220,8 @@ def test_initial_debris_above_the_tables_cap_is_refused(tmp_path):
     over = {"fmus.strip.parameters.table_file": str(closed),
             "fmus.strip.parameters.beta_initial": min(1.0, 1.5 * cap)}
     with pytest.raises(SceneError, match=r"fmus.strip.parameters.beta_initial: beta_initial = .* exceeds the cap of beta"):
-        load_component_scene(DEMO, over)
-    load_component_scene(DEMO, {**over, "fmus.strip.parameters.beta_initial": 0.5 * cap})
+        load_scene(DEMO, over)
+    load_scene(DEMO, {**over, "fmus.strip.parameters.beta_initial": 0.5 * cap})
 
 
 def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
@@ -232,8 +232,8 @@ def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
     over = {"fmus.strip.parameters.table_file": str(small), "fmus.drive.parameters.velocity_setpoint": 2.0}
     with pytest.raises(SceneError, match=r"fmus.drive.parameters.velocity_setpoint: velocity_setpoint = 2 m/s is "
                                          r"above the friction table's velocity axis \(up to 1 m/s\)"):
-        load_component_scene(DEMO, over)
-    load_component_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
+        load_scene(DEMO, over)
+    load_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
 
 
 @pytest.mark.parametrize("key, value, message", [
@@ -246,10 +246,10 @@ def test_a_set_point_outside_the_range_the_input_is_built_for_is_named(key, valu
     the scene check matches the drive's set-point, with its sign, against the range the strip's input port
     declares (Port.low), and names the set-point's parameter."""
     with pytest.raises(SceneError) as exc:
-        load_component_scene(DEMO, {key: value})
+        load_scene(DEMO, {key: value})
     assert [p.key for p in exc.value.problems] == [key], exc.value
     assert message in exc.value.problems[0].message, exc.value
-    load_component_scene(DEMO, {key: 0.5})
+    load_scene(DEMO, {key: 0.5})
 
 
 def test_every_declared_port_bound_is_a_number_or_a_parameter():
@@ -291,14 +291,14 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
     Jacobi at 50 us and the iterative scheme at 1 ms give the smooth build-up of the pull force."""
     scene = SCENES / "stiff_drive.toml"
     creep = tomllib.loads(scene.read_text())["fmus"]["drive"]["parameters"]["start_time"]  # after the press closes
-    small = run(load_component_scene(scene, {"experiment.step": 5e-5}), write=False)
+    small = run(load_scene(scene, {"experiment.step": 5e-5}), write=False)
     pull = small["strip.pull_force"]
     assert np.all(pull[small.time <= creep] == 0.0), "nothing moves while the press closes"
     assert np.all(np.diff(pull[small.time > creep + 0.05]) > 0) and 150 < pull[-1] < 300, "smooth build-up while sticking"
-    jac = run(load_component_scene(scene), write=False)
+    jac = run(load_scene(scene), write=False)
     assert np.max(np.abs(jac["strip.pull_force"])) > 10 * pull[-1], "Jacobi at 1 ms should ring (unstable loop)"
     assert np.min(jac["drive.grip_velocity"]) < -0.01, "... with the grip reversing"
-    it = run(load_component_scene(scene, {"master.algorithm": "iterative"}), write=False)
+    it = run(load_scene(scene, {"master.algorithm": "iterative"}), write=False)
     np.testing.assert_allclose(it["strip.pull_force"][-1], pull[-1], rtol=0.1, err_msg="iterative at 1 ms")
     ref = np.interp(it.time, small.time, pull)
     assert np.max(np.abs(it["strip.pull_force"] - ref)) < 0.1 * pull[-1]
