@@ -38,7 +38,10 @@ class PressParameters:
 
     def __post_init__(self) -> None:
         validate_fields(self)
-        self.setpoints()  # parse now: a malformed table is a parameter error
+        try:
+            self.setpoints()  # parse now: a malformed table is a parameter error (of that field)
+        except ParameterError as exc:
+            raise ParameterError(str(exc), fields=[("setpoint_table", str(exc))]) from None
 
     def setpoints(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """Breakpoints (times [s], forces [N]) of the piecewise-linear set-point."""

@@ -120,7 +120,7 @@ def _plot(args, result):
     """The PNG of the recorded variables when --plot asks for it (None otherwise)."""
     if not args.plot or result.csv_path is None:
         return None
-    from tribocosim.cosim.apps.plotting import plot_result
+    from tribocosim.cosim.studies.plotting import plot_result
 
     return plot_result(result, result.csv_path.with_suffix(".png"))
 

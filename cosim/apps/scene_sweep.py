@@ -466,7 +466,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                     indent=2, default=str), encoding="utf-8")
     result = SweepResult(sweep, rows, csv_path, json_path, wall)
     if plot:
-        from tribocosim.cosim.apps.plotting import plot_beta_maps, plot_sweep
+        from tribocosim.cosim.studies.plotting import plot_beta_maps, plot_sweep
 
         result.plots.append(plot_sweep(result, out / "sweep.png"))
         maps = sweep.plot.get("maps")

@@ -60,16 +60,23 @@ class Checked:
 
 
 def _instance(cls, given: dict, add, key: str):
-    """The dataclass ``cls`` made once from ``given``, or None after reporting every bad field under its key."""
+    """The dataclass ``cls`` made once from ``given``, or None after reporting a rule across fields that fails.
+
+    A bad field is reported under its key and the dataclass is made again without the bad fields (their defaults
+    instead), so that the checks that need an instance still run and a scene's problems are reported at once."""
     try:
         return cls(**given)
     except ParameterError as exc:
-        if exc.fields:
-            for name, message in exc.fields:
-                add(f"{key}.{name}", message)
-        else:  # a rule across fields
+        if not exc.fields:  # a rule across fields
             add(key, str(exc))
-    return None
+            return None
+        for name, message in exc.fields:
+            add(f"{key}.{name}", message)
+        bad = {name for name, _ in exc.fields}
+    try:
+        return cls(**{k: v for k, v in given.items() if k not in bad})
+    except ParameterError:
+        return None
 
 
 def check_components(scene) -> Checked:

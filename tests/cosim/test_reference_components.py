@@ -18,7 +18,7 @@ from tribocosim.errors import SceneError
 from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
-from tribocosim.cosim.apps.monolithic import ComponentModel, make_model, reference_for_scene
+from tribocosim.cosim.studies.monolithic import ComponentModel, make_model, reference_for_scene
 from tribocosim.cosim.scene.component_checks import component_problems
 from tribocosim.cosim.scene.validate import load_scene
 from tribocosim.cosim.scene.schema import parse_scene

@@ -23,7 +23,7 @@ from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
+from tribocosim.cosim.studies.stripdraw_experiment import steady_ratio
 from tribocosim.cosim.scene.validate import load_scene
 from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
@@ -188,11 +188,11 @@ def test_each_later_pass_has_lower_mu_bar(tmp_path):
 
 
 BAD = {
-    "fmus.drive.parameters.drive_stiffness": (-5e7, "outside the declared range"),
+    "fmus.drive.parameters.drive_stiffness": (-5e7, "is out of range; allowed: [1, 1e+13] N/m"),
     "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's pressure axis"),
     "fmus.strip.parameters.friction_model": ("tabel", "is not allowed; choose one of table"),
     "fmus.press.parameters.setpoint_table": ("0 0; 0.1", "is malformed"),
-    "fmus.strip.parameters.beta_initial": (1.5, "outside the declared range"),
+    "fmus.strip.parameters.beta_initial": (1.5, "is out of range; allowed: [0, 1]"),
 }
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from tribocosim.errors import CosimStepError
 from tribocosim.cosim import run
-from tribocosim.cosim.apps.monolithic import TwoMassOscillator, coupling_error
+from tribocosim.cosim.studies.monolithic import TwoMassOscillator, coupling_error
 
 BOND = """
 [[power_bonds]]
