@@ -15,7 +15,9 @@ same order, with the same values:
    feedthrough of undeclared slaves, the algebraic loops and the evaluation order follow
    (:mod:`tribocosim.cosim.engine.graph`); one more refresh, and the start row recorded (``tcm_record_row``);
 3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time;
-4. the end-of-run outputs read, ``fmi2Terminate`` and ``fmi2FreeInstance``, the libraries unloaded.
+4. the end-of-run outputs read, ``fmi2Terminate`` and ``fmi2FreeInstance``. The libraries stay loaded for the
+   process (an FMU's extracted folder is named by its content, so a later run loads the same library again; unloading
+   a library that embeds an interpreter, a pythonfmu FMU's, can leave objects behind that point into it).
 
 So its results are the Python loop's to the last bit (``tests/cosim/test_native_loop.py``). Anything it does not
 take as the Python master would (an FMI status above warning, a discarded step, a non-finite value) frees the FMUs
@@ -34,7 +36,6 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from tribocosim.errors import TribocosimError
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
@@ -394,8 +395,8 @@ class NativeSession:
                              [int(c.do_steps) for c in self.c_slaves], loop_time, self.warnings, end_values)
 
     def _free(self, fmus: list[_Fmu]) -> None:
-        """``fmi2Terminate`` and ``fmi2FreeInstance`` of every instance, then its library unloaded (as fmpy does);
-        a failure here changes no result and is not reported (as the Python master's clean-up)."""
+        """``fmi2Terminate`` and ``fmi2FreeInstance`` of every instance; a failure here changes no result and is not
+        reported (as the Python master's clean-up)."""
         for f in fmus:
             if f.component:
                 try:
@@ -407,17 +408,3 @@ class NativeSession:
                 except Exception:  # noqa: BLE001
                     pass
                 f.component = None
-            _unload(f.dll)
-
-
-def _unload(dll: Any) -> None:
-    """Close a library loaded by ctypes (fmpy's ``freeLibrary``)."""
-    import _ctypes
-
-    try:
-        if sys.platform.startswith("win"):
-            _ctypes.FreeLibrary(dll._handle)
-        else:
-            _ctypes.dlclose(dll._handle)
-    except Exception:  # noqa: BLE001 - a library that stays loaded until the process ends
-        pass
