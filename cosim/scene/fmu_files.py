@@ -33,7 +33,7 @@ from tribocosim.components.native.toolchain.library import cache_dir
 from tribocosim.cosim.scene.binaries import fmu_binary_problem, host_platform
 
 #: the summary's layout; a stored summary of another version is read again from the FMU
-SUMMARY_VERSION = 1
+SUMMARY_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,7 @@ class FmuSummary:
     variables: tuple[Variable, ...]
     dependencies: dict  # output name -> the input names it depends on directly, or None when not declared
     binary_problem: str | None = None
+    generation_tool: str = ""
 
 
 class FmuFileError(Exception):
@@ -103,7 +104,8 @@ def _read(path: Path) -> FmuSummary:
         problem = fmu_binary_problem(path, cs.modelIdentifier)
     return FmuSummary(md.fmiVersion, md.guid, cs.modelIdentifier if cs is not None else None,
                       bool(cs.canGetAndSetFMUstate) if cs is not None else False,
-                      bool(cs.canInterpolateInputs) if cs is not None else False, tuple(variables), deps, problem)
+                      bool(cs.canInterpolateInputs) if cs is not None else False, tuple(variables), deps, problem,
+                      md.generationTool or "")
 
 
 def summary(path: str | Path) -> FmuSummary:

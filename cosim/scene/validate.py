@@ -213,9 +213,11 @@ def load_scene(path: str | Path, overrides: dict | None = None, document: dict |
                     continue
                 plan.parameters.setdefault(name, []).append((var.valueReference, var.type, value))
         else:
-            from tribocosim.components import registry
+            comp = None
+            if info.generation_tool.startswith("tribocosim"):  # our FMU run by path (an SSP package's)
+                from tribocosim.components import registry
 
-            comp = registry.find(info.model_identifier)  # our FMUs run by path (an SSP package's) declare the same
+                comp = registry.find(info.model_identifier)
             for pname, value in spec.parameters.items():
                 if _check_parameter(add, f"{key}.parameters.{pname}", model, pname, value):
                     var = model.variables[pname]
