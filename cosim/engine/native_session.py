@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import array
 import ctypes
+import itertools
 import logging
 import math
 import sys
@@ -36,6 +37,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
+from weakref import WeakValueDictionary
 
 from tribocosim.errors import TribocosimError
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
@@ -49,6 +51,24 @@ _LABELS = ("ok", "warning", "discard", "error", "fatal", "pending")
 _VP, _I, _D, _SZ, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_size_t, ctypes.c_uint
 _PD, _PI, _PU, _PB = (ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_uint),
                       ctypes.POINTER(ctypes.c_ubyte))
+
+
+# FMU log messages: one sink for the whole process, and every instance's callbacks and environment kept for the
+# process (a few dozen bytes each). An FMU may log after its instance was freed (a pythonfmu FMU's Python object,
+# collected later in this interpreter): what it was given must still be readable and the sink still callable; a key
+# whose instance is gone is dropped.
+_FMUS: "WeakValueDictionary[int, _Fmu]" = WeakValueDictionary()
+_KEYS = itertools.count(1)
+_ENVS: list = []
+
+
+def _dispatch(key, status, message) -> None:
+    f = _FMUS.get(int(key or 0))
+    if f is not None:
+        f.log(status, message)
+
+
+_SINK = SINK(_dispatch)
 
 
 class SessionStopped(TribocosimError):
@@ -117,13 +137,16 @@ def _library_file(slave: SessionSlave) -> Path:
 class _Fmu:
     """One loaded FMU instance: the library, its life-cycle functions, its log, its wall time."""
 
-    def __init__(self, slave: SessionSlave, index: int, sink) -> None:
+    def __init__(self, slave: SessionSlave) -> None:
         self.slave = slave
         self.dll = ctypes.CDLL(str(_library_file(slave)))
         self.component = None
         self.wall_time = 0.0
         self.messages: deque[str] = deque(maxlen=20)
-        self.env = TcmLogEnv(ctypes.cast(sink, _VP), index + 1)
+        key = next(_KEYS)
+        _FMUS[key] = self
+        self.env = TcmLogEnv(ctypes.cast(_SINK, _VP), key)
+        _ENVS.append(self.env)
         f = self.dll
         f.fmi2Instantiate.restype = _VP
         f.fmi2Instantiate.argtypes = [ctypes.c_char_p, _I, ctypes.c_char_p, ctypes.c_char_p,
@@ -133,6 +156,14 @@ class _Fmu:
             getattr(f, name).argtypes = [_VP]
         f.fmi2FreeInstance.argtypes = [_VP]
         f.fmi2FreeInstance.restype = None
+
+    def log(self, status: int, message: bytes | None) -> None:
+        """A message of the FMU (as :class:`~tribocosim.cosim.engine.slave.FmpySlave` keeps and logs them)."""
+        text = (message or b"").decode("utf-8", "replace").strip()
+        label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
+        self.messages.append(f"[{label}] {text}")
+        if status >= 1:
+            LOG.warning("FMU %s: [%s] %s", self.slave.name, label, text)
 
     def call(self, function: str, *args) -> int:
         t0 = time.perf_counter()
@@ -298,25 +329,16 @@ class NativeSession:
         self.lib = library()
         fmus: list[_Fmu] = []
 
-        def sink(key, status, message):
-            f = fmus[int(key or 0) - 1] if 0 < int(key or 0) <= len(fmus) else None
-            text = (message or b"").decode("utf-8", "replace").strip()
-            label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
-            if f is not None:
-                f.messages.append(f"[{label}] {text}")
-                if status >= 1:
-                    LOG.warning("FMU %s: [%s] %s", f.slave.name, label, text)
-
-        self._sink = SINK(sink)
         callbacks = _Callbacks(*(ctypes.cast(getattr(self.lib, name), _VP).value
                                  for name in ("tcm_logger", "tcm_allocate_memory", "tcm_free_memory")), None, None)
         try:
-            for i, s in enumerate(self.slaves):
-                f = _Fmu(s, i, self._sink)
+            for s in self.slaves:
+                f = _Fmu(s)
                 fmus.append(f)
                 cb = _Callbacks.from_buffer_copy(callbacks)
                 cb.componentEnvironment = ctypes.addressof(f.env)
                 f.callbacks = cb
+                _ENVS.append(cb)  # the FMU may read its callbacks as long as it lives (see _ENVS)
                 t0 = time.perf_counter()
                 f.component = f.dll.fmi2Instantiate(s.name.encode(), 1, s.guid.encode(),
                                                     (s.folder / "resources").as_uri().encode(), ctypes.byref(cb), 0, 1)

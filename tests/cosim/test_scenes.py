@@ -331,3 +331,36 @@ def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(t
     second = run_sweep(path, tmp_path / "out")
     assert summary.stat().st_mtime_ns != stamp, "a changed table must run the case again"
     assert second.rows[0]["mu_bar"] == pytest.approx(0.5 * first.rows[0]["mu_bar"], rel=0.05)
+
+
+def test_a_scene_is_parsed_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
+    """``tribocosim run``: one TOML parse of the scene file, and one range check of ``tool_length`` in Python (the
+    component declaration's; the model description's min/max derive from it and are not checked again)."""
+    from tribocosim.components import params
+    from tribocosim.cosim.scene import schema
+
+    tribocosim(["run", str(DEMO), "--out", str(tmp_path / "warm"), "--quiet", "--set", "experiment.stop=0.01"])
+    parses, checked = [], []
+    loads, check_field = schema.tomllib.loads, params.check_field
+
+    class CountingToml:
+        TOMLDecodeError = tomllib.TOMLDecodeError
+
+        @staticmethod
+        def loads(text):
+            parses.append(text)
+            return loads(text)
+
+    monkeypatch.setattr(schema, "tomllib", CountingToml)
+    monkeypatch.setattr(params, "check_field", lambda f, value: (checked.append(f.name), check_field(f, value))[1])
+    assert tribocosim(["run", str(DEMO), "--out", str(tmp_path / "out"), "--quiet",
+                       "--set", "experiment.stop=0.01"]) == 0
+    assert len([t for t in parses if "[fmus.strip]" in t]) == 1, "the scene file is parsed once"
+    assert checked.count("tool_length") == 1, checked
+
+
+def test_the_variant_key_accepts_native_and_refuses_the_rest(tmp_path):
+    load_scene(DEMO, {**CHEAP, "fmus.strip.variant": "native"})  # scenes of earlier versions keep running
+    with pytest.raises(SceneError, match="fmus.strip.variant: 'python' is not allowed: the project builds the FMUs of "
+                                         "its components in C only"):
+        load_scene(DEMO, {**CHEAP, "fmus.strip.variant": "python"})
