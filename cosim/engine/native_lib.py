@@ -1,10 +1,9 @@
 """The C master's library (``native/tc_master.c``): its build, its loading and the ctypes structures it takes.
 
-The library (``tc_master.c``, ``tc_results.c``) holds the fixed-step loop of Jacobi and Gauss-Seidel with held coupling values (``tcm_run``), the output
+The library holds the fixed-step loop of Jacobi and Gauss-Seidel with held coupling values (``tcm_run``), the output
 refresh and the feedthrough probe of the master's initialization (``tcm_refresh``, ``tcm_probe``), the start row of
 the recorder (``tcm_record_row``), and the FMI 2.0 callbacks a host passes to ``fmi2Instantiate`` (``tcm_logger``,
-which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``),
-and the text of the results CSV (``tcm_format_rows``: each double as Python's ``repr``).
+which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``).
 :mod:`.native_loop` runs the loop for the Python master, :mod:`.native_session` a whole run in it. Nothing here
 imports numpy or fmpy.
 
@@ -26,10 +25,8 @@ from pathlib import Path
 
 #: the C sources of the loop
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-SOURCES = ("tc_master.c", "tc_results.c")
+SOURCES = ("tc_master.c",)
 HEADER = "tc_master.h"
-#: the headers of the sources (all of them go into the digest)
-HEADERS = ("tc_master.h", "tc_results.h")
 #: accepted steps per call of the C loop (between two calls the progress reporters are told the time)
 CHUNK = 2048
 #: tcm_status
@@ -113,7 +110,7 @@ def digest() -> str:
     from tribocosim.components.native.toolchain.digests import memo
 
     folder = fmi_headers()
-    files = (*(NATIVE_DIR / s for s in (*SOURCES, *HEADERS)), folder / "fmi2FunctionTypes.h",
+    files = (*(NATIVE_DIR / s for s in SOURCES), NATIVE_DIR / HEADER, folder / "fmi2FunctionTypes.h",
              folder / "fmi2TypesPlatform.h")
     flags = " ".join((*compiler.CFLAGS, compiler.zig_version()))
 
@@ -159,8 +156,4 @@ def library() -> ctypes.CDLL:
     lib.tcm_probe.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState), _PI, _PU, _PB, _PD, _PB, _PD]
     lib.tcm_record_row.restype = _I
     lib.tcm_record_row.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState)]
-    lib.tcm_repr.restype = _SZ
-    lib.tcm_repr.argtypes = [_D, ctypes.c_char_p]
-    lib.tcm_format_rows.restype = _SZ
-    lib.tcm_format_rows.argtypes = [_PD, _PD, _SZ, _SZ, ctypes.c_char_p, _SZ]
     return lib
