@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import struct
 import sys
-import zipfile
 from pathlib import Path
 
 
@@ -38,6 +37,8 @@ def library_in_fmu(model_identifier: str) -> str:
 def fmu_binary_problem(fmu: str | Path, model_identifier: str) -> str | None:
     """Why the FMU's library for this machine cannot be loaded safely (absent, or shorter than its headers say),
     or None."""
+    import zipfile
+
     inside = library_in_fmu(model_identifier)
     with zipfile.ZipFile(fmu) as z:
         try:

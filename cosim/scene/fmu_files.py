@@ -22,15 +22,12 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
-import tempfile
-import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from tribocosim.components.native.toolchain.digests import file_sha256
 from tribocosim.components.native.toolchain.library import cache_dir
-from tribocosim.cosim.scene.binaries import fmu_binary_problem, host_platform
+from tribocosim.cosim.scene.binaries import host_platform
 
 #: the summary's layout; a stored summary of another version is read again from the FMU
 SUMMARY_VERSION = 2
@@ -74,6 +71,8 @@ class FmuFileError(Exception):
 
 def _read(path: Path) -> FmuSummary:
     from fmpy import read_model_description
+
+    from tribocosim.cosim.scene.binaries import fmu_binary_problem
 
     try:
         md = read_model_description(str(path), validate=True)
@@ -127,6 +126,8 @@ def summary(path: str | Path) -> FmuSummary:
 
 
 def _write_atomically(path: Path, text: str) -> None:
+    import tempfile
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=".summary-", dir=path.parent)
@@ -144,6 +145,10 @@ def extracted(path: str | Path) -> Path:
     folder = root / file_sha256(path)[:32]
     if (folder / "modelDescription.xml").is_file():
         return folder
+    import shutil
+    import tempfile
+    import zipfile
+
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".extract-", dir=root))
     try:

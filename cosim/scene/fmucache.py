@@ -16,8 +16,6 @@ names only ``path = ...`` FMUs never imports the builder.
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 from tribocosim.errors import SceneError, TribocosimError
@@ -41,7 +39,7 @@ def component_fmu(component: str, cache: Path | None = None) -> Path:
         If the component is unknown or the build fails (with the builder's message).
     """
     from tribocosim.components import registry
-    from tribocosim.components.fmus import native_build
+    from tribocosim.components.native.toolchain.digests import remembered
 
     comp = registry.find(component)
     if comp is None:
@@ -53,17 +51,26 @@ def component_fmu(component: str, cache: Path | None = None) -> Path:
                          "a component written in Python is a pythonfmu FMU of its own, named by path = ... "
                          "(docs/user-guide.md)")
     root = Path(cache) if cache is not None else cache_dir()
-    try:
-        digest = native_build.source_digest(name)
-    except TribocosimError as exc:
-        raise SceneError(f"component {component!r}: {exc}") from exc
+    digest = remembered(f"fmu {name} 2")  # native_build.digest_key: found without importing the builder
+    if digest is None:
+        from tribocosim.components.fmus import native_build
+
+        try:
+            digest = native_build.source_digest(name)
+        except TribocosimError as exc:
+            raise SceneError(f"component {component!r}: {exc}") from exc
     entry = root / f"{name}-native-{digest[:16]}"
     fmu = entry / f"{name}.fmu"
     if fmu.is_file():
         return fmu
+    import shutil
+    import tempfile
+
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
+        from tribocosim.components.fmus import native_build
+
         native_build.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
         try:
             os.rename(tmp, entry)

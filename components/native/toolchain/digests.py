@@ -15,7 +15,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -34,12 +33,29 @@ def signature(files: Iterable[Path]) -> list[list]:
     return out
 
 
+def _record(key: str) -> Path:
+    return cache_dir() / "digests" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+
+
+def remembered(key: str) -> Any:
+    """The value :func:`memo` stored for ``key`` while every file it was computed from is unchanged, else None (for
+    a caller that would have to do work to name the files)."""
+    try:
+        stored = json.loads(_record(key).read_text(encoding="utf-8"))
+        files = [f[0] for f in stored["files"]]
+        if stored.get("key") == key and stored["files"] == signature(files):
+            return stored["digest"]
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        pass
+    return None
+
+
 def memo(key: str, files: Iterable[Path], compute: Callable[[], Any]) -> Any:
     """The value ``compute()`` returns for ``key`` (a digest, or any value JSON holds as it is), computed again only
     when one of ``files`` changed. An exception of ``compute`` is raised, and nothing is remembered."""
     files = list(files)
     sig = signature(files)
-    record = cache_dir() / "digests" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+    record = _record(key)
     try:
         stored = json.loads(record.read_text(encoding="utf-8"))
         if stored.get("key") == key and stored.get("files") == sig:
@@ -49,6 +65,8 @@ def memo(key: str, files: Iterable[Path], compute: Callable[[], Any]) -> Any:
     digest = compute()
     if signature(files) != sig:  # a file changed while it was read: do not store what may mix two versions
         return digest
+    import tempfile
+
     try:
         record.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=".digest-", dir=record.parent)
