@@ -525,19 +525,14 @@ def _generate_surfaces(c: SlideConfig):
     from .measured_surfaces import slide_surface
     from .surfaces import self_affine_surface, surface_wavenumbers
 
-    if c.sheet_file is not None:
-        h_def0 = slide_surface(c, "sheet")[0]
-    else:
-        q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.sheet_rolloff_wavelength)
-        h_def0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
-                                     rms_height=c.sheet_rms_height, seed=c.sheet_seed)
-    if c.tool_file is not None:
-        h_tool0 = slide_surface(c, "tool")[0]
-    else:
-        q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, c.tool_rolloff_wavelength)
-        h_tool0 = self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut,
-                                      rms_height=c.tool_rms_height, seed=c.tool_seed)
-    return h_def0, h_tool0
+    def side(name: str) -> np.ndarray:
+        if getattr(c, f"{name}_file") is not None:
+            return slide_surface(c, name)[0]
+        q_roll, q_cut = surface_wavenumbers(c.size, c.wavelength_ratio, getattr(c, f"{name}_rolloff_wavelength"))
+        return self_affine_surface(c.n, c.size, c.hurst, q_roll, q_cut, rms_height=getattr(c, f"{name}_rms_height"),
+                                   seed=getattr(c, f"{name}_seed"))
+
+    return side("sheet"), side("tool")
 
 
 def run_slide(config: SlideConfig, solver=None, surfaces=None, progress=None) -> SlideResult:

@@ -160,6 +160,21 @@ def _face_contact(face, hv, gx, gy, pz):
 
 
 @_inline
+def _add_point_force(force, torque, i, cf, ct, f, fx, fy, fz, rx, ry, rz):
+    """A face point's penalty force f (fx, fy, fz) at the lever (rx, ry, rz) added to force[i, cf:cf+3] and its
+    moment to torque[i, ct:ct+3] (the columns, so that one array may hold both)."""
+    fx *= f
+    fy *= f
+    fz *= f
+    force[i, cf] += fx
+    force[i, cf + 1] += fy
+    force[i, cf + 2] += fz
+    torque[i, ct] += ry * fz - rz * fy
+    torque[i, ct + 1] += rz * fx - rx * fz
+    torque[i, ct + 2] += rx * fy - ry * fx
+
+
+@_inline
 def _disc_point(rot, P, xb, yb, ox, oy, oz, nx, ny, nz, ac, c):
     """A point of the mid-plane disc of flake P (body (xb, yb), on the core disc of radius ac) against the
     sphere-swept disc of flake Q (centre at (ox, oy, oz) from P's, axis (nx, ny, nz), core radius ac, sweep
@@ -441,16 +456,7 @@ def _forces(pos, quat, h_low, dh_low, low_w, low_end, h_top, top_shift, top_offs
                 d, fx, fy, fz = _face_contact(1, hv + top_offset, gx, gy, pz)
             if d > 0.0:
                 kw = k_area * weights[k]
-                f = kw * d
-                fx *= f
-                fy *= f
-                fz *= f
-                force[i, 0] += fx
-                force[i, 1] += fy
-                force[i, 2] += fz
-                torque[i, 0] += ry * fz - rz * fy
-                torque[i, 1] += rz * fx - rx * fz
-                torque[i, 2] += rx * fy - ry * fx
+                _add_point_force(force, torque, i, 0, 0, kw * d, fx, fy, fz, rx, ry, rz)
                 energy += 0.5 * kw * d * d
                 if d > overlap[i]:
                     overlap[i] = d

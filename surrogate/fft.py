@@ -3,12 +3,17 @@
 A Fourier-BEM iteration is dominated by one forward real FFT (``rfft2``) and one inverse
 (``irfft2``) of an ``n x n`` field. :class:`RFFT2Pair` owns SIMD-aligned work buffers and the two
 FFTW plans bound to them, so that a transform is a bare ``execute()`` without allocation or
-re-planning. Plans are made with ``FFTW_MEASURE``; FFTW keeps the wisdom it gathers in the
-process, so a second plan for the same size costs nothing. :func:`rfft2_pair` caches one pair per
-``(n, threads)`` and thread. Wisdom can be saved to and loaded from a file
-(:func:`export_wisdom`, :func:`import_wisdom`); if the environment variable
-``TRIBOCOSIM_FFTW_WISDOM`` names a file, it is loaded before the first plan of the process and
-rewritten after each new plan, so campaign workers skip the measuring step.
+re-planning. :func:`rfft2_pair` caches one pair per ``(n, threads)`` and thread.
+
+Plans and reproducibility. Two plans of one transform round differently (2e-15 relative on a 256^2 grid), and a
+slide amplifies round-off, so a rerun is bit for bit only on the same plans. By default the plans are FFTW's
+estimate (``FFTW_ESTIMATE``: chosen without timing, the same in every process on one machine), so that a case
+resumed, rerun by ``surrogate verify`` or computed by another worker gives the same numbers. Measured plans
+(``FFTW_MEASURE``) are about a quarter faster on a 256^2 grid (0.26 against 0.33-0.35 ms a transform pair here)
+but chosen by timing, so that two processes under load plan differently: they are used when the environment
+variable ``TRIBOCOSIM_FFTW_WISDOM`` names a wisdom file, which is loaded before the first plan of the process and
+rewritten after each new plan, so that every process reading that file takes the same plans
+(:func:`export_wisdom`, :func:`import_wisdom`).
 
 Conventions: the forward transform is unnormalised, ``F[k] = sum_x f[x] exp(-2 pi i k.x / n)``,
 and so is the backward one (FFTW's ``execute`` does not divide by ``n**2``): callers fold the
@@ -46,8 +51,9 @@ class RFFT2Pair:
         Grid points per side (>= 2).
     threads : int
         FFTW threads (>= 1).
-    flags : tuple of str
-        FFTW planner flags (default ``("FFTW_MEASURE",)``).
+    flags : tuple of str or None
+        FFTW planner flags; None: ``FFTW_MEASURE`` with a wisdom file named by ``TRIBOCOSIM_FFTW_WISDOM``,
+        ``FFTW_ESTIMATE`` without (module docstring).
 
     Attributes
     ----------
@@ -59,13 +65,15 @@ class RFFT2Pair:
         Output of the backward transform (unnormalised).
     """
 
-    def __init__(self, n: int, threads: int = 1, flags: tuple[str, ...] = ("FFTW_MEASURE",)):
+    def __init__(self, n: int, threads: int = 1, flags: tuple[str, ...] | None = None):
         if int(n) != n or n < 2:
             raise ParameterError(f"n = {n!r} is not allowed; an integer >= 2 is required")
         if int(threads) != threads or threads < 1:
             raise ParameterError(f"threads = {threads!r} is not allowed; "
                                  "an integer >= 1 is required")
         n, threads = int(n), int(threads)
+        if flags is None:  # module docstring: measured plans only with a shared wisdom file
+            flags = ("FFTW_MEASURE",) if os.environ.get(WISDOM_ENV) else ("FFTW_ESTIMATE",)
         _maybe_load_env_wisdom()
         self.n, self.threads = n, threads
         self.real_in = pyfftw.zeros_aligned((n, n), dtype=np.float64)

@@ -19,36 +19,40 @@ set by the penalty stiffness, not by the sliding. In the limit Lambda -> oo the 
 flakes), a gradient flow of the penalty energy E in the metric of the drag.
 
 Method. The tool's shift and height and the sheet move through a pixel in ``n_sub`` equal substeps, as in
-the DEM phase of the staggered loop (:mod:`tribocosim.surrogate.coupling`). Each substep of slide ds takes the
-backward-Euler step of the flow, i.e. the flakes move from their positions x_n at its start to the
-minimiser of
+the DEM phase of the staggered loop (:mod:`tribocosim.surrogate.coupling`). At each substep the flakes move from
+where they are to force and torque balance, F = 0, along the flow: Levenberg-Marquardt steps
 
-    Phi(x) = E(x; s_n + ds) + (1/2) (x - x_n)^T (D / h) (x - x_n),      h = ds / v0,
+    delta = (H + nu D)^-1 F,
 
-found by Newton's method on the Gauss-Newton Hessian of E (exact for the penalty energy k w d^2 / 2 up to
-terms in the overlap d times the surfaces' curvature) plus D / h,
-within a trust region, and the iteration stops when no Newton step moves a point of a flake by more than
-``tol_move`` (a point of a flake moves by at most |dx_c| + a |dtheta|). The contact law, its forces,
-the Hessian and the faces proven out of contact are the DEM's (:func:`tribocosim.surrogate.dem_kernels._forces`).
-A flake with no contact and no displacement in the substep is not touched: it stays where it is, as an
-overdamped flake with no force does.
+H the Gauss-Newton Hessian of E (exact for the penalty energy k w d^2 / 2 up to terms in the overlap d times the
+surfaces' curvature), per group of flakes in contact (a flake alone: 6 unknowns), with nu at least ~1e-8 of a face
+point's stiffness over the drag and raised until the step moves no point of the group by more than the step
+radius; a step is kept when the group's energy falls by at least 1e-4 of what the quadratic model predicts, and
+nu follows the ratio of the two. Steps no longer than RADIUS_FRACTION h_p (10 nm) follow the path of the flow
+rather than jump to whichever equilibrium the linearised contacts point at; on a straight stretch of the path (a
+step the radius shortened, predicted well and in the direction of the one before) the radius doubles, up to half
+a pixel. A substep ends when the step with the least nu moves no point of any flake by more than ``tol_move``
+(1e-3 h_p; a point of a flake moves by at most |dx_c| + a |dtheta|). The contact law, its forces and its
+Hessian are the DEM's (:mod:`tribocosim.surrogate.dem_kernels`), read again only where a flake or the surfaces
+moved (:mod:`tribocosim.surrogate.relax_kernels`). A flake with no contact is not touched: it stays where it is,
+as an overdamped flake with no force does.
 
-Cost. A substep costs a few force evaluations whatever v0 and the penalty stiffness: D / h, the only place
-either enters (h = ds / v0), is ~1e-7 of the contact stiffness k_A pi a^2 (1 N/m against 6e6 N/m for a 12 um
-flake at 0.08 m/s), so it only fixes the solution in the directions no contact constrains (there a flake
-stays put) and picks, among equilibria, the one the flow reaches.
+The drag D enters only the direction of a step (the metric of the descent), not where the flow ends: the
+overdamped flake's equilibrium under the physical drag, which at the test's speed is ~1e-7 of the contact
+stiffness (D v0 / ds: 1 N/m against k_A pi a^2 = 6e6 N/m for a 12 um flake at 0.08 m/s), so the cost depends
+neither on v0 nor on the penalty stiffness.
 
-What it drops. Inertia: a flake released by a contact glides v/gamma (at most ~dx / Lambda, 5 nm at
-0.08 m/s) in the DEM and not at all here, and a flake that snaps from one equilibrium to another follows
-the drag-weighted steepest descent instead of an inertial path. Below Lambda ~ 1 (fast slides, thin oil:
-the velocity study of docs/physics/alpha_velocity.md) that is wrong, and the inertial DEM is used:
-:data:`LAMBDA_MIN` bounds the regime a slide may use this solver in, and docs/physics/flake_solvers.md
-compares the two solvers on paired placements.
+What it drops. Inertia: a flake released by a contact glides v/gamma (at most ~dx / Lambda, 5 nm at 0.08 m/s) in
+the DEM and not at all here, and a flake that snaps from one equilibrium to another follows the drag-weighted
+descent instead of an inertial path. Below Lambda ~ 1 (fast slides, thin oil: the velocity study of
+docs/physics/alpha_velocity.md) that is wrong, and the inertial DEM is used: :data:`LAMBDA_MIN` bounds the regime
+a slide may use this solver in, and docs/physics/flake_solvers.md compares the two solvers on paired placements
+(and why they differ where they do: the DEM's similarity speed multiplies the drag forces).
 
 Substeps. A substep's motion of the surfaces relative to a flake is at most slope x dx / n_sub + the tool's
-vertical move (0.34 um / n_sub on the roll-off surfaces' RMS slope): with the default 8 substeps ~8 % of h_p,
-which the first Newton iteration resolves. A pixel whose Newton iteration does not converge is redone from
-its start with twice the substeps, up to :data:`MAX_REFINE` times.
+vertical move (0.34 um / n_sub on the roll-off surfaces' RMS slope): with the default 8 substeps ~8 % of h_p. A
+pixel whose iterations do not balance a substep within :data:`MAX_ITER` is redone from its start with twice the
+substeps, up to :data:`MAX_REFINE` times.
 """
 
 from __future__ import annotations

@@ -31,8 +31,8 @@ import math
 import numba
 import numpy as np
 
-from .dem_kernels import (CLEARANCE_TOL, PAIR_SKIN, REACH_PX, _bilinear, _bilinear_pair, _disc_point,
-                          _face_contact, _face_heights, _face_lever, _pair_candidates, _qmul, _rotmat,
+from .dem_kernels import (CLEARANCE_TOL, PAIR_SKIN, REACH_PX, _add_point_force, _bilinear, _bilinear_pair,
+                          _disc_point, _face_contact, _face_heights, _face_lever, _pair_candidates, _qmul, _rotmat,
                           _slope_bound)
 
 _jit = numba.njit(cache=True)
@@ -168,16 +168,7 @@ def _read_faces(i, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx,
                 kw = k_area * weights[k]
                 _add_outer(face_h, i, 0, kw, fx, fy, fz, ry * fz - rz * fy, rz * fx - rx * fz,
                            rx * fy - ry * fx)
-                f = kw * d
-                fx *= f
-                fy *= f
-                fz *= f
-                face_part[i, 0] += fx
-                face_part[i, 1] += fy
-                face_part[i, 2] += fz
-                face_part[i, 3] += ry * fz - rz * fy
-                face_part[i, 4] += rz * fx - rx * fz
-                face_part[i, 5] += rx * fy - ry * fx
+                _add_point_force(face_part, face_part, i, 0, 3, kw * d, fx, fy, fz, rx, ry, rz)
                 face_part[i, 6] += 0.5 * kw * d * d
                 face_part[i, 7] = max(face_part[i, 7], d)
         if full:

@@ -127,7 +127,8 @@ class SlideConfig:
         (:mod:`tribocosim.surrogate.flake_relax`), the limit of large damping per pixel, allowed where
         Lambda = gamma_min dx / v0 >= :data:`tribocosim.surrogate.flake_relax.LAMBDA_MIN` (the physical
         damping at the physical v0; ``dem_velocity`` and ``dt_safety`` do not apply); ``auto``: overdamped
-        where Lambda allows it, inertial elsewhere (a sweep over velocities in one preset).
+        where Lambda allows it, inertial elsewhere (a sweep over velocities in one preset), resolved when the
+        configuration is made, so that a case's dict and id name the solver that runs it.
     relax_substeps : int or None
         Substeps per pixel of the overdamped solver (None: its default, 8).
     dt_safety : float
@@ -261,6 +262,11 @@ class SlideConfig:
                                  f"{', '.join(FLAKE_SOLVERS)}")
         if self.relax_substeps is not None:
             _int("relax_substeps", self.relax_substeps, 1)
+        if self.flake_solver == "auto":
+            from .flake_relax import LAMBDA_MIN
+
+            solver = "overdamped" if self._damping_per_pixel() >= LAMBDA_MIN else "inertial"
+            object.__setattr__(self, "flake_solver", solver)
         if self.flake_solver == "overdamped":
             self._check_overdamped()
         check_range("dt_safety", self.dt_safety, 0.0, 1.0, low_inclusive=False)
@@ -287,10 +293,6 @@ class SlideConfig:
     @property
     def overdamped(self) -> bool:
         """True when the flakes move by the overdamped solver (``flake_solver``)."""
-        if self.flake_solver == "auto":
-            from .flake_relax import LAMBDA_MIN
-
-            return self._damping_per_pixel() >= LAMBDA_MIN
         return self.flake_solver == "overdamped"
 
     def _damping_per_pixel(self) -> float:

@@ -264,6 +264,17 @@ def test_fft_pair_matches_numpy_and_wisdom_round_trips(tmp_path):
     assert import_wisdom(tmp_path / "w.json") and not import_wisdom(tmp_path / "none.json")
 
 
+def test_plans_are_estimated_unless_a_wisdom_file_is_shared(monkeypatch, tmp_path):
+    """Measured plans are chosen by timing and differ between processes under load (and so do the bits of a
+    slide); without a shared wisdom file the plans are FFTW's estimate, the same in every process."""
+    monkeypatch.delenv("TRIBOCOSIM_FFTW_WISDOM", raising=False)
+    assert "FFTW_ESTIMATE" in RFFT2Pair(20)._fwd.flags
+    monkeypatch.setenv("TRIBOCOSIM_FFTW_WISDOM", str(tmp_path / "w.json"))
+    pair = RFFT2Pair(20)
+    assert "FFTW_MEASURE" in pair._fwd.flags and "FFTW_MEASURE" in pair._bwd.flags
+    assert (tmp_path / "w.json").exists()
+
+
 # --------------------------------------------------------------------------- sliding regression
 def _flake_slide_case(seed=3, steps=8, n=32, size=64e-6):
     """A tiny sliding loop like surrogate/coupling.py's: a rough tool with a flake plateau (a disc

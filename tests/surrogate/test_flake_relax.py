@@ -217,9 +217,11 @@ def test_overdamped_solver_is_refused_where_the_flakes_are_not_overdamped():
 
 
 def test_auto_takes_the_overdamped_solver_where_lambda_allows_it():
+    """``auto`` is resolved when the configuration is made: the case's dict (and id) names the solver that runs."""
     base = dict(n=32, size=64e-6, wavelength_ratio=0.125, flake_solver="auto")
     slow, fast = SlideConfig(v0=0.08, **base), SlideConfig(v0=50.0, **base)
     assert slow.overdamped and not fast.overdamped
+    assert slow.to_dict()["flake_solver"] == "overdamped" and fast.to_dict()["flake_solver"] == "inertial"
     assert slow._damping_per_pixel() > 20.0 > fast._damping_per_pixel()
 
 
