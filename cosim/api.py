@@ -90,8 +90,14 @@ class Build:
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
-        """Terminate and free every slave."""
-        for s in self.master.system.slaves:
+        """Terminate and free every slave; one whose FMU returned fmi2Fatal in any instance is only dropped
+        (:meth:`~tribocosim.cosim.engine.slave.FmpySlave.abandon`)."""
+        slaves = self.master.system.slaves
+        dead = {s.unzip_dir for s in slaves if s.fatal}
+        for s in slaves:
+            if s.unzip_dir in dead:
+                s.abandon()
+                continue
             try:
                 s.terminate()
             except Exception:  # keep freeing the others
@@ -404,9 +410,14 @@ def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
 def _end_values(b: Build) -> list[float]:
     """The values of the plan's end checks, read from the Python master's slaves (0 where one cannot answer)."""
     out = []
+    slaves = b.master.system.slaves
+    dead = {s.unzip_dir for s in slaves if s.fatal}
     for check in b.plan.end_checks:
         try:
-            slave = b.master.system.slaves[b.names.index(check.instance)]
+            slave = slaves[b.names.index(check.instance)]
+            if slave.unzip_dir in dead:  # no call after fmi2Fatal (FMI 2.0.4, section 2.1.3)
+                out.append(0.0)
+                continue
             getter = slave.get_real if check.type == "Real" else slave.get_integer
             out.append(float(getter([check.value_reference])[0]))
         except Exception:  # noqa: BLE001 - an FMU that cannot answer after a failure says nothing here

@@ -48,6 +48,7 @@ from tribocosim.cosim.engine.timegrid import TimeGrid
 
 LOG = logging.getLogger("tribocosim.cosim")
 _LABELS = ("ok", "warning", "discard", "error", "fatal", "pending")
+_FATAL = 4
 _VP, _I, _D, _SZ, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_size_t, ctypes.c_uint
 _PD, _PI, _PU, _PB = (ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_uint),
                       ctypes.POINTER(ctypes.c_ubyte))
@@ -143,6 +144,7 @@ class _Fmu:
         self.component = None
         self.wall_time = 0.0
         self.messages: deque[str] = deque(maxlen=20)
+        self.fatal = False  # a function returned fmi2Fatal: no function of the FMU's instances may be called again
         key = next(_KEYS)
         _FMUS[key] = self
         self.env = TcmLogEnv(ctypes.cast(_SINK, _VP), key)
@@ -170,6 +172,7 @@ class _Fmu:
         status = getattr(self.dll, function)(_VP(self.component), *args)
         self.wall_time += time.perf_counter() - t0
         if status > 1:
+            self.fatal = self.fatal or status == _FATAL
             label = _LABELS[status] if 0 <= status < len(_LABELS) else "illegal status"
             raise SessionStopped(f"FMU instance '{self.slave.name}': {function} returned {label}")
         return status
@@ -320,6 +323,8 @@ class NativeSession:
         status = getattr(self.lib, function)(ctypes.byref(self.rig), ctypes.byref(self.state), *args)
         if status != TCM_DONE:
             st = self.state
+            if st.failed_slave >= 0 and st.failed_status == _FATAL:
+                self.fmus[st.failed_slave].fatal = True
             what = st.failed_function.decode() if st.failed_function else "?"
             raise SessionStopped(f"{function}: {what} (slave {st.failed_slave}, status {st.failed_status})")
 
@@ -328,6 +333,7 @@ class NativeSession:
         """Run to the end of the grid (see the module docstring); SessionStopped where the Python master must."""
         self.lib = library()
         fmus: list[_Fmu] = []
+        self.fmus = fmus
 
         callbacks = _Callbacks(*(ctypes.cast(getattr(self.lib, name), _VP).value
                                  for name in ("tcm_logger", "tcm_allocate_memory", "tcm_free_memory")), None, None)
@@ -418,15 +424,20 @@ class NativeSession:
 
     def _free(self, fmus: list[_Fmu]) -> None:
         """``fmi2Terminate`` and ``fmi2FreeInstance`` of every instance; a failure here changes no result and is not
-        reported (as the Python master's clean-up)."""
+        reported (as the Python master's clean-up). After fmi2Fatal no function of any instance of that FMU is called
+        (FMI 2.0.4, section 2.1.3): its instances are left as they are (a pythonfmu FMU releases the Python objects of
+        an instance that raised once more when it is freed)."""
+        dead = {f.slave.folder for f in fmus if f.fatal}
         for f in fmus:
-            if f.component:
-                try:
-                    f.call("fmi2Terminate")
-                except Exception:  # noqa: BLE001 - keep freeing the others
-                    pass
+            if not f.component or f.slave.folder in dead:
+                continue
+            try:
+                f.call("fmi2Terminate")
+            except Exception:  # noqa: BLE001 - keep freeing the others
+                pass
+            if not f.fatal:
                 try:
                     f.dll.fmi2FreeInstance(f.component)
                 except Exception:  # noqa: BLE001
                     pass
-                f.component = None
+            f.component = None

@@ -50,6 +50,8 @@ LOG = logging.getLogger("tribocosim.cosim")
 #: do_step outcomes
 OK = 0
 DISCARD = 2
+#: the FMI 2.0 status after which no function of any instance of the FMU may be called (FMI 2.0.4, section 2.1.3)
+FATAL = 4
 
 #: FMI functions called on hot paths without fmpy's Python wrapper
 _HOT = ("fmi2SetReal", "fmi2GetReal", "fmi2SetInteger", "fmi2GetInteger", "fmi2SetBoolean", "fmi2GetBoolean",
@@ -83,6 +85,8 @@ class Slave(Protocol):
     wall_time: float
     calls: dict[str, int]  # FMI calls made, by function (doStep, getFMUstate, ...)
     messages: Sequence[str]  # the last log messages of the FMU (for error messages)
+    unzip_dir: Path  # the FMU's folder: the instances of one FMU share its library
+    fatal: bool  # a function returned fmi2Fatal: no function of any instance of the FMU may be called again
 
     def instantiate(self) -> None: ...
 
@@ -120,6 +124,9 @@ class Slave(Protocol):
 
     def terminate(self) -> None: ...
 
+    def abandon(self) -> None:
+        """Drop the instance without an FMI call (after fmi2Fatal of its FMU)."""
+
 
 class FmpySlave:
     """An FMI 2.0 co-simulation FMU instance driven through fmpy.
@@ -144,6 +151,8 @@ class FmpySlave:
         self.wall_time = 0.0
         self.calls = {"doStep": 0, "getFMUstate": 0, "setFMUstate": 0}
         self.messages: deque[str] = deque(maxlen=20)
+        #: an FMI function of this instance returned fmi2Fatal
+        self.fatal = False
         self.current_time = float("nan")
         self._fmu = None
         self._dll: dict[str, Any] = {}
@@ -154,6 +163,7 @@ class FmpySlave:
         """Return ``status`` if ok/warning (or discard from doStep); raise CosimStepError otherwise."""
         if status <= 1 or (status == DISCARD and function == "fmi2DoStep"):
             return status
+        self.fatal = self.fatal or status == FATAL
         label = _LABELS[status] if 0 <= status < len(_LABELS) else "illegal status"
         raise CosimStepError(self._failure(function, f"status {status}, {label}"))
 
@@ -247,12 +257,22 @@ class FmpySlave:
         try:
             self._call("fmi2Terminate", self._fmu.terminate)
         finally:
-            try:
-                self._fmu.freeInstance()
-            except Exception as exc:  # pragma: no cover
-                LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
-            self._fmu = None
-            self._dll = {}
+            if self.fatal:
+                self.abandon()
+            else:
+                try:
+                    self._fmu.freeInstance()
+                except Exception as exc:  # pragma: no cover
+                    LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
+                self._fmu = None
+                self._dll = {}
+
+    def abandon(self) -> None:
+        """Drop the instance without an FMI call and leave its library loaded: after fmi2Fatal of any instance of
+        its FMU, no function of any of them may be called (FMI 2.0.4, section 2.1.3), fmi2FreeInstance included
+        (a pythonfmu FMU releases the Python objects of an instance that raised once more when it is freed)."""
+        self._fmu = None
+        self._dll = {}
 
     @property
     def loaded(self) -> bool:
