@@ -64,12 +64,14 @@ def test_the_python_masters_c_loop_gives_the_whole_c_runs_values(algorithm):
 
 
 def test_the_whole_c_run_imports_neither_numpy_nor_fmpy(tmp_path):
-    """``tribocosim run demo`` with the FMUs built: the run path of the C master (its summaries and checks cached)."""
+    """``tribocosim run demo`` with the FMUs built: the run path of the C master (its summaries and checks cached)
+    imports neither numpy nor fmpy, and so neither numba nor the mesoscale code."""
     import subprocess
     import sys
 
     code = ("import sys; from tribocosim.cli import main; main(['run', 'demo', '--quiet', '--out', sys.argv[1]]); "
-            "print(sorted({m.split('.')[0] for m in sys.modules} & {'numpy', 'fmpy', 'scipy', 'matplotlib'}))")
+            "print(sorted({m.split('.')[0] for m in sys.modules} & {'numpy', 'fmpy', 'scipy', 'matplotlib', 'numba'} "
+            "| {m for m in sys.modules if m.startswith('tribocosim.surrogate')}))")
     for _ in range(2):  # the first run may fill the caches
         out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=300)
         assert out.returncode == 0, out.stderr
