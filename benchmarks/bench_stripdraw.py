@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from tribocosim.cosim.apps.demo import run_strip_draw, steady_mean
+from tribocosim.cosim.studies.stripdraw_experiment import run_strip_draw, steady_mean
 
 
 def one(tool_length: float, integrator: str, step: float, repeats: int):

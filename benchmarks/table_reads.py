@@ -1,6 +1,6 @@
 """Which nodes of the friction table the strip-draw tests read, and the shape of mu_bar(P) they give.
 
-The families of the paper report's strip-draw tests (cosim/apps/stripdraw_experiment.py: V0 = 0.08 m/s, 140 mm
+The families of the paper report's strip-draw tests (cosim/studies/stripdraw_experiment.py: V0 = 0.08 m/s, 140 mm
 draw, the grip ramped over 10 ms, constant normal force), default parameters (s = 1 unless --scale, zeta 0.2,
 K 1e-4): 1, 2 and 3 passes on the 35 mm pad and one pass on the 70 and 140 mm pads, at every pressure from 1 to 30 MPa in 1 MPa steps.
 
@@ -46,7 +46,7 @@ def draw_with_reads(task):
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.model import StripDrawModel
     from tribocosim.components.stripdraw.table import read_table
-    from tribocosim.cosim.apps.stripdraw_experiment import LAST, RAMP, STEP, V0
+    from tribocosim.cosim.studies.stripdraw_experiment import LAST, RAMP, STEP, V0
 
     table = read_table(table_file)
     sim = table.array("simulated") if table.version >= 3 else np.ones_like(table.mu)

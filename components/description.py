@@ -56,6 +56,10 @@ class Port:
     ``initial_inputs`` names the inputs an output depends on at the end of initialization (the native FMU
     computes its outputs there from the inputs set during initialization: the model description's
     InitialUnknown dependencies); empty: the parameters alone.
+
+    ``end_warning``: an output whose value at the end of a run says something went outside what the model rests
+    on when it is above 0 (a count), and what: a run that ends with the output above 0 warns
+    ``FMU instance '<name>': <value> <end_warning>``.
     """
 
     name: str
@@ -68,6 +72,7 @@ class Port:
     high: float | str | None = None
     why: str = ""
     initial_inputs: tuple = ()
+    end_warning: str = ""
 
     @property
     def model_key(self) -> str:

@@ -7,6 +7,7 @@ The metadata is the single source for validation messages and for the FMU variab
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import field
 
 from tribocosim.errors import ParameterError, check_range
@@ -31,34 +32,45 @@ def param(default, unit: str, description: str, low=None, high=None, low_inclusi
 
 
 def validate_fields(obj) -> None:
-    """Check every field of the dataclass instance ``obj`` against its metadata.
+    """Check every field of the dataclass instance ``obj`` against its metadata (each field once).
 
     Raises
     ------
     ParameterError
-        Naming the field, its value and what is allowed.
+        Naming the field, its value and what is allowed; when several fields are bad, its ``fields`` lists each
+        with its message and the message names them all.
     """
+    bad = []
     for f in dataclasses.fields(obj):
-        value = getattr(obj, f.name)
-        meta = f.metadata
-        if meta.get("text"):
-            if not isinstance(value, str):
-                raise ParameterError(f"{f.name} = {value!r} must be a string")
+        try:
+            value = check_field(f, getattr(obj, f.name))
+        except ParameterError as exc:
+            bad.append((f.name, str(exc)))
             continue
-        if "choices" in meta:
-            if value not in meta["choices"]:
-                raise ParameterError(f"{f.name} = {value!r} is not allowed; choose one of {', '.join(meta['choices'])}")
-            continue
-        if meta.get("integer"):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
-                raise ParameterError(f"{f.name} = {value!r} must be an integer")
-            object.__setattr__(obj, f.name, int(value))
-        elif isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(f"{f.name} = {value!r} must be a number")
-        check_range(
-            f.name,
-            value,
-            meta["low"],
-            meta["high"],
-            unit=meta["unit"] if meta["unit"] not in ("", "1") else "",
-        )
+        if value is not getattr(obj, f.name):
+            object.__setattr__(obj, f.name, value)
+    if bad:
+        raise ParameterError("; ".join(message for _, message in bad), fields=bad)
+
+
+def check_field(f: dataclasses.Field, value):
+    """``value`` of field ``f`` as the dataclass keeps it (an integer field's value as an int), or ParameterError
+    naming the field, the value and what its metadata allows."""
+    meta = f.metadata
+    if meta.get("text"):
+        if not isinstance(value, str):
+            raise ParameterError(f"{f.name} = {value!r} must be a string")
+        return value
+    if "choices" in meta:
+        if value not in meta["choices"]:
+            raise ParameterError(f"{f.name} = {value!r} is not allowed; choose one of {', '.join(meta['choices'])}")
+        return value
+    if meta.get("integer"):
+        if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+                or int(value) != value):
+            raise ParameterError(f"{f.name} = {value!r} must be an integer")
+        value = int(value)
+    elif isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{f.name} = {value!r} must be a number")
+    check_range(f.name, value, meta["low"], meta["high"], unit=meta["unit"] if meta["unit"] not in ("", "1") else "")
+    return value

@@ -1,41 +1,36 @@
 """Python API: ``tribocosim.cosim.run(scene) -> Result``, and the assembly of a master from a scene.
 
-:func:`build` turns a validated :class:`~tribocosim.cosim.scene.validate.Plan` into a ready
-:class:`~tribocosim.cosim.engine.master.Master` (FMUs extracted and wrapped in :class:`~tribocosim.cosim.engine.slave.FmpySlave`,
-links, algorithm, step controller, recorder); :func:`run` loads a scene, runs it, and writes
-the CSV and the metadata JSON. The command line (``tribocosim run``) is a thin layer over
-:func:`run`.
+:func:`run` loads a scene (:func:`tribocosim.cosim.scene.validate.load_scene`: parsed once, each value checked once),
+runs it, and writes the CSV and the metadata JSON. A fixed-step Jacobi or Gauss-Seidel run with held coupling values
+(the demo's) runs whole in the C master (:class:`~tribocosim.cosim.engine.native_session.NativeSession`: no numpy,
+no fmpy on its path); every other run, and one the C master leaves to Python, runs the master of
+:mod:`tribocosim.cosim.engine` that :func:`build` assembles from a validated
+:class:`~tribocosim.cosim.scene.validate.Plan` (FMUs extracted and wrapped in
+:class:`~tribocosim.cosim.engine.slave.FmpySlave`, links, algorithm, step controller, recorder). Both make the same
+FMI calls, so their results are the same to the last bit. The command line (``tribocosim run``) is a thin layer over
+:func:`run`. Nothing here knows a component: what a scene sets and what it watches at the end of a run is in the
+plan.
 """
 
 from __future__ import annotations
 
-import atexit
 import datetime as _dt
 import hashlib
 import json
-import shutil
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
-from tribocosim.cosim.engine.algorithms import ALGORITHMS, GaussSeidel
 from tribocosim.cosim.engine.graph import gauss_seidel_order
-from tribocosim.cosim.engine.master import Master
-from tribocosim.cosim.engine.native_loop import NativeLoopStopped
-from tribocosim.cosim.engine.recorder import Progress, Recorder
-from tribocosim.cosim.engine.slave import FmpySlave
-from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, FixedStep
-from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
-from tribocosim.cosim.engine.timegrid import TimeGrid
+from tribocosim.cosim.engine.schemes import LinkSpec
 from tribocosim.cosim.scene.validate import Plan
 
+if TYPE_CHECKING:  # the Python master: numpy, fmpy
+    from tribocosim.cosim.engine.master import Master
 
-@dataclass
+
 class Result:
     """The outcome of a run.
 
@@ -49,15 +44,36 @@ class Result:
         Scene, settings, steps taken and rejected, wall times (the content of the JSON file).
     csv_path, metadata_path : Path or None
         Files written, if any.
+
+    A run of the C master keeps its rows as plain doubles (``recording``: times, rows row after row, names) and makes
+    the arrays on first use, so that a run that only writes its files never imports numpy.
     """
 
-    time: np.ndarray
-    columns: dict[str, np.ndarray]
-    metadata: dict[str, Any]
-    csv_path: Path | None = None
-    metadata_path: Path | None = None
+    def __init__(self, time=None, columns=None, metadata=None, csv_path: Path | None = None,
+                 metadata_path: Path | None = None, *, recording=None) -> None:
+        self._time, self._columns, self._recording = time, columns, recording
+        self.metadata: dict[str, Any] = metadata if metadata is not None else {}
+        self.csv_path, self.metadata_path = csv_path, metadata_path
 
-    def __getitem__(self, name: str) -> np.ndarray:
+    @property
+    def time(self):
+        if self._time is None:
+            import numpy as np
+
+            self._time = np.array(self._recording[0], dtype=float)
+        return self._time
+
+    @property
+    def columns(self) -> dict:
+        if self._columns is None:
+            import numpy as np
+
+            times, rows, names = self._recording
+            data = np.array(rows, dtype=float).reshape(len(times), len(names))
+            self._columns = {n: data[:, j].copy() for j, n in enumerate(names)}
+        return self._columns
+
+    def __getitem__(self, name: str):
         if name == "time":
             return self.time
         return self.columns[name]
@@ -74,43 +90,78 @@ class Build:
     notes: list[str] = field(default_factory=list)
 
     def close(self) -> None:
-        """Terminate and free every slave."""
-        for s in self.master.system.slaves:
+        """Terminate and free every slave; one whose FMU returned fmi2Fatal in any instance is only dropped
+        (:meth:`~tribocosim.cosim.engine.slave.FmpySlave.abandon`)."""
+        slaves = self.master.system.slaves
+        dead = {s.unzip_dir for s in slaves if s.fatal}
+        for s in slaves:
+            if s.unzip_dir in dead:
+                s.abandon()
+                continue
             try:
                 s.terminate()
             except Exception:  # keep freeing the others
                 pass
 
 
-#: FMU file (path, size, mtime) -> folder it is extracted to, for the life of the process
-_EXTRACTED: dict[tuple[str, int, int], Path] = {}
+@dataclass
+class Coupling:
+    """How a plan's FMUs are coupled, in index form (what both masters need): instance names, links, the declared
+    dependency structure (``structure[k][j]``: link k's source may depend directly on link j's target), declared
+    feedthrough, the Gauss-Seidel order, the order of accuracy of the coupling and the notes on it."""
+
+    names: list[str]
+    links: list[LinkSpec]
+    structure: list[list[bool]]
+    feedthrough: list
+    gauss_seidel: Any
+    order_of_accuracy: int
+    notes: list[str]
 
 
-def _cleanup_extracted() -> None:
-    for d in _EXTRACTED.values():
-        shutil.rmtree(d, ignore_errors=True)
-
-
-atexit.register(_cleanup_extracted)
+def coupling(plan: Plan) -> Coupling:
+    """The :class:`Coupling` of a validated plan."""
+    scene = plan.scene
+    names = list(plan.fmus)
+    index = {n: i for i, n in enumerate(names)}
+    links = []
+    for l in plan.links:
+        tmodel = plan.fmus[l.target.instance]
+        der = tmodel.derivative_inputs.get(l.target.variable, {})
+        links.append(LinkSpec(index[l.source.instance], l.source_vr, l.source_type, index[l.target.instance],
+                              l.target_vr, l.target_type, l.continuous, f"{l.source} -> {l.target}",
+                              (der.get(1), der.get(2))))
+    structure = []
+    for lk in plan.links:
+        deps = plan.fmus[lk.source.instance].dependencies.get(lk.source.variable)
+        structure.append([lj.target.instance == lk.source.instance and (deps is None or lj.target.variable in deps)
+                          for lj in plan.links])
+    ms = scene.master
+    notes = list(plan.notes)
+    order = ms.extrapolation
+    mean_hold = [str(l.target) for l, spec in zip(plan.links, links) if spec.continuous and spec.derivative_vrs[0] is None
+                 and not plan.fmus[l.target.instance].can_interpolate_inputs]
+    p = order + 1
+    if order >= 1 and mean_hold:
+        notes.append(f"inputs {', '.join(mean_hold)} cannot take input derivatives (no canInterpolateInputs, no der() inputs): "
+                     "they hold the step mean of the extrapolation polynomial, which caps the order at 2")
+        p = min(p, 2)
+    pairs = [(sp.source, sp.target) for sp in links]
+    gs = gauss_seidel_order(len(names), pairs, [index[o] for o in ms.order] if ms.order else None)
+    if ms.algorithm == "gauss-seidel":
+        for cycle in gs.cycles:
+            back = [links[k].label for k in sorted(gs.backward) if links[k].target in cycle]
+            notes.append(f"Gauss-Seidel: instances {' -> '.join(names[i] for i in cycle)} form a cycle; stepping order "
+                         f"{', '.join(names[i] for i in gs.order)}, so {', '.join(back)} {'is' if len(back) == 1 else 'are'} "
+                         "extrapolated")
+    return Coupling(names, links, structure, [plan.fmus[n].feedthrough for n in names], gs, p, notes)
 
 
 def extracted_fmu(path: Path) -> Path:
-    """The folder ``path`` is extracted to, extracting it once per process (sweeps reuse it).
+    """The folder the FMU file ``path`` is extracted to (:func:`tribocosim.cosim.scene.fmu_files.extracted`)."""
+    from tribocosim.cosim.scene.fmu_files import extracted
 
-    The key includes the file's size and modification time, so a rebuilt FMU is extracted
-    again. (pythonfmu FMUs import their Python class by module name, so a rebuilt pythonfmu
-    FMU's code is only picked up by a new process.)
-    """
-    from fmpy import extract
-
-    st = Path(path).stat()
-    key = (str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
-    d = _EXTRACTED.get(key)
-    if d is None or not d.is_dir():
-        d = Path(tempfile.mkdtemp(prefix=f"tribocosim-{Path(path).stem}-"))
-        extract(str(path), str(d))
-        _EXTRACTED[key] = d
-    return d
+    return extracted(path)
 
 
 def build(plan: Plan, loop: str = "auto") -> Build:
@@ -124,97 +175,38 @@ def build(plan: Plan, loop: str = "auto") -> Build:
         The master's loop (:class:`~tribocosim.cosim.engine.master.Master`): the C loop where it takes the run, or
         always the Python one.
     """
+    import numpy as np
+
+    from tribocosim.cosim.engine import algorithms, stepcontrol
+    from tribocosim.cosim.engine.master import Master
+    from tribocosim.cosim.engine.recorder import Recorder
+    from tribocosim.cosim.engine.slave import FmpySlave
+    from tribocosim.cosim.engine.system import CoupledSystem
+    from tribocosim.cosim.engine.timegrid import TimeGrid
+
     scene = plan.scene
-    names = list(plan.fmus)
-    index = {n: i for i, n in enumerate(names)}
-    slaves = []
-    for n in names:
-        model = plan.fmus[n]
-        slaves.append(FmpySlave(n, extracted_fmu(model.path), model.md))
-
-    links = []
-    for l in plan.links:
-        tmodel = plan.fmus[l.target.instance]
-        der = tmodel.derivative_inputs.get(l.target.variable, {})
-        links.append(LinkSpec(index[l.source.instance], l.source_vr, l.source_type, index[l.target.instance],
-                              l.target_vr, l.target_type, l.continuous, f"{l.source} -> {l.target}",
-                              (der.get(1), der.get(2))))
-    m = len(links)
-    structure = np.ones((m, m), dtype=bool)
-    for k, lk in enumerate(plan.links):
-        deps = plan.fmus[lk.source.instance].dependencies.get(lk.source.variable)
-        for j, lj in enumerate(plan.links):
-            same = lj.target.instance == lk.source.instance
-            structure[k, j] = same and (deps is None or lj.target.variable in deps)
-    feed = [plan.fmus[n].feedthrough for n in names]
-
+    c = coupling(plan)
+    index = {n: i for i, n in enumerate(c.names)}
+    slaves = [FmpySlave(n, extracted_fmu(plan.fmus[n].path), plan.fmus[n].md) for n in c.names]
     ms = scene.master
-    notes = list(plan.notes)
-    order = ms.extrapolation
-    mean_hold = [str(l.target) for l, spec in zip(plan.links, links) if spec.continuous and spec.derivative_vrs[0] is None
-                 and not plan.fmus[l.target.instance].can_interpolate_inputs]
-    p = order + 1
-    if order >= 1 and mean_hold:
-        notes.append(f"inputs {', '.join(mean_hold)} cannot take input derivatives (no canInterpolateInputs, no der() inputs): "
-                     "they hold the step mean of the extrapolation polynomial, which caps the order at 2")
-        p = min(p, 2)
-    system = CoupledSystem(slaves, links, order, feed, structure)
-    propagate = ms.output_update == "propagate"
-    pairs = [(sp.source, sp.target) for sp in links]
-    gs = gauss_seidel_order(len(names), pairs, [index[o] for o in ms.order] if ms.order else None)
-    algorithm = ALGORITHMS[ms.algorithm].create(order, propagate, gs.order, ms.algorithm_settings)
-    if isinstance(algorithm, GaussSeidel):
-        for cycle in gs.cycles:
-            back = [links[k].label for k in sorted(gs.backward) if links[k].target in cycle]
-            notes.append(f"Gauss-Seidel: instances {' -> '.join(names[i] for i in cycle)} form a cycle; stepping order "
-                         f"{', '.join(names[i] for i in gs.order)}, so {', '.join(back)} {'is' if len(back) == 1 else 'are'} "
-                         "extrapolated")
-
+    m = len(c.links)
+    system = CoupledSystem(slaves, c.links, ms.extrapolation, c.feedthrough,
+                           np.array(c.structure, dtype=bool).reshape(m, m))
+    algorithm = algorithms.create(ms.algorithm, ms.extrapolation, ms.output_update == "propagate", c.gauss_seidel.order,
+                                  ms.algorithm_settings)
     ex = scene.experiment
     if ms.adaptive is None:
         grid = TimeGrid.fixed(ex.start, ex.stop, ex.step)
-        controller = FixedStep(grid.macro_ticks)
+        controller = stepcontrol.FixedStep(grid.macro_ticks)
     else:
         grid = TimeGrid.variable(ex.start, ex.stop, ms.adaptive.min_step)
-        controller = ESTIMATORS[ms.adaptive.estimator].create(ms.adaptive, grid, ex.step, p, plan.bonds)
+        controller = stepcontrol.create_controller(ms.adaptive, grid, ex.step, c.order_of_accuracy, plan.bonds)
     recorder = Recorder(slaves, index, plan.recorded, system)
-    master = Master(system, algorithm, controller, grid, recorder, names, loop=loop)
-    master.gauss_seidel = gs
-    master.accuracy_order = p  # of the coupling error with exact subsystems (reported in the metadata)
-    params = []
-    for n in names:
-        model = plan.fmus[n]
-        d = {}
-        for pname, value in scene.fmus[n].parameters.items():
-            var = model.variables[pname]
-            d[var.valueReference] = (var.type, native_resource(scene.fmus[n], pname, value))
-        params.append(d)
-    return Build(master, plan, names, params, notes)
-
-
-def native_resource(spec, name: str, value):
-    """The value of parameter ``name`` of a scene FMU as the FMU reads it: for a native FMU of a component whose
-    parameter names a resource file the C code reads in another form (the strip's ``table_file``, a .npz table),
-    that form, converted once into the cache; every other value as it is."""
-    if spec.component is None or not isinstance(value, str) or not value:
-        return value
-    from tribocosim.components import registry
-
-    comp = registry.find(spec.component)
-    native = comp.native if comp is not None else None
-    if native is None or native.convert_resource is None or name not in native.resource_parameters:
-        return value
-    source = Path(value)
-    if not source.is_absolute() or not source.is_file():  # a file in the FMU's resources: converted by its build
-        return value
-    from tribocosim.cosim.scene.fmucache import cache_dir
-
-    folder = cache_dir() / "resources" / hashlib.sha256(source.read_bytes()).hexdigest()[:20]
-    converted = folder / f"{source.stem}.tca"
-    if not converted.is_file():
-        folder.mkdir(parents=True, exist_ok=True)
-        native.convert_resource(source, folder)
-    return str(converted)
+    master = Master(system, algorithm, controller, grid, recorder, c.names, loop=loop)
+    master.gauss_seidel = c.gauss_seidel
+    master.accuracy_order = c.order_of_accuracy  # of the coupling error with exact subsystems (in the metadata)
+    params = [{vr: (kind, value) for vr, kind, value in plan.parameters.get(n, [])} for n in c.names]
+    return Build(master, plan, c.names, params, c.notes)
 
 
 def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, overrides: dict | None = None,
@@ -237,9 +229,10 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     write : bool
         Write the CSV and JSON files (False: only return the result).
     loop : {"auto", "python"}
-        "auto": a fixed-step Jacobi or Gauss-Seidel run without extrapolation takes its steps in C
-        (:mod:`tribocosim.cosim.engine.native_loop`, the same results); a step the C loop does not take (a discard,
-        a non-finite value) repeats the run with the Python loop, which can roll back. "python": the Python loop.
+        "auto": a fixed-step Jacobi or Gauss-Seidel run without extrapolation takes its steps in C (the whole run in
+        :mod:`tribocosim.cosim.engine.native_session`, else the loop in :mod:`tribocosim.cosim.engine.native_loop`;
+        the same results); a step the C loop does not take (a discard, a non-finite value) repeats the run with the
+        Python loop, which can roll back. "python": the Python loop.
 
     Returns
     -------
@@ -247,45 +240,137 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     """
     if not isinstance(scene, Plan):
         from tribocosim.paths import scene_file
-        from tribocosim.cosim.scene.component_checks import load_component_scene
+        from tribocosim.cosim.scene.validate import load_scene
 
-        # load_scene plus the parameters of component = "..." FMUs checked against their dataclasses
-        scene = load_component_scene(scene_file(scene), overrides)
+        scene = load_scene(scene_file(scene), overrides)
     plan = scene
     started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     t0 = time.perf_counter()
-    try:
-        b, failure, fmu_times, calls = _execute(plan, loop, progress)
-    except NativeLoopStopped as stop:  # the C loop saves no state: the Python loop repeats the run and rolls back
-        b, failure, fmu_times, calls = _execute(plan, "python", progress)
-        b.notes.append(f"the native loop stopped ({stop}); the run was repeated with the Python loop, which can "
-                       "roll back and halve the step")
-    total = time.perf_counter() - t0
-    m = b.master
-    meta = _metadata(b, started, total, fmu_times, calls)
+    outcome = _session(plan, progress) if loop == "auto" else None
+    if outcome is None:
+        from tribocosim.cosim.engine.native_loop import NativeLoopStopped
+
+        try:
+            outcome = _execute(plan, loop, progress)
+        except NativeLoopStopped as stop:  # the C loop saves no state: the Python loop repeats the run, rolls back
+            outcome = _execute(plan, "python", progress)
+            outcome.notes.append(f"the native loop stopped ({stop}); the run was repeated with the Python loop, which "
+                                 "can roll back and halve the step")
+    meta = _metadata(plan, outcome, started, time.perf_counter() - t0)
+    failure = outcome.failure
     if failure is not None:
-        meta["failure"] = {"message": str(failure), "last_accepted_time": m.grid.time(m.n),
-                           "recorded_rows": len(m.recorder.time)}
-    result = Result(m.recorder.time, m.recorder.columns(), meta)
+        meta["failure"] = {"message": str(failure), "last_accepted_time": outcome.end_time,
+                           "recorded_rows": outcome.rows}
+    result = outcome.result(meta)
     if write:
         out = Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path)
         out.mkdir(parents=True, exist_ok=True)
         if plan.scene.output.file:
-            result.csv_path = m.recorder.write_csv(out / plan.scene.output.file)
+            result.csv_path = outcome.write_csv(out / plan.scene.output.file)
             result.metadata_path = result.csv_path.with_suffix(".json")
         else:
             result.metadata_path = out / f"{plan.scene.path.stem}.run.json"
         meta["outputs"]["csv"] = str(result.csv_path) if result.csv_path else None
         result.metadata_path.write_text(json.dumps(meta, indent=2, default=_json_default), encoding="utf-8")
     if failure is not None:
-        raise RunFailed(f"{failure}; the run stopped at t = {m.grid.time(m.n):.9g} s", result) from failure
+        raise RunFailed(f"{failure}; the run stopped at t = {outcome.end_time:.9g} s", result) from failure
     return result
 
 
-def _execute(plan: Plan, loop: str, progress: bool):
-    """Build, initialize and run a master: ``(build, failure or None, FMU wall times, FMI call counts)``; the FMUs
-    are freed. A step that could not be recovered (an FMU's refusal, a non-finite output, a coupling iteration that
-    does not converge) is the failure, and what was accepted before it is kept."""
+@dataclass
+class Outcome:
+    """What a run did, whichever master ran it: what :func:`_metadata` reports and what the result holds."""
+
+    names: list[str]
+    columns: list[str]
+    notes: list[str]
+    warnings: list[str]
+    master: dict  # the metadata's "master" entries that depend on the run
+    feedthrough: list
+    gauss_seidel: Any
+    link_labels: list[str]
+    loops: list
+    hold_mean: list
+    steps: dict
+    calls: dict
+    fmu_times: dict
+    loop_time: float
+    end_time: float
+    rows: int
+    failure: Exception | None = None
+    recording: Any = None  # (times, rows row after row) of the C master
+    recorder: Any = None  # the Python master's
+
+    def result(self, meta: dict) -> Result:
+        if self.recorder is not None:
+            return Result(self.recorder.time, self.recorder.columns(), meta)
+        return Result(metadata=meta, recording=(*self.recording, self.columns))
+
+    def write_csv(self, path: Path) -> Path:
+        if self.recorder is not None:
+            return self.recorder.write_csv(path)
+        from tribocosim.cosim.engine.results_csv import write_csv
+
+        return write_csv(path, self.columns, *self.recording)
+
+
+def _end_warnings(plan: Plan, names: list[str], values: list[float]) -> list[str]:
+    """The warnings of the plan's end checks (``Plan.end_checks``) whose outputs ended above 0."""
+    return [f"FMU instance '{check.instance}': {value:.0f} {check.message}"
+            for check, value in zip(plan.end_checks, values) if value > 0]
+
+
+def _session(plan: Plan, progress: bool) -> Outcome | None:
+    """The run in the C master (:class:`~tribocosim.cosim.engine.native_session.NativeSession`), or None when it
+    does not take it or leaves it to the Python master."""
+    from tribocosim.cosim.engine import native_session as ns
+
+    ms, ex = plan.scene.master, plan.scene.experiment
+    c = coupling(plan)
+    if ns.supported(ms.algorithm, ms.extrapolation, ms.adaptive, c.links) is not None:
+        return None
+    from tribocosim.cosim.engine.observers import Progress
+    from tribocosim.cosim.engine.timegrid import TimeGrid
+    from tribocosim.cosim.scene.fmu_files import extracted
+
+    index = {n: i for i, n in enumerate(c.names)}
+    slaves = [ns.SessionSlave(n, extracted(plan.fmus[n].path), plan.fmus[n].summary.model_identifier,
+                              plan.fmus[n].summary.guid, plan.parameters.get(n, []), plan.fmus[n].feedthrough)
+              for n in c.names]
+    grid = TimeGrid.fixed(ex.start, ex.stop, ex.step)
+    session = ns.NativeSession(slaves, c.links, c.structure, [(index[r.instance], vr, t) for r, vr, t in plan.recorded],
+                               ms.algorithm, ms.output_update == "propagate", c.gauss_seidel.order, grid, ex.stop,
+                               [(index[e.instance], e.value_reference, e.type) for e in plan.end_checks])
+    bar = Progress(ex.start, ex.stop) if progress else None
+    try:
+        r = session.run(bar)
+    except ns.SessionStopped:
+        return None
+    finally:
+        if bar is not None:
+            bar.close()
+    columns = [str(ref) for ref, _, _ in plan.recorded]
+    n_rows = len(r.times)
+    return Outcome(
+        c.names, columns, c.notes, [*r.warnings, *_end_warnings(plan, c.names, r.end_values)],
+        {"step_control": "fixed", "order_of_accuracy": c.order_of_accuracy, "loop": "native", "time_tick": grid.tick},
+        r.feedthrough, c.gauss_seidel, [l.label for l in c.links],
+        [{"links": [c.links[k].label for k in lp.links], "contraction": lp.contraction} for lp in r.loops], [],
+        {"accepted": r.steps, "rejected_error": 0, "rejected_failure": 0, "iterations": r.steps,
+         "observed_contraction": None, "min_step": r.min_step if r.steps else None,
+         "max_step": r.max_step if r.steps else None},
+        {n: {"doStep": d, "getFMUstate": 0, "setFMUstate": 0} for n, d in zip(c.names, r.do_steps)},
+        dict(zip(c.names, r.wall_times)), r.loop_time, grid.time(grid.end_ticks if n_rows else 0), n_rows,
+        recording=(r.times, r.rows))
+
+
+def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
+    """Build, initialize and run the Python master; the FMUs are freed. A step that could not be recovered (an FMU's
+    refusal, a non-finite output, a coupling iteration that does not converge) is the failure, and what was accepted
+    before it is kept. :class:`~tribocosim.cosim.engine.native_loop.NativeLoopStopped` goes to the caller."""
+    from tribocosim.cosim.engine.native_loop import NativeLoopStopped
+    from tribocosim.cosim.engine.observers import Progress
+
     b = build(plan, loop)
     m = b.master
     ex = plan.scene.experiment
@@ -305,13 +390,39 @@ def _execute(plan: Plan, loop: str, progress: bool):
             bar.close()
         fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
         calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
-        m.warnings.extend(_outside_table_warnings(b))
+        m.warnings.extend(_end_warnings(plan, b.names, _end_values(b)))
         b.close()
-    return b, failure, fmu_times, calls
+    sysm, st = m.system, m.stats
+    return Outcome(
+        b.names, list(m.recorder.names), b.notes, m.warnings,
+        {"step_control": m.controller.name, "order_of_accuracy": m.accuracy_order, "loop": m.loop_used,
+         **({"python_loop_because": m.loop_reason} if m.loop_used == "python" else {}), "time_tick": m.grid.tick},
+        sysm.feedthrough, m.gauss_seidel, [l.label for l in sysm.links],
+        [{"links": [sysm.links[k].label for k in lp.links], "contraction": lp.contraction} for lp in sysm.loops],
+        sorted(sysm.hold_mean),
+        {"accepted": st.steps, "rejected_error": st.rejected_error, "rejected_failure": st.rejected_failures,
+         "iterations": st.iterations,
+         "observed_contraction": st.observed_contraction if st.observed_contraction == st.observed_contraction else None,
+         "min_step": st.min_step if st.steps else None, "max_step": st.max_step if st.steps else None},
+        calls, fmu_times, st.wall_time, m.grid.time(m.n), len(m.recorder.time), failure, recorder=m.recorder)
 
 
-#: the output through which a strip-draw FMU counts its friction-table lookups outside the simulated range
-CLAMP_OUTPUT = "table_clamp_count"
+def _end_values(b: Build) -> list[float]:
+    """The values of the plan's end checks, read from the Python master's slaves (0 where one cannot answer)."""
+    out = []
+    slaves = b.master.system.slaves
+    dead = {s.unzip_dir for s in slaves if s.fatal}
+    for check in b.plan.end_checks:
+        try:
+            slave = slaves[b.names.index(check.instance)]
+            if slave.unzip_dir in dead:  # no call after fmi2Fatal (FMI 2.0.4, section 2.1.3)
+                out.append(0.0)
+                continue
+            getter = slave.get_real if check.type == "Real" else slave.get_integer
+            out.append(float(getter([check.value_reference])[0]))
+        except Exception:  # noqa: BLE001 - an FMU that cannot answer after a failure says nothing here
+            out.append(0.0)
+    return out
 
 
 def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict | None = None, *,
@@ -344,26 +455,6 @@ def _note_package(result, ssp: Path, scene: Path) -> None:
         result.metadata_path.write_text(json.dumps(meta, indent=2), encoding="utf-8")
 
 
-def _outside_table_warnings(b: Build) -> list[str]:
-    """A warning for every FMU whose ``table_clamp_count`` output ended above 0 (read at the end of the run)."""
-    out = []
-    for i, name in enumerate(b.names):
-        var = b.plan.fmus[name].variables.get(CLAMP_OUTPUT)
-        if var is None or var.causality != "output":
-            continue
-        try:
-            slave = b.master.system.slaves[i]
-            getter = slave.get_integer if var.type == "Integer" else slave.get_real
-            count = float(getter([var.valueReference])[0])
-        except Exception:  # noqa: BLE001 - an FMU that cannot answer after a failure says nothing here
-            continue
-        if count > 0:
-            out.append(f"FMU instance '{name}': {count:.0f} friction-table lookups read values outside the table's "
-                       f"simulated range ({CLAMP_OUTPUT}): there the friction rests on values the mesoscale "
-                       "campaign did not simulate (docs/model.md section 4)")
-    return out
-
-
 def default_out_dir(scene_path: Path) -> Path:
     """Where a run writes when no folder is given: the scene's folder, or ``./<stem>`` for a packaged scene
     (an installed package's folder is no place for results)."""
@@ -373,7 +464,7 @@ def default_out_dir(scene_path: Path) -> Path:
 
 
 def _json_default(o):
-    if isinstance(o, (np.floating, np.integer)):
+    if hasattr(o, "item") and callable(o.item):  # a numpy scalar
         return o.item()
     if isinstance(o, Path):
         return str(o)
@@ -393,12 +484,9 @@ def distribution_version(name: str) -> str | None:
     return None
 
 
-def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict) -> dict:
-    plan, m = b.plan, b.master
+def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
     scene = plan.scene
-    sysm = m.system
-    st = m.stats
-    gs = m.gauss_seidel
+    gs = o.gauss_seidel
     ms = scene.master
     return {
         "scene": str(scene.path),
@@ -411,37 +499,28 @@ def _metadata(b: Build, started: str, total: float, fmu_times: dict, calls: dict
             "algorithm": ms.algorithm,
             "extrapolation": ms.extrapolation,
             "output_update": ms.output_update,
-            "step_control": m.controller.name,
+            "step_control": o.master["step_control"],
             "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
             **({ms.algorithm: asdict(ms.algorithm_settings)} if ms.algorithm_settings is not None else {}),
-            "order_of_accuracy": m.accuracy_order,
-            "loop": m.loop_used,
-            **({"python_loop_because": m.loop_reason} if m.loop_used == "python" else {}),
-            "time_tick": m.grid.tick,
+            "order_of_accuracy": o.master["order_of_accuracy"],
+            "loop": o.master["loop"],
+            **({"python_loop_because": o.master["python_loop_because"]} if "python_loop_because" in o.master else {}),
+            "time_tick": o.master["time_tick"],
         },
         "fmus": {n: {"path": str(plan.fmus[n].path), "can_roll_back": plan.fmus[n].can_roll_back,
-                     "feedthrough": sysm.feedthrough[i]} for i, n in enumerate(b.names)},
+                     "feedthrough": o.feedthrough[i]} for i, n in enumerate(o.names)},
         "gauss_seidel": {
-            "order": [b.names[i] for i in gs.order],
-            "extrapolated_links": [sysm.links[k].label for k in sorted(gs.backward)],
-            "cycles": [[b.names[i] for i in c] for c in gs.cycles],
+            "order": [o.names[i] for i in gs.order],
+            "extrapolated_links": [o.link_labels[k] for k in sorted(gs.backward)],
+            "cycles": [[o.names[i] for i in c] for c in gs.cycles],
         },
-        "algebraic_loops": [{"links": [sysm.links[k].label for k in lp.links], "contraction": lp.contraction}
-                            for lp in sysm.loops],
-        "input_hold_mean": sorted(sysm.hold_mean),
-        "steps": {
-            "accepted": st.steps,
-            "rejected_error": st.rejected_error,
-            "rejected_failure": st.rejected_failures,
-            "iterations": st.iterations,
-            "observed_contraction": st.observed_contraction if st.observed_contraction == st.observed_contraction else None,
-            "min_step": st.min_step if st.steps else None,
-            "max_step": st.max_step if st.steps else None,
-        },
-        "fmi_calls": calls,
-        "wall_time": {"total": total, "loop": st.wall_time, "fmus": fmu_times,
-                      "master": total - sum(fmu_times.values())},
-        "warnings": plan.warnings + m.warnings,
-        "notes": b.notes,
-        "outputs": {"columns": ["time", *m.recorder.names]},
+        "algebraic_loops": o.loops,
+        "input_hold_mean": o.hold_mean,
+        "steps": o.steps,
+        "fmi_calls": o.calls,
+        "wall_time": {"total": total, "loop": o.loop_time, "fmus": o.fmu_times,
+                      "master": total - sum(o.fmu_times.values())},
+        "warnings": plan.warnings + o.warnings,
+        "notes": o.notes,
+        "outputs": {"columns": ["time", *o.columns]},
     }

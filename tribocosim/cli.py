@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _exit_on_termination() -> None:
     """SIGTERM (and SIGHUP) end the process as an exception does: ``finally`` blocks and ``atexit`` handlers run, so
-    the folders the FMUs were extracted to are removed and a run's lock on its output folder is released (by
+    the folders SSP packages were extracted to are removed and a run's lock on its output folder is released (by
     default Python dies at once and leaves them). The exit status is 128 + the signal's number, as a shell shows
     it."""
     import signal
@@ -75,8 +75,8 @@ def console() -> None:
     its embedded interpreter state can corrupt the heap during Python's own teardown (pythonfmu 0.7.0; seen once
     as "corrupted double-linked list" after a report had written all its files), so then the process ends
     without that teardown (``os._exit``). What Python's exit does first, and what this process relies on, still
-    happens before: the ``atexit`` handlers run, which remove the folders the FMUs and SSP packages were
-    extracted to (:mod:`tribocosim.cosim.api`, :mod:`tribocosim.cosim.ssp.reader`), the temporary folders of
+    happens before: the ``atexit`` handlers run, which remove the folders SSP packages were
+    extracted to (:mod:`tribocosim.cosim.ssp.reader`), the temporary folders of
     ``weakref.finalize`` (``tempfile.TemporaryDirectory``); then every output is flushed. ``os._exit`` skips only the
     module and object teardown and the C library's exit, where the heap corruption happens."""
     _exit_on_termination()

@@ -27,7 +27,15 @@ class TribocosimError(Exception):
 
 
 class ParameterError(TribocosimError, ValueError):
-    """A parameter or an input is outside its allowed range."""
+    """A parameter or an input is outside its allowed range.
+
+    ``fields``: ``[(name, message), ...]`` when the error is about named fields of a parameter set (every bad field
+    of it, each with its own message); empty for a rule across fields.
+    """
+
+    def __init__(self, message: str = "", fields=()) -> None:
+        super().__init__(message)
+        self.fields = list(fields)
 
 
 class TableError(TribocosimError):

@@ -42,7 +42,7 @@ from tribocosim.components.description import Component
 from tribocosim.components.fmus import modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
-from tribocosim.components.native.toolchain import compiler, declarations
+from tribocosim.components.native.toolchain import compiler, declarations, digests
 from tribocosim.components.native.toolchain.library import COMMON_SOURCES
 from tribocosim.errors import TribocosimError
 
@@ -142,8 +142,28 @@ def description(comp: Component, fmu_guid: str, fmi_version: int = 2) -> str:
 
 
 def source_digest(name: str, fmi_version: int = 2) -> str:
-    """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags."""
+    """SHA-256 over what the FMU is made of: C sources and headers, generated text, resources, flags (remembered in
+    the cache while none of the files it is computed from has changed, the Python modules that generate the text and
+    hold the flags and the compiler's dist-info folder included: :func:`tribocosim.components.native.toolchain.
+    digests.memo`)."""
     comp = component(name)
+    package = compiler.NATIVE_DIR.parent
+    generators = [*Path(sys.modules[comp.build.__module__].__file__).parent.glob("*.py"), package / "description.py",
+                  package / "params.py", *Path(__file__).parent.glob("*.py"),
+                  *(Path(declarations.__file__).parent.glob("*.py"))]
+    zig = compiler.zig_dist_info()  # its name carries the compiler's version
+    files = sorted({*sources(comp, fmi_version), *compiler.headers(), *comp.resource_files, *generators,
+                    *([zig] if zig is not None else [])})
+    return digests.memo(digest_key(name, fmi_version), files, lambda: _source_digest(comp, fmi_version))
+
+
+def digest_key(name: str, fmi_version: int = 2) -> str:
+    """The key :func:`source_digest` is remembered under (:func:`tribocosim.components.native.toolchain.digests.
+    remembered` finds it without this module's imports)."""
+    return f"fmu {name} {fmi_version}"
+
+
+def _source_digest(comp: Component, fmi_version: int) -> str:
     h = hashlib.sha256()
     for path in sorted({*sources(comp, fmi_version), *compiler.headers()}):
         h.update(path.name.encode())

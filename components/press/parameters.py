@@ -6,10 +6,9 @@ the FMU variable declarations (:mod:`tribocosim.components.press.component`).
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
-
-import numpy as np
 
 from tribocosim.errors import ParameterError
 from tribocosim.components.params import param, validate_fields
@@ -39,14 +38,17 @@ class PressParameters:
 
     def __post_init__(self) -> None:
         validate_fields(self)
-        self.setpoints()  # parse now: a malformed table is a parameter error
+        try:
+            self.setpoints()  # parse now: a malformed table is a parameter error (of that field)
+        except ParameterError as exc:
+            raise ParameterError(str(exc), fields=[("setpoint_table", str(exc))]) from None
 
-    def setpoints(self) -> tuple[np.ndarray, np.ndarray]:
+    def setpoints(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """Breakpoints (times [s], forces [N]) of the piecewise-linear set-point."""
         if not self.setpoint_table:
             if self.ramp_time == 0:
-                return np.array([0.0]), np.array([self.force_setpoint])
-            return np.array([0.0, self.ramp_time]), np.array([0.0, self.force_setpoint])
+                return (0.0,), (float(self.force_setpoint),)
+            return (0.0, float(self.ramp_time)), (0.0, float(self.force_setpoint))
         entries = [item for item in self.setpoint_table.split(";") if item.strip(" \t")]
         if not entries:
             raise ParameterError(f"setpoint_table = '{self.setpoint_table}' is malformed: it has no entry")
@@ -54,8 +56,9 @@ class PressParameters:
             raise ParameterError(f"setpoint_table = '{self.setpoint_table}' is malformed: each entry is a time and a "
                                  "force, two decimal numbers separated by spaces (entries separated by ';')")
         pairs = [[float(x) for x in item.split()] for item in entries]
-        t, f = np.array(pairs).T
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))) or np.any(np.diff(t) <= 0) or np.any(f < 0):
+        t, f = tuple(p[0] for p in pairs), tuple(p[1] for p in pairs)
+        if (not all(map(math.isfinite, t + f)) or any(b <= a for a, b in zip(t, t[1:]))
+                or any(x < 0 for x in f)):
             raise ParameterError(
                 f"setpoint_table = '{self.setpoint_table}': times must increase and forces be finite and >= 0"
             )

@@ -1,7 +1,7 @@
 """The strip-draw component: its FMU variables, files, resources and how the model is made.
 
-The one description of the StripDraw FMU (Python and native variants), the scene checks and the
-monolithic reference (:mod:`tribocosim.components.description`).
+The one description of the StripDraw FMU, the scene checks and the monolithic reference
+(:mod:`tribocosim.components.description`).
 
 Variables
     One parameter per field of :class:`~tribocosim.components.stripdraw.parameters.StripDrawParameters`,
@@ -106,7 +106,9 @@ OUTPUTS = (
     Port("grip_position", "m", "displacement of the grip", high="draw_length",
          why="the bar is built for draw_length; beyond it the strip's tail runs into the pad and out of it"),
     Port("table_clamp_count", "1", "cumulative number of nodal table lookups outside the table (clamped)",
-         integer=True),
+         integer=True, end_warning="friction-table lookups read values outside the table's simulated range "
+         "(table_clamp_count): there the friction rests on values the mesoscale campaign did not simulate "
+         "(docs/model.md section 4)"),
 )
 
 #: the nodal fields (as in field_output), array outputs of the FMI 3.0 FMU (one value per node)
@@ -149,36 +151,60 @@ def convert_resource(source: Path, folder: Path) -> Path:
     return write_table_resource(source, Path(folder) / (Path(source).stem + RESOURCE_SUFFIX))
 
 
+def law_facts(params: StripDrawParameters, files: StripDrawFiles, resources: Path) -> dict:
+    """What the scene checks need of the friction law the parameters make: ``table_error`` (why the table cannot be
+    used, or None), ``law_error`` (why the law cannot be made), ``cap`` (its cap of beta, Eq. 24,
+    ``beta_threshold``), ``pressure`` and ``velocity_max`` (the table's pressure axis [Pa] and largest velocity
+    [m/s]). Making the law reads the table and evaluates the law natively, so the facts are remembered in the cache
+    for these parameters while the table file is unchanged (:func:`tribocosim.components.native.toolchain.digests.
+    memo`)."""
+    from tribocosim.components.native.toolchain.digests import memo
+
+    path = files.table_path(resources) if params.friction_model == "table" else None
+
+    def compute() -> dict:
+        from tribocosim.components.stripdraw.friction import make_friction_law
+
+        facts = {"table_error": None, "law_error": None, "cap": None, "pressure": None, "velocity_max": None}
+        table = None
+        if path is not None:
+            try:
+                table = _table(params, files, resources)
+            except Exception as exc:  # noqa: BLE001 - any unreadable table is a scene problem
+                facts["table_error"] = f"friction table {path} cannot be used: {exc}"
+                return facts
+            facts["pressure"] = [float(table.pressure[0]), float(table.pressure[-1])]
+            facts["velocity_max"] = float(table.velocity[-1])
+        try:
+            facts["cap"] = float(make_friction_law(params, table).beta_threshold)
+        except ParameterError as exc:
+            facts["law_error"] = str(exc)
+        return facts
+
+    return memo(f"stripdraw law {params!r} {path}", [path] if path is not None else [], compute)
+
+
 def check(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
     """Scene problems only the model sees (the table, the field file, the cap), and the input limits
     the table sets: the normal force's nominal pressure and the grip speed must lie on its axes."""
-    from tribocosim.components.stripdraw.friction import make_friction_law
-
     problems, limits = [], {}
-    table = None
-    if params.friction_model == "table":
-        path = files.table_path(resources)
-        try:
-            table = _table(params, files, resources)
-        except Exception as exc:  # noqa: BLE001 - any unreadable table is a scene problem
-            problems.append(("table_file", f"friction table {path} cannot be used: {exc}"))
+    facts = law_facts(params, files, resources)
+    if facts["table_error"]:
+        problems.append(("table_file", facts["table_error"]))
     if files.field_input and not Path(files.field_input).is_file():
         problems.append(("field_input", f"field file {files.field_input} does not exist (the field_output of an "
                                         "earlier pass)"))
-    cap = None
-    if table is not None or params.friction_model != "table":
-        try:
-            cap = make_friction_law(params, table).beta_threshold
-        except ParameterError as exc:
-            problems.append(("", str(exc)))
+    if facts["law_error"]:
+        problems.append(("", facts["law_error"]))
+    cap = facts["cap"]
     if params.beta_threshold > 0:
         cap = params.beta_threshold
     if cap is not None and params.beta_initial > cap:
         problems.append(("beta_initial", f"beta_initial = {params.beta_initial!r} exceeds the cap of beta, {cap:.6g} "
                                          "(Eq. 24; from the friction law or beta_threshold)"))
-    if table is not None:
-        lo, hi = float(table.pressure[0]), float(table.pressure[-1])
-        vmax = float(table.velocity[-1])
+    if facts["pressure"] is not None:
+        lo, hi = facts["pressure"]
+        vmax = facts["velocity_max"]
         pad = f"{params.tool_length * 1e3:g} x {params.tool_width * 1e3:g} mm pad"
 
         def force_limit(force: float, label: str, instance: str) -> str | None:

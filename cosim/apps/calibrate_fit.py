@@ -6,7 +6,7 @@ later pass starts from the debris the previous one left), and any of the observa
 that pass, each with an optional standard deviation (``<name>_std``): ``mu_bar`` (the steady-state friction
 coefficient), ``debris_g_m2`` (the debris left on the strip that passed under the pad, weighed per unit area
 [g/m^2]), ``beta`` (its coverage, the area fraction of flakes). Every row is simulated with the pure strip-draw model
-(:func:`tribocosim.cosim.apps.stripdraw_experiment.draw`, one draw per pressure and pad gives all its passes).
+(:func:`tribocosim.cosim.studies.stripdraw_experiment.draw`, one draw per pressure and pad gives all its passes).
 
 Parameters (:data:`FITTABLE`): the scale s of the table's A_p (``particle_area_scale``), and the debris balance: the
 production K / H (``archard_k``, the hardness fixed: only K / H enters, Eq. 33-37), the share of the debris the tool
@@ -319,7 +319,7 @@ def separability(Jw: np.ndarray, names, scale) -> tuple[np.ndarray, np.ndarray, 
 def strip_draw_model(data: list[Measurement], workers: int | None = None):
     """``model(parameter sets)`` for :func:`fit`: every (pressure, pad) of ``data`` drawn once per parameter set with
     as many passes as its rows need (in parallel processes), each row's observables read from its pass."""
-    from tribocosim.cosim.apps.stripdraw_experiment import Point, draw, run_points
+    from tribocosim.cosim.studies.stripdraw_experiment import Point, draw, run_points
 
     tests = {}
     for d in data:

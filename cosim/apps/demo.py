@@ -8,9 +8,6 @@ builder's message. It writes the results (CSV + JSON), the strip's beta field (`
 and three figures: mu against sliding distance, the beta(X, t) map (like Fig. 17a), and the
 press and drive signals; it prints mu_bar, the mean of mu(t) = pull_force / (2 F_N) (Eq. 1) over
 the last 20 % of the draw, the steady-state region where the paper reads it (Sec. 7).
-
-:func:`run_strip_draw` and :func:`steady_mean` run the pure strip-draw model alone (no FMI;
-used by the benchmarks).
 """
 
 from __future__ import annotations
@@ -21,57 +18,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-
-
-def run_strip_draw(
-    pressure: float = 10e6,
-    tool_length: float = 0.035,
-    velocity: float = 0.08,
-    draw_length: float = 0.14,
-    step: float = 1e-3,
-    ramp_time: float = 0.01,
-    **parameters,
-):
-    """Run one strip draw with the pure model; return (time, outputs per step, model).
-
-    Parameters
-    ----------
-    pressure : float
-        Nominal contact pressure P_N [Pa]; the normal force is P_N L_T w_T.
-    tool_length : float
-        Pad length L_T [m].
-    velocity : float
-        Drawing velocity V0 [m/s].
-    draw_length : float
-        Draw length [m].
-    step : float
-        Output step [s].
-    ramp_time : float
-        Time over which the grip velocity ramps up [s].
-    **parameters
-        Further parameters of the StripDraw component: :class:`StripDrawParameters` fields and its
-        files (``table_file``: default the shipped table).
-    """
-    from tribocosim.components.stripdraw.component import COMPONENT
-
-    model = COMPONENT.make({"tool_length": tool_length, "draw_length": draw_length, **parameters}).model
-    p = model.params
-    normal_force = p.normal_force(pressure)
-    t_end = draw_length / velocity + 0.5 * ramp_time
-    n = int(round(t_end / step))
-    times = step * np.arange(1, n + 1)
-    outs = []
-    for k in range(n):
-        v = velocity * min(1.0, (k + 0.5) * step / ramp_time) if ramp_time > 0 else velocity
-        outs.append(model.step(step, {"normal_force": normal_force, "grip_velocity": v}))
-    return times, outs, model
-
-
-def steady_mean(outs, key: str = "mu_mean", fraction: float = 0.2) -> float:
-    """Mean of an output over the last ``fraction`` of the run (the steady-state region)."""
-    values = np.array([o[key] for o in outs])
-    return float(values[int((1.0 - fraction) * values.size):].mean())
 
 
 def demo_scene() -> Path:
@@ -122,9 +68,9 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     the figure files.
     """
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.apps.plotting import plot_demo
-    from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
-    from tribocosim.cosim.scene.component_checks import load_component_scene
+    from tribocosim.cosim.studies.plotting import plot_demo
+    from tribocosim.cosim.studies.stripdraw_experiment import steady_ratio
+    from tribocosim.cosim.scene.validate import load_scene
 
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -141,7 +87,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
             base.fmus["press"].parameters["force_setpoint"])
         over["fmus.press.parameters.force_setpoint"] = strip_parameters(parse_scene(demo_scene(), over)[0]).normal_force(p)
     over.update(overrides or {})
-    plan = load_component_scene(demo_scene(), over)
+    plan = load_scene(demo_scene(), over)
     result = run(plan, out)
     t = result.time
     steady = t >= t[-1] - 0.2 * (t[-1] - t[0])

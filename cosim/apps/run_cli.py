@@ -49,8 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
     from tribocosim.cosim.api import run, run_ssp
-    from tribocosim.cosim.apps.scene_sweep import is_sweep_file
-    from tribocosim.cosim.scene.schema import parse_overrides
+    from tribocosim.cosim.scene.schema import is_sweep, parse_overrides, read_document
     from tribocosim.paths import scene_file
 
     from tribocosim.cosim.apps.run_output import OutputError, OutputFolder, run_files
@@ -63,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
             with OutputFolder(out, []):
                 result = run_ssp(args.scene, out, parse_overrides(args.set), progress=not args.quiet)
                 png = _plot(args, result)
-        elif is_sweep_file(args.scene):  # a parameter sweep or chained passes over a base scene
+        elif is_sweep(document := read_document(args.scene)):  # a sweep or chained passes over a base scene
             if args.set:
                 raise SceneError("--set applies to scenes; put the keys in the sweep file's [sweep.set]")
             from tribocosim.cosim.apps.scene_sweep import main as sweep_main
@@ -71,10 +70,10 @@ def main(argv: list[str] | None = None) -> int:
             return sweep_main(args)
         else:
             from tribocosim.cosim.api import default_out_dir
-            from tribocosim.cosim.scene.component_checks import load_component_scene
+            from tribocosim.cosim.scene.validate import load_scene
 
-            # load_scene, plus the parameters of component = "..." FMUs against their dataclasses
-            plan = load_component_scene(args.scene, parse_overrides(args.set))
+            # parsed once, each value checked once (the component declarations, the model descriptions)
+            plan = load_scene(args.scene, parse_overrides(args.set), document)
             out = Path(args.out) if args.out is not None else default_out_dir(plan.scene.path)
             with OutputFolder(out, run_files(plan, out, args.plot)):  # writable, and no other run writes there
                 result = run(plan, out, progress=not args.quiet)
@@ -121,7 +120,7 @@ def _plot(args, result):
     """The PNG of the recorded variables when --plot asks for it (None otherwise)."""
     if not args.plot or result.csv_path is None:
         return None
-    from tribocosim.cosim.apps.plotting import plot_result
+    from tribocosim.cosim.studies.plotting import plot_result
 
     return plot_result(result, result.csv_path.with_suffix(".png"))
 

@@ -189,10 +189,9 @@ class Sweep:
 
 def is_sweep_file(path: str | Path) -> bool:
     """True if ``path`` is a TOML file with a ``[sweep]`` table (False for scenes and unreadable files)."""
-    try:
-        return isinstance(tomllib.loads(Path(path).read_text(encoding="utf-8")).get("sweep"), dict)
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return False
+    from tribocosim.cosim.scene.schema import is_sweep, read_document
+
+    return is_sweep(read_document(path))
 
 
 def load_sweep(path: str | Path) -> Sweep:
@@ -347,11 +346,11 @@ def pass_overrides(sweep: Sweep, case: Case, folder: Path, k: int) -> dict:
 def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
     """Run every pass of one case in this process; write and return its summary rows."""
     from tribocosim.cosim.api import run
-    from tribocosim.cosim.scene.component_checks import load_component_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     folder = out / "cases" / case.name
     done = folder / "summary.json"
-    key = _case_key(sweep, case, load_component_scene(sweep.scene, pass_overrides(sweep, case, folder, 1)), folder)
+    key = _case_key(sweep, case, load_scene(sweep.scene, pass_overrides(sweep, case, folder, 1)), folder)
     if done.is_file():
         try:
             old = json.loads(done.read_text())
@@ -362,7 +361,7 @@ def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
     folder.mkdir(parents=True, exist_ok=True)
     rows = []
     for k in range(1, sweep.passes + 1):
-        plan = load_component_scene(sweep.scene, pass_overrides(sweep, case, folder, k))
+        plan = load_scene(sweep.scene, pass_overrides(sweep, case, folder, k))
         t0 = time.perf_counter()
         result = run(plan, folder / f"pass-{k}", write=True)
         row = {**case.variables, "pass": k}
@@ -419,7 +418,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
         For problems in the sweep file or in the scene of any case (all checked before running).
     """
     from tribocosim.cosim.scene.problems import Problems
-    from tribocosim.cosim.scene.component_checks import load_component_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
     sweep = load_sweep(path)
     out = Path(out) if out is not None else Path.cwd() / sweep.path.stem
@@ -428,7 +427,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     problems = Problems(sweep.path, "sweep")
     for case in cases:  # every case checked before any runs (the first builds the FMUs); a later pass's
         try:            # field_input is the file its previous pass writes
-            load_component_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
+            load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
         except SceneError as exc:
             for p in exc.problems or [None]:
                 problems.add(f"{case.name}" + (f": {p.key}" if p else ""),
@@ -467,7 +466,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                     indent=2, default=str), encoding="utf-8")
     result = SweepResult(sweep, rows, csv_path, json_path, wall)
     if plot:
-        from tribocosim.cosim.apps.plotting import plot_beta_maps, plot_sweep
+        from tribocosim.cosim.studies.plotting import plot_beta_maps, plot_sweep
 
         result.plots.append(plot_sweep(result, out / "sweep.png"))
         maps = sweep.plot.get("maps")

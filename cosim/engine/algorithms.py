@@ -43,40 +43,9 @@ import numpy as np
 
 from tribocosim.errors import ConvergenceError
 from tribocosim.cosim.engine.extrapolation import StepPolynomial
+from tribocosim.cosim.engine.schemes import ALGORITHMS, Iterative
 from tribocosim.cosim.engine.slave import DISCARD
 from tribocosim.cosim.engine.system import CoupledSystem
-
-ITERATION_METHODS = ("fixed-point", "quasi-newton")
-
-
-@dataclass(frozen=True)
-class Iterative:
-    """[master.iterative]: the fixed-point / quasi-Newton iteration of a macro step."""
-
-    method: str = "quasi-newton"
-    relaxation: float | str = 1.0
-    tolerance: float = 1e-8
-    max_iterations: int = 50
-    reuse: int = 2
-
-    @classmethod
-    def parse(cls, p, table: dict, key: str) -> "Iterative":
-        """The settings of a ``[master.iterative]`` table; problems go to the collector ``p``."""
-        p.unknown_keys(table, [f.name for f in __import__("dataclasses").fields(cls)], key)
-        d = cls()
-        method = p.choice(table, "method", key, ITERATION_METHODS, d.method)
-        relax = table.get("relaxation", d.relaxation)
-        if relax != "aitken" and (isinstance(relax, bool) or not isinstance(relax, (int, float)) or not 0 < relax <= 2):
-            p.add(f"{key}.relaxation", f"must be a number in (0, 2] or \"aitken\", got {relax!r}")
-            relax = d.relaxation
-        return cls(
-            method,
-            relax if relax == "aitken" else float(relax),
-            float(p.number(table, "tolerance", key, d.tolerance, positive=True)),
-            int(p.number(table, "max_iterations", key, d.max_iterations, positive=True, integer=True)),
-            int(p.number(table, "reuse", key, d.reuse, integer=True)),
-        )
-
 
 @dataclass
 class StepResult:
@@ -308,24 +277,12 @@ def _worst(sys: CoupledSystem, r: np.ndarray, scale: np.ndarray) -> str:
     return f"{sys.links[k].label} (residual {r[k]:.3g})"
 
 
-@dataclass(frozen=True)
-class AlgorithmSpec:
-    """A coupling scheme: its class, the dataclass of its ``[master.<name>]`` table (or None), and
-    what the master and the scene checks need to know of it."""
-
-    cls: type
-    settings: type | None = None
-    rolls_back: bool = False  # repeats every macro step from saved FMU states
-    solves_loops: bool = False  # converges algebraic loops within a macro step
-
-    def create(self, order: int, propagate: bool, sequence: tuple[int, ...], settings) -> Algorithm:
-        """The scheme for a run."""
-        return self.cls(order, propagate, sequence, settings)
+#: the class of every coupling scheme of :data:`~tribocosim.cosim.engine.schemes.ALGORITHMS`, by its scene name
+ALGORITHM_CLASSES: dict[str, type[Algorithm]] = {cls.name: cls for cls in (Jacobi, GaussSeidel, IterativeCoupling)}
+assert set(ALGORITHM_CLASSES) == set(ALGORITHMS), "every scheme of schemes.ALGORITHMS has its class here"
 
 
-#: every coupling scheme by its scene name (``[master] algorithm``): the one list of them
-ALGORITHMS: dict[str, AlgorithmSpec] = {
-    Jacobi.name: AlgorithmSpec(Jacobi),
-    GaussSeidel.name: AlgorithmSpec(GaussSeidel),
-    IterativeCoupling.name: AlgorithmSpec(IterativeCoupling, Iterative, rolls_back=True, solves_loops=True),
-}
+def create(name: str, order: int, propagate: bool, sequence: tuple[int, ...], settings) -> Algorithm:
+    """The scheme ``name`` (a key of :data:`ALGORITHMS`) for a run: extrapolation ``order``, output propagation,
+    Gauss-Seidel ``sequence`` and its ``[master.<name>]`` settings."""
+    return ALGORITHM_CLASSES[name](order, propagate, sequence, settings)

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 
 def strongly_connected(n: int, edges: list[tuple[int, int]]) -> list[list[int]]:
     """Strongly connected components of a directed graph, in topological order.
@@ -142,20 +140,20 @@ class LoopReport:
     contraction: float
 
 
-def feedthrough_edges(dep: np.ndarray) -> list[tuple[int, int]]:
-    """Edges j -> k of the feedthrough graph from a boolean dependency matrix dep[k, j]."""
-    ks, js = np.nonzero(dep)
-    return [(int(j), int(k)) for k, j in zip(ks, js)]
+def feedthrough_edges(dep) -> list[tuple[int, int]]:
+    """Edges j -> k of the feedthrough graph from a boolean dependency matrix dep[k][j] (rows k: an (m, m) array or
+    a list of m rows)."""
+    return [(j, k) for k, row in enumerate(dep) for j, d in enumerate(row) if d]
 
 
-def algebraic_loops(dep: np.ndarray, jac: np.ndarray) -> list[LoopReport]:
+def algebraic_loops(dep, jac) -> list[LoopReport]:
     """Algebraic loops and their contraction factors.
 
     Parameters
     ----------
-    dep : ndarray of bool, shape (m, m)
-        dep[k, j]: link k's source output depends directly on link j's target input.
-    jac : ndarray, shape (m, m)
+    dep : (m, m) array or list of m rows of bool
+        dep[k][j]: link k's source output depends directly on link j's target input.
+    jac : (m, m) array or list of m rows of float
         The measured loop Jacobian D[k, j] = d y_k / d u_j.
 
     Returns
@@ -163,18 +161,19 @@ def algebraic_loops(dep: np.ndarray, jac: np.ndarray) -> list[LoopReport]:
     list of LoopReport
         One per strongly connected component of the feedthrough graph that contains a cycle.
     """
-    m = dep.shape[0]
     reports = []
-    for comp in strongly_connected(m, feedthrough_edges(dep)):
-        if len(comp) == 1 and not dep[comp[0], comp[0]]:
+    for comp in strongly_connected(len(dep), feedthrough_edges(dep)):
+        if len(comp) == 1 and not dep[comp[0]][comp[0]]:
             continue
-        sub = jac[np.ix_(comp, comp)]
+        import numpy as np  # a scene with an algebraic loop only
+
+        sub = np.array([[jac[k][j] for j in comp] for k in comp], dtype=float)
         rho = float(max(abs(np.linalg.eigvals(sub)))) if sub.size else 0.0
         reports.append(LoopReport(tuple(comp), rho))
     return reports
 
 
-def evaluation_order(n: int, links: list[tuple[int, int]], dep: np.ndarray) -> list[int]:
+def evaluation_order(n: int, links: list[tuple[int, int]], dep) -> list[int]:
     """Order in which to refresh instances' outputs at a communication point.
 
     Instances are ordered topologically along all links; inside a cycle of the instance graph,
@@ -185,7 +184,7 @@ def evaluation_order(n: int, links: list[tuple[int, int]], dep: np.ndarray) -> l
     feed = set()
     for j, (a, b) in enumerate(links):
         for k, (src, _dst) in enumerate(links):
-            if src == b and dep[k, j] and a != b:
+            if src == b and dep[k][j] and a != b:
                 feed.add((a, b))
     order: list[int] = []
     for comp in strongly_connected(n, [(a, b) for a, b in links if a != b]):

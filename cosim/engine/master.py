@@ -26,8 +26,10 @@ import time
 from dataclasses import dataclass, field
 
 from tribocosim.errors import ConvergenceError, CosimStepError
-from tribocosim.cosim.engine.algorithms import ALGORITHMS, Algorithm
-from tribocosim.cosim.engine.recorder import Observer, Recorder
+from tribocosim.cosim.engine.algorithms import Algorithm
+from tribocosim.cosim.engine.schemes import ALGORITHMS
+from tribocosim.cosim.engine.observers import Observer
+from tribocosim.cosim.engine.recorder import Recorder
 from tribocosim.cosim.engine.system import CoupledSystem, NonFiniteOutput
 from tribocosim.cosim.engine.timegrid import TimeGrid
 

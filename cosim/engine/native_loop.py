@@ -16,139 +16,25 @@ error stops the run as under the Python loop (:class:`~tribocosim.errors.CosimSt
 function and the time). Every other run (adaptive steps, iterative coupling, extrapolation orders 1 and 2, Integer
 or Boolean links, other slaves) runs the Python loop; :func:`unsupported` says why.
 
-The library is compiled on first use with the project's C compiler (:mod:`tribocosim.components.native.toolchain.
-compiler`) into ``$TRIBOCOSIM_CACHE/master`` under a name carrying the digest of its sources, the FMI headers,
-the flags and the compiler version, as the core library is.
+The library and its ctypes structures are :mod:`.native_lib`.
 """
 
 from __future__ import annotations
 
 import ctypes
-import functools
-import hashlib
-import os
-import sys
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
 from tribocosim.errors import CosimStepError, TribocosimError
+from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, STATUS_LABELS, TCM_DONE, TCM_FMI_ERROR, TCM_STOPPED,
+                                                TcmGet, TcmRig, TcmSet, TcmSlave, TcmState, library)
 
-#: the C sources of the loop
-NATIVE_DIR = Path(__file__).resolve().parent / "native"
-SOURCES = ("tc_master.c",)
-HEADER = "tc_master.h"
-#: accepted steps per call of the C loop (between two calls the progress reporters are told the time)
-CHUNK = 2048
-#: tcm_status
-TCM_DONE, TCM_STOPPED, TCM_FMI_ERROR = 0, 1, 2
-#: tcm_kind of each FMI type the recorder reads
-KINDS = {"get_real": 0, "get_integer": 1, "get_boolean": 2}
-_LABELS = ("ok", "warning", "discard", "error", "fatal", "pending")
-
-_I, _SZ, _D, _I64, _VP = ctypes.c_int, ctypes.c_size_t, ctypes.c_double, ctypes.c_int64, ctypes.c_void_p
-_PI, _PD, _PU = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint)
-_PSZ, _PB = ctypes.POINTER(ctypes.c_size_t), ctypes.POINTER(ctypes.c_ubyte)
+_I, _SZ = ctypes.c_int, ctypes.c_size_t
+_PD, _PB, _PI = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_ubyte), ctypes.POINTER(ctypes.c_int)
 
 
 class NativeLoopStopped(CosimStepError):
     """The C loop met a step it does not take (a discard or a non-finite value): the run is repeated in Python."""
-
-
-class TcmSlave(ctypes.Structure):
-    """``tcm_slave``."""
-
-    _fields_ = [("component", _VP), ("set_real", _VP), ("get_real", _VP), ("get_integer", _VP),
-                ("get_boolean", _VP), ("do_step", _VP), ("wall_time", _D), ("do_steps", _I64),
-                ("current_time", _D)]
-
-
-class TcmGet(ctypes.Structure):
-    """``tcm_get``."""
-
-    _fields_ = [("slave", _I), ("kind", _I), ("n_vrs", _SZ), ("vrs", _PU), ("n_dst", _SZ), ("pos", _PI),
-                ("dst", _PI)]
-
-
-class TcmSet(ctypes.Structure):
-    """``tcm_set``."""
-
-    _fields_ = [("slave", _I), ("n", _SZ), ("vrs", _PU), ("link", _PI)]
-
-
-class TcmRig(ctypes.Structure):
-    """``tcm_rig``."""
-
-    _fields_ = [("n_slaves", _SZ), ("slaves", ctypes.POINTER(TcmSlave)), ("n_links", _SZ), ("link_source", _PI),
-                ("set_first", _PSZ), ("sets", ctypes.POINTER(TcmSet)), ("get_first", _PSZ),
-                ("gets", ctypes.POINTER(TcmGet)), ("feeds", _PI), ("eval_order", _PI), ("sequence", _PI),
-                ("gauss_seidel", _I), ("propagate", _I), ("n_columns", _SZ), ("n_record_gets", _SZ),
-                ("record_gets", ctypes.POINTER(TcmGet)), ("n_from_links", _SZ), ("from_link_column", _PI),
-                ("from_link", _PI), ("start", _D), ("tick", _D), ("macro_ticks", _I64), ("end_ticks", _I64)]
-
-
-class TcmState(ctypes.Structure):
-    """``tcm_state``."""
-
-    _fields_ = [("n", _I64), ("y", _PD), ("written", _PD), ("written_ok", _PB), ("stepped", _PB), ("values", _PD),
-                ("held", _PD), ("ints", _PI), ("row", _PD), ("times", _PD), ("rows", _PD), ("capacity", _SZ),
-                ("n_rows", _SZ), ("steps", _I64), ("min_step", _D), ("max_step", _D), ("failed_slave", _I),
-                ("failed_status", _I), ("failed_function", ctypes.c_char_p), ("failed_time", _D)]
-
-
-#: every ctypes structure of the loop by its C name (tests/cosim/test_native_loop.py holds them to the header)
-STRUCTS = {"tcm_slave": TcmSlave, "tcm_get": TcmGet, "tcm_set": TcmSet, "tcm_rig": TcmRig, "tcm_state": TcmState}
-
-
-# ------------------------------------------------------------------------------------------------ the library
-def fmi_headers() -> Path:
-    """The folder of the FMI 2.0 headers that fmpy ships (``fmi2FunctionTypes.h``)."""
-    import fmpy
-
-    return Path(fmpy.__file__).resolve().parent / "c-code"
-
-
-def digest() -> str:
-    """SHA-256 of what the library is made of: its sources, the FMI headers, the flags and the compiler version."""
-    from tribocosim.components.native.toolchain import compiler
-
-    h = hashlib.sha256()
-    folder = fmi_headers()
-    for path in (*(NATIVE_DIR / s for s in SOURCES), NATIVE_DIR / HEADER, folder / "fmi2FunctionTypes.h",
-                 folder / "fmi2TypesPlatform.h"):
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
-    h.update(" ".join((*compiler.CFLAGS, compiler.zig_version())).encode())
-    return h.hexdigest()
-
-
-def build(output: str | os.PathLike) -> Path:
-    """Compile the loop's library for this machine into ``output`` (atomically)."""
-    from tribocosim.components.native.toolchain import compiler
-
-    platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
-    out = Path(output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="tribocosim-master-", dir=out.parent) as tmp:
-        partial = Path(tmp) / out.name
-        compiler.compile_shared([NATIVE_DIR / s for s in SOURCES], partial, platform,
-                                include_dirs=[str(NATIVE_DIR), str(fmi_headers())])
-        os.replace(partial, out)
-    return out
-
-
-@functools.lru_cache(maxsize=1)
-def library() -> ctypes.CDLL:
-    """The loop's library of this process, built on first use into the cache."""
-    from tribocosim.components.native.toolchain.library import cache_dir
-
-    suffix = ".dll" if sys.platform.startswith("win") else ".dylib" if sys.platform == "darwin" else ".so"
-    path = cache_dir() / "master" / f"libtc_master-{digest()[:20]}{suffix}"
-    lib = ctypes.CDLL(str(path if path.is_file() else build(path)))
-    lib.tcm_run.restype = _I
-    lib.tcm_run.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState), _I64]
-    return lib
 
 
 # ------------------------------------------------------------------------------------------------ the loop
@@ -286,8 +172,7 @@ class NativeLoop:
             s.current_time = c.current_time
         if status == TCM_FMI_ERROR:
             slave = sysm.slaves[st.failed_slave]
-            slave._check(st.failed_function.decode(), st.failed_status)  # raises, and notes an error or fatal
-            label = _LABELS[st.failed_status] if 0 <= st.failed_status < len(_LABELS) else "illegal status"
+            label = STATUS_LABELS[st.failed_status] if 0 <= st.failed_status < len(STATUS_LABELS) else "illegal status"
             raise CosimStepError(slave._failure(st.failed_function.decode(), f"status {st.failed_status}, {label}"))
         if status == TCM_STOPPED:
             what = st.failed_function.decode()

@@ -1,51 +1,22 @@
-"""Observers of a run: the recorder of the scene's output variables, and a progress reporter.
-
-The master notifies a list of observers (:class:`Observer`): after every successful attempt of a
-macro step (an observer may refuse the values it read, e.g. non-finite outputs, and the attempt
-then counts as failed), when a step is accepted, and around rollbacks (``mark``/``truncate``).
+"""The recorder of a run's output variables, an observer of the master (:mod:`tribocosim.cosim.engine.observers`).
 
 The recorder reads the variables named in ``[output] variables`` from the slaves at every
 accepted communication point (one ``fmi2Get*`` call per slave) and keeps them in memory; rows
 written after a snapshot are dropped again when the master rolls back to it. It writes a CSV
-file in the FMI cross-check format that ``fmpy.util.read_csv`` reads: a header ``"time","a.x",...``
-and one row per point, values with 17 significant digits (exact round trip).
+file in the FMI cross-check format (:mod:`tribocosim.cosim.engine.results_csv`).
 """
 
 from __future__ import annotations
 
 import math
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-from tribocosim.cosim.engine.system import VariableRef
+from tribocosim.cosim.engine.observers import Observer
+from tribocosim.cosim.engine.results_csv import write_csv
+from tribocosim.cosim.engine.schemes import VariableRef
 from tribocosim.cosim.engine.slave import Slave
-
-
-class Observer:
-    """What the master calls on its observers (a base that does nothing).
-
-    An observer with ``sampled = True`` needs only the time of the latest accepted step now and then (a progress
-    reporter), so the native loop (:mod:`tribocosim.cosim.engine.native_loop`) may tell it once per chunk of steps.
-    """
-
-    sampled = False
-
-    def step_attempted(self, t: float) -> list[str]:
-        """A macro step to ``t`` succeeded in the FMUs; return the names of values that make it unusable."""
-        return []
-
-    def step_accepted(self, t: float) -> None:
-        """The step to ``t`` is final."""
-
-    def mark(self):
-        """A position to roll back to."""
-        return None
-
-    def truncate(self, mark) -> None:
-        """Forget what was observed after ``mark``."""
 
 
 class Recorder(Observer):
@@ -153,46 +124,7 @@ class Recorder(Observer):
         return {n: data[:, j].copy() for j, n in enumerate(self.names)}
 
     def write_csv(self, path: Path) -> Path:
-        """Write ``time`` and the recorded columns (in the scene's order) to a CSV file."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(path.suffix + ".part")
-        data = np.column_stack([self.time, np.array(self._rows).reshape(len(self._rows), len(self.names))])
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(",".join(f'"{n}"' for n in ["time", *self.names]) + "\n")
-            f.write("".join(",".join(map(repr, row)) + "\n" for row in data.tolist()))
-        tmp.replace(path)
-        return path
-
-
-class Progress(Observer):
-    """A one-line progress bar on stderr, shown once a run has taken longer than ``delay`` seconds."""
-
-    sampled = True
-
-    def __init__(self, start: float, stop: float, delay: float = 2.0, stream=None) -> None:
-        self.start, self.stop, self.delay = start, stop, delay
-        self.stream = stream if stream is not None else sys.stderr
-        self.t0 = time.perf_counter()
-        self.last = 0.0
-        self.shown = False
-
-    def __call__(self, t: float) -> None:
-        now = time.perf_counter()
-        if now - self.t0 < self.delay or now - self.last < 0.2:
-            return
-        self.last = now
-        frac = min(1.0, max(0.0, (t - self.start) / (self.stop - self.start)))
-        eta = (now - self.t0) * (1.0 - frac) / frac if frac > 0 else float("nan")
-        bar = "#" * int(30 * frac)
-        self.stream.write(f"\r[{bar:<30}] {100 * frac:5.1f}%  t = {t:.6g} s  eta {eta:6.1f} s")
-        self.stream.flush()
-        self.shown = True
-
-    def step_accepted(self, t: float) -> None:
-        self(t)
-
-    def close(self) -> None:
-        if self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
+        """Write ``time`` and the recorded columns (in the scene's order) to a CSV file
+        (:func:`tribocosim.cosim.engine.results_csv.write_csv`)."""
+        data = np.array(self._rows, dtype=float).reshape(len(self._rows), len(self.names))
+        return write_csv(path, self.names, self._times, data.ravel().tolist())

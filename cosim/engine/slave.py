@@ -50,14 +50,8 @@ LOG = logging.getLogger("tribocosim.cosim")
 #: do_step outcomes
 OK = 0
 DISCARD = 2
-#: the FMI statuses after which the instance's life cycle is cut short (FMI 2.0, section 2.1.3 and Fig. 7)
+#: the FMI 2.0 status after which no function of any instance of the FMU may be called (FMI 2.0.4, section 2.1.3)
 ERROR, FATAL = 3, 4
-
-#: the shared libraries of FMUs that returned fmi2Fatal in this process: "the model computations are irreparably
-#: corrupted for all FMU instances" and no function of any of them may be called again, fmi2FreeInstance included
-#: (PythonFMU 0.7 returns fmi2Fatal on a Python exception after releasing the objects its instance holds, and
-#: releases them again in fmi2FreeInstance: freeing such an instance corrupts this interpreter's heap)
-_FATAL_LIBRARIES: set[str] = set()
 
 #: FMI functions called on hot paths without fmpy's Python wrapper
 _HOT = ("fmi2SetReal", "fmi2GetReal", "fmi2SetInteger", "fmi2GetInteger", "fmi2SetBoolean", "fmi2GetBoolean",
@@ -91,6 +85,8 @@ class Slave(Protocol):
     wall_time: float
     calls: dict[str, int]  # FMI calls made, by function (doStep, getFMUstate, ...)
     messages: Sequence[str]  # the last log messages of the FMU (for error messages)
+    unzip_dir: Path  # the FMU's folder: the instances of one FMU share its library
+    fatal: bool  # a function returned fmi2Fatal: no function of any instance of the FMU may be called again
 
     def instantiate(self) -> None: ...
 
@@ -128,6 +124,9 @@ class Slave(Protocol):
 
     def terminate(self) -> None: ...
 
+    def abandon(self) -> None:
+        """Drop the instance without an FMI call (after fmi2Fatal of its FMU)."""
+
 
 class FmpySlave:
     """An FMI 2.0 co-simulation FMU instance driven through fmpy.
@@ -152,8 +151,11 @@ class FmpySlave:
         self.wall_time = 0.0
         self.calls = {"doStep": 0, "getFMUstate": 0, "setFMUstate": 0}
         self.messages: deque[str] = deque(maxlen=20)
+        #: an FMI function of this instance returned fmi2Fatal
+        self.fatal = False
+        #: an FMI function of this instance returned fmi2Error or fmi2Fatal: fmi2Terminate is not called
+        self.errored = False
         self.current_time = float("nan")
-        self.worst_status = OK
         self._fmu = None
         self._dll: dict[str, Any] = {}
         self._arrays: dict[tuple, Any] = {}
@@ -163,9 +165,8 @@ class FmpySlave:
         """Return ``status`` if ok/warning (or discard from doStep); raise CosimStepError otherwise."""
         if status <= 1 or (status == DISCARD and function == "fmi2DoStep"):
             return status
-        self.worst_status = max(self.worst_status, status)
-        if status >= FATAL and self._fmu is not None:
-            _FATAL_LIBRARIES.add(self._library())
+        self.fatal = self.fatal or status == FATAL
+        self.errored = self.errored or status >= ERROR
         label = _LABELS[status] if 0 <= status < len(_LABELS) else "illegal status"
         raise CosimStepError(self._failure(function, f"status {status}, {label}"))
 
@@ -252,31 +253,32 @@ class FmpySlave:
         """Leave initialization mode (the FMU is then in step mode)."""
         self._call("fmi2ExitInitializationMode", self._fmu.exitInitializationMode)
 
-    def _library(self) -> str:
-        """The path of the instance's shared library (the key of :data:`_FATAL_LIBRARIES`)."""
-        return str(getattr(self._fmu.dll, "_name", id(self._fmu.dll)))
-
     def terminate(self) -> None:
-        """End the instance as the FMI 2.0 state machine allows: ``fmi2Terminate`` and ``fmi2FreeInstance`` after a
-        run; only ``fmi2FreeInstance`` once a call returned fmi2Error; nothing once any instance of its library
-        returned fmi2Fatal (the instance is left to the process: see :data:`_FATAL_LIBRARIES`). Errors while
-        freeing are logged only."""
+        """``fmi2Terminate`` and free the instance as the FMI 2.0 state machine allows (section 2.1.5): after
+        fmi2Error only ``fmi2FreeInstance``, after fmi2Fatal nothing (:meth:`abandon`). Errors while freeing are
+        logged only."""
         if self._fmu is None:
             return
-        fatal = self._library() in _FATAL_LIBRARIES
         try:
-            if not fatal and self.worst_status < ERROR:
+            if not self.errored:
                 self._call("fmi2Terminate", self._fmu.terminate)
         finally:
-            if fatal:
-                LOG.warning("FMU %s: not freed: an instance of its library returned fmi2Fatal", self.name)
+            if self.fatal:
+                self.abandon()
             else:
                 try:
                     self._fmu.freeInstance()
                 except Exception as exc:  # pragma: no cover
                     LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
-            self._fmu = None
-            self._dll = {}
+                self._fmu = None
+                self._dll = {}
+
+    def abandon(self) -> None:
+        """Drop the instance without an FMI call and leave its library loaded: after fmi2Fatal of any instance of
+        its FMU, no function of any of them may be called (FMI 2.0.4, section 2.1.3), fmi2FreeInstance included
+        (a pythonfmu FMU releases the Python objects of an instance that raised once more when it is freed)."""
+        self._fmu = None
+        self._dll = {}
 
     @property
     def loaded(self) -> bool:

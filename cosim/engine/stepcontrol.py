@@ -40,68 +40,10 @@ doi:10.1007/s00366-016-0492-8)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-
-@dataclass(frozen=True)
-class Adaptive:
-    """[master.adaptive]: error-controlled variable step.
-
-    ``tolerance`` is relative, ``absolute_tolerance`` (default: ``tolerance``) absolute.
-    Step doubling accepts a step H whose local error estimates e_i of the coupling signals y_i
-    satisfy max_i |e_i| / (H (absolute_tolerance + tolerance |y_i|)) <= 1 (error per unit
-    step: the tolerance is per second of simulated time); the energy estimator normalises the
-    energy residual of each power bond by absolute_tolerance + tolerance * energy level.
-    ``estimator`` is a name of :data:`ESTIMATORS`. ``step_quantum`` (step doubling; default none):
-    steps are whole multiples of twice it, so that half steps land on the grid k * step_quantum
-    (set it to the strip's ``internal_step``); it must be a whole number of grid ticks
-    (min_step / 2**VARIABLE_SUBDIVISION), e.g. min_step = 2 * step_quantum.
-    """
-
-    tolerance: float = 1e-4
-    absolute_tolerance: float | None = None
-    min_step: float = 1e-7
-    max_step: float = 1e-2
-    estimator: str = "step-doubling"
-    safety: float = 0.9
-    step_quantum: float | None = None
-
-    @property
-    def atol(self) -> float:
-        return self.tolerance if self.absolute_tolerance is None else self.absolute_tolerance
-
-    @classmethod
-    def parse(cls, p, table: dict, key: str, step: float) -> "Adaptive":
-        """The settings of a ``[master.adaptive]`` table for the experiment's ``step``; problems go to ``p``."""
-        p.unknown_keys(table, [f.name for f in __import__("dataclasses").fields(cls)], key)
-        d = cls()
-        tol = p.number(table, "tolerance", key, d.tolerance, positive=True)
-        atol = p.number(table, "absolute_tolerance", key, None, positive=True)
-        hmin = p.number(table, "min_step", key, min(d.min_step, step), positive=True)
-        hmax = p.number(table, "max_step", key, max(d.max_step, step), positive=True)
-        est = p.choice(table, "estimator", key, tuple(ESTIMATORS), d.estimator)
-        safety = p.number(table, "safety", key, d.safety, positive=True)
-        quantum = p.number(table, "step_quantum", key, None, positive=True)
-        if not hmin <= step <= hmax:
-            p.add(key, f"need min_step <= experiment.step <= max_step, got {hmin!r} <= {step!r} <= {hmax!r}")
-        if safety >= 1.0:
-            p.add(f"{key}.safety", f"must be in (0, 1), got {safety!r}")
-        if quantum is not None:
-            from tribocosim.cosim.engine.timegrid import VARIABLE_SUBDIVISION
-
-            tick = hmin / 2**VARIABLE_SUBDIVISION
-            ratio = quantum / tick
-            if est != StepDoubling.name:
-                p.add(f"{key}.step_quantum", f"is used by the step-doubling estimator only, not by {est!r}")
-            elif ratio < 0.5 or abs(ratio - round(ratio)) > 1e-9 * ratio:
-                p.add(f"{key}.step_quantum", f"must be a whole number of grid ticks (min_step / "
-                      f"{2**VARIABLE_SUBDIVISION} = {tick!r} s), e.g. min_step = 2 * step_quantum; got {quantum!r}")
-            elif 2 * quantum > hmax * (1 + 1e-12):
-                p.add(f"{key}.step_quantum", f"two quanta ({2 * quantum!r} s) exceed max_step = {hmax!r}")
-        return cls(float(tol), atol if atol is None else float(atol), float(hmin), float(hmax), est, float(safety),
-                   quantum if quantum is None else float(quantum))
+from tribocosim.cosim.engine.schemes import ESTIMATORS, Adaptive
 
 
 class FixedStep:
@@ -260,23 +202,13 @@ class EnergyControl:
 
 
 
-@dataclass(frozen=True)
-class EstimatorSpec:
-    """An error estimator of adaptive steps: its controller and what the scene checks need to know."""
-
-    cls: type
-    rolls_back: bool  # rejects steps by restoring saved FMU states
-    needs_bonds: bool  # needs [[power_bonds]]
-
-    def create(self, settings: Adaptive, grid, step: float, order: int, bonds) -> "StepDoubling | EnergyControl":
-        """The controller for a run starting with ``step``."""
-        if self.cls is StepDoubling:
-            return StepDoubling(settings, grid.even_ticks(step), order)
-        return self.cls(settings, grid.ticks(step), bonds)
+#: the controller of every error estimator of :data:`~tribocosim.cosim.engine.schemes.ESTIMATORS`, by its scene name
+ESTIMATOR_CLASSES = {cls.name: cls for cls in (StepDoubling, EnergyControl)}
+assert set(ESTIMATOR_CLASSES) == set(ESTIMATORS), "every estimator of schemes.ESTIMATORS has its controller here"
 
 
-#: every error estimator by its scene name (``[master.adaptive] estimator``)
-ESTIMATORS: dict[str, EstimatorSpec] = {
-    StepDoubling.name: EstimatorSpec(StepDoubling, rolls_back=True, needs_bonds=False),
-    EnergyControl.name: EstimatorSpec(EnergyControl, rolls_back=False, needs_bonds=True),
-}
+def create_controller(settings: Adaptive, grid, step: float, order: int, bonds) -> "StepDoubling | EnergyControl":
+    """The adaptive step controller of ``settings.estimator`` for a run starting with ``step``."""
+    if settings.estimator == StepDoubling.name:
+        return StepDoubling(settings, grid.even_ticks(step), order)
+    return ESTIMATOR_CLASSES[settings.estimator](settings, grid.ticks(step), bonds)

@@ -23,34 +23,9 @@ import numpy as np
 
 from tribocosim.errors import CosimStepError
 from tribocosim.cosim.engine.extrapolation import History, StepPolynomial
+from tribocosim.cosim.engine.schemes import LinkSpec
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.engine.slave import Slave
-
-
-@dataclass(frozen=True)
-class VariableRef:
-    """``instance.variable`` (the instance name is everything before the first dot)."""
-
-    instance: str
-    variable: str
-
-    def __str__(self) -> str:
-        return f"{self.instance}.{self.variable}"
-
-
-@dataclass(frozen=True)
-class LinkSpec:
-    """One link in index form (what the system needs from a validated connection)."""
-
-    source: int
-    source_vr: int
-    source_type: str
-    target: int
-    target_vr: int
-    target_type: str
-    continuous: bool
-    label: str
-    derivative_vrs: tuple[int | None, int | None] = (None, None)
 
 
 @dataclass

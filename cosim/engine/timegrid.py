@@ -20,10 +20,7 @@ from dataclasses import dataclass
 
 from tribocosim.errors import ParameterError
 
-#: a fixed macro step is 2**FIXED_SUBDIVISION ticks (room for this many halvings)
-FIXED_SUBDIVISION = 10
-#: ticks per minimum step in variable-step runs
-VARIABLE_SUBDIVISION = 6
+from tribocosim.cosim.engine.schemes import FIXED_SUBDIVISION, VARIABLE_SUBDIVISION
 
 
 @dataclass(frozen=True)

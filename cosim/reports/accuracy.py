@@ -10,11 +10,11 @@ included).
     The linear two-mass oscillator of the tests (k2 = 10, 10 s) split into two FMUs; every
     algorithm x extrapolation order x fixed step, and the two adaptive estimators x tolerance
     (Jacobi, extrapolation 1). Error: max |x1 - x1_exact| / max |x1_exact| against the closed
-    form (:class:`tribocosim.cosim.apps.monolithic.TwoMassOscillator`).
+    form (:class:`tribocosim.cosim.studies.monolithic.TwoMassOscillator`).
 ``demo``
     ``models/scenes/demo.toml`` (press + strip + drawing machine) shortened in quick mode; the
     same settings. Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the
-    monolithic reference (:func:`tribocosim.cosim.apps.monolithic.reference_for_scene`, the pure
+    monolithic reference (:func:`tribocosim.cosim.studies.monolithic.reference_for_scene`, the pure
     models coupled implicitly with a tiny step ``dt_ref``), interpolated linearly onto the
     communication points. The step-doubling rows run the strip on its internal time grid
     (``internal_step`` = :data:`DEMO_INTERNAL_STEP`, with ``step_quantum`` the same and ``min_step``
@@ -86,7 +86,7 @@ def _master_settings(quick: bool, steps_quick, steps_full, tols_quick, tols_full
 @timed
 def oscillator(settings: Settings) -> Family:
     """The two-mass oscillator (k2 = 10): master settings vs the closed form."""
-    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
+    from tribocosim.cosim.studies.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.runner import run_plan
     from tribocosim.cosim.scene.validate import load_scene
 
@@ -102,7 +102,7 @@ def oscillator(settings: Settings) -> Family:
     run_plan(load_scene(oscillator_scene(work, fmus, step=0.1, stop=0.2)))  # warm-up: extraction, imports
     fam = Family("oscillator", title, curve="curve", error="error", cost="wall_time", label="setting")
     fam.note = ("Error: max |x1 - x1_exact| / max |x1_exact| over the communication points (closed form: "
-                "tribocosim.cosim.apps.monolithic.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
+                "tribocosim.cosim.studies.monolithic.TwoMassOscillator). Cost: wall time of the run (building the master, instantiation, initialization, loop; after a warm-up run) and "
                 "doStep calls of both FMUs. Adaptive runs: Jacobi with extrapolation 1, initial step 0.01 s, "
                 f"min_step 1e-6 s, max_step 1 s. A run is stopped after {budget:g} s of wall time.")
     for curve, setting, s in _master_settings(settings.quick, (0.1, 0.05, 0.02, 0.01),
@@ -129,7 +129,7 @@ def oscillator(settings: Settings) -> Family:
 @timed
 def demo(settings: Settings) -> Family:
     """demo.toml: master settings vs the monolithic reference."""
-    from tribocosim.cosim.apps.monolithic import reference_for_scene
+    from tribocosim.cosim.studies.monolithic import reference_for_scene
     from tribocosim.cosim.reports.runner import run_plan
     from tribocosim.cosim.scene.validate import load_scene
 
@@ -171,7 +171,7 @@ def demo(settings: Settings) -> Family:
     fam.note = (f"demo.toml with the drive started at once (start_time = 0: both ramps overlap) and stop = {stop} s"
                 f"{' (quick mode: the velocity ramp and the start of the steady draw)' if quick else ''}. "
                 f"Error: max |F - F_ref| / max |F_ref| of strip.pull_force over the communication points; F_ref is the "
-                f"monolithic reference (cosim.apps.monolithic.reference_for_scene: pure models, coupling solved every "
+                f"monolithic reference (cosim.studies.monolithic.reference_for_scene: pure models, coupling solved every "
                 f"step to {DEMO_REFERENCE_TOL:g}, dt_ref = {dt_ref:g} s, {ref_time:.1f} s to compute), interpolated linearly (the "
                 f"reference's own error at the start of the draw, measured against dt_ref = 2.5e-5 s: about 2e-4 at "
                 f"dt_ref = 5e-5 s, 6e-4 at 1e-4 s, so errors below 2e-4 are not resolved); error_after_ramps: the same "
@@ -225,7 +225,7 @@ def demo(settings: Settings) -> Family:
 
 
 def _strip_run(integrator: str, n: int, draw: float, step: float = 1e-3):
-    from tribocosim.cosim.apps.demo import run_strip_draw, steady_mean
+    from tribocosim.cosim.studies.stripdraw_experiment import run_strip_draw, steady_mean
 
     t0 = time.perf_counter()
     _, outs, model = run_strip_draw(integrator=integrator, draw_length=draw, n_elements=n, step=step)

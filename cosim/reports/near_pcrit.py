@@ -15,7 +15,7 @@ iterative coupling with extrapolation 0 at h = 1 ms, one row per update of the i
   :data:`RELAXED_MAX_ITERATIONS`.
 
 Error: max |F - F_ref| / max |F_ref| of ``strip.pull_force`` against the monolithic reference
-(:func:`tribocosim.cosim.apps.monolithic.reference_for_scene`) with the same step, 1 ms, the coupling
+(:func:`tribocosim.cosim.studies.monolithic.reference_for_scene`) with the same step, 1 ms, the coupling
 solved by the reference's own fixed point to :data:`REFERENCE_TOL` every step: the same implicit coupling
 (inputs held at their end values), so the error is how far the iteration stopped from it.
 ``error_vs_fine``: the same against the reference with dt = :data:`FINE_DT` (interpolated), which adds the
@@ -87,7 +87,7 @@ def _run_row(plan, setting: str, iterative: dict, t_ref, refs: dict) -> tuple[di
 @timed
 def near_pcrit(settings: Settings) -> Family:
     """demo.toml at 0.99 p_crit: iterative coupling by quasi-Newton, fixed point (w = 1, Aitken, w from rho)."""
-    from tribocosim.cosim.apps.monolithic import reference_for_scene
+    from tribocosim.cosim.studies.monolithic import reference_for_scene
     from tribocosim.cosim.scene.validate import load_scene
 
     title = f"Demo scene at {FRACTION:g} p_crit: iterative coupling, quasi-Newton against fixed point"

@@ -88,7 +88,7 @@ def oscillator_scene(folder: Path, fmus: Path, *, step: float, stop: float, algo
                      name: str = "osc.toml") -> Path:
     """Write the two-mass oscillator scene (force-displacement coupling, as the tests use it).
 
-    Parameters are those of :class:`tribocosim.cosim.apps.monolithic.TwoMassOscillator` (m = 1, k1 = 10, k3 = 20,
+    Parameters are those of :class:`tribocosim.cosim.studies.monolithic.TwoMassOscillator` (m = 1, k1 = 10, k3 = 20,
     c1 = 0.2, c2 = 0.5, c3 = 0.3, x2(0) = 0.5) with coupling stiffness ``k2``. ``adaptive``, if
     given, is the ``[master.adaptive]`` table (the power bond for the energy estimator is declared).
     """

@@ -3,7 +3,7 @@ budget, the drawing-speed prediction and the friction table's checks.
 
 ``tribocosim report paper --out DIR [--quick] [--table T] [--workers N]``
 
-Every figure is a set of strip-draw tests (:mod:`tribocosim.cosim.apps.stripdraw_experiment`: V0 = 0.08 m/s,
+Every figure is a set of strip-draw tests (:mod:`tribocosim.cosim.studies.stripdraw_experiment`: V0 = 0.08 m/s,
 140 mm draw, mu_bar the mean of mu = pull_force / (2 F_N) (Eq. 1) over the last 20 %) with the pure
 model and the friction law mu = mu0 (1 - s A_p / A_c) (Eq. 7 with Eq. 6; docs/model.md section 4):
 
@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import TribocosimError
-from tribocosim.cosim.apps.stripdraw_experiment import V0, Point, draw, run_points
+from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, run_points
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports import paper_text
 from tribocosim.cosim.reports.paper_physics import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
@@ -373,7 +373,7 @@ def clamps_per_figure(m: dict) -> dict[str, int]:
 
 def plot(results: dict, out: Path) -> list[str]:
     """One PNG per figure, one panel per configuration."""
-    from tribocosim.cosim.apps.plotting import _pyplot
+    from tribocosim.cosim.studies.plotting import _pyplot
 
     plt = _pyplot()
     names = []

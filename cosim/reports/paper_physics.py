@@ -1,7 +1,7 @@
 """What the paper report adds to the paper's figures: the multi-pass options, the uncertainty budget, the
 drawing-speed prediction, alpha of both observables, and the friction table's checks.
 
-Every strip-draw test is the pure model of :mod:`tribocosim.cosim.apps.stripdraw_experiment` (140 mm draw,
+Every strip-draw test is the pure model of :mod:`tribocosim.cosim.studies.stripdraw_experiment` (140 mm draw,
 mu_bar over the last 20 %); a drop is 1 - mu_bar(25 MPa) / mu_bar(1 MPa) on the same pad and pass. Each setting is
 calibrated the same way as the report's main columns: the scale s of A_p solves the paper's one number, the 35 %
 one-pass drop at 25 MPa on the 35 mm pad (:func:`tribocosim.cosim.reports.paper.calibrate`); everything else is
@@ -43,7 +43,7 @@ import numpy as np
 
 from tribocosim.errors import TribocosimError
 from tribocosim.components.stripdraw.table import mu_of_areas
-from tribocosim.cosim.apps.stripdraw_experiment import Point
+from tribocosim.cosim.studies.stripdraw_experiment import Point
 
 #: drawing speeds of the speed prediction [m/s]
 SPEEDS = (0.02, 0.05, 0.08, 0.2, 0.5)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tribocosim.cosim.apps.stripdraw_experiment import V0
+from tribocosim.cosim.studies.stripdraw_experiment import V0
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports.paper_physics import CAL_PRESSURE
 

@@ -75,7 +75,7 @@ def _cell_row(case: str, scheme: str, verdict: Verdict, limit, **extra) -> dict:
 
 # --------------------------------------------------------------------------- oscillator
 def _fast_period(k2: float) -> float:
-    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
+    from tribocosim.cosim.studies.monolithic import TwoMassOscillator
 
     lam = np.linalg.eigvals(TwoMassOscillator(k2=k2).matrix())
     return 2 * math.pi / float(np.max(np.abs(lam.imag)))
@@ -84,7 +84,7 @@ def _fast_period(k2: float) -> float:
 @timed
 def oscillator(settings: Settings) -> Family:
     """Two-mass oscillator, k2 = 10 ... 1e7: schemes x stiffness."""
-    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
+    from tribocosim.cosim.studies.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.monodromy import jacobi0_limit
     from tribocosim.cosim.reports.runner import judged_run
     from tribocosim.cosim.scene.validate import load_scene

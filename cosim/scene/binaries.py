@@ -18,20 +18,27 @@ This checks the structure the loader maps, not the code: a library that is compl
 from __future__ import annotations
 
 import struct
-import zipfile
+import sys
 from pathlib import Path
 
 
-def library_in_fmu(model_identifier: str) -> str:
-    """The path inside an FMI 2.0 FMU of the library this machine loads (fmpy's platform folder and suffix)."""
-    from fmpy import platform, sharedLibraryExtension
+def host_platform() -> str:
+    """The FMI 2.0 platform folder of this machine's libraries (64-bit: ``linux64``, ``darwin64``, ``win64``)."""
+    return "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
 
-    return f"binaries/{platform}/{model_identifier}{sharedLibraryExtension}"
+
+def library_in_fmu(model_identifier: str) -> str:
+    """The path inside an FMI 2.0 FMU of the library this machine loads (its platform folder and suffix, as fmpy
+    and every FMI 2.0 importer look for it)."""
+    suffix = ".dll" if sys.platform.startswith("win") else ".dylib" if sys.platform == "darwin" else ".so"
+    return f"binaries/{host_platform()}/{model_identifier}{suffix}"
 
 
 def fmu_binary_problem(fmu: str | Path, model_identifier: str) -> str | None:
     """Why the FMU's library for this machine cannot be loaded safely (absent, or shorter than its headers say),
     or None."""
+    import zipfile
+
     inside = library_in_fmu(model_identifier)
     with zipfile.ZipFile(fmu) as z:
         try:

@@ -1,32 +1,44 @@
-"""Scenes built from this project's components: their parameters checked against the component descriptions.
+"""Scenes built from this project's components: every scene value checked once, against the component declaration.
 
-A scene FMU given as ``component = "<name>"`` is the FMU of a component of
-:mod:`tribocosim.components.registry`, whose description
-(:class:`~tribocosim.components.description.Component`) this module reads to
+A scene FMU given as ``component = "<name>"`` is the FMU of a component of :mod:`tribocosim.components.registry`,
+whose declaration (:class:`~tribocosim.components.description.Component`) the FMU's model description derives
+from. :func:`check_components` checks the scene's values of such an FMU against the declaration, each value once,
+and the model description's ranges are not checked again (:mod:`tribocosim.cosim.scene.validate` does that for FMUs
+given by path):
 
-- check the parameters before anything runs (:func:`component_problems`): the FMUs declare
-  min/max for Reals, which :mod:`tribocosim.cosim.scene.validate` checks, but no choices for Strings
-  (``friction_model = "tabel"``), no cross-field rules (a malformed press ``setpoint_table``) and
-  nothing that spans instances. Each parameter is checked against its dataclass, then the
-  component's own ``check`` runs (e.g. the strip's table and field file, the cap of beta), and
-  every connection from an output with known set-points (``setpoints``: the press's force, the
-  drive's velocity) to an input is matched against the range the input's port declares (``low``,
-  ``high``: the strip is pulled, grip_velocity >= 0), the component's ``input_limits`` (the strip's
-  pressure at most its hardness, its grip slower than its waves) and the limits of ``check`` (the strip's
-  table axes); an input held at a scene value is matched against the first two, and must be finite.
+- every name is a parameter, a file or an input of the component;
+- the parameters make the component's parameter dataclass, built once from the scene's values: each field's type,
+  range or choices (:func:`tribocosim.components.params.validate_fields`), then the rules across fields (a
+  malformed press ``setpoint_table``); every bad field is reported under its own key;
+- the component's own ``check`` runs (the strip's table and field file, the cap of beta);
+- an input held at a scene value is a finite number inside the range its port declares (``low``, ``high``: the
+  strip is pulled, grip_velocity >= 0) and the component's ``input_limits`` (the strip's pressure at most its
+  hardness, its grip slower than its waves);
+- every connection from an output with known set-points (``setpoints``: the press's force, the drive's velocity)
+  to an input is matched against the input's port range, its ``input_limits`` and the limits of ``check`` (the
+  strip's table axes).
 
-The monolithic reference of such a scene is :func:`tribocosim.cosim.apps.monolithic.reference_for_scene`.
+Its result holds, per instance, the scene's values as the FMU reads them (:func:`fmu_value`: an integer field as an
+int; a resource file the C code reads in another form, the strip's ``table_file`` .npz, converted once into the
+cache), which the plan sets into the FMU. :func:`end_warnings` gives the outputs a component declares to watch at the
+end of a run (the strip's ``table_clamp_count``).
+
+The monolithic reference of such a scene is :func:`tribocosim.cosim.studies.monolithic.reference_for_scene`.
 
 This is, with :mod:`tribocosim.cosim.scene.fmucache`, where :mod:`tribocosim.cosim` imports
-:mod:`tribocosim.components`; the imports are lazy, and a scene of FMU files imports none of it.
+:mod:`tribocosim.components`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
-from tribocosim.errors import ParameterError, Problem, SceneError
+from tribocosim.errors import ParameterError, Problem
+from tribocosim.cosim.scene.problems import Problems, known
 
 
 def component_of(spec):
@@ -38,71 +50,89 @@ def component_of(spec):
     return registry.find(spec.component)
 
 
-def _split(comp, given: dict, add, key: str):
-    """(parameters, files) of ``given`` (the FMU's parameters), each bad field reported by name."""
-    instances = []
-    for cls in (comp.parameters, comp.files):
-        if cls is None:
-            instances.append(None)
-            continue
-        names = {f.name for f in dataclasses.fields(cls)}
-        default = cls()
-        ok = {}
-        for name, value in given.items():  # one field at a time: the message names the culprit
-            if name not in names:
-                continue
-            try:
-                dataclasses.replace(default, **{name: value})
-                ok[name] = value
-            except ParameterError as exc:
-                add(f"{key}.{name}", str(exc))
-            except TypeError as exc:
-                add(f"{key}.{name}", f"{name} = {value!r}: {exc}")
-        try:
-            instances.append(cls(**ok))
-        except ParameterError as exc:  # a rule across fields
+@dataclass
+class Checked:
+    """The component checks of a scene: every problem, and per component instance whose values are all good the
+    scene's values as the FMU reads them (``{FMU variable: value}``)."""
+
+    problems: list[Problem] = field(default_factory=list)
+    values: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+def _instance(cls, given: dict, add, key: str):
+    """The dataclass ``cls`` made once from ``given``, or None after reporting a rule across fields that fails.
+
+    A bad field is reported under its key and the dataclass is made again without the bad fields (their defaults
+    instead), so that the checks that need an instance still run and a scene's problems are reported at once."""
+    try:
+        return cls(**given)
+    except ParameterError as exc:
+        if not exc.fields:  # a rule across fields
             add(key, str(exc))
-            instances.append(None)
-    return instances
+            return None
+        for name, message in exc.fields:
+            add(f"{key}.{name}", message)
+        bad = {name for name, _ in exc.fields}
+    try:
+        return cls(**{k: v for k, v in given.items() if k not in bad})
+    except ParameterError:
+        return None
 
 
-def component_problems(scene) -> list[Problem]:
-    """Problems of the component parameters of a scene.
-
-    ``scene`` is a :class:`tribocosim.cosim.scene.schema.Scene` (parsed, not necessarily valid) or a validated plan.
-    """
-    from tribocosim.cosim.scene.problems import Problems
-
-    scene = getattr(scene, "scene", scene)
+def check_components(scene) -> Checked:
+    """Check the component FMUs of ``scene`` (a :class:`tribocosim.cosim.scene.schema.Scene`, parsed, not
+    necessarily valid) against their declarations; see the module docstring."""
     problems = Problems(scene.path)
+    out = Checked()
     found = {name: comp for name, spec in scene.fmus.items() if (comp := component_of(spec)) is not None}
     limits: dict[str, dict] = {}
     setpoints: dict[str, dict] = {}
     physical: dict[str, dict] = {}
     for name, comp in found.items():
         key = f"fmus.{name}.parameters"
-        params, files = _split(comp, scene.fmus[name].parameters, problems.add, key)
+        before = len(problems)
+        own = {f.name for f in dataclasses.fields(comp.parameters)}
+        files_names = {f.name for f in dataclasses.fields(comp.files)} if comp.files is not None else set()
+        inputs = {p.name: p for p in comp.inputs}
+        given = scene.fmus[name].parameters
+        for pname, value in given.items():
+            if pname in own or pname in files_names or pname in inputs:
+                continue
+            if any(p.name == pname for p in comp.outputs):
+                problems.add(f"{key}.{pname}", f"{pname!r} is an output of component {comp.name!r}; only parameters "
+                                               "and inputs can be set")
+            else:
+                problems.add(f"{key}.{pname}", f"unknown parameter of component {comp.name!r}; "
+                                               f"{known([*own, *files_names, *inputs], pname)}")
+        params = _instance(comp.parameters, {k: v for k, v in given.items() if k in own}, problems.add, key)
+        files = (_instance(comp.files, {k: v for k, v in given.items() if k in files_names}, problems.add, key)
+                 if comp.files is not None else None)
+        for pname, port in inputs.items():  # inputs held at a scene value
+            if pname in given and (isinstance(given[pname], bool) or not isinstance(given[pname], (int, float))):
+                problems.add(f"{key}.{pname}", f"{pname!r} is an input of type Real; got {given[pname]!r}")
         if params is None or (comp.files is not None and files is None):
             continue
         if comp.check is not None:
-            own, limits[name] = comp.check(params, files, comp.resource_dir)
-            for pname, message in own:
+            own_problems, limits[name] = comp.check(params, files, comp.resource_dir)
+            for pname, message in own_problems:
                 problems.add(f"{key}.{pname}" if pname else key, message)
         if comp.setpoints is not None:
             setpoints[name] = comp.setpoints(params)
         if comp.input_limits is not None:
             physical[name] = comp.input_limits(params)
-    for name, comp in found.items():  # inputs held at a scene value
-        given = scene.fmus[name].parameters
-        for port in comp.inputs:
-            value = given.get(port.name)
+        for pname, port in inputs.items():
+            value = given.get(pname)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
-                label = f"{port.name} = {value:g}{_unit(port)}"
-                limit = physical.get(name, {}).get(port.name)
-                message = _outside_port(comp, given, port, float(value), label, f"{name}.{port.name}") or (
+                label = f"{pname} = {value:g}{_unit(port)}"
+                limit = physical.get(name, {}).get(pname)
+                message = _outside_port(comp, given, port, float(value), label, f"{name}.{pname}") or (
                     limit(float(value), label, name) if limit else None)
                 if message:
-                    problems.add(f"fmus.{name}.parameters.{port.name}", message)
+                    problems.add(f"{key}.{pname}", message)
+        if len(problems) == before:
+            out.values[name] = {pname: fmu_value(comp, pname, getattr(params, pname) if pname in own else
+                                                 getattr(files, pname) if pname in files_names else value)
+                                for pname, value in given.items()}
     for link in scene.connections:  # set-points of one instance against the inputs of another
         src, dst = link.source, link.target
         comp = found.get(dst.instance)
@@ -115,7 +145,40 @@ def component_problems(scene) -> list[Problem]:
             for message in messages:
                 if message:
                     problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
-    return problems.items
+    out.problems = problems.items
+    return out
+
+
+def component_problems(scene) -> list[Problem]:
+    """The problems :func:`check_components` finds (``scene``: a parsed scene or a validated plan)."""
+    return check_components(getattr(scene, "scene", scene)).problems
+
+
+def fmu_value(comp, name: str, value):
+    """The value of parameter ``name`` of component ``comp`` as its FMU reads it: a resource file its C code reads in
+    another form (``Native.resource_parameters``, e.g. the strip's ``table_file`` .npz) converted once into the cache
+    (``Native.convert_resource``; a relative name is a file of the FMU's resources, converted by its build); every
+    other value as it is."""
+    native = comp.native
+    if native is None or native.convert_resource is None or name not in native.resource_parameters:
+        return value
+    source = Path(value) if isinstance(value, str) and value else None
+    if source is None or not source.is_absolute() or not source.is_file():
+        return value
+    from tribocosim.components.native.toolchain.digests import file_sha256
+    from tribocosim.components.native.toolchain.library import cache_dir
+
+    folder = cache_dir() / "resources" / file_sha256(source)[:20]
+    converted = folder / f"{source.stem}.tca"
+    if not converted.is_file():
+        folder.mkdir(parents=True, exist_ok=True)
+        native.convert_resource(source, folder)
+    return str(converted)
+
+
+def end_warnings(comp) -> dict[str, str]:
+    """``{output: what its value above 0 at the end of a run means}`` of a component (``Port.end_warning``)."""
+    return {p.name: p.end_warning for p in comp.outputs if p.end_warning}
 
 
 def _unit(port) -> str:
@@ -143,30 +206,4 @@ def _outside_port(comp, values: dict, port, value: float, label: str, where: str
     return None
 
 
-def load_component_scene(path, overrides: dict | None = None):
-    """:func:`tribocosim.cosim.scene.validate.load_scene` plus :func:`component_problems`, all problems in one SceneError.
-
-    (The component checks run on the parsed scene even when the FMU-level validation fails, and
-    a key that both report is listed once.)
-    """
-    from tribocosim.cosim.scene.problems import Problems
-    from tribocosim.cosim.scene.schema import parse_scene
-    from tribocosim.cosim.scene.validate import load_scene
-
-    scene, _ = parse_scene(path, overrides)
-    extra = component_problems(scene) if scene is not None else []
-    try:
-        plan = load_scene(path, overrides)
-    except SceneError as exc:
-        problems = Problems(scene.path if scene is not None else path)
-        problems.extend(exc.problems)
-        problems.extend(extra, skip_known_keys=True)
-        raise problems.error() from None
-    if extra:
-        problems = Problems(plan.scene.path)
-        problems.extend(extra)
-        problems.raise_if_any()
-    return plan
-
-
-__all__ = ["component_of", "component_problems", "load_component_scene"]
+__all__ = ["Checked", "check_components", "component_of", "component_problems", "end_warnings", "fmu_value"]

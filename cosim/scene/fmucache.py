@@ -16,22 +16,14 @@ names only ``path = ...`` FMUs never imports the builder.
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 from tribocosim.errors import SceneError, TribocosimError
 from tribocosim.components.native.toolchain.library import cache_dir
+from tribocosim.cosim.scene.binaries import host_platform
 
 
-def host_platform() -> str:
-    """The FMI 2.0 platform folder of this machine (a cached native FMU carries only its binary)."""
-    import sys
-
-    return "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
-
-
-def component_fmu(component: str, cache: Path | None = None, variant: str | None = None) -> Path:
+def component_fmu(component: str, cache: Path | None = None) -> Path:
     """Return the path of the cached FMU of ``component``, building it if needed.
 
     Parameters
@@ -40,9 +32,6 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         Component name (``"stripdraw"``) or model identifier (``"StripDraw"``), case-insensitive.
     cache : Path, optional
         Cache folder (default :func:`cache_dir`).
-    variant : {"native"}, optional
-        The FMU's implementation: C (in the cache with this machine's binary only), the only one the project
-        builds.
 
     Raises
     ------
@@ -50,30 +39,38 @@ def component_fmu(component: str, cache: Path | None = None, variant: str | None
         If the component is unknown or the build fails (with the builder's message).
     """
     from tribocosim.components import registry
-    from tribocosim.components.fmus import native_build
+    from tribocosim.components.native.toolchain.digests import remembered
 
     comp = registry.find(component)
     if comp is None:
         raise SceneError(f"unknown component {component!r}; this installation builds: "
                          f"{', '.join(c.name for c in registry.components().values())}")
     name = comp.model_identifier
-    variant = variant or "native"
     if comp.native is None:
         raise SceneError(f"component {component!r} has no native implementation: the project builds its FMUs in C; "
                          "a component written in Python is a pythonfmu FMU of its own, named by path = ... "
                          "(docs/user-guide.md)")
     root = Path(cache) if cache is not None else cache_dir()
-    try:
-        digest = native_build.source_digest(name)
-    except TribocosimError as exc:
-        raise SceneError(f"component {component!r}: {exc}") from exc
-    entry = root / f"{name}-{variant}-{digest[:16]}"
+    digest = remembered(f"fmu {name} 2")  # native_build.digest_key: found without importing the builder
+    if digest is None:
+        from tribocosim.components.fmus import native_build
+
+        try:
+            digest = native_build.source_digest(name)
+        except TribocosimError as exc:
+            raise SceneError(f"component {component!r}: {exc}") from exc
+    entry = root / f"{name}-native-{digest[:16]}"
     fmu = entry / f"{name}.fmu"
     if fmu.is_file():
         return fmu
+    import shutil
+    import tempfile
+
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
+        from tribocosim.components.fmus import native_build
+
         native_build.build_native_fmus(tmp, names=[name], platforms=[host_platform()])
         try:
             os.rename(tmp, entry)

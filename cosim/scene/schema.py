@@ -30,7 +30,6 @@ settings and the outputs to record; nothing else is loaded, computed or written.
 
     [fmus.strip]
     path = "StripDraw.fmu"      # relative to the scene file, or: component = "stripdraw"
-    # variant = "native"        # of a component's FMU: native (C), the one the project builds
     parameters = { tool_length = 0.035 }
     # feedthrough = false       # outputs never depend directly on inputs (default: from the
                                 # model description, else probed numerically at the start)
@@ -60,9 +59,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tribocosim.cosim.engine.algorithms import ALGORITHMS
-from tribocosim.cosim.engine.stepcontrol import ESTIMATORS, Adaptive
-from tribocosim.cosim.engine.system import VariableRef
+from tribocosim.cosim.engine.schemes import ALGORITHMS, ESTIMATORS, Adaptive, VariableRef
 from tribocosim.cosim.scene.problems import Problems
 from tribocosim.errors import SceneError
 
@@ -76,6 +73,8 @@ MAX_STEPS = 1e8
 _MASTER_KEYS = ("algorithm", "extrapolation", "output_update", "order", "adaptive",
                 *(name for name, spec in ALGORITHMS.items() if spec.settings is not None))
 _FMU_KEYS = ("path", "component", "variant", "parameters", "feedthrough")
+#: the one value ``variant`` may have: a component's FMU is built in C (the key is accepted, and does nothing, so that
+#: scenes that name it keep running)
 VARIANTS = ("native",)
 _CONNECTION_KEYS = ("from", "to")
 _BOND_KEYS = ("effort", "flow")
@@ -113,7 +112,6 @@ class FmuSpec:
     component: str | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
     feedthrough: bool | None = None
-    variant: str | None = None  # of a component's FMU: native (C), the one the project builds
 
 
 @dataclass(frozen=True)
@@ -196,7 +194,22 @@ def apply_overrides(doc: dict, overrides: dict[str, Any]) -> dict:
     return doc
 
 
-def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tuple[Scene | None, list[str]]:
+def read_document(path: str | Path) -> dict | None:
+    """The TOML document of a scene or sweep file, or None when it cannot be read as TOML (:func:`parse_scene` then
+    says why)."""
+    try:
+        return tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+
+
+def is_sweep(document: dict | None) -> bool:
+    """True for the document of a sweep file (a ``[sweep]`` table over a base scene)."""
+    return isinstance(document, dict) and isinstance(document.get("sweep"), dict)
+
+
+def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None,
+                document: dict | None = None) -> tuple[Scene | None, list[str]]:
     """Read and structurally check a scene file.
 
     Parameters
@@ -205,6 +218,8 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         The TOML scene file.
     overrides : dict, optional
         Dotted keys to set before checking, e.g. ``{"experiment.step": 1e-2}`` (for sweeps).
+    document : dict, optional
+        The file's TOML document when it was read already (:func:`read_document`; the overrides are set in it).
 
     Returns
     -------
@@ -216,7 +231,7 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
     path = Path(path).resolve()
     p = Problems(path)
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        doc = document if document is not None else tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         p.add("(file)", "scene file not found")
         return None, p.items
@@ -281,11 +296,14 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> tu
         if ft is not None and not isinstance(ft, bool):
             p.add(f"{key}.feedthrough", f"must be true or false, got {ft!r}")
             ft = None
-        variant = p.choice(spec, "variant", key, VARIANTS, None)
-        if "variant" in spec and comp is None:
+        if "variant" in spec and spec["variant"] not in VARIANTS:
+            p.add(f"{key}.variant", f"{spec['variant']!r} is not allowed: the project builds the FMUs of its components "
+                                    "in C only (variant = \"native\", which need not be given); a component written "
+                                    "in Python is an FMU of its own, named by path = ...")
+        elif "variant" in spec and comp is None:
             p.add(f"{key}.variant", "applies to component = \"...\" FMUs only")
         resolved = (path.parent / fpath).resolve() if fpath else None
-        fmus[name] = FmuSpec(name, resolved, comp, dict(params), ft, variant)
+        fmus[name] = FmuSpec(name, resolved, comp, dict(params), ft)
 
     connections = []
     conn_doc = doc.get("connections", [])

@@ -1,12 +1,15 @@
-"""Second validation pass: the scene against the FMUs' model descriptions.
+"""The scene pipeline: a scene file parsed once, each value checked once, every FMU's model description read.
 
-:func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.schema.parse_scene`), reads the model
-description of every FMU it names (no shared library is loaded), and checks
+:func:`load_scene` parses a scene (:func:`tribocosim.cosim.scene.schema.parse_scene`), checks the FMUs built from
+the project's components against their declarations (:func:`tribocosim.cosim.scene.component_checks.check_components`),
+reads the model description of every FMU it names (:func:`tribocosim.cosim.scene.fmu_files.summary`: once per
+file content; no shared library is loaded), and checks
 
 - FMU files: present, FMI 2.0, co-simulation, with a complete library for this machine
   (:mod:`tribocosim.cosim.scene.binaries`: a truncated one crashed the process with a bus error);
-- parameters: known, settable (causality parameter or input), of the right type, finite, inside a
-  declared min/max;
+- parameters of an FMU given by path: known, settable (causality parameter or input), of the right type, finite,
+  inside a declared min/max (those of a component's FMU were checked against its declaration, from which its
+  model description's ranges derive);
 - connections: known instances and variables, output -> input causality, compatible types,
   equal units where both sides declare one, one connection per input;
 - outputs to record: known, numeric;
@@ -16,7 +19,7 @@ description of every FMU it names (no shared library is loaded), and checks
 All problems are collected and raised in one :class:`~tribocosim.errors.SceneError`, each
 line naming the file and the key. Unconnected inputs are warnings that give the start value
 used. The result, :class:`Plan`, holds everything the master needs with value references
-resolved.
+resolved: the values to set into each FMU (as it reads them) and the outputs to watch at the end of the run.
 """
 
 from __future__ import annotations
@@ -26,14 +29,13 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fmpy import read_model_description
+from typing import Any
 
 from tribocosim.errors import SceneError
-from tribocosim.cosim.engine.algorithms import ALGORITHMS
-from tribocosim.cosim.scene.binaries import fmu_binary_problem
+from tribocosim.cosim.engine.schemes import ALGORITHMS, ESTIMATORS, VariableRef
+from tribocosim.cosim.scene.component_checks import check_components, component_of, end_warnings
+from tribocosim.cosim.scene.fmu_files import FmuFileError, FmuSummary, summary
 from tribocosim.cosim.scene.problems import Problems, known
-from tribocosim.cosim.engine.stepcontrol import ESTIMATORS
-from tribocosim.cosim.engine.system import VariableRef
 from tribocosim.cosim.scene.schema import Scene, parse_scene
 
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
@@ -50,9 +52,10 @@ class FmuModel:
         Instance name.
     path : Path
         The .fmu file.
-    md : fmpy.model_description.ModelDescription
+    summary : FmuSummary
+        What its model description says that a run needs (:mod:`tribocosim.cosim.scene.fmu_files`).
     variables : dict
-        Name -> fmpy ModelVariable.
+        Name -> :class:`~tribocosim.cosim.scene.fmu_files.Variable`.
     dependencies : dict
         Output name -> set of input names it depends on directly, or None when the model
         description does not say (then the master probes it numerically).
@@ -62,19 +65,39 @@ class FmuModel:
 
     name: str
     path: Path
-    md: object
+    summary: FmuSummary
     variables: dict
     dependencies: dict
     derivative_inputs: dict
     feedthrough: bool | None = None
+    _md: Any = field(default=None, repr=False)
 
     @property
     def can_roll_back(self) -> bool:
-        return bool(self.md.coSimulation.canGetAndSetFMUstate)
+        return self.summary.can_get_and_set_fmu_state
 
     @property
     def can_interpolate_inputs(self) -> bool:
-        return bool(self.md.coSimulation.canInterpolateInputs)
+        return self.summary.can_interpolate_inputs
+
+    @property
+    def md(self):
+        """fmpy's model description of the FMU (read on first use: unit definitions, declared types, ...)."""
+        if self._md is None:
+            from fmpy import read_model_description
+
+            self._md = read_model_description(str(self.path))
+        return self._md
+
+
+@dataclass(frozen=True)
+class EndCheck:
+    """An output to read at the end of a run: above 0 it means ``FMU instance '<instance>': <value> <message>``."""
+
+    instance: str
+    value_reference: int
+    type: str
+    message: str
 
 
 @dataclass(frozen=True)
@@ -102,17 +125,21 @@ class Plan:
     bonds: list[tuple[int, int]] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: per instance, the scene's parameter values as the FMU reads them: ``[(value reference, type, value), ...]``
+    parameters: dict[str, list[tuple[int, str, Any]]] = field(default_factory=dict)
+    end_checks: list[EndCheck] = field(default_factory=list)
 
 
 def unit_of(var) -> str | None:
-    """The declared unit of a variable (own attribute, else its declared type's)."""
+    """The declared unit of a variable (own attribute, else its declared type's; fmpy's variables and
+    :class:`~tribocosim.cosim.scene.fmu_files.Variable`)."""
     if getattr(var, "unit", None):
         return var.unit
     dt = getattr(var, "declaredType", None)
     return getattr(dt, "unit", None) or None
 
 
-def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
+def load_scene(path: str | Path, overrides: dict | None = None, document: dict | None = None) -> Plan:
     """Parse and validate a scene; raise one SceneError listing every problem.
 
     Parameters
@@ -121,6 +148,8 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
         The scene file.
     overrides : dict, optional
         Dotted keys to set before validation (see :func:`tribocosim.cosim.scene.schema.apply_overrides`).
+    document : dict, optional
+        The file's TOML document when it was read already (:func:`tribocosim.cosim.scene.schema.read_document`).
 
     Returns
     -------
@@ -132,11 +161,13 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     SceneError
         With every problem (``.problems``: file, key, message), one line each in the message.
     """
-    scene, parsed = parse_scene(path, overrides)
+    scene, parsed = parse_scene(path, overrides, document)
     problems = Problems(scene.path if scene is not None else Path(path).resolve())
     problems.extend(parsed)
     if scene is None:
         problems.raise_if_any()
+    checked = check_components(scene)
+    problems.extend(checked.problems)
     plan = Plan(scene, {}, [], [])
     add = problems.add
 
@@ -147,7 +178,7 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
             from tribocosim.cosim.scene.fmucache import component_fmu
 
             try:
-                fmu_path = component_fmu(spec.component, variant=spec.variant)
+                fmu_path = component_fmu(spec.component)
             except SceneError as exc:
                 add(f"{key}.component", str(exc))
                 continue
@@ -157,23 +188,44 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
             add(f"{key}.path", f"FMU file not found: {fmu_path}")
             continue
         try:
-            md = read_model_description(str(fmu_path), validate=True)
-        except Exception as exc:
+            info = summary(fmu_path)
+        except FmuFileError as exc:
             add(f"{key}.path", f"cannot read the model description of {fmu_path.name}: {exc}")
             continue
-        if md.fmiVersion != "2.0":
-            add(f"{key}.path", f"{fmu_path.name} is FMI {md.fmiVersion}; the master runs FMI 2.0 co-simulation FMUs")
+        if info.fmi_version != "2.0":
+            add(f"{key}.path", f"{fmu_path.name} is FMI {info.fmi_version}; the master runs FMI 2.0 co-simulation FMUs")
             continue
-        if md.coSimulation is None:
+        if info.model_identifier is None:
             add(f"{key}.path", f"{fmu_path.name} has no co-simulation interface (model exchange only)")
             continue
-        broken = fmu_binary_problem(fmu_path, md.coSimulation.modelIdentifier)
-        if broken:
-            add(f"{key}.path", broken)
+        if info.binary_problem:
+            add(f"{key}.path", info.binary_problem)
             continue
-        plan.fmus[name] = model = _fmu_model(name, fmu_path, md, spec.feedthrough)
-        for pname, value in spec.parameters.items():
-            _check_parameter(add, f"{key}.parameters.{pname}", model, pname, value)
+        plan.fmus[name] = model = _fmu_model(name, fmu_path, info, spec.feedthrough)
+        comp = component_of(spec)
+        if comp is not None:  # checked against the declaration (check_components); the values as the FMU reads them
+            values = checked.values.get(name, {})
+            for pname, value in values.items():
+                var = model.variables.get(pname)
+                if var is None:
+                    add(f"{key}.parameters.{pname}", f"{fmu_path.name} has no variable {pname!r} though component "
+                                                     f"{comp.name!r} declares it: rebuild the FMU")
+                    continue
+                plan.parameters.setdefault(name, []).append((var.valueReference, var.type, value))
+        else:
+            comp = None
+            if info.generation_tool.startswith("tribocosim"):  # our FMU run by path (an SSP package's)
+                from tribocosim.components import registry
+
+                comp = registry.find(info.model_identifier)
+            for pname, value in spec.parameters.items():
+                if _check_parameter(add, f"{key}.parameters.{pname}", model, pname, value):
+                    var = model.variables[pname]
+                    plan.parameters.setdefault(name, []).append((var.valueReference, var.type, value))
+        for output, message in (end_warnings(comp) if comp is not None else {}).items():
+            var = model.variables.get(output)
+            if var is not None and var.causality == "output":
+                plan.end_checks.append(EndCheck(name, var.valueReference, var.type, message))
 
     def lookup(ref: VariableRef, key: str, causalities: tuple[str, ...], role: str):
         if ref.instance not in scene.fmus:
@@ -232,37 +284,30 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Plan:
     return plan
 
 
-def _fmu_model(name: str, path: Path, md, feedthrough: bool | None) -> FmuModel:
-    variables = {v.name: v for v in md.modelVariables}
-    deps: dict[str, set[str] | None] = {}
-    listed = {u.variable.name: u for u in (md.outputs or [])}
-    for v in md.modelVariables:
-        if v.causality != "output":
-            continue
-        u = listed.get(v.name)
-        if u is None or u.dependencies is None:
-            deps[v.name] = None
-        else:
-            deps[v.name] = {d.name for d in u.dependencies if d.causality == "input"}
+def _fmu_model(name: str, path: Path, info: FmuSummary, feedthrough: bool | None) -> FmuModel:
+    variables = {v.name: v for v in info.variables}
+    deps = {out: (None if inputs is None else set(inputs)) for out, inputs in info.dependencies.items()}
     derivs: dict[str, dict[int, int]] = {}
-    for v in md.modelVariables:
+    for v in info.variables:
         m = _DER.match(v.name)
         if m and v.causality == "input" and v.type == "Real":
             base = variables.get(m.group("name"))
             if base is not None and base.causality == "input":
                 derivs.setdefault(base.name, {})[int(m.group("order") or 1)] = v.valueReference
-    return FmuModel(name, path, md, variables, deps, derivs, feedthrough)
+    return FmuModel(name, path, info, variables, deps, derivs, feedthrough)
 
 
-def _check_parameter(add, key: str, model: FmuModel, pname: str, value) -> None:
+def _check_parameter(add, key: str, model: FmuModel, pname: str, value) -> bool:
+    """Check a scene value of a parameter of an FMU given by path against its model description; False after
+    reporting a problem."""
     var = model.variables.get(pname)
     if var is None:
         settable = [n for n, v in model.variables.items() if v.causality in ("parameter", "input")]
         add(key, f"unknown parameter of {model.path.name}; {known(settable, pname)}")
-        return
+        return False
     if var.causality not in ("parameter", "input") or var.variability == "constant":
         add(key, f"{pname!r} has causality {var.causality!r} and variability {var.variability!r}; only parameters and inputs can be set")
-        return
+        return False
     t = var.type
     ok = {
         "Real": isinstance(value, (int, float)) and not isinstance(value, bool),
@@ -273,15 +318,16 @@ def _check_parameter(add, key: str, model: FmuModel, pname: str, value) -> None:
     }.get(t, False)
     if not ok:
         add(key, f"{pname!r} is a {t}; got {value!r}")
-        return
+        return False
     if t == "Real" and not math.isfinite(value):
         add(key, f"{pname} = {value!r} is not finite; a finite number is required")
-        return
+        return False
     if t in ("Real", "Integer"):
-        lo = var.min if var.min is not None else getattr(var.declaredType, "min", None)
-        hi = var.max if var.max is not None else getattr(var.declaredType, "max", None)
+        lo, hi = var.min, var.max
         if (lo is not None and value < float(lo)) or (hi is not None and value > float(hi)):
             add(key, f"{pname} = {value!r} is outside the declared range [{lo}, {hi}]")
+            return False
+    return True
 
 
 def _check_master(add, plan: Plan) -> None:
@@ -329,7 +375,7 @@ def _warn_unconnected(plan: Plan, connected: dict) -> None:
     for name, model in plan.fmus.items():
         derivative_vrs = {vr for d in model.derivative_inputs.values() for vr in d.values()}
         params = plan.scene.fmus[name].parameters
-        for v in model.md.modelVariables:
+        for v in model.variables.values():
             if v.causality != "input" or (name, v.name) in connected or v.valueReference in derivative_vrs:
                 continue
             value = params.get(v.name, v.start)

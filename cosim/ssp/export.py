@@ -105,9 +105,9 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
     TribocosimError
         If two FMUs define the same unit name differently.
     """
-    from tribocosim.cosim.scene.component_checks import load_component_scene
+    from tribocosim.cosim.scene.validate import load_scene
 
-    plan = load_component_scene(scene, overrides)
+    plan = load_scene(scene, overrides)
     sc = plan.scene
     doc = apply_overrides(tomllib.loads(sc.path.read_text(encoding="utf-8")), dict(overrides or {}))
     for prefix in ("ssd", "ssc", "ssv", "osp", "oms", "tc"):

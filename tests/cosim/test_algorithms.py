@@ -15,11 +15,10 @@ from tribocosim.cosim import run
 from tribocosim.cosim.engine.algorithms import GaussSeidel, IterativeCoupling, Jacobi
 from tribocosim.cosim.engine.master import Master
 from tribocosim.cosim.engine.recorder import Recorder
-from tribocosim.cosim.engine.algorithms import Iterative
-from tribocosim.cosim.engine.system import VariableRef
+from tribocosim.cosim.engine.schemes import Iterative, LinkSpec, VariableRef
 from tribocosim.cosim.engine.slave import OK
 from tribocosim.cosim.engine.stepcontrol import FixedStep
-from tribocosim.cosim.engine.system import CoupledSystem, LinkSpec
+from tribocosim.cosim.engine.system import CoupledSystem
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
 SWEEPS = {0: [0.01, 0.005, 0.0025], 1: [0.02, 0.01, 0.005], 2: [0.04, 0.02, 0.01]}

@@ -13,7 +13,7 @@ from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, write_table
 from tribocosim.cosim.apps.calibrate import calibrate, main, read_measurements
-from tribocosim.cosim.apps.stripdraw_experiment import Point, draw, run_points
+from tribocosim.cosim.studies.stripdraw_experiment import Point, draw, run_points
 
 #: a coarse strip (fast) with enough debris for a visible effect; Eq. 23 with alpha = 40
 FAST = {"n_elements": 60, "draw_length": 0.02, "archard_k": 5e-4, "contact_area": "eq8"}

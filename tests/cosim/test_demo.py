@@ -20,6 +20,7 @@ import pytest
 from fmpy.util import read_csv
 
 from tribocosim.cosim.apps import demo
+from tribocosim.cosim.studies.stripdraw_experiment import run_strip_draw, steady_mean
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -53,8 +54,8 @@ def test_demo_builds_the_fmus_runs_and_writes_results_and_figures(tmp_path):
     assert field["beta"].shape == (207, field["X"].size), "rows every 10 ms (+ t = 0)"
     assert field["beta"][-1].max() == pytest.approx(res["strip.beta_max"][-1], rel=1e-12)
     # the same test with the pure model (prescribed velocity ramp and force): same mu_bar
-    _, outs, _ = demo.run_strip_draw(10e6, 0.035, ramp_time=0.02)
-    np.testing.assert_allclose(mu_bar, demo.steady_mean(outs), rtol=2e-3,
+    _, outs, _ = run_strip_draw(10e6, 0.035, ramp_time=0.02)
+    np.testing.assert_allclose(mu_bar, steady_mean(outs), rtol=2e-3,
                                err_msg="co-simulated mu_bar vs the strip-draw model alone")
 
 

@@ -104,15 +104,15 @@ def test_a_table_replaced_after_its_resource_was_written_is_refused_by_the_fmu(s
 @pytest.mark.parametrize("setting, message", [
     ("fmus.strip.parameters.normal_force=1e30", "is a nominal pressure of 8.163e+32 Pa, above the strip's hardness "
                                                 "8e+08 Pa"),
-    ("fmus.strip.parameters.normal_force=nan", "normal_force = nan is not finite; a finite number is required"),
-    ("fmus.strip.parameters.normal_force=-inf", "normal_force = -inf is not finite"),
-    ("fmus.strip.parameters.grip_velocity=inf", "grip_velocity = inf is not finite"),
+    ("fmus.strip.parameters.normal_force=nan", "normal_force = nan N is not finite; a finite number is required"),
+    ("fmus.strip.parameters.normal_force=-inf", "normal_force = -inf N is not finite"),
+    ("fmus.strip.parameters.grip_velocity=inf", "grip_velocity = inf m/s is not finite"),
     ("fmus.strip.parameters.grip_velocity=1e6", "grip_velocity = 1e+06 m/s is not below the wave speed "
                                                 "sqrt(E / rho) = 5129.89 m/s"),
     ("fmus.strip.parameters.grip_velocity=-1e6", "grip_velocity = -1e+06 m/s is below 0 m/s"),
     ("fmus.strip.parameters.tool_length=nan", "tool_length = nan is not finite"),
-    ("fmus.strip.parameters.shear_stiffness_factor=1e9", "shear_stiffness_factor = 1000000000.0 is outside the "
-                                                         "declared range [1e-06, 10000.0]"),
+    ("fmus.strip.parameters.shear_stiffness_factor=1e9", "shear_stiffness_factor = 1000000000.0 is out of range; "
+                                                         "allowed: [1e-06, 10000]"),
     ("experiment.stop=1e30", "stop = 1e+30 s is 1e+33 steps of 0.001 s after start = 0.0 s; at most 1e+08 steps"),
 ])
 def test_absurd_scene_values_are_scene_problems_before_anything_runs(tmp_path, tmpdir_env, setting, message):
@@ -234,15 +234,17 @@ def test_a_truncated_fmu_binary_is_a_scene_problem_not_a_bus_error(strip_fmu, tm
 
 
 def test_sigterm_ends_a_run_and_leaves_no_temporary_folder(tmp_path, tmpdir_env):
-    """SIGTERM killed the process before Python's clean-up: the folders its FMUs were extracted to stayed in the
-    temporary folder. It ends the run as an exception does (exit 143), and they are removed."""
+    """SIGTERM killed the process before Python's clean-up: the output folder's lock stayed. It ends the run as an
+    exception does (exit 143): the lock is released, and no temporary folder stays (the FMUs are extracted into the
+    FMU cache)."""
+    lock = tmp_path / "out" / ".tribocosim-run.lock"
     proc = subprocess.Popen([sys.executable, "-m", "tribocosim.cli", "run", "demo", "--out", str(tmp_path / "out"),
                              "--quiet", "--set", "experiment.stop=60"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120
-    while not temp_folders(tmpdir_env) and time.time() < deadline:  # the FMUs extracted: the run is under way
-        time.sleep(0.1)
-    assert temp_folders(tmpdir_env), "the run extracted its FMUs"
+    while not lock.exists() and time.time() < deadline:  # the scene is valid: the run is under way
+        time.sleep(0.05)
+    assert lock.exists(), "the run took its output folder"
     time.sleep(1.0)
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=120)

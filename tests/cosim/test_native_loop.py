@@ -1,5 +1,6 @@
-"""Tests of cosim.engine.native_loop: the fixed-step loop in C gives the Python loop's results to the last bit, saves
-no FMU state, and leaves to the Python loop the steps it does not take."""
+"""Tests of the C master (cosim.engine.native_session: a whole run; cosim.engine.native_loop: the loop of the Python
+master): the fixed-step loop in C gives the Python loop's results to the last bit, saves no FMU state, and leaves to
+the Python loop the steps it does not take."""
 
 from __future__ import annotations
 
@@ -10,10 +11,13 @@ import numpy as np
 import pytest
 
 from tribocosim.components.native.toolchain.prototypes import code
-from tribocosim.cosim.engine import native_loop
+from tribocosim.cosim.engine import native_lib
 
 from tribocosim.errors import RunFailed
 from tribocosim.cosim import run
+from tribocosim.cosim.api import build
+from tribocosim.cosim.scene.validate import load_scene
+from tribocosim.paths import scene_file
 
 #: the demo rig cut to 0.4 s at 1 ms, the strip pulled from 0.1 s (every FMU's behaviour in a short run)
 SHORT = {"experiment.stop": 0.4, "experiment.step": 1e-3, "fmus.drive.parameters.start_time": 0.1}
@@ -38,6 +42,40 @@ def test_the_demo_rig_gives_the_python_loops_values_to_the_last_bit(algorithm, u
     assert native.metadata["steps"] == python.metadata["steps"]
     for name, calls in native.metadata["fmi_calls"].items():
         assert calls == {"doStep": 400, "getFMUstate": 0, "setFMUstate": 0}, (name, "no state saved by the C loop")
+
+
+@pytest.mark.parametrize("algorithm", ["jacobi", "gauss-seidel"])
+def test_the_python_masters_c_loop_gives_the_whole_c_runs_values(algorithm):
+    """The loop of the Python master in C (after the Python initialization: build, initialize, run) and the whole
+    run in C (native_session) make the same FMI calls: the same recorded values, bit for bit."""
+    keys = {**SHORT, "master.algorithm": algorithm}
+    session = run("demo", overrides=keys, write=False)
+    b = build(load_scene(scene_file("demo"), keys))
+    m = b.master
+    try:
+        m.initialize(m.grid.start, b.plan.scene.experiment.stop, b.parameters)
+        m.run()
+    finally:
+        b.close()
+    assert m.loop_used == "native" and session.metadata["master"]["loop"] == "native"
+    np.testing.assert_array_equal(m.recorder.time, session.time)
+    for name, column in m.recorder.columns().items():
+        np.testing.assert_array_equal(column, session.columns[name], err_msg=name)
+
+
+def test_the_whole_c_run_imports_neither_numpy_nor_fmpy(tmp_path):
+    """``tribocosim run demo`` with the FMUs built: the run path of the C master (its summaries and checks cached)
+    imports neither numpy nor fmpy, and so neither numba nor the mesoscale code."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from tribocosim.cli import main; main(['run', 'demo', '--quiet', '--out', sys.argv[1]]); "
+            "print(sorted({m.split('.')[0] for m in sys.modules} & {'numpy', 'fmpy', 'scipy', 'matplotlib', 'numba'} "
+            "| {m for m in sys.modules if m.startswith('tribocosim.surrogate')}))")
+    for _ in range(2):  # the first run may fill the caches
+        out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
 
 
 @pytest.mark.parametrize("algorithm", ["jacobi", "gauss-seidel"])
@@ -95,7 +133,7 @@ def test_without_rollback_the_repeated_run_stops_with_the_python_loops_message(t
 
 
 #: the C types of tc_master.h's struct members and the ctypes type each is passed as
-_C_TYPES = {"fmi2Component": ctypes.c_void_p, "double": ctypes.c_double, "int64_t": ctypes.c_int64,
+_C_TYPES = {"fmi2Component": ctypes.c_void_p, "tcm_sink *": ctypes.c_void_p, "void *": ctypes.c_void_p, "double": ctypes.c_double, "int64_t": ctypes.c_int64,
             "int": ctypes.c_int, "size_t": ctypes.c_size_t, "double *": ctypes.POINTER(ctypes.c_double),
             "fmi2Integer *": ctypes.POINTER(ctypes.c_int), "unsigned char *": ctypes.POINTER(ctypes.c_ubyte),
             "const int *": ctypes.POINTER(ctypes.c_int), "const size_t *": ctypes.POINTER(ctypes.c_size_t),
@@ -103,19 +141,21 @@ _C_TYPES = {"fmi2Component": ctypes.c_void_p, "double": ctypes.c_double, "int64_
 
 
 def test_the_ctypes_structs_are_the_headers():
-    """Every struct of tc_master.h, member by member (name and type), is the ctypes structure native_loop passes."""
-    text = code((native_loop.NATIVE_DIR / native_loop.HEADER).read_text())
+    """Every struct of tc_master.h, member by member (name and type), is the ctypes structure native_lib passes."""
+    text = code((native_lib.NATIVE_DIR / native_lib.HEADER).read_text())
     structs = dict(re.findall(r"typedef struct (\w+) \{(.*?)\} \1;", text, flags=re.S))
-    assert set(structs) == set(native_loop.STRUCTS)
+    assert set(structs) == set(native_lib.STRUCTS)
     for name, body in structs.items():
         members = []
         for decl in filter(None, (d.strip() for d in body.split(";"))):
             ctype, member = re.fullmatch(r"(.*?)\s*\b(\w+)", " ".join(decl.split())).groups()
-            if ctype.endswith("TYPE *"):  # a pointer to an FMI function
+            if ctype in _C_TYPES:
+                expected = _C_TYPES[ctype]
+            elif ctype.endswith("TYPE *"):  # a pointer to an FMI function
                 expected = ctypes.c_void_p
             elif ctype.startswith(("tcm_", "const tcm_")):  # a pointer to an array of the loop's structs
-                expected = ctypes.POINTER(native_loop.STRUCTS[ctype.replace("const ", "").rstrip(" *")])
+                expected = ctypes.POINTER(native_lib.STRUCTS[ctype.replace("const ", "").rstrip(" *")])
             else:
                 expected = _C_TYPES[ctype]
             members.append((member, expected))
-        assert native_loop.STRUCTS[name]._fields_ == members, name
+        assert native_lib.STRUCTS[name]._fields_ == members, name

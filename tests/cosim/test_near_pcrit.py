@@ -32,7 +32,7 @@ import pytest
 from tribocosim.errors import ConvergenceError, RunFailed
 from tribocosim.paths import scene_file
 from tribocosim.cosim.api import run
-from tribocosim.cosim.apps.monolithic import reference_for_scene
+from tribocosim.cosim.studies.monolithic import reference_for_scene
 from tribocosim.cosim.scene.validate import load_scene
 
 P_CRIT = 340e6

@@ -15,7 +15,7 @@ from tribocosim.components.stripdraw.friction import closed_form_table
 from tribocosim.components.stripdraw.table import FrictionTable, write_table
 from tribocosim.cosim.apps.report_cli import main as report_main
 from tribocosim.cosim.reports import paper
-from tribocosim.cosim.apps.stripdraw_experiment import Point, mu_bar
+from tribocosim.cosim.studies.stripdraw_experiment import Point, mu_bar
 
 
 @pytest.mark.parametrize("rate, start", [(1.0, 1.0), (100.0, 1.0), (0.01, 1.0), (3.0, 1e-3)])

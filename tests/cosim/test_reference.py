@@ -1,9 +1,9 @@
-"""Tests of cosim.apps.monolithic: the closed form against scipy, the monolithic runner against the closed form."""
+"""Tests of cosim.studies.monolithic: the closed form against scipy, the monolithic runner against the closed form."""
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from tribocosim.cosim.apps.monolithic import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
+from tribocosim.cosim.studies.monolithic import CoupledModels, MassCouplingPart, MassPart, TwoMassOscillator
 
 
 def test_closed_form_matches_scipy_and_the_issue_values(exact_t10):

@@ -18,8 +18,9 @@ from tribocosim.errors import SceneError
 from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
-from tribocosim.cosim.apps.monolithic import ComponentModel, make_model, reference_for_scene
-from tribocosim.cosim.scene.component_checks import component_problems, load_component_scene
+from tribocosim.cosim.studies.monolithic import ComponentModel, make_model, reference_for_scene
+from tribocosim.cosim.scene.component_checks import component_problems
+from tribocosim.cosim.scene.validate import load_scene
 from tribocosim.cosim.scene.schema import parse_scene
 
 DEMO = Path(__file__).resolve().parents[2] / "models" / "scenes" / "demo.toml"
@@ -32,7 +33,7 @@ VARIABLES = ("strip.pull_force", "drive.grip_velocity", "press.normal_force")
 
 @pytest.fixture(scope="module")
 def reference():
-    plan = load_component_scene(DEMO, CHEAP)
+    plan = load_scene(DEMO, CHEAP)
     ref = reference_for_scene(plan, 1e-4)
     times = np.arange(0, 51) * (STOP / 50)  # every 4 ms: on the grid of every step below
     return times, ref.solve(times), ref
@@ -49,7 +50,7 @@ def test_cosimulation_converges_to_the_monolithic_reference(reference):
     times, sol, _ = reference
     errors = []
     for h in (4e-3, 2e-3, 1e-3, 5e-4):
-        r = run(load_component_scene(DEMO, {**CHEAP, "experiment.step": h}), write=False)
+        r = run(load_scene(DEMO, {**CHEAP, "experiment.step": h}), write=False)
         k = np.round(times / h).astype(int)
         assert np.allclose(r.time[k], times, rtol=0, atol=1e-12)
         errors.append(max(np.max(np.abs(r[n][k] - sol[n])) / np.max(np.abs(sol[n])) for n in VARIABLES))

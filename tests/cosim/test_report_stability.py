@@ -151,7 +151,7 @@ def test_monodromy_of_the_report_agrees_with_this_derivation():
 
 
 def test_jacobi_stability_limit_through_the_master_matches_the_exact_one_step_map(tmp_path, fmu_dir):
-    from tribocosim.cosim.apps.monolithic import TwoMassOscillator
+    from tribocosim.cosim.studies.monolithic import TwoMassOscillator
     from tribocosim.cosim.reports.oscfmus import oscillator_scene
     from tribocosim.cosim.reports.runner import judged_run
     from tribocosim.cosim.scene.validate import load_scene

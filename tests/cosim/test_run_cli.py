@@ -8,7 +8,7 @@ from fmpy.util import read_csv
 
 from tribocosim.cosim import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.engine.recorder import Progress
+from tribocosim.cosim.engine.observers import Progress
 
 
 def test_run_writes_csv_readable_by_fmpy_and_metadata(tmp_path, osc_scene, capsys):

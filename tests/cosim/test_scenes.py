@@ -23,8 +23,8 @@ from tribocosim.paths import DEFAULT_TABLE
 from tribocosim.components.stripdraw.table import read_table
 from tribocosim.cosim.api import run
 from tribocosim.cli import main as tribocosim
-from tribocosim.cosim.apps.stripdraw_experiment import steady_ratio
-from tribocosim.cosim.scene.component_checks import load_component_scene
+from tribocosim.cosim.studies.stripdraw_experiment import steady_ratio
+from tribocosim.cosim.scene.validate import load_scene
 from tribocosim.cosim.apps.scene_sweep import load_sweep, run_sweep
 
 SCENES = Path(__file__).resolve().parents[2] / "models" / "scenes"
@@ -56,7 +56,7 @@ def by(rows, key, **where):
 @pytest.fixture(scope="module")
 def demo_run():
     """The demo scene at the cheap settings (Jacobi, 1 ms)."""
-    return run(load_component_scene(DEMO, CHEAP), write=False)
+    return run(load_scene(DEMO, CHEAP), write=False)
 
 
 def test_shipped_scenes_and_sweeps_are_valid():
@@ -66,7 +66,7 @@ def test_shipped_scenes_and_sweeps_are_valid():
             sweep = load_sweep(path)
             assert sweep.scene.is_file() and sweep.cases(), path.name
         else:
-            load_component_scene(path)  # raises SceneError on any problem
+            load_scene(path)  # raises SceneError on any problem
     names = {p.stem for p in SCENES.glob("*.toml")}
     assert {"demo", "pressure_sweep", "multipass", "zeta_sweep", "archard_sweep", "stiff_drive"} <= names
 
@@ -188,11 +188,11 @@ def test_each_later_pass_has_lower_mu_bar(tmp_path):
 
 
 BAD = {
-    "fmus.drive.parameters.drive_stiffness": (-5e7, "outside the declared range"),
+    "fmus.drive.parameters.drive_stiffness": (-5e7, "is out of range; allowed: [1, 1e+13] N/m"),
     "fmus.press.parameters.force_setpoint": (150e3, "outside the friction table's pressure axis"),
     "fmus.strip.parameters.friction_model": ("tabel", "is not allowed; choose one of table"),
     "fmus.press.parameters.setpoint_table": ("0 0; 0.1", "is malformed"),
-    "fmus.strip.parameters.beta_initial": (1.5, "outside the declared range"),
+    "fmus.strip.parameters.beta_initial": (1.5, "is out of range; allowed: [0, 1]"),
 }
 
 
@@ -220,8 +220,8 @@ def test_initial_debris_above_the_tables_cap_is_refused(tmp_path):
     over = {"fmus.strip.parameters.table_file": str(closed),
             "fmus.strip.parameters.beta_initial": min(1.0, 1.5 * cap)}
     with pytest.raises(SceneError, match=r"fmus.strip.parameters.beta_initial: beta_initial = .* exceeds the cap of beta"):
-        load_component_scene(DEMO, over)
-    load_component_scene(DEMO, {**over, "fmus.strip.parameters.beta_initial": 0.5 * cap})
+        load_scene(DEMO, over)
+    load_scene(DEMO, {**over, "fmus.strip.parameters.beta_initial": 0.5 * cap})
 
 
 def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
@@ -232,8 +232,8 @@ def test_drive_faster_than_the_table_covers_is_refused(tmp_path):
     over = {"fmus.strip.parameters.table_file": str(small), "fmus.drive.parameters.velocity_setpoint": 2.0}
     with pytest.raises(SceneError, match=r"fmus.drive.parameters.velocity_setpoint: velocity_setpoint = 2 m/s is "
                                          r"above the friction table's velocity axis \(up to 1 m/s\)"):
-        load_component_scene(DEMO, over)
-    load_component_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
+        load_scene(DEMO, over)
+    load_scene(DEMO, {**over, "fmus.drive.parameters.velocity_setpoint": 0.5})
 
 
 @pytest.mark.parametrize("key, value, message", [
@@ -246,10 +246,10 @@ def test_a_set_point_outside_the_range_the_input_is_built_for_is_named(key, valu
     the scene check matches the drive's set-point, with its sign, against the range the strip's input port
     declares (Port.low), and names the set-point's parameter."""
     with pytest.raises(SceneError) as exc:
-        load_component_scene(DEMO, {key: value})
+        load_scene(DEMO, {key: value})
     assert [p.key for p in exc.value.problems] == [key], exc.value
     assert message in exc.value.problems[0].message, exc.value
-    load_component_scene(DEMO, {key: 0.5})
+    load_scene(DEMO, {key: 0.5})
 
 
 def test_every_declared_port_bound_is_a_number_or_a_parameter():
@@ -291,14 +291,14 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
     Jacobi at 50 us and the iterative scheme at 1 ms give the smooth build-up of the pull force."""
     scene = SCENES / "stiff_drive.toml"
     creep = tomllib.loads(scene.read_text())["fmus"]["drive"]["parameters"]["start_time"]  # after the press closes
-    small = run(load_component_scene(scene, {"experiment.step": 5e-5}), write=False)
+    small = run(load_scene(scene, {"experiment.step": 5e-5}), write=False)
     pull = small["strip.pull_force"]
     assert np.all(pull[small.time <= creep] == 0.0), "nothing moves while the press closes"
     assert np.all(np.diff(pull[small.time > creep + 0.05]) > 0) and 150 < pull[-1] < 300, "smooth build-up while sticking"
-    jac = run(load_component_scene(scene), write=False)
+    jac = run(load_scene(scene), write=False)
     assert np.max(np.abs(jac["strip.pull_force"])) > 10 * pull[-1], "Jacobi at 1 ms should ring (unstable loop)"
     assert np.min(jac["drive.grip_velocity"]) < -0.01, "... with the grip reversing"
-    it = run(load_component_scene(scene, {"master.algorithm": "iterative"}), write=False)
+    it = run(load_scene(scene, {"master.algorithm": "iterative"}), write=False)
     np.testing.assert_allclose(it["strip.pull_force"][-1], pull[-1], rtol=0.1, err_msg="iterative at 1 ms")
     ref = np.interp(it.time, small.time, pull)
     assert np.max(np.abs(it["strip.pull_force"] - ref)) < 0.1 * pull[-1]
@@ -331,3 +331,36 @@ def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(t
     second = run_sweep(path, tmp_path / "out")
     assert summary.stat().st_mtime_ns != stamp, "a changed table must run the case again"
     assert second.rows[0]["mu_bar"] == pytest.approx(0.5 * first.rows[0]["mu_bar"], rel=0.05)
+
+
+def test_a_scene_is_parsed_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
+    """``tribocosim run``: one TOML parse of the scene file, and one range check of ``tool_length`` in Python (the
+    component declaration's; the model description's min/max derive from it and are not checked again)."""
+    from tribocosim.components import params
+    from tribocosim.cosim.scene import schema
+
+    tribocosim(["run", str(DEMO), "--out", str(tmp_path / "warm"), "--quiet", "--set", "experiment.stop=0.01"])
+    parses, checked = [], []
+    loads, check_field = schema.tomllib.loads, params.check_field
+
+    class CountingToml:
+        TOMLDecodeError = tomllib.TOMLDecodeError
+
+        @staticmethod
+        def loads(text):
+            parses.append(text)
+            return loads(text)
+
+    monkeypatch.setattr(schema, "tomllib", CountingToml)
+    monkeypatch.setattr(params, "check_field", lambda f, value: (checked.append(f.name), check_field(f, value))[1])
+    assert tribocosim(["run", str(DEMO), "--out", str(tmp_path / "out"), "--quiet",
+                       "--set", "experiment.stop=0.01"]) == 0
+    assert len([t for t in parses if "[fmus.strip]" in t]) == 1, "the scene file is parsed once"
+    assert checked.count("tool_length") == 1, checked
+
+
+def test_the_variant_key_accepts_native_and_refuses_the_rest(tmp_path):
+    load_scene(DEMO, {**CHEAP, "fmus.strip.variant": "native"})  # scenes of earlier versions keep running
+    with pytest.raises(SceneError, match="fmus.strip.variant: 'python' is not allowed: the project builds the FMUs of "
+                                         "its components in C only"):
+        load_scene(DEMO, {**CHEAP, "fmus.strip.variant": "python"})

@@ -5,7 +5,7 @@ import pytest
 
 from tribocosim.errors import CosimStepError
 from tribocosim.cosim import run
-from tribocosim.cosim.apps.monolithic import TwoMassOscillator, coupling_error
+from tribocosim.cosim.studies.monolithic import TwoMassOscillator, coupling_error
 
 BOND = """
 [[power_bonds]]
@@ -164,7 +164,8 @@ class _FakeMaster:
 def test_a_rejected_step_shrinks_by_a_quantum_at_least():
     """A rejection whose smaller step rounds back to the same whole number of double quanta (err = 1.05 at four:
     0.9 x 4 / sqrt(1.05) = 3.5 rounds to 4) must still shrink the step, not retry it for ever."""
-    from tribocosim.cosim.engine.stepcontrol import Adaptive, StepDoubling
+    from tribocosim.cosim.engine.schemes import Adaptive
+    from tribocosim.cosim.engine.stepcontrol import StepDoubling
     from tribocosim.cosim.engine.timegrid import TimeGrid
 
     q, tol = 1e-3, 1e-3

@@ -31,6 +31,7 @@ LAYERS = (
     ("tribocosim.cosim.scene",),
     ("tribocosim.cosim.ssp",),
     ("tribocosim.cosim.api",),
+    ("tribocosim.cosim.studies",),
     ("tribocosim.cosim.apps", "tribocosim.cosim.reports"),
 )
 FACADES = {"tribocosim", "tribocosim.cli", "tribocosim.cosim"}

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import os
 import struct
-import subprocess
 import sys
 from pathlib import Path
 
@@ -83,16 +82,22 @@ def zig_command() -> list[str]:
     return [sys.executable, "-m", "ziglang", "cc"]
 
 
+def zig_dist_info() -> Path | None:
+    """The dist-info folder of the installed ``ziglang`` package (its name carries the version), or None."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("ziglang")
+    if spec is None or spec.origin is None:
+        return None
+    found = sorted(Path(spec.origin).resolve().parent.parent.glob("ziglang-*.dist-info"))
+    return found[-1] if found else None
+
+
 def zig_version() -> str:
     """The version of the installed ``ziglang`` package (from its dist-info folder's name: no metadata import), or
     ``"?"`` when it is not installed."""
-    try:
-        import ziglang
-    except ImportError:
-        return "?"
-    site = Path(ziglang.__file__).resolve().parent.parent
-    found = sorted(p.name[len("ziglang-"):-len(".dist-info")] for p in site.glob("ziglang-*.dist-info"))
-    return found[-1] if found else "?"
+    folder = zig_dist_info()
+    return folder.name[len("ziglang-"):-len(".dist-info")] if folder is not None else "?"
 
 
 def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64", *, include_dirs=(),
@@ -141,6 +146,8 @@ def _command(target: str, include_dirs, defines, extra_flags) -> list[str]:
 
 
 def _run(cmd: list[str], out: Path, what: str) -> Path:
+    import subprocess
+
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0 or not out.is_file():
         raise CompileError(f"compiling {what} failed (exit {proc.returncode}):\n{' '.join(cmd)}\n"

@@ -25,8 +25,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 from tribocosim.errors import ParameterError, TribocosimError
 from tribocosim.components.native.toolchain.prototypes import ctypes_signature
 
@@ -84,7 +82,7 @@ def to_struct(struct_cls, params):
     return s
 
 
-def ptr(a: np.ndarray, ctype=DBL_P):
+def ptr(a, ctype=DBL_P):
     """A ctypes pointer to a contiguous array's data."""
     return a.ctypes.data_as(ctype)
 

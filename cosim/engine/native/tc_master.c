@@ -19,6 +19,9 @@
 #include "tc_master.h"
 
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -205,3 +208,71 @@ TCM_API int tcm_run(const tcm_rig *r, tcm_state *s, int64_t max_steps) {
     }
     return TCM_DONE;
 }
+
+TCM_API int tcm_refresh(const tcm_rig *r, tcm_state *s) { return refresh(r, s); }
+
+TCM_API int tcm_probe(const tcm_rig *r, tcm_state *s, const int *targets, const fmi2ValueReference *target_vrs,
+                      const unsigned char *probe, double *jac, unsigned char *dep, double *scratch) {
+    size_t m = r->n_links;
+    double *base = scratch, *pert = scratch + m;
+    memcpy(base, s->y, m * sizeof(double));
+    for (size_t j = 0; j < m; j++) {
+        if (!probe[j]) continue;
+        int i = targets[j];
+        tcm_slave *sl = &r->slaves[i];
+        double u = base[j];
+        double delta = 1e-6 * fmax(1.0, fabs(u));
+        double values[2] = {u + delta, u};
+        for (int pass = 0; pass < 2; pass++) {
+            double t0 = wall_clock();
+            fmi2Status st = sl->set_real(sl->component, &target_vrs[j], 1, &values[pass]);
+            sl->wall_time += wall_clock() - t0;
+            if (st > fmi2Warning) return fmi_failed(s, i, st, "fmi2SetReal", sl->current_time);
+            int rc = read_outputs(r, s, i);
+            if (rc != TCM_DONE) return rc;
+            if (pass == 0) memcpy(pert, s->y, m * sizeof(double));
+        }
+        for (size_t g = r->get_first[i]; g < r->get_first[i + 1]; g++) {
+            const tcm_get *get = &r->gets[g];
+            for (size_t q = 0; q < get->n_dst; q++) {
+                size_t k = (size_t)get->dst[q];
+                double d = (pert[k] - s->y[k]) / delta;
+                double tol = 1e-8 * fmax(1.0, fabs(s->y[k])) / fmax(1.0, fabs(u));
+                jac[k * m + j] = d;
+                dep[k * m + j] = fabs(d) > tol;
+            }
+        }
+    }
+    memcpy(s->y, base, m * sizeof(double));
+    memset(s->written_ok, 0, r->n_slaves);
+    return TCM_DONE;
+}
+
+TCM_API int tcm_record_row(const tcm_rig *r, tcm_state *s) {
+    if (s->n_rows >= s->capacity) return failed(s, TCM_STOPPED, -1, fmi2OK, "no room for a row", 0.0);
+    double t = r->start + (double)s->n * r->tick;
+    int rc = record(r, s, t);
+    if (rc != TCM_DONE) return rc;
+    s->times[s->n_rows] = t;
+    memcpy(s->rows + s->n_rows * r->n_columns, s->row, r->n_columns * sizeof(double));
+    s->n_rows++;
+    return TCM_DONE;
+}
+
+TCM_API void tcm_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
+                        fmi2String message, ...) {
+    (void)instance;
+    (void)category;
+    const tcm_log_env *e = (const tcm_log_env *)env;
+    if (e == NULL || e->sink == NULL) return;
+    char text[4096];
+    va_list args;
+    va_start(args, message);
+    vsnprintf(text, sizeof text, message != NULL ? message : "", args);
+    va_end(args);
+    e->sink(e->key, (int)status, text);
+}
+
+TCM_API void *tcm_allocate_memory(size_t n, size_t size) { return calloc(n, size); }
+
+TCM_API void tcm_free_memory(void *block) { free(block); }

@@ -128,4 +128,33 @@ typedef struct tcm_state {
  * are written); returns a tcm_status. */
 TCM_API int tcm_run(const tcm_rig *rig, tcm_state *state, int64_t max_steps);
 
+/* The output refresh at the current communication point (the slaves in rig->eval_order; one that may feed through
+ * gets its inputs set to y first when rig->propagate), as tribocosim.cosim.engine.system.CoupledSystem.refresh. */
+TCM_API int tcm_refresh(const tcm_rig *rig, tcm_state *state);
+
+/* The loop Jacobian by probing, as CoupledSystem.probe_feedthrough: for each link j with probe[j], the input
+ * target_vrs[j] of slave targets[j] is set to u + delta (u = y[j], delta = 1e-6 max(1, |u|)), the slave's linked
+ * outputs read, the input set back to u and the outputs read again; jac[k m + j] = (y_k(u + delta) - y_k(u)) / delta
+ * and dep[k m + j] = |jac| > 1e-8 max(1, |y_k|) / max(1, |u|) for the links k the slave's outputs feed (m links).
+ * Afterwards y holds its values from before and no slave's inputs count as written. `scratch` holds 2 m doubles. */
+TCM_API int tcm_probe(const tcm_rig *rig, tcm_state *state, const int *targets, const fmi2ValueReference *target_vrs,
+                      const unsigned char *probe, double *jac, unsigned char *dep, double *scratch);
+
+/* Read the recorded variables at the current communication point and append them as a row (the row of the start
+ * point); a non-finite one stops (TCM_STOPPED). */
+TCM_API int tcm_record_row(const tcm_rig *rig, tcm_state *state);
+
+/* FMU log messages: the FMI 2.0 logger (variadic) formats a message and hands it to env->sink with env->key. */
+typedef void tcm_sink(void *key, int status, const char *message);
+typedef struct tcm_log_env {
+    tcm_sink *sink;
+    void *key;
+} tcm_log_env;
+
+TCM_API void tcm_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
+                        fmi2String message, ...);
+/* The memory callbacks of FMI 2.0 (calloc and free). */
+TCM_API void *tcm_allocate_memory(size_t n, size_t size);
+TCM_API void tcm_free_memory(void *block);
+
 #endif

@@ -7,7 +7,8 @@ the draw, the steady-state region. A later pass starts from the debris field the
 Fig. 2b; the share ``debris_carry_over`` of it), with the strip's mechanics afresh. After each pass the debris
 left on the strip is weighed: the mean of beta over the nodes that were under the pad in the pass, times
 h_p rho (flakes of Al, rho = 2700 kg/m^3) per unit area. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
-worker processes (:func:`run_points`).
+worker processes (:func:`run_points`). :func:`run_strip_draw` and :func:`steady_mean`: one draw with its outputs at
+every step (the accuracy report and the benchmarks).
 """
 
 from __future__ import annotations
@@ -90,3 +91,53 @@ def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> li
 
     with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
         return list(pool.map(fn, points))
+
+
+def run_strip_draw(
+    pressure: float = 10e6,
+    tool_length: float = 0.035,
+    velocity: float = 0.08,
+    draw_length: float = 0.14,
+    step: float = 1e-3,
+    ramp_time: float = 0.01,
+    **parameters,
+):
+    """Run one strip draw with the pure model; return (time, outputs per step, model).
+
+    Parameters
+    ----------
+    pressure : float
+        Nominal contact pressure P_N [Pa]; the normal force is P_N L_T w_T.
+    tool_length : float
+        Pad length L_T [m].
+    velocity : float
+        Drawing velocity V0 [m/s].
+    draw_length : float
+        Draw length [m].
+    step : float
+        Output step [s].
+    ramp_time : float
+        Time over which the grip velocity ramps up [s].
+    **parameters
+        Further parameters of the StripDraw component: :class:`StripDrawParameters` fields and its
+        files (``table_file``: default the shipped table).
+    """
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    model = COMPONENT.make({"tool_length": tool_length, "draw_length": draw_length, **parameters}).model
+    p = model.params
+    normal_force = p.normal_force(pressure)
+    t_end = draw_length / velocity + 0.5 * ramp_time
+    n = int(round(t_end / step))
+    times = step * np.arange(1, n + 1)
+    outs = []
+    for k in range(n):
+        v = velocity * min(1.0, (k + 0.5) * step / ramp_time) if ramp_time > 0 else velocity
+        outs.append(model.step(step, {"normal_force": normal_force, "grip_velocity": v}))
+    return times, outs, model
+
+
+def steady_mean(outs, key: str = "mu_mean", fraction: float = 0.2) -> float:
+    """Mean of an output over the last ``fraction`` of the run (the steady-state region)."""
+    values = np.array([o[key] for o in outs])
+    return float(values[int((1.0 - fraction) * values.size):].mean())
