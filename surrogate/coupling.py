@@ -94,23 +94,15 @@ def overlap_clusters(fp: Footprint, h_top) -> int:
     return int(ndimage.label(mask, structure=_EIGHT)[1])
 
 
-def _stacked(fps: list[Footprint], field) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """z_lo, z_hi, inside and the windows of ``field``, stacked over flakes (all windows of a
-    :func:`~tribocosim.surrogate.flakes.footprints` call have one size)."""
-    ix, iy, z_lo, z_hi, inside = (fps if isinstance(fps, Footprints) else Footprints(fps)).stacked()
-    return z_lo, z_hi, inside, np.asarray(field)[ix[:, :, None], iy[:, None, :]]
-
-
-def classify(fps: list[Footprint], h_top, threshold: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def classify(fps, h_top, threshold: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Blocked flags (cluster rule, Fig. 8) and overlap-cluster counts against the tool ``h_top``
     (:func:`overlap_clusters` of every flake, labelled in one call); a pixel overlaps when the flake's upper
     surface is above the tool by more than ``threshold`` [m] (0: the paper's rule; negative: within that
     distance below it)."""
-    if len({fp.z_lo.shape for fp in fps}) != 1:
-        counts = np.array([overlap_clusters(fp, h_top + threshold) for fp in fps], dtype=np.int64)
-        return counts >= MIN_CLUSTERS_BLOCKED, counts
-    _, z_hi, inside, window = _stacked(fps, h_top)
-    mask = inside & (np.nan_to_num(z_hi, nan=-np.inf) > window + threshold)
+    fps = Footprints.of(fps)
+    if not len(fps):
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64)
+    mask = fps.inside & (np.nan_to_num(fps.z_hi, nan=-np.inf) > fps.windows(h_top) + threshold)
     # 8-connected within each flake's window, never across flakes
     labels, _ = ndimage.label(mask, structure=np.stack([np.zeros((3, 3), bool), _EIGHT,
                                                         np.zeros((3, 3), bool)]))
@@ -143,7 +135,7 @@ def attach_to_tool(fp: Footprint, h_top, drop: float | None = None) -> tuple[Foo
     return Footprint(fp.ix, fp.iy, z_lo, z_hi), drop
 
 
-def stack_groups(fps: list[Footprint], n: int) -> np.ndarray:
+def stack_groups(fps, n: int) -> np.ndarray:
     """Label of the stack each flake belongs to: flakes whose footprints share a pixel (one lies on
     the other there) are in one stack, transitively; a flake alone is a stack of one.
 
@@ -151,10 +143,11 @@ def stack_groups(fps: list[Footprint], n: int) -> np.ndarray:
     flake resting on another is pressed into the sheet through it, so the pinch test reads the
     stack's top against the tool and its bottom against the sheet, and a blocked flake makes its
     whole stack load-bearing."""
-    if not fps:
+    fps = Footprints.of(fps)
+    if not len(fps):
         return np.zeros(0, dtype=np.int64)
-    flake = np.concatenate([np.full(int(fp.inside.sum()), i) for i, fp in enumerate(fps)])
-    pixel = np.concatenate([(fp.ix[:, None] * n + fp.iy[None, :])[fp.inside] for fp in fps])
+    flake = np.nonzero(fps.inside)[0]
+    pixel = fps.flat_indices(n)[fps.inside]
     order = np.lexsort((flake, pixel))
     pixel, flake = pixel[order], flake[order]
     shared = pixel[1:] == pixel[:-1]  # consecutive flakes on one pixel: an edge of the stack graph
@@ -179,97 +172,56 @@ def spread_to_stacks(flags: np.ndarray, groups: np.ndarray | None) -> np.ndarray
     return _per_stack_max(flags.astype(float), groups) > 0.0
 
 
-def pinched(fps: list[Footprint], h_top, h_low, limit: float, groups=None) -> np.ndarray:
+def pinched(fps, h_top, h_low, limit: float, groups=None) -> np.ndarray:
     """Flakes that do not fit between the tool and the sheet: the depths by which the tool and the
     sheet cut into the flake (maxima over its footprint, grid) add up to more than 2 ``limit`` [m].
     A flake touching only one surface with a gap to the other larger than the cut fits (the DEM moves
     it into the gap); one touching both, or cut by one deeper than its clearance to the other, does
     not. With ``groups`` (:func:`stack_groups`) the test is that of each stack as one rigid body: the
     largest cut of the tool into any of its flakes plus the largest cut of the sheet."""
-    if not fps:
+    fps = Footprints.of(fps)
+    if not len(fps):
         return np.zeros(0, dtype=bool)
-    if len({fp.z_lo.shape for fp in fps}) != 1:
-        top, low = np.array([_cuts(fp, h_top, h_low) for fp in fps]).T
-    else:
-        z_lo, z_hi, inside, top_win = _stacked(fps, h_top)
-        low_win = _stacked(fps, h_low)[3]
-        top = np.where(inside, z_hi - top_win, -np.inf).max(axis=(1, 2))
-        low = np.where(inside, low_win - z_lo, -np.inf).max(axis=(1, 2))
+    top = np.where(fps.inside, fps.z_hi - fps.windows(h_top), -np.inf).max(axis=(1, 2))
+    low = np.where(fps.inside, fps.windows(h_low) - fps.z_lo, -np.inf).max(axis=(1, 2))
     return _per_stack_max(top, groups) + _per_stack_max(low, groups) > 2.0 * limit
 
 
-def _cuts(fp: Footprint, h_top, h_low) -> tuple[float, float]:
-    """The depths by which the tool and the sheet cut into one flake (maxima over its footprint)."""
-    ins = fp.inside
-    top = np.max((fp.z_hi - h_top[np.ix_(fp.ix, fp.iy)])[ins])
-    low = np.max((h_low[np.ix_(fp.ix, fp.iy)] - fp.z_lo)[ins])
-    return float(top), float(low)
-
-
-def attach_stacks(fps: list[Footprint], blocked, h_top, groups=None) -> list[Footprint]:
+def attach_stacks(fps, blocked, h_top, groups=None) -> Footprints:
     """The footprints as the contact solve sees them: every blocked flake attached to the tool
-    (:func:`attach_to_tool`), dropped by the largest drop in its stack so that the stack moves as one
-    body; the others unchanged. (Footprints of one window size are done all at once, with the same
-    minima and maxima as :func:`attach_to_tool` one by one.)"""
+    (:func:`attach_to_tool`, all at once with the same minima and maxima), dropped by the largest drop in its
+    stack so that the stack moves as one body; the others unchanged."""
+    fps = Footprints.of(fps)
     idx = np.flatnonzero(blocked)
-    out = list(fps)
     if idx.size == 0:
-        return out
-    if len({fps[j].z_lo.shape for j in idx}) != 1:
-        drops = np.zeros(len(fps))
-        drops[idx] = [attach_to_tool(fps[j], h_top)[1] for j in idx]
-        drops = _per_stack_max(np.where(blocked, drops, -np.inf), groups)
-        for j in idx:
-            out[j] = attach_to_tool(fps[j], h_top, drop=float(drops[j]))[0]
-        return out
-    sel = [fps[j] for j in idx]
-    z_lo, z_hi, _, window = _stacked(sel, h_top)
-    z_lo = ndimage.minimum_filter(np.nan_to_num(z_lo, nan=np.inf), size=(1, 3, 3), mode="constant",
+        return fps
+    sel = fps.take(idx)
+    z_lo = ndimage.minimum_filter(np.nan_to_num(sel.z_lo, nan=np.inf), size=(1, 3, 3), mode="constant",
                                   cval=np.inf)
-    z_hi = ndimage.maximum_filter(np.nan_to_num(z_hi, nan=-np.inf), size=(1, 3, 3), mode="constant",
+    z_hi = ndimage.maximum_filter(np.nan_to_num(sel.z_hi, nan=-np.inf), size=(1, 3, 3), mode="constant",
                                   cval=-np.inf)
     drops = np.zeros(len(fps))
-    drops[idx] = np.maximum(0.0, np.max(z_hi - window, axis=(1, 2)))
+    drops[idx] = np.maximum(0.0, np.max(z_hi - sel.windows(h_top), axis=(1, 2)))
     drop = _per_stack_max(np.where(blocked, drops, -np.inf), groups)[idx][:, None, None]
-    z_lo = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
-    z_hi = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
-    for k, j in enumerate(idx):
-        out[j] = Footprint(fps[j].ix, fps[j].iy, z_lo[k], z_hi[k])
-    return out
+    out_lo, out_hi = fps.z_lo.copy(), fps.z_hi.copy()
+    out_lo[idx] = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
+    out_hi[idx] = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
+    return Footprints(fps.ix, fps.iy, out_lo, out_hi)
 
 
-def _window_indices(fps: list[Footprint], n: int) -> np.ndarray:
-    """Flat grid indices (len(fps), wx, wy) of the footprints' windows (one window size)."""
-    ix = np.stack([fp.ix for fp in fps])
-    iy = np.stack([fp.iy for fp in fps])
-    return ix[:, :, None] * n + iy[:, None, :]
-
-
-def modified_tool(h_top, fps: list[Footprint], blocked) -> np.ndarray:
+def modified_tool(h_top, fps, blocked) -> np.ndarray:
     """Eq. 18: min of the tool and the lower surface of every blocked flake."""
     h_star = np.array(h_top, dtype=np.float64, copy=True)
-    sel = [fp for fp, b in zip(fps, blocked) if b]
-    if sel and len({fp.z_lo.shape for fp in sel}) == 1:
-        z = np.stack([fp.z_lo for fp in sel])
-        inside = np.isfinite(z)
-        np.minimum.at(h_star.reshape(-1), _window_indices(sel, h_star.shape[0])[inside], z[inside])
-        return h_star
-    for fp in sel:
-        sub = h_star[np.ix_(fp.ix, fp.iy)]
-        h_star[np.ix_(fp.ix, fp.iy)] = np.fmin(sub, fp.z_lo)
+    sel = Footprints.of(fps).take(np.flatnonzero(np.asarray(blocked, dtype=bool)))
+    np.minimum.at(h_star.reshape(-1), sel.flat_indices(h_star.shape[0])[sel.inside], sel.z_lo[sel.inside])
     return h_star
 
 
-def blocked_mask(fps: list[Footprint], blocked, n: int) -> np.ndarray:
+def blocked_mask(fps, blocked, n: int) -> np.ndarray:
     """Boolean (n, n) mask of the pixels under a blocked flake."""
     mask = np.zeros((n, n), dtype=bool)
-    sel = [fp for fp, b in zip(fps, blocked) if b]
-    if sel and len({fp.z_lo.shape for fp in sel}) == 1:
-        inside = np.stack([fp.inside for fp in sel])
-        mask.reshape(-1)[_window_indices(sel, n)[inside]] = True
-        return mask
-    for fp in sel:
-        mask[np.ix_(fp.ix, fp.iy)] |= fp.inside
+    sel = Footprints.of(fps).take(np.flatnonzero(np.asarray(blocked, dtype=bool)))
+    mask.reshape(-1)[sel.flat_indices(n)[sel.inside]] = True
     return mask
 
 

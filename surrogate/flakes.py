@@ -47,19 +47,61 @@ class Footprint:
         return np.isfinite(self.z_lo)
 
 
-class Footprints(list):
-    """The footprints of one :func:`footprints` call (a list of :class:`Footprint`, all windows of one size)
-    with their arrays stacked over flakes, made once when first asked for."""
+class Footprints:
+    """The footprints of a set of flakes, all windows of one size, as stacked arrays: a sequence of
+    :class:`Footprint` (made when one is asked for) whose arrays the classification of a slide reads at once.
 
-    _stack = None
+    Attributes
+    ----------
+    ix, iy : ndarray (k, w)
+        Global pixel indices of each window's rows/columns (wrapped mod n).
+    z_lo, z_hi : ndarray (k, w, w)
+        Lower and upper surface heights [m]; NaN outside the footprint.
+    inside : ndarray (k, w, w) of bool
+        The footprints' masks.
+    """
 
-    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(ix, iy, z_lo, z_hi, inside), stacked over the flakes."""
-        if self._stack is None:
-            z_lo = np.stack([fp.z_lo for fp in self])
-            self._stack = (np.stack([fp.ix for fp in self]), np.stack([fp.iy for fp in self]), z_lo,
-                           np.stack([fp.z_hi for fp in self]), np.isfinite(z_lo))
-        return self._stack
+    __slots__ = ("ix", "iy", "z_lo", "z_hi", "inside")
+
+    def __init__(self, ix, iy, z_lo, z_hi):
+        self.ix, self.iy, self.z_lo, self.z_hi = ix, iy, z_lo, z_hi
+        self.inside = np.isfinite(z_lo)
+
+    @classmethod
+    def of(cls, fps) -> Footprints:
+        """``fps`` itself if it is a Footprints, else the list of :class:`Footprint` stacked (one window size)."""
+        if isinstance(fps, Footprints):
+            return fps
+        fps = list(fps)
+        if not fps:
+            return cls(np.zeros((0, 0), np.int64), np.zeros((0, 0), np.int64), np.zeros((0, 0, 0)),
+                       np.zeros((0, 0, 0)))
+        if len({fp.z_lo.shape for fp in fps}) != 1:
+            raise ParameterError(f"footprint windows of sizes {sorted({fp.z_lo.shape for fp in fps})}; allowed: "
+                                 f"one size (the windows of one footprints() call)")
+        return cls(np.stack([fp.ix for fp in fps]), np.stack([fp.iy for fp in fps]),
+                   np.stack([fp.z_lo for fp in fps]), np.stack([fp.z_hi for fp in fps]))
+
+    def __len__(self) -> int:
+        return len(self.z_lo)
+
+    def __getitem__(self, k: int) -> Footprint:
+        return Footprint(self.ix[k], self.iy[k], self.z_lo[k], self.z_hi[k])
+
+    def __iter__(self):
+        return (self[k] for k in range(len(self)))
+
+    def take(self, idx) -> Footprints:
+        """The footprints of the flakes ``idx`` (integer indices)."""
+        return Footprints(self.ix[idx], self.iy[idx], self.z_lo[idx], self.z_hi[idx])
+
+    def windows(self, field) -> np.ndarray:
+        """(k, w, w): ``field`` (n, n) read over every window."""
+        return np.asarray(field)[self.ix[:, :, None], self.iy[:, None, :]]
+
+    def flat_indices(self, n: int) -> np.ndarray:
+        """(k, w, w): the flat indices of the windows' pixels in an (n, n) grid."""
+        return self.ix[:, :, None] * n + self.iy[:, None, :]
 
 
 def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
@@ -68,7 +110,7 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
     Returns
     -------
     Footprints
-        One Footprint per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
+        One footprint per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
     """
     dx = size / n
     a, c = shape.a, shape.c
@@ -77,11 +119,12 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
     half = int(math.ceil(a / dx)) + 1
     offs = np.arange(-half, half + 1)
     if len(pos) == 0:
-        return Footprints()
+        return Footprints.of([])
     # all flakes at once (the same elementwise operations as one at a time, so the same numbers)
-    m = np.stack([R @ np.diag([a**-2, a**-2, c**-2]) @ R.T for R in rot])[:, :, :, None, None]
-    i0 = np.array([int(math.floor(r[0] / dx)) for r in pos])
-    j0 = np.array([int(math.floor(r[1] / dx)) for r in pos])
+    body = np.diag([a**-2, a**-2, c**-2])
+    m = np.stack([R @ body @ R.T for R in rot])[:, :, :, None, None]
+    i0 = np.floor(pos[:, 0] / dx).astype(np.int64)
+    j0 = np.floor(pos[:, 1] / dx).astype(np.int64)
     dX = ((i0[:, None] + offs) * dx - pos[:, :1])[:, :, None]
     dY = ((j0[:, None] + offs) * dx - pos[:, 1:2])[:, None, :]
     qa = m[:, 2, 2]
@@ -92,8 +135,7 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
     z0 = pos[:, 2, None, None]
     z_lo = z0 + (-qb - root) / (2.0 * qa)
     z_hi = z0 + (-qb + root) / (2.0 * qa)
-    return Footprints(Footprint((i0[k] + offs) % n, (j0[k] + offs) % n, z_lo[k], z_hi[k])
-                      for k in range(len(pos)))
+    return Footprints((i0[:, None] + offs) % n, (j0[:, None] + offs) % n, z_lo, z_hi)
 
 
 def _bilinear_np(h, x, y, dx):

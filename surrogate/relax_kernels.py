@@ -18,8 +18,8 @@ not change since its last solve, and whose step was then below the tolerance, is
 
 Components. The system couples two flakes only through a flake-flake contact; the flakes are grouped into
 the connected components of the contact graph (union-find), and each component's system (6 unknowns per
-flake) is solved on its own, dense (LAPACK through ``np.linalg.solve``): a flake alone is a 6 x 6 system, a
-stack of m flakes a 6m x 6m one. Each component has its own damping and accepts or rejects its step on its
+flake) is solved on its own, dense (a Cholesky factorisation, :func:`_cholesky_solve`): a flake alone is a
+6 x 6 system, a stack of m flakes a 6m x 6m one. Each component has its own damping and accepts or rejects its step on its
 own energy, so that a flake whose linearised contacts mislead it (the bilinear surfaces are smooth only
 within a pixel) does not hold back the others.
 """
@@ -415,16 +415,57 @@ def _assemble(members, hess, force, torque, adj_start, adj, pairs, pair_part, pa
 
 
 @_jit
+def _cholesky_solve(m, x):
+    """Solve m y = x in place for a symmetric positive definite ``m`` (overwritten: its lower triangle by the
+    Cholesky factor L, m = L L^T; ``x`` by y). Returns False, with ``m`` and ``x`` spoilt, when a pivot is not
+    positive (``m`` not positive definite in floating point).
+
+    H + nu D is positive definite (H a Gauss-Newton sum of k w a a^T, D the drag, nu > 0), and the factor needs no
+    pivoting; it is unchanged by a diagonal scaling of the unknowns (translations and rotations), so that the
+    condition that matters is the scaled matrix's (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed.,
+    SIAM 2002, ch. 10). The systems are 6k x 6k for a component of k flakes (k = 1 mostly), where a library call
+    costs more than the n^3/3 operations."""
+    n = m.shape[0]
+    for j in range(n):
+        s = m[j, j]
+        for q in range(j):
+            s -= m[j, q] * m[j, q]
+        if not s > 0.0:
+            return False
+        d = math.sqrt(s)
+        m[j, j] = d
+        for i in range(j + 1, n):
+            s = m[i, j]
+            for q in range(j):
+                s -= m[i, q] * m[j, q]
+            m[i, j] = s / d
+    for i in range(n):
+        s = x[i]
+        for q in range(i):
+            s -= m[i, q] * x[q]
+        x[i] = s / m[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for q in range(i + 1, n):
+            s -= m[q, i] * x[q]
+        x[i] = s / m[i, i]
+    return True
+
+
+@_jit
 def _lm_step(members, big, rhs, drag, nu, a, delta):
-    """delta = (H + nu D)^-1 F for the members; returns the largest move of a point."""
+    """delta = (H + nu D)^-1 F for the members; returns the largest move of a point (infinite when H + nu D is
+    not positive definite in floating point: the caller then raises nu)."""
     k = members.shape[0]
     shifted = big.copy()
+    sol = rhs.copy()
     for l in range(k):
         j = members[l]
         for r in range(6):
             for q in range(6):
                 shifted[6 * l + r, 6 * l + q] += nu * drag[j, r, q]
-    sol = np.linalg.solve(shifted, rhs)
+    if not _cholesky_solve(shifted, sol):
+        return math.inf
     move = 0.0
     for l in range(k):
         j = members[l]
@@ -437,15 +478,14 @@ def _lm_step(members, big, rhs, drag, nu, a, delta):
 @_jit
 def _predicted(members, big, rhs, delta):
     """Change of the energy the quadratic model predicts for delta: -F.delta + delta.H.delta / 2."""
-    k = members.shape[0]
-    sol = np.empty(6 * k)
-    for l in range(k):
-        for r in range(6):
-            sol[6 * l + r] = delta[members[l], r]
-    hs = big @ sol
+    m6 = 6 * members.shape[0]
     out = 0.0
-    for q in range(6 * k):
-        out += -rhs[q] * sol[q] + 0.5 * sol[q] * hs[q]
+    for q in range(m6):
+        dq = delta[members[q // 6], q % 6]
+        hs = 0.0
+        for r in range(m6):
+            hs += big[q, r] * delta[members[r // 6], r % 6]
+        out += -rhs[q] * dq + 0.5 * dq * hs
     return out
 
 

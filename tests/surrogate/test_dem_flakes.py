@@ -121,4 +121,4 @@ def test_footprints_of_all_flakes_at_once_equal_one_at_a_time_bit_for_bit():
         assert np.array_equal(fp.ix, ix) and np.array_equal(fp.iy, iy)
         assert np.array_equal(fp.z_lo, z_lo, equal_nan=True)
         assert np.array_equal(fp.z_hi, z_hi, equal_nan=True)
-    assert footprints(np.zeros((0, 3)), np.zeros((0, 4)), SHAPE, N, L) == []
+    assert len(footprints(np.zeros((0, 3)), np.zeros((0, 4)), SHAPE, N, L)) == 0

@@ -197,6 +197,25 @@ def small_slide(**over):
     return run_slide(cfg)
 
 
+@pytest.mark.parametrize("flakes", [1, 3, 20])
+def test_the_step_solve_is_the_solution_of_the_damped_system(flakes):
+    """delta = (H + nu D)^-1 F: the residual of the solve is round-off of the system's scale, on a Gauss-Newton sum
+    of rank-one terms with translations and rotations of different units (as H + nu D is), and an indefinite
+    matrix is reported, not solved."""
+    rng = np.random.default_rng(flakes)
+    n = 6 * flakes
+    scale = np.repeat([[1.0, 1.0, 1.0, 1e-5, 1e-5, 1e-5]], flakes, axis=0).ravel()  # m against rad (a ~ 6 um)
+    rows = rng.normal(size=(2 * n, n)) * scale
+    m = 1e7 * rows.T @ rows + 1e-3 * np.diag(scale**2)
+    x = rng.normal(size=n)
+    factor, y = m.copy(), x.copy()
+    assert rk._cholesky_solve(factor, y)
+    assert_allclose(m @ y, x, rtol=0, atol=1e-12 * np.abs(m).max() * np.abs(y).max() * n)
+    assert_allclose(np.tril(factor) @ np.tril(factor).T, m, rtol=0, atol=1e-13 * np.abs(m).max())
+    indefinite = m - 2.0 * np.abs(m).max() * np.eye(n)
+    assert not rk._cholesky_solve(indefinite, x.copy())
+
+
 def test_overdamped_slide_is_deterministic_and_counts_its_work():
     a, b = small_slide(), small_slide()
     assert np.array_equal(a.particle_fraction, b.particle_fraction)
