@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 from tribocosim.errors import ConvergenceError, CosimStepError
 from tribocosim.cosim.engine.algorithms import Algorithm
-from tribocosim.cosim.engine.schemes import ALGORITHMS
+from tribocosim.cosim.engine.schemes import loop_message
 from tribocosim.cosim.engine.observers import Observer
 from tribocosim.cosim.engine.recorder import Recorder
 from tribocosim.cosim.engine.system import CoupledSystem, NonFiniteOutput
@@ -128,12 +128,8 @@ class Master:
         sysm.probe_feedthrough(start)
         sysm.refresh(start, propagate=True)
         for loop in sysm.loops:
-            labels = ", ".join(sysm.links[k].label for k in loop.links)
-            msg = f"algebraic loop through {labels}: contraction factor rho = {loop.contraction:.4g}"
-            if not ALGORITHMS[self.algorithm.name].solves_loops and loop.contraction >= 1.0:
-                solvers = " or ".join(f'"{n}"' for n, a in ALGORITHMS.items() if a.solves_loops)
-                msg += (f" >= 1: {self.algorithm.name} cannot be stable here (the loop is broken with a one-step "
-                        f"delay, y_n+1 = D y_n + s); use algorithm = {solvers}")
+            msg, warn = loop_message(loop, ", ".join(sysm.links[k].label for k in loop.links), self.algorithm.name)
+            if warn:
                 self.warnings.append(msg)
                 LOG.warning(msg)
             else:

@@ -43,7 +43,7 @@ from tribocosim.errors import TribocosimError
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, SINK, TCM_DONE, TcmGet, TcmLogEnv, TcmRig, TcmSet,
                                                 TcmSlave, TcmState, library)
-from tribocosim.cosim.engine.schemes import ALGORITHMS, LinkSpec
+from tribocosim.cosim.engine.schemes import LinkSpec, loop_message
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
 LOG = logging.getLogger("tribocosim.cosim")
@@ -397,12 +397,8 @@ class NativeSession:
         self._set_feeds(feedthrough)
         self._c("tcm_refresh")
         for loop in loops:
-            labels = ", ".join(self.links[k].label for k in loop.links)
-            msg = f"algebraic loop through {labels}: contraction factor rho = {loop.contraction:.4g}"
-            if not ALGORITHMS[self.algorithm].solves_loops and loop.contraction >= 1.0:
-                solvers = " or ".join(f'"{name}"' for name, a in ALGORITHMS.items() if a.solves_loops)
-                msg += (f" >= 1: {self.algorithm} cannot be stable here (the loop is broken with a one-step delay, "
-                        f"y_n+1 = D y_n + s); use algorithm = {solvers}")
+            msg, warn = loop_message(loop, ", ".join(self.links[k].label for k in loop.links), self.algorithm)
+            if warn:
                 self.warnings.append(msg)
                 LOG.warning(msg)
             else:

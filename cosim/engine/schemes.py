@@ -161,6 +161,18 @@ ALGORITHMS: dict[str, AlgorithmSpec] = {
     "iterative": AlgorithmSpec(Iterative, rolls_back=True, solves_loops=True),
 }
 
+def loop_message(loop, labels: str, algorithm: str) -> tuple[str, bool]:
+    """What a master says of an algebraic loop through the links ``labels`` before it runs ``algorithm``, and
+    whether that is a warning: a loop whose contraction factor rho is >= 1 cannot be stable under a scheme that
+    breaks it with a one-step delay (y_n+1 = D y_n + s)."""
+    msg = f"algebraic loop through {labels}: contraction factor rho = {loop.contraction:.4g}"
+    if ALGORITHMS[algorithm].solves_loops or loop.contraction < 1.0:
+        return msg, False
+    solvers = " or ".join(f'"{name}"' for name, a in ALGORITHMS.items() if a.solves_loops)
+    return (msg + f" >= 1: {algorithm} cannot be stable here (the loop is broken with a one-step delay, "
+            f"y_n+1 = D y_n + s); use algorithm = {solvers}"), True
+
+
 #: every error estimator by its scene name (``[master.adaptive] estimator``)
 ESTIMATORS: dict[str, EstimatorSpec] = {
     "step-doubling": EstimatorSpec(rolls_back=True, needs_bonds=False),

@@ -30,11 +30,7 @@ def plot_result(result, path: Path) -> Path:
     axes[-1, 0].set_xlabel("time [s]")
     m = result.metadata["master"]
     fig.suptitle(f"{Path(result.metadata['scene']).name}: {m['algorithm']}, extrapolation {m['extrapolation']}", fontsize=9)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, path, dpi=120)
 
 
 def _pyplot():
@@ -44,6 +40,19 @@ def _pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _save(fig, path, dpi: int = 130, **options) -> Path:
+    """Lay ``fig`` out (tight_layout, or the tight bounding box ``bbox_inches="tight"`` when given), write it to
+    ``path`` (PNG) and close it; returns the path."""
+    import matplotlib.pyplot as plt
+
+    if "bbox_inches" not in options:
+        fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=dpi, **options)
+    plt.close(fig)
+    return path
 
 
 def read_field(path) -> dict:
@@ -120,19 +129,13 @@ def plot_demo(result, field_file, out_dir, mu_bar: float | None = None) -> list[
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("Friction coefficient over the draw", fontsize=10)
-    fig.tight_layout()
-    files.append(out_dir / "mu_vs_sliding_distance.png")
-    fig.savefig(files[-1], dpi=130)
-    plt.close(fig)
+    files.append(_save(fig, out_dir / "mu_vs_sliding_distance.png"))
 
     field = read_field(field_file)
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     draw_beta_map(ax, field)
     ax.set_title("Debris beta(X, t) on the strip (cf. paper Fig. 17a); dashed: pad edges", fontsize=10)
-    fig.tight_layout()
-    files.append(out_dir / "beta_map.png")
-    fig.savefig(files[-1], dpi=130)
-    plt.close(fig)
+    files.append(_save(fig, out_dir / "beta_map.png"))
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 4.8), sharex=True)
     a1.plot(t, fp / 1e3, lw=1.2, label="pull force (strip, both faces)")
@@ -148,10 +151,7 @@ def plot_demo(result, field_file, out_dir, mu_bar: float | None = None) -> list[
     a2.grid(True, alpha=0.3)
     a2.legend(fontsize=8)
     a1.set_title("Press and drawing machine", fontsize=10)
-    fig.tight_layout()
-    files.append(out_dir / "forces.png")
-    fig.savefig(files[-1], dpi=130)
-    plt.close(fig)
+    files.append(_save(fig, out_dir / "forces.png"))
     return files
 
 
@@ -185,11 +185,7 @@ def plot_sweep(result, path: Path) -> Path:
     if series or flagged:
         ax.legend(fontsize=8)
     ax.set_title(spec.get("title", sw.title), fontsize=10)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def plot_beta_maps(files, labels, path: Path, *, mu_bar=None, title: str = "") -> Path:
@@ -208,7 +204,4 @@ def plot_beta_maps(files, labels, path: Path, *, mu_bar=None, title: str = "") -
     fig.colorbar(mesh, ax=list(axes[0]), label="beta [-]")
     if title:
         fig.suptitle(title, fontsize=10, y=1.04)
-    path = Path(path)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return _save(fig, path, dpi=120, bbox_inches="tight")
