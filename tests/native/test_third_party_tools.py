@@ -136,8 +136,9 @@ def _assert_outputs_match(names, table, reference, digits, what: str):
 
 
 def _first_row_per_step(table: np.ndarray, step: float) -> np.ndarray:
-    """OMSimulator writes a time more than once (before and after the inputs are updated): the first row of each
-    step k = round(t / step), so the values a step ended with."""
+    """OMSimulator may write a time more than once (v3.0.0-114: before and after the inputs are updated; and at T
+    after its last step of T - t_N): the first row of each step k = round(t / step), the values the step ended
+    with."""
     k = np.rint(table[:, 0] / step).astype(int)
     first = np.flatnonzero(np.concatenate([[True], np.diff(k) != 0]))
     assert np.array_equal(k[first], np.arange(len(first))), "one row at least per step, in order"
