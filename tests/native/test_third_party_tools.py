@@ -23,7 +23,9 @@ t_k = fl(t_(k-1) + h), fmpy uses k h, so |t_k - k h| <= N ulp(T) / 2 for N steps
 output y by about |dy/dt| dt <= max_k |y_(k+1) - y_k| / h dt (fmpy's trajectory). Added to that is how the tool
 prints: the checker 17 significant digits (exact), OMSimulator 12 (%.12g: half a unit of the 12th digit).
 Where the running time falls short of T after N steps (1750 x 1 ms sums to 1.749999999999918), OMSimulator adds a
-step of T - t_N (8e-14 s); its rows before that step are compared, and the run is checked to end at T.
+step of T - t_N (8e-14 s), which no other host takes: even that short a step moved StripDraw's pull force by
+1.2e-7 N in OMSimulator's run (4e-11 of it, within the bar solve's tolerance NEWTON_RTOL = 1e-10 in
+tc_stripdraw.c). The rows before that step are compared, and the run is checked to end at T.
 """
 
 from __future__ import annotations
