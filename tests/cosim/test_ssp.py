@@ -5,8 +5,9 @@ The rig is the demo scene (press + strip draw + drawing machine, component FMUs 
 not the FMUs' defaults, so that a tool that dropped a parameter set would be seen. fmpy's
 ``simulate_ssp``, libcosim and ecos all step all FMUs from the outputs read right after the last doStep:
 that is our Jacobi (no FMU of the rig has direct feedthrough, so ``output_update`` does not matter).
-OMSimulator cannot be installed here (its pip package downloads a binary when it is built): the package
-is checked against what its SSP reader requires, from its source.
+OMSimulator runs the package in tests/native/test_third_party_tools.py where an OMSimulator built from source is
+named (its pip package downloads a binary when it is installed); here the package is checked against what its SSP
+reader requires, from its source.
 """
 
 import json
