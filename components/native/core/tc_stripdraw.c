@@ -40,7 +40,8 @@
  * interval's limit at the state's).
  *
  * Outputs are functions of the state at the communication point (a vanishing step changes them by a vanishing
- * amount): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
+ * amount, down to the bar solve's tolerance: pull_force moves by ~2e-11 of itself on a step of any length, below
+ * NEWTON_RTOL times the capacity it is relative to): pull_force = 2 x the axial force of the last element at the grip (Eq. 1: mu = pull_force / (2 F_N)),
  * friction_force F_S = sum over the nodes under the pad of T_i w_T ov_i with T_i = k_s (U_i - Up_i) limited to
  * mu(P, v, beta_i) P of the current debris (what the return mapping of a vanishing step gives), mu_mean =
  * F_S / F_N (Eq. 28), contact-weighted means under the pad at the current displacements.
