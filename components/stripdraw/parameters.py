@@ -82,9 +82,9 @@ class StripDrawParameters:
     kappa: float = _p(2.0, "1", "contact-area constant kappa of Eq. 8", 1e-6, 100.0)
     rms_slope: float = _p(0.34, "1", "RMS slope h'_rms of the strip surface", 1e-6, 100.0)
     alpha_b: float = _p(
-        203.52, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
+        207.91, "1", "alpha of Eq. 23 in the closed_form law, the amplitude b of alpha(v) = b (1 - exp(-v/v_ref)) "
         "(Fig. 15): the shipped campaign's straight-line fit of Eq. 23 at its slowest velocity, 0.08 m/s, over "
-        "beta 0.02-1 at 1-30 MPa (standard error 6.8)", 0.0, 1e6
+        "beta 0.02-1 at 1-30 MPa (standard error 6.6)", 0.0, 1e6
     )
     alpha_v_ref: float = _p(
         0.0, "m/s", "velocity scale v_ref of alpha(v) in the closed_form law; 0: alpha = alpha_b at every velocity "
