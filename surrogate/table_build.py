@@ -379,7 +379,14 @@ def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> Fr
     subset ``cases`` of them) with its recorded sweep and surface statistics: what the table was built from, without
     the campaign folder."""
     cases = metadata["cases"] if cases is None else cases
-    records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0),
+    # the code that computed the cases: known per case only when the table records one version for all of them
+    digests, versions = metadata.get("case_source_digests") or [], metadata.get("case_code_versions") or []
+    origin = {}
+    if len(digests) == 1:
+        origin["source_digest"] = digests[0]
+    if len(versions) == 1:
+        origin["code_version"] = versions[0]
+    records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0), **origin,
                 "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
                             "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}} for c in cases]
     manifest = {"sweep": metadata["campaign"]["sweep"],

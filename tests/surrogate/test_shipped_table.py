@@ -58,6 +58,14 @@ def test_the_build_makes_exactly_the_shipped_arrays_from_the_recorded_cases(ship
         np.testing.assert_array_equal(rebuilt.array(name), shipped.array(name), err_msg=name)
 
 
+def test_a_rebuild_keeps_the_code_version_that_computed_the_cases(shipped):
+    """The shipped table's cases come from one version of the mesoscale code, which ``surrogate verify`` compares a
+    rerun's with (bit for bit when it is the same); a table rebuilt from them records that version, not 'unknown'."""
+    digests = shipped.metadata["case_source_digests"]
+    assert len(digests) == 1 and digests != ["unknown"]
+    assert rebuild_from_metadata(shipped.metadata).metadata["case_source_digests"] == digests
+
+
 def test_a_recorded_case_reruns_to_its_recorded_result(shipped):
     """The cheapest recorded case (particle-free: the contact alone) rebuilt from the preset and rerun."""
     sweep = parse_sweep_dict(shipped.metadata["campaign"]["sweep"])
