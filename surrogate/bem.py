@@ -339,6 +339,74 @@ def _sparse_correct(g, h, kr, idx, val, m, c):
                 g[a, b] += v * kr[ra, b - jb]
 
 
+@_jit_exact
+def _candidates(t, g, state, fidx, viol_idx, sidx, delta, tau_v, pc):
+    """The points an active-set change considers (free, violating zero and saturated), their tractions and
+    their trial values y: t on F, -tau_v (G - delta) at a zero point, pc - tau_v (G - delta) at a saturated one
+    (module docstring, step 2)."""
+    nz = 0
+    for i in viol_idx:
+        if state[i] == _ZERO:
+            nz += 1
+    nf, ns = fidx.size, sidx.size
+    m = nf + nz + ns
+    idx = np.empty(m, dtype=np.int64)
+    t_old = np.empty(m)
+    y = np.empty(m)
+    for k in range(nf):
+        i = fidx[k]
+        idx[k] = i
+        t_old[k] = t[i]
+        y[k] = t[i]
+    k = nf
+    for i in viol_idx:
+        if state[i] == _ZERO:
+            idx[k] = i
+            t_old[k] = 0.0
+            y[k] = -tau_v * (g[i] - delta)
+            k += 1
+    for q in range(ns):
+        i = sidx[q]
+        idx[k] = i
+        t_old[k] = pc
+        y[k] = pc - tau_v * (g[i] - delta)
+        k += 1
+    return idx, t_old, y
+
+
+@_jit_exact
+def _new_sets(idx, t_new, pc, state, old_free, keep, d):
+    """The points' new states from their tractions t_new (zero, free or saturated); the search direction d
+    cleared where it loses its meaning: on the points that left F (``keep``), else on all of old F. Returns the
+    new free and saturated indices, in the order of ``idx``."""
+    nf = 0
+    ns = 0
+    for k in range(idx.size):
+        x = t_new[k]
+        s = _ZERO if x <= 0.0 else (_SAT if x >= pc else _FREE)
+        state[idx[k]] = s
+        if s == _FREE:
+            nf += 1
+        elif s == _SAT:
+            ns += 1
+    fidx = np.empty(nf, dtype=np.int64)
+    sidx = np.empty(ns, dtype=np.int64)
+    nf = 0
+    ns = 0
+    for k in range(idx.size):
+        s = state[idx[k]]
+        if s == _FREE:
+            fidx[nf] = idx[k]
+            nf += 1
+        elif s == _SAT:
+            sidx[ns] = idx[k]
+            ns += 1
+    for i in old_free:
+        if not keep or state[i] != _FREE:
+            d[i] = 0.0
+    return fidx, sidx
+
+
 def _between(lo: float, hi: float, guess: float) -> float:
     """Approach when F is empty: any value between the saturated (lo) and zero (hi) gaps."""
     if math.isfinite(lo) and math.isfinite(hi):
@@ -660,17 +728,14 @@ class ContactSolver:
     def _exact_gap(self, t, g, hf) -> None:
         """g = K t + h by one FFT pair (destroys the search direction)."""
         n = self.n
-        self._apply(t.reshape(n, n), g.reshape(n, n))
-        g += hf
+        self._apply(t.reshape(n, n), self._fft.real_out)
+        np.add(self._fft.real_out.reshape(-1), hf, out=g)
         self._d[:] = 0.0
 
     def _change(self, t, g, h, state, fidx, sidx, viol_idx, delta, tau_v, p, pc):
         """Active-set change (module docstring); work ~ |F| + |S| + #violators when possible."""
         n, N = self.n, t.size
-        zv = viol_idx[state[viol_idx] == _ZERO]
-        idx = np.concatenate((fidx, zv, sidx))
-        t_old = np.concatenate((t[fidx], np.zeros(zv.size), np.full(sidx.size, pc)))
-        y = np.concatenate((t[fidx], -tau_v * (g[zv] - delta), pc - tau_v * (g[sidx] - delta)))
+        idx, t_old, y = _candidates(t, g, state, fidx, viol_idx, sidx, delta, tau_v, pc)
         c, lam, every = self._mean_map(y, p * N, pc)
         if every:  # the contact points cannot carry p: redo over the whole grid
             idx, t_old = np.arange(N), t.copy()
@@ -688,12 +753,8 @@ class ContactSolver:
                             c if use_c else 1.0)
         else:
             self._exact_gap(t, g, h.ravel())
-        old_free = fidx
-        st = np.where(t_new <= 0.0, _ZERO, np.where(t_new >= pc, _SAT, _FREE)).astype(np.uint8)
-        state[idx] = st
-        fidx, sidx = idx[st == _FREE], idx[st == _SAT]
         keep = m <= _NORESET_MAX
-        self._d[old_free[state[old_free] != _FREE] if keep else old_free] = 0.0
+        fidx, sidx = _new_sets(idx, t_new, pc, state, fidx, keep, self._d)
         if fidx.size:
             gf = g[fidx]
             delta = float(gf.mean())

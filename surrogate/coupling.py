@@ -34,8 +34,8 @@ grid: h_tool0 rolled by k along x) the loop
    (z_lo: the flake's lower surface: the blocked flake becomes part of the tool). A blocked flake
    enters the solve attached to the tool's underside (Fig. 7: "the particles are rigidly
    attached to the tool"): moved down by the depth the tool's envelope h_env cuts into it (so that
-   it still fits under the tool after the coming pixel), so that the rigid tool + flake body has no interpenetration and the solve dents the
-   sheet by the flake's full thickness; its faces are rasterised pixel-consistently with the
+   it still fits under the tool after the coming pixel), so that the rigid tool + flake body has no
+   interpenetration and the solve dents the sheet by the flake's full thickness; its faces are rasterised pixel-consistently with the
    DEM's bilinear surfaces (:func:`attach_to_tool`). The DEM flake itself is not moved: the
    tool's cut pushes it into the dent as the sheet moves there in the next DEM phase. Without
    this a flake sitting in its dent while the tool slides over it is cut deeper at each pixel
@@ -70,12 +70,12 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import ndimage, sparse
-from scipy.sparse import csgraph
+from scipy import ndimage
 
 from tribocosim.errors import ConvergenceError
 
 from . import dem
+from . import footprint_kernels as _k
 from .flake_body import DampingRates
 from .flake_relax import RELAX_SUBSTEPS, Drag, RelaxStats, relax
 from .flakes import Footprint, Footprints, footprints, random_placement
@@ -102,14 +102,9 @@ def classify(fps, h_top, threshold: float = 0.0) -> tuple[np.ndarray, np.ndarray
     fps = Footprints.of(fps)
     if not len(fps):
         return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64)
-    mask = fps.inside & (np.nan_to_num(fps.z_hi, nan=-np.inf) > fps.windows(h_top) + threshold)
-    # 8-connected within each flake's window, never across flakes
-    labels, _ = ndimage.label(mask, structure=np.stack([np.zeros((3, 3), bool), _EIGHT,
-                                                        np.zeros((3, 3), bool)]))
-    flat = labels.reshape(len(fps), -1)
-    which, first = np.unique(flat, return_index=True)
-    first = first[which > 0]
-    counts = np.bincount(first // flat.shape[1], minlength=len(fps)).astype(np.int64)
+    field = np.ascontiguousarray(h_top, dtype=np.float64)
+    counts = _k._overlap_clusters(fps.flat_indices(field.shape[0]), fps.inside, fps.z_hi, field.reshape(-1),
+                                  float(threshold))
     return counts >= MIN_CLUSTERS_BLOCKED, counts
 
 
@@ -146,14 +141,7 @@ def stack_groups(fps, n: int) -> np.ndarray:
     fps = Footprints.of(fps)
     if not len(fps):
         return np.zeros(0, dtype=np.int64)
-    flake = np.nonzero(fps.inside)[0]
-    pixel = fps.flat_indices(n)[fps.inside]
-    order = np.lexsort((flake, pixel))
-    pixel, flake = pixel[order], flake[order]
-    shared = pixel[1:] == pixel[:-1]  # consecutive flakes on one pixel: an edge of the stack graph
-    graph = sparse.coo_matrix((np.ones(int(shared.sum())), (flake[:-1][shared], flake[1:][shared])),
-                              shape=(len(fps), len(fps)))
-    return csgraph.connected_components(graph, directed=False)[1].astype(np.int64)
+    return _k._stack_labels(fps.flat_indices(n), fps.inside, n * n)
 
 
 def _per_stack_max(values: np.ndarray, groups: np.ndarray | None) -> np.ndarray:
@@ -182,8 +170,11 @@ def pinched(fps, h_top, h_low, limit: float, groups=None) -> np.ndarray:
     fps = Footprints.of(fps)
     if not len(fps):
         return np.zeros(0, dtype=bool)
-    top = np.where(fps.inside, fps.z_hi - fps.windows(h_top), -np.inf).max(axis=(1, 2))
-    low = np.where(fps.inside, fps.windows(h_low) - fps.z_lo, -np.inf).max(axis=(1, 2))
+    h_top = np.ascontiguousarray(h_top, dtype=np.float64)
+    flat = fps.flat_indices(h_top.shape[0])
+    top = _k._largest_cut(flat, fps.inside, fps.z_hi, h_top.reshape(-1), 1)
+    h_low = np.ascontiguousarray(h_low, dtype=np.float64)
+    low = _k._largest_cut(flat, fps.inside, fps.z_lo, h_low.reshape(-1), -1)
     return _per_stack_max(top, groups) + _per_stack_max(low, groups) > 2.0 * limit
 
 
@@ -195,18 +186,14 @@ def attach_stacks(fps, blocked, h_top, groups=None) -> Footprints:
     idx = np.flatnonzero(blocked)
     if idx.size == 0:
         return fps
-    sel = fps.take(idx)
-    z_lo = ndimage.minimum_filter(np.nan_to_num(sel.z_lo, nan=np.inf), size=(1, 3, 3), mode="constant",
-                                  cval=np.inf)
-    z_hi = ndimage.maximum_filter(np.nan_to_num(sel.z_hi, nan=-np.inf), size=(1, 3, 3), mode="constant",
-                                  cval=-np.inf)
+    h_top = np.ascontiguousarray(h_top, dtype=np.float64)
+    z_lo, z_hi = _k._grown_faces(fps.z_lo, fps.z_hi, idx)  # 3 x 3 minimum and maximum (attach_to_tool)
     drops = np.zeros(len(fps))
-    drops[idx] = np.maximum(0.0, np.max(z_hi - sel.windows(h_top), axis=(1, 2)))
-    drop = _per_stack_max(np.where(blocked, drops, -np.inf), groups)[idx][:, None, None]
+    drops[idx] = _k._drops(fps.flat_indices(h_top.shape[0]), z_hi, idx, h_top.reshape(-1))
+    drop = _per_stack_max(np.where(blocked, drops, -np.inf), groups)[idx]
     out_lo, out_hi = fps.z_lo.copy(), fps.z_hi.copy()
-    out_lo[idx] = np.where(np.isfinite(z_lo), z_lo - drop, np.nan)
-    out_hi[idx] = np.where(np.isfinite(z_hi), z_hi - drop, np.nan)
-    return Footprints(fps.ix, fps.iy, out_lo, out_hi)
+    _k._dropped(z_lo, z_hi, drop, idx, out_lo, out_hi)
+    return fps.with_faces(out_lo, out_hi)
 
 
 def modified_tool(h_top, fps, blocked) -> np.ndarray:

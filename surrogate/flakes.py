@@ -21,6 +21,7 @@ import numpy as np
 from tribocosim.errors import ParameterError
 
 from .dem import face_samples
+from .footprint_kernels import _rasterise
 from .flake_body import FlakeShape, rotation_matrices
 
 
@@ -61,11 +62,12 @@ class Footprints:
         The footprints' masks.
     """
 
-    __slots__ = ("ix", "iy", "z_lo", "z_hi", "inside")
+    __slots__ = ("ix", "iy", "z_lo", "z_hi", "inside", "_flat")
 
-    def __init__(self, ix, iy, z_lo, z_hi):
+    def __init__(self, ix, iy, z_lo, z_hi, flat=None):
         self.ix, self.iy, self.z_lo, self.z_hi = ix, iy, z_lo, z_hi
         self.inside = np.isfinite(z_lo)
+        self._flat = flat  # (n, flat indices) of the last flat_indices(n), shared by footprints on the same windows
 
     @classmethod
     def of(cls, fps) -> Footprints:
@@ -93,15 +95,23 @@ class Footprints:
 
     def take(self, idx) -> Footprints:
         """The footprints of the flakes ``idx`` (integer indices)."""
-        return Footprints(self.ix[idx], self.iy[idx], self.z_lo[idx], self.z_hi[idx])
+        flat = None if self._flat is None else (self._flat[0], self._flat[1][idx])
+        return Footprints(self.ix[idx], self.iy[idx], self.z_lo[idx], self.z_hi[idx], flat)
+
+    def with_faces(self, z_lo, z_hi) -> Footprints:
+        """The same windows with other lower and upper surfaces."""
+        return Footprints(self.ix, self.iy, z_lo, z_hi, self._flat)
 
     def windows(self, field) -> np.ndarray:
         """(k, w, w): ``field`` (n, n) read over every window."""
-        return np.asarray(field)[self.ix[:, :, None], self.iy[:, None, :]]
+        field = np.asarray(field)
+        return np.take(field.reshape(-1), self.flat_indices(field.shape[0]))
 
     def flat_indices(self, n: int) -> np.ndarray:
-        """(k, w, w): the flat indices of the windows' pixels in an (n, n) grid."""
-        return self.ix[:, :, None] * n + self.iy[:, None, :]
+        """(k, w, w): the flat indices of the windows' pixels in an (n, n) grid (computed once per n)."""
+        if self._flat is None or self._flat[0] != n:
+            self._flat = (n, self.ix[:, :, None] * n + self.iy[:, None, :])
+        return self._flat[1]
 
 
 def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
@@ -110,32 +120,17 @@ def footprints(pos, quat, shape: FlakeShape, n: int, size: float) -> Footprints:
     Returns
     -------
     Footprints
-        One footprint per flake, windows of (2 ceil(a/dx) + 2)^2 pixels around each centre.
+        One footprint per flake, windows of (2 ceil(a/dx) + 3)^2 pixels around the pixel of each centre.
     """
     dx = size / n
     a, c = shape.a, shape.c
     pos = np.asarray(pos, dtype=np.float64).reshape(-1, 3)
     rot = rotation_matrices(quat)
     half = int(math.ceil(a / dx)) + 1
-    offs = np.arange(-half, half + 1)
     if len(pos) == 0:
         return Footprints.of([])
-    # all flakes at once (the same elementwise operations as one at a time, so the same numbers)
-    body = np.diag([a**-2, a**-2, c**-2])
-    m = np.stack([R @ body @ R.T for R in rot])[:, :, :, None, None]
-    i0 = np.floor(pos[:, 0] / dx).astype(np.int64)
-    j0 = np.floor(pos[:, 1] / dx).astype(np.int64)
-    dX = ((i0[:, None] + offs) * dx - pos[:, :1])[:, :, None]
-    dY = ((j0[:, None] + offs) * dx - pos[:, 1:2])[:, None, :]
-    qa = m[:, 2, 2]
-    qb = 2.0 * (m[:, 0, 2] * dX + m[:, 1, 2] * dY)
-    qc = m[:, 0, 0] * dX**2 + 2.0 * m[:, 0, 1] * dX * dY + m[:, 1, 1] * dY**2 - 1.0
-    disc = qb * qb - 4.0 * qa * qc
-    root = np.sqrt(np.where(disc >= 0.0, disc, np.nan))
-    z0 = pos[:, 2, None, None]
-    z_lo = z0 + (-qb - root) / (2.0 * qa)
-    z_hi = z0 + (-qb + root) / (2.0 * qa)
-    return Footprints((i0[:, None] + offs) % n, (j0[:, None] + offs) % n, z_lo, z_hi)
+    m = (rot @ np.diag([a**-2, a**-2, c**-2])) @ rot.transpose(0, 2, 1)  # R diag(a^-2, a^-2, c^-2) R^T
+    return Footprints(*_rasterise(np.ascontiguousarray(m), np.ascontiguousarray(pos), dx, half, n))
 
 
 def _bilinear_np(h, x, y, dx):

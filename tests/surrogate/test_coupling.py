@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from tribocosim.surrogate.coupling import (SlideSimulation, attach_to_tool, blocked_mask, classify,
+from tribocosim.surrogate.coupling import (SlideSimulation, attach_stacks, attach_to_tool, blocked_mask, classify,
                                 modified_tool, particle_area_fraction, run_slide)
 from tribocosim.errors import ParameterError
 from tribocosim.surrogate import dem
@@ -280,7 +280,40 @@ def test_all_flakes_at_once_classify_and_pinch_as_one_at_a_time():
             low = np.max((sheet[win] - fp.z_lo)[fp.inside])
             assert flag == (top + low > 2 * 0.05e-6)
         totals += [counts.sum(), blocked.sum(), flags.sum()]
+        # attach_stacks (every blocked flake at once) without stacks: attach_to_tool flake by flake
+        attached = attach_stacks(fps, flags, tool)
+        for k, fp in enumerate(fps):
+            ref = attach_to_tool(fp, tool)[0] if flags[k] else fp
+            assert np.array_equal(attached.z_lo[k], ref.z_lo, equal_nan=True)
+            assert np.array_equal(attached.z_hi[k], ref.z_hi, equal_nan=True)
     assert np.all(totals > 0), totals
+
+
+def test_stacks_are_the_connected_components_of_flakes_sharing_a_pixel():
+    """stack_groups() against a direct search: two flakes are in one stack exactly when a chain of flakes
+    joins them in which each shares a footprint pixel with the next (across the periodic edges too)."""
+    from tribocosim.surrogate.coupling import stack_groups
+
+    rng = np.random.default_rng(7)
+    n, size = 64, 64e-6
+    sizes = []
+    for _ in range(5):
+        pos = np.column_stack([rng.uniform(0, size, 25), rng.uniform(0, size, 25), np.zeros(25)])
+        fps = footprints(pos, np.tile([1.0, 0, 0, 0], (25, 1)), SHAPE, n, size)
+        pixels = [set((fp.ix[:, None] * n + fp.iy[None, :])[fp.inside].tolist()) for fp in fps]
+        label = list(range(25))  # components by repeated relabelling to the least neighbour's label
+        changed = True
+        while changed:
+            changed = False
+            for i in range(25):
+                for j in range(25):
+                    if pixels[i] & pixels[j] and label[j] < label[i]:
+                        label[i], changed = label[j], True
+        groups = stack_groups(fps, n)
+        same = groups[:, None] == groups[None, :]
+        assert np.array_equal(same, np.equal.outer(label, label))
+        sizes.append(np.bincount(groups).max())
+    assert max(sizes) >= 3, sizes  # stacks of several flakes were tested
 
 
 def test_real_solve_with_a_blocked_flake_gives_particle_area():
