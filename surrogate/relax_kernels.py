@@ -193,14 +193,25 @@ def _read_faces(i, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx,
 
 
 @_jit
-def _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights, k_area, pair_part, pair_h):
+def _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights, k_area, pair_part, pair_h,
+               moved, point_gaps, point_ref, cap, tol):
     """Pair part of pair m = (i, j): forces and torques on i (0:6) and on j (6:12), energy (12) and largest
     overlap (13, 0 without contact) in pair_part[m]; the Hessian blocks (i, i), (j, j) and the coupling
     (i, j) in pair_h[m] (dem_kernels._forces' flake-flake contact: a point of P's disc against Q's,
-    J_P = -(u, r x u), J_Q = (u, t x u)). Returns the largest overlap of a point (negative: the smallest
-    separation, a bound on it when the discs are out of reach)."""
+    J_P = -(u, r x u), J_Q = (u, t x u)). Returns an upper bound on the largest overlap of a point (negative:
+    a lower bound on the smallest separation).
+
+    A full reading keeps the separation -d of every point (``point_gaps[m]``) and the distances the two flakes
+    had moved then (``point_ref[m]``, of ``moved``; -1: no reading to refer to). A point's separation falls by
+    at most the distance both flakes have moved since (the distance from a point to a disc changes by at most
+    the point's and the disc's displacements), so while that is at most ``cap`` a reading evaluates only the
+    points that can be within ``tol`` of contact: the others have no overlap and add nothing."""
     i = pairs[m, 0]
     j = pairs[m, 1]
+    app = math.inf
+    if point_ref[m, 0] >= 0.0:
+        app = (moved[i] - point_ref[m, 0]) + (moved[j] - point_ref[m, 1])
+    full = not (app <= cap)
     for r in range(14):
         pair_part[m, r] = 0.0
     for b in range(3):
@@ -214,6 +225,7 @@ def _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights,
     dzij = pos[j, 2] - pos[i, 2]
     dist = math.sqrt(dxij * dxij + dyij * dyij + dzij * dzij)
     if not (dist < 2.0 * a):
+        point_ref[m, 0] = -1.0
         return 2.0 * a - dist  # the discs are at least dist - 2a apart
     _rotmat(quat, i, rot)
     _rotmat(quat, j, rot)
@@ -232,8 +244,13 @@ def _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights,
             bp, bq = 6, 0
         nx, ny, nz = rot[Q, 0, 2], rot[Q, 1, 2], rot[Q, 2, 2]
         for k in range(pair_samples.shape[0]):
+            if not full and point_gaps[m, side, k] - app > tol:
+                dmax = max(dmax, app - point_gaps[m, side, k])  # proven clear: no overlap
+                continue
             d, ux, uy, uz, rx, ry, rz, tx, ty, tz = _disc_point(
                 rot, P, pair_samples[k, 0] * scale, pair_samples[k, 1] * scale, ox, oy, oz, nx, ny, nz, ac, c)
+            if full:
+                point_gaps[m, side, k] = -d
             dmax = max(dmax, d)
             if d <= 0.0:
                 continue
@@ -266,6 +283,9 @@ def _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights,
                         pair_h[m, 2, r, q] -= kw * av[r] * bv[q]
                     else:
                         pair_h[m, 2, r, q] -= kw * bv[r] * av[q]
+    if full:
+        point_ref[m, 0] = moved[i]
+        point_ref[m, 1] = moved[j]
     return dmax
 
 
@@ -493,7 +513,7 @@ def _predicted(members, big, rhs, delta):
 def _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, size, a, c, samples, zface,
              weights, k_area, half, cap, tol, pair_samples, pair_weights, pairs, n_pairs, adj_start, adj,
              face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part, pair_h, pair_gap, pair_ref,
-             moved, force, torque, hess, energy, overlap, dirty, stats):
+             point_gaps, point_ref, moved, force, torque, hess, energy, overlap, dirty, stats):
     """Recompute the stale face parts and the stale pair parts that can have changed, and the totals of every
     flake they touch (marked dirty). A pair out of contact at its last reading whose separation then exceeds
     the distance both flakes can have moved since (``moved``, each flake's accumulated |dx_c| + a |dtheta|)
@@ -518,7 +538,7 @@ def _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, s
             stats[_PAIR_SKIPS] += 1
             continue
         pair_gap[m] = _read_pair(m, pairs, pos, quat, rot, size, a, c, pair_samples, pair_weights, k_area,
-                                 pair_part, pair_h)
+                                 pair_part, pair_h, moved, point_gaps, point_ref, cap, tol)
         pair_ref[m, 0] = moved[i]
         pair_ref[m, 1] = moved[j]
         dirty[i] = True
@@ -582,6 +602,8 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
     old_face_h = np.zeros((nf, 1, 6, 6))
     pair_gap = np.zeros(cap_pairs)
     pair_ref = np.zeros((cap_pairs, 2))
+    point_gaps = np.zeros((cap_pairs, 2, pair_samples.shape[0]))
+    point_ref = np.full((cap_pairs, 2), -1.0)
     moved = np.zeros(nf)
     hess = np.zeros((nf, 6, 6))
     energy = np.zeros(nf)
@@ -636,7 +658,10 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
                     pair_stale = np.ones(cap_pairs, dtype=np.bool_)
                     pair_gap = np.zeros(cap_pairs)
                     pair_ref = np.zeros((cap_pairs, 2))
+                    point_gaps = np.zeros((cap_pairs, 2, pair_samples.shape[0]))
+                    point_ref = np.full((cap_pairs, 2), -1.0)
                     adj = np.empty(2 * cap_pairs, dtype=np.int64)
+                point_ref[:, 0] = -1.0  # the list's indices changed: full readings
                 pair_stale[:] = True
                 pair_part[:n_pairs, 13] = 1.0  # read every pair of the new list
                 _adjacency(nf, pairs, n_pairs, adj_start, adj)
@@ -645,7 +670,8 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
             _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, size, a, c, samples,
                      zface, weights, k_area, half, cap, tol_clear, pair_samples, pair_weights, pairs, n_pairs,
                      adj_start, adj, face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part,
-                     pair_h, pair_gap, pair_ref, moved, force, torque, hess, energy, overlap, dirty, stats)
+                     pair_h, pair_gap, pair_ref, point_gaps, point_ref, moved, force, torque, hess, energy, overlap,
+                     dirty, stats)
             if it == max_iter:
                 break
             stats[_ITERS] += 1
@@ -717,7 +743,8 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
             _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, size, a, c, samples,
                      zface, weights, k_area, half, cap, tol_clear, pair_samples, pair_weights, pairs, n_pairs,
                      adj_start, adj, face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part,
-                     pair_h, pair_gap, pair_ref, moved, force, torque, hess, energy, overlap, dirty, stats)
+                     pair_h, pair_gap, pair_ref, point_gaps, point_ref, moved, force, torque, hess, energy, overlap,
+                     dirty, stats)
             # accept or reject each component's step on its own energy (its flakes' shares)
             for cc in range(nc):
                 members = order[start[cc]:start[cc + 1]]
