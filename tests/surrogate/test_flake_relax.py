@@ -63,8 +63,10 @@ def kernel_totals(state, p, h_low, h_top, shift=0.0, offset=0.0):
     pairs = np.ascontiguousarray(np.stack(np.triu_indices(nf, 1), axis=1), dtype=np.int64)
     npairs = len(pairs)
     pp, ph = np.zeros((max(npairs, 1), 14)), np.zeros((max(npairs, 1), 3, 6, 6))
-    for m in range(npairs):
-        rk._read_pair(m, pairs, state.pos, state.quat, rot, L, SHAPE.a, SHAPE.c, *p.pair_points, p.k_area, pp, ph)
+    point_gaps, point_ref = np.zeros((max(npairs, 1), 2, len(p.pair_points[0]))), np.full((max(npairs, 1), 2), -1.0)
+    for m in range(npairs):  # full readings
+        rk._read_pair(m, pairs, state.pos, state.quat, rot, L, SHAPE.a, SHAPE.c, *p.pair_points, p.k_area, pp, ph,
+                      np.zeros(nf), point_gaps, point_ref, 0.5 * H_P, 1e-9 * SHAPE.c)
     adj_start, adj = np.zeros(nf + 1, dtype=np.int64), np.empty(max(2 * npairs, 1), dtype=np.int64)
     rk._adjacency(nf, pairs, npairs, adj_start, adj)
     F, T, H, E, ov = np.zeros((nf, 3)), np.zeros((nf, 3)), np.zeros((nf, 6, 6)), np.zeros(nf), np.zeros(nf)
