@@ -106,16 +106,18 @@ def overdamped_split(sim) -> dict:
 
     ns = prm.samples.shape[0]
     gaps, near = np.zeros((nf, 2, ns)), np.zeros((nf, 2, ns + 1), dtype=np.int64)
+    bounds = rk.new_bounds(sim.h_low.shape)
     cap, tol = fr.NEAR_FRACTION * sh.thickness, fr.TOL_MOVE_FRACTION * sh.thickness
 
     def read_all():
         for i in range(nf):
             rk._read_faces(i, st.pos, st.quat, rot, sim.h_low, dh, 0.0, sim.h_tool0, sim.k * prm.dx, sim.z_top,
                            prm.dx, sh.a, prm.samples, zf, prm.weights, prm.k_area, half, cap, tol, fp, fh, rec,
-                           gaps, near)
+                           gaps, near, bounds)
 
-    def faces():  # full readings: every face point of every flake
+    def faces():  # full readings: every face point of every flake, the surfaces' bounds computed again
         rec[:] = 0.0
+        bounds[:] = -1.0
         read_all()
 
     def faces_near():  # the readings while nothing has moved: the points within reach of contact only

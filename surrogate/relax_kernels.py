@@ -71,6 +71,11 @@ def _add_outer(h, i, b, kw, a0, a1, a2, a3, a4, a5):
             h[i, b, r, q] += kw * a[r] * a[q]
 
 
+def new_bounds(shape) -> np.ndarray:
+    """The cache of the face records' surface bounds by pixel (:func:`_read_faces`), empty (-1)."""
+    return np.full((3,) + tuple(shape), -1.0)
+
+
 @_jit
 def _window_max(dh, ic, jc, half):
     """Largest |dh| over the pixels ic-half..ic+half, jc-half..jc+half (periodic)."""
@@ -113,13 +118,15 @@ def _approach(i, pos, quat, rec, lam, shift, offset, a):
 
 @_jit
 def _read_faces(i, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, a, samples, zface, weights,
-                k_area, half, cap, tol, face_part, face_h, rec, gaps, near):
+                k_area, half, cap, tol, face_part, face_h, rec, gaps, near, bounds):
     """Face part of flake i: forces (0:3), torques (3:6), energy (6) and largest overlap (7) in face_part[i],
     the Gauss-Newton Hessian in face_h[i, 0]. A full reading keeps the gap of every point (``gaps[i]``), the
     points within ``cap`` of contact (``near[i, face]``: their number, then their indices) and the record
     ``rec[i]``; while the flake and the surfaces have moved less than a pixel and less than ``cap`` towards
     each other since, only the near points that can be within ``tol`` of contact are read (the others have
-    no overlap). Returns True for a full reading."""
+    no overlap). ``bounds`` (3, n, n), -1 where not yet computed: the surfaces' bounds of the record by pixel (the
+    sheet's slope, its largest change, the tool's slope at its pixel in the tool's frame), each computed once per
+    pixel for the surfaces of one call of :func:`_relax` (:func:`new_bounds`). Returns True for a full reading."""
     inv_dx = 1.0 / dx
     reach, app_low, app_top = _approach(i, pos, quat, rec, lam, shift, offset, a)
     full = (rec[i, _VALID] == 0.0 or reach > dx or app_low + tol > cap or app_top + tol > cap)
@@ -181,9 +188,14 @@ def _read_faces(i, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx,
         rec[i, _LAM] = lam
         rec[i, _SHIFT] = shift
         rec[i, _OFF] = offset
-        rec[i, _SLOPE_TOP] = _slope_bound(h_top, h_top, 0.0, it, jc, half, inv_dx)
-        rec[i, _SLOPE_LOW] = _slope_bound(h_low, dh_low, 1.0, ic, jc, half, inv_dx)
-        rec[i, _DH] = _window_max(dh_low, ic, jc, half)
+        if bounds[0, ic, jc] < 0.0:
+            bounds[0, ic, jc] = _slope_bound(h_low, dh_low, 1.0, ic, jc, half, inv_dx)
+            bounds[1, ic, jc] = _window_max(dh_low, ic, jc, half)
+        if bounds[2, it, jc] < 0.0:
+            bounds[2, it, jc] = _slope_bound(h_top, h_top, 0.0, it, jc, half, inv_dx)
+        rec[i, _SLOPE_TOP] = bounds[2, it, jc]
+        rec[i, _SLOPE_LOW] = bounds[0, ic, jc]
+        rec[i, _DH] = bounds[1, ic, jc]
         for d in range(3):
             rec[i, _POS + d] = pos[i, d]
         for d in range(4):
@@ -513,7 +525,7 @@ def _predicted(members, big, rhs, delta):
 def _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, size, a, c, samples, zface,
              weights, k_area, half, cap, tol, pair_samples, pair_weights, pairs, n_pairs, adj_start, adj,
              face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part, pair_h, pair_gap, pair_ref,
-             point_gaps, point_ref, moved, force, torque, hess, energy, overlap, dirty, stats):
+             point_gaps, point_ref, moved, force, torque, hess, energy, overlap, dirty, bounds, stats):
     """Recompute the stale face parts and the stale pair parts that can have changed, and the totals of every
     flake they touch (marked dirty). A pair out of contact at its last reading whose separation then exceeds
     the distance both flakes can have moved since (``moved``, each flake's accumulated |dx_c| + a |dtheta|)
@@ -521,7 +533,7 @@ def _refresh(nf, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, s
     for i in range(nf):
         if face_stale[i]:
             if _read_faces(i, pos, quat, rot, h_low, dh_low, lam, h_top, shift, offset, dx, a, samples, zface,
-                           weights, k_area, half, cap, tol, face_part, face_h, rec, gaps, near):
+                           weights, k_area, half, cap, tol, face_part, face_h, rec, gaps, near, bounds):
                 stats[_FACE_READS] += 1
             else:
                 stats[_FACE_PARTIAL] += 1
@@ -605,6 +617,7 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
     point_gaps = np.zeros((cap_pairs, 2, pair_samples.shape[0]))
     point_ref = np.full((cap_pairs, 2), -1.0)
     moved = np.zeros(nf)
+    bounds = np.full((3, h_low.shape[0], h_low.shape[1]), -1.0)  # new_bounds
     hess = np.zeros((nf, 6, 6))
     energy = np.zeros(nf)
     dirty = np.zeros(nf, dtype=np.bool_)
@@ -671,7 +684,7 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
                      zface, weights, k_area, half, cap, tol_clear, pair_samples, pair_weights, pairs, n_pairs,
                      adj_start, adj, face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part,
                      pair_h, pair_gap, pair_ref, point_gaps, point_ref, moved, force, torque, hess, energy, overlap,
-                     dirty, stats)
+                     dirty, bounds, stats)
             if it == max_iter:
                 break
             stats[_ITERS] += 1
@@ -744,7 +757,7 @@ def _relax(pos, quat, h_low, dh_low, ramp, h_top, shift0, dshift, top_offset, dt
                      zface, weights, k_area, half, cap, tol_clear, pair_samples, pair_weights, pairs, n_pairs,
                      adj_start, adj, face_stale, pair_stale, face_part, face_h, rec, gaps, near, pair_part,
                      pair_h, pair_gap, pair_ref, point_gaps, point_ref, moved, force, torque, hess, energy, overlap,
-                     dirty, stats)
+                     dirty, bounds, stats)
             # accept or reject each component's step on its own energy (its flakes' shares)
             for cc in range(nc):
                 members = order[start[cc]:start[cc + 1]]

@@ -512,7 +512,8 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
         log("drawing speed ...")
     speed = pp.speed_prediction(runs, params, cal.scale, total["scale"])
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
-             "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study()}
+             "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study(),
+             "sizes": pp.cluster_rule_sizes()}
     checks = pp.direct_slide_check(table, workers, quick, log)
     return {"options": options, "budget": rows, "budget_total": total, "budget_intervals": intervals,
             "budget_not_varied": pp.inputs_not_varied(table, tables), "observable": observable,

@@ -29,7 +29,8 @@ predicted.
 - alpha of both observables (every load-bearing flake, the paper's cluster rule alone): the table's Eq. 23 slope
   at its first debris level per velocity row (alpha = A_p / A0 / (beta P / E*), mean over the pressures with its
   standard error), and the alpha(v) study of docs/physics/alpha_velocity.md when its results are shipped
-  (``models/alpha_velocity.json``).
+  (``models/alpha_velocity.json``), and the cluster rule at the paper's flake sizes, 25-100 um on a 512 um domain
+  (``models/cluster_rule_sizes.json``, benchmarks/cluster_sizes.py).
 """
 
 from __future__ import annotations
@@ -333,16 +334,27 @@ def table_alpha(table, rule: str = "particle_area") -> list[dict]:
     return out
 
 
-def alpha_study() -> dict | None:
-    """The alpha(v) study's results shipped with the models (docs/physics/alpha_velocity.md), or None."""
+def _shipped_json(name: str) -> dict | None:
+    """A study's results shipped with the models (``models/NAME``), or None."""
     import json
 
     from tribocosim.paths import MODELS_DIR
 
-    path = Path(MODELS_DIR) / "alpha_velocity.json"
+    path = Path(MODELS_DIR) / name
     if not path.is_file():
         return None
     return json.loads(path.read_text())
+
+
+def alpha_study() -> dict | None:
+    """The alpha(v) study's results shipped with the models (docs/physics/alpha_velocity.md), or None."""
+    return _shipped_json("alpha_velocity.json")
+
+
+def cluster_rule_sizes() -> dict | None:
+    """The cluster rule at the paper's flake sizes (benchmarks/cluster_sizes.py on a ``cluster_sizes`` campaign:
+    25-100 um flakes on a 512 um domain), shipped with the models, or None."""
+    return _shipped_json("cluster_rule_sizes.json")
 
 
 def simulated_velocities(table) -> list[float]:

@@ -5,6 +5,7 @@ the drawing speed, alpha of both observables, the table's checks), from the numb
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from tribocosim.cosim.studies.stripdraw_experiment import V0
@@ -192,6 +193,7 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
                       f"cluster rule alone: alpha {max(cluster):.2g} at most, zero in {sum(c == 0 for c in cluster)} of "
                       f"{len(cluster)} cells: too sparse to test the shape of Fig. 15; where it is non-zero at the least "
                       "damping it grows with v0, as Fig. 15 does, within the standard errors shown."]
+    lines += sizes_markdown(extra["alpha"].get("sizes"))
     lines += ["", "## The friction table's checks", ""]
     checks = extra.get("direct_slides", [])
     if checks:
@@ -248,3 +250,31 @@ def observable_markdown(observable: dict, nominal: dict) -> list[str]:
                   f"{_pct(nominal['drops'][2])}) and the 140 mm pad's one-pass drop {_pct(other['drop_140'])} (against "
                   f"{_pct(nominal['drop_140'])}).", ""]
     return lines
+
+
+def sizes_markdown(sizes: dict | None) -> list[str]:
+    """The cluster rule at the paper's flake sizes (models/cluster_rule_sizes.json), or nothing when not shipped."""
+    if not sizes:
+        return []
+    rows = {k: r for k, r in sizes["sizes"].items() if k != "none"}
+    if not rows:
+        return []
+    r0 = next(iter(rows.values()))
+    lines = ["", f"The paper's flake sizes ({sizes['source']}; {sizes['finished']} of {sizes['cases']} slides, "
+                 f"{r0['pressure'] / 1e6:g} MPa, {r0['velocity']:g} m/s, a 512 um domain, mean +- standard error over "
+                 "the members): alpha of Eq. 23 and alpha_eff = (A_p / A_c) kappa / (h'_rms beta), the alpha of the "
+                 "paper's macro model at the slide's own contact area, for both observables:", "",
+             "| d_p [um] | beta | members | cluster rule / every load-bearing | alpha, every | alpha, cluster rule | "
+             "alpha_eff, every | alpha_eff, cluster rule |", "|---|---|---|---|---|---|---|---|"]
+
+    def cell(pair):
+        m, se = pair
+        return "-" if m is None or not math.isfinite(m) else f"{m:.3g} +- {se:.2g}"
+
+    for r in rows.values():
+        lb, cl = r["load_bearing"], r["clusters"]
+        lines.append(f"| {1e6 * r['flake_diameter']:g} | {r['beta']:.3g} | {r['members']} | {cell(r['cluster_share'])} "
+                     f"| {cell(lb['alpha'])} | {cell(cl['alpha'])} | {cell(lb['alpha_eff'])} | "
+                     f"{cell(cl['alpha_eff'])} |")
+    return lines
+

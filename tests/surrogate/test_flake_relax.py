@@ -59,7 +59,7 @@ def kernel_totals(state, p, h_low, h_top, shift=0.0, offset=0.0):
     for i in range(nf):
         rk._read_faces(i, state.pos, state.quat, rot, h_low, dh, 0.0, h_top, shift, offset, DX, SHAPE.a,
                        p.samples, zf, p.weights, p.k_area, half, 0.5 * H_P, 1e-9 * SHAPE.c, fp, fh, rec, gaps,
-                       near)
+                       near, rk.new_bounds(h_low.shape))
     pairs = np.ascontiguousarray(np.stack(np.triu_indices(nf, 1), axis=1), dtype=np.int64)
     npairs = len(pairs)
     pp, ph = np.zeros((max(npairs, 1), 14)), np.zeros((max(npairs, 1), 3, 6, 6))
@@ -182,11 +182,12 @@ def test_a_partial_reading_equals_a_full_one():
     for i in range(nf):
         was_full = rk._read_faces(i, moved.pos, moved.quat, rot, h_low, dh, 0.0, h_top, 0.0, 0.0, DX, SHAPE.a,
                                   p.samples, zf, p.weights, p.k_area, half, 0.5 * H_P, 1e-9 * SHAPE.c, fp, fh, rec,
-                                  gaps, near)
+                                  gaps, near, rk.new_bounds(h_low.shape))
         partial += not was_full
         rk._read_faces(i, moved.pos, moved.quat, rot, h_low, dh, 0.0, h_top, 0.0, 0.0, DX, SHAPE.a, p.samples,
                        zf, p.weights, p.k_area, half, 0.5 * H_P, 1e-9 * SHAPE.c, full_fp, full_fh,
-                       np.zeros((nf, rk._REC)), np.zeros((nf, 2, ns)), np.zeros((nf, 2, ns + 1), dtype=np.int64))
+                       np.zeros((nf, rk._REC)), np.zeros((nf, 2, ns)), np.zeros((nf, 2, ns + 1), dtype=np.int64),
+                       rk.new_bounds(h_low.shape))
     assert partial == nf, "every face must have been read in part"
     assert np.array_equal(fp, full_fp) and np.array_equal(fh, full_fh)
 
