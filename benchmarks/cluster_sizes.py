@@ -51,7 +51,7 @@ def summarise(done: list[dict], e_star: float) -> dict:
         key = "none" if not lab.get("n_flakes") else f"{lab['flake_diameter']:.6g}"
         groups.setdefault(key, []).append((lab, s, rec.get("wall_s", s.get("time_wall_s", math.nan))))
     out = {}
-    for key, members in sorted(groups.items(), key=lambda kv: (kv[0] != "none", kv[0])):
+    for key, members in sorted(groups.items(), key=lambda kv: -1.0 if kv[0] == "none" else float(kv[0])):
         lab0 = members[0][0]
         row = {"members": len(members), "n_flakes": int(lab0.get("n_flakes") or 0),
                "flake_diameter": lab0.get("flake_diameter") if key != "none" else None,
