@@ -16,7 +16,7 @@ Fig. 8), the cluster rule's share of every load-bearing flake's A_p, and alpha t
   strip-draw component's defaults): the quantity `tribocosim report paper` compares with the alpha that model
   needs for the 35 % drop (15.3).
 
-The question it answers (issue 35, item 5): with flakes of the paper's sizes, does the cluster rule's observable
+The question it answers: with flakes of the paper's sizes, does the cluster rule's observable
 reach an alpha of order 10, as the paper's Fig. 15 reports? ``--json`` writes the summary that the paper report
 prints.
 """
@@ -31,16 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-#: the strip-draw component's Eq. 8 constants (kappa, h'_rms), as in cosim.reports.paper_physics
-KAPPA, RMS_SLOPE = 2.0, 0.34
+from alpha_velocity import mean_se  # noqa: E402 (the script beside this one)
 
 
-def mean_se(values) -> tuple[float, float, int]:
-    """Mean, standard error (ddof 1) and count."""
-    v = np.asarray(list(values), dtype=float)
-    if v.size == 0:
-        return math.nan, math.nan, 0
-    return float(v.mean()), float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else math.nan, int(v.size)
+def eq8_constants() -> tuple[float, float]:
+    """kappa and h'_rms of Eq. 8: the strip-draw component's defaults, as the paper report reads them."""
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    return float(COMPONENT.defaults["kappa"]), float(COMPONENT.defaults["rms_slope"])
 
 
 def summarise(done: list[dict], e_star: float) -> dict:
@@ -50,6 +48,7 @@ def summarise(done: list[dict], e_star: float) -> dict:
         lab, s = rec["labels"], rec["summary"]
         key = "none" if not lab.get("n_flakes") else f"{lab['flake_diameter']:.6g}"
         groups.setdefault(key, []).append((lab, s, rec.get("wall_s", s.get("time_wall_s", math.nan))))
+    kappa, rms_slope = eq8_constants()
     out = {}
     for key, members in sorted(groups.items(), key=lambda kv: -1.0 if kv[0] == "none" else float(kv[0])):
         lab0 = members[0][0]
@@ -61,16 +60,17 @@ def summarise(done: list[dict], e_star: float) -> dict:
         row["contact_fraction"] = mean_se(a_c)[:2]
         if key != "none":
             beta, p = row["beta"], row["pressure"]
+            a_p = {}
             for name, field in (("load_bearing", "mean_particle_fraction"),
                                 ("clusters", "mean_particle_fraction_clusters")):
-                a_p = np.array([m[1][field] for m in members])
-                share = a_p / np.array(a_c)
-                row[name] = {"particle_fraction": mean_se(a_p)[:2],
-                             "alpha": mean_se(a_p / (beta * p / e_star))[:2],
-                             "alpha_eff": mean_se(share * KAPPA / (RMS_SLOPE * beta))[:2]}
-            every = np.array([m[1]["mean_particle_fraction"] for m in members])
-            rule = np.array([m[1]["mean_particle_fraction_clusters"] for m in members])
-            row["cluster_share"] = mean_se(np.where(every > 0, rule / np.where(every > 0, every, 1.0), 0.0))[:2]
+                a_p[name] = np.array([m[1][field] for m in members])
+                share = a_p[name] / np.array(a_c)
+                row[name] = {"particle_fraction": mean_se(a_p[name])[:2],
+                             "alpha": mean_se(a_p[name] / (beta * p / e_star))[:2],
+                             "alpha_eff": mean_se(share * kappa / (rms_slope * beta))[:2]}
+            every = a_p["load_bearing"]
+            row["cluster_share"] = mean_se(np.where(every > 0, a_p["clusters"] / np.where(every > 0, every, 1.0),
+                                                    0.0))[:2]
         out[key] = row
     return out
 
@@ -108,17 +108,16 @@ def main(argv=None) -> int:
     e_star = float(done[0]["config"]["e_star"])
     summary = summarise(done, e_star)
     show(summary)
-    open_cases = [f for f in failed]
-    print(f"\n{len(done)} of {len(manifest['cases'])} cases finished ({len(open_cases)} not: "
-          f"{', '.join(sorted({f['status'] for f in open_cases})) or 'none'}); "
+    print(f"\n{len(done)} of {len(manifest['cases'])} cases finished ({len(failed)} not: "
+          f"{', '.join(sorted({f['status'] for f in failed})) or 'none'}); "
           f"{case_cpu_seconds(done) / 3600:.2f} core-hours (sum of the finished cases' wall times)")
     if args.json:
         doc = {"source": "benchmarks/cluster_sizes.py on a campaign of surrogate/presets/cluster_sizes.toml",
                "preset": manifest.get("sweep", {}).get("name", "cluster_sizes"),
                "code": sorted({r.get("source_digest", "unknown") for r in done}),
                "cases": len(manifest["cases"]), "finished": len(done),
-               "core_hours": case_cpu_seconds(done) / 3600, "e_star": e_star, "kappa": KAPPA,
-               "rms_slope": RMS_SLOPE, "sizes": summary}
+               "core_hours": case_cpu_seconds(done) / 3600, "e_star": e_star,
+               **dict(zip(("kappa", "rms_slope"), eq8_constants())), "sizes": summary}
         Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
         print(f"written {args.json}")
     return 0

@@ -35,10 +35,11 @@ grid: h_tool0 rolled by k along x) the loop
    enters the solve attached to the tool's underside (Fig. 7: "the particles are rigidly
    attached to the tool"): moved down by the depth the tool's envelope h_env cuts into it (so that
    it still fits under the tool after the coming pixel), so that the rigid tool + flake body has no
-   interpenetration and the solve dents the sheet by the flake's full thickness; its faces are rasterised pixel-consistently with the
-   DEM's bilinear surfaces (:func:`attach_to_tool`). The DEM flake itself is not moved: the
-   tool's cut pushes it into the dent as the sheet moves there in the next DEM phase. Without
-   this a flake sitting in its dent while the tool slides over it is cut deeper at each pixel
+   interpenetration and the solve dents the sheet by the flake's full thickness; its faces are
+   rasterised pixel-consistently with the DEM's bilinear surfaces (:func:`attach_to_tool`). The DEM
+   flake itself is not moved: the tool's cut pushes it into the dent as the sheet moves there in
+   the next DEM phase. Without this a flake sitting in its dent while the tool slides over it is
+   cut deeper at each pixel
    (by about slope * dx) until the DEM stops; with it the flake is pressed (ploughed) into the
    sheet step by step;
 4. solves the contact (Eq. 19-21) of the rigid profile g* = h*_top - h_def0 (Eq. 19; gap
@@ -189,7 +190,9 @@ def attach_stacks(fps, blocked, h_top, groups=None) -> Footprints:
     h_top = np.ascontiguousarray(h_top, dtype=np.float64)
     z_lo, z_hi = _k._grown_faces(fps.z_lo, fps.z_hi, idx)  # 3 x 3 minimum and maximum (attach_to_tool)
     drops = np.zeros(len(fps))
-    drops[idx] = _k._drops(fps.flat_indices(h_top.shape[0]), z_hi, idx, h_top.reshape(-1))
+    # the depth by which each grown upper face cuts into the tool, at least 0
+    cut = _k._largest_cut(fps.flat_indices(h_top.shape[0])[idx], np.isfinite(z_hi), z_hi, h_top.reshape(-1), 1)
+    drops[idx] = np.maximum(0.0, cut)
     drop = _per_stack_max(np.where(blocked, drops, -np.inf), groups)[idx]
     out_lo, out_hi = fps.z_lo.copy(), fps.z_hi.copy()
     _k._dropped(z_lo, z_hi, drop, idx, out_lo, out_hi)

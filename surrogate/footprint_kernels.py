@@ -107,23 +107,6 @@ def _grown_faces(z_lo, z_hi, idx):
 
 
 @_jit
-def _drops(flat, hi, idx, field):
-    """Per selected flake, the depth max(0, max(hi - field)) by which its grown upper face cuts into the field."""
-    _, w0, w1 = hi.shape
-    out = np.zeros(idx.size)
-    for s in range(idx.size):
-        f = idx[s]
-        best = -np.inf
-        for a in range(w0):
-            for b in range(w1):
-                d = hi[s, a, b] - field[flat[f, a, b]]
-                if d > best:
-                    best = d
-        out[s] = max(0.0, best)
-    return out
-
-
-@_jit
 def _dropped(lo, hi, drop, idx, out_lo, out_hi):
     """out_lo[idx], out_hi[idx] = the grown faces moved down by their flake's ``drop`` (NaN where not finite)."""
     _, w0, w1 = lo.shape
