@@ -484,13 +484,14 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
         log("uncertainty budget ...")
     varied = {}
     with pp.scratch_folder() as folder:
-        # the domain-size variation's table is the shipped table's (the same slides on a 128 um domain)
+        # the domain-size variation's tables are the shipped table's (the same slides on 128 and 512 um domains)
         shipped = Path(base["table_file"]).resolve() == Path(DEFAULT_TABLE).resolve()
-        domain = Path(DEFAULT_TABLE).with_name(pp.DOMAIN_TABLE)
-        tables = pp.table_variants(table, Path(folder), domain if shipped and domain.is_file() else None)
+        domains = {name: Path(DEFAULT_TABLE).with_name(file) for name, file in pp.DOMAIN_TABLES.items()}
+        tables = pp.table_variants(table, Path(folder),
+                                   {name: path for name, path in domains.items() if shipped and path.is_file()})
         for v in pp.VARIATIONS:
-            if v.table == pp.DOMAIN_VARIANT and v.table not in tables:
-                continue  # no table on another domain size: named as not varied (pp.inputs_not_varied)
+            if v.table in pp.DOMAIN_TABLES and v.table not in tables:
+                continue  # no table on that domain size: one-sided, or named as not varied (pp.inputs_not_varied)
             if v.table is not None and v.table not in tables:
                 needs = "version 4" if v.table == pp.FORM_VARIANT else "version 3 or 4"
                 varied[v.name] = {"error": f"needs a {needs} table that records its campaign"}

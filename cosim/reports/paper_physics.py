@@ -16,8 +16,8 @@ predicted.
 - Uncertainty budget (:data:`VARIATIONS`): every chosen input varied over a stated range, s recalibrated, and the
   change of s and of each prediction recorded; the total is the quadrature sum of the half-ranges (a one-sided
   variation counts whole), and a prediction's band is the interval it spans, clipped to [0, 100 %]
-  (:func:`band`). The slides' domain size is varied with the shipped table of the same slides on a 128 um domain at
-  the rows the 3-pass test reads (:data:`DOMAIN_TABLE`); the table's form with the table whose simulated nodes hold
+  (:func:`band`). The slides' domain size is varied with the shipped tables of the same slides on a 128 um and a
+  512 um domain at the rows the 3-pass and 140 mm tests read (:data:`DOMAIN_TABLES`); the table's form with the table whose simulated nodes hold
   their row's fit instead of the ensemble means (:func:`with_fitted_rows`).
 - The observable (:func:`observable_evidence`): A_p of every load-bearing flake or of the paper's cluster rule alone
   is a model choice, not an input with a range: it is reported beside the budget with its evidence (the alpha of
@@ -51,10 +51,10 @@ SPEEDS = (0.02, 0.05, 0.08, 0.2, 0.5)
 #: the long pad of the prediction that tells the options apart
 LONG_PAD = 0.14
 CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test and its 1 MPa reference
-#: the domain-size variation's table, beside the shipped table: the quick preset's slides on a 128 um domain
-#: (128^2 pixels of 1 um) at 1, 20 and 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um``)
-DOMAIN_TABLE = "friction_table_128um.npz"
-DOMAIN_VARIANT = "domain_128"  # its variant's name in table_variants
+#: the domain-size variation's tables beside the shipped table (256 um), by their variants' names in
+#: table_variants: the quick preset's slides on a 128 um and on a 512 um domain (pixels of 1 um) at 1, 20 and
+#: 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um`` / ``domain_512um``)
+DOMAIN_TABLES = {"domain_128": "friction_table_128um.npz", "domain_512": "friction_table_512um.npz"}
 FORM_VARIANT = "fitted_rows"  # the table with its rows' fits at the simulated nodes (with_fitted_rows)
 
 
@@ -110,7 +110,8 @@ VARIATIONS = (
     Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
     Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
     Variation("domain_128", "domain size of the slides", "128 um instead of 256 um at 1, 20 and 30 MPa (0.08 m/s)",
-              table=DOMAIN_VARIANT),
+              table="domain_128", pair="domain_512"),
+    Variation("domain_512", "domain size of the slides", "512 um", table="domain_512", pair="domain_128"),
     Variation("form", "form of the table", "each row's fit (smaller AIC) at its simulated nodes instead of the "
               "ensemble means", table=FORM_VARIANT),
     Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
@@ -122,9 +123,9 @@ OBSERVABLE_CHOICE = {"particle_area_rule": "clusters"}
 
 def inputs_not_varied(table, variants: dict) -> list[dict]:
     """The chosen inputs of the uncertainty budget that no variation covers, named so that the budget's total is not
-    read as covering them: the domain size of the table's slides when there is no table on a second domain size
-    (``variants`` has no ``domain_128``; docs/physics/table_domain.md)."""
-    if DOMAIN_VARIANT in variants:
+    read as covering them: the domain size of the table's slides when there is no table on another domain size
+    (``variants`` has none of :data:`DOMAIN_TABLES`; docs/physics/table_domain.md)."""
+    if any(name in variants for name in DOMAIN_TABLES):
         return []
     size = table.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("size")
     where = f"the table's {size * 1e6:g} um domain only" if size else "the table's one domain size"
@@ -181,13 +182,13 @@ def with_fitted_rows(table):
                                mu=mu_of_areas(table.metadata["calibration"]["mu0"], ap, table.contact_area))
 
 
-def table_variants(table, folder: Path, domain_table: Path | None = None) -> dict[str, str]:
+def table_variants(table, folder: Path, domain_tables: dict[str, Path] | None = None) -> dict[str, str]:
     """The tables the budget varies, written into ``folder``: A_p -/+ one standard error at every node
     (``ensemble_low``/``ensemble_high``), the table rebuilt from the recorded cases of each surface pair alone
     (``pair_0``, ``pair_1``; a version 3 or 4 table that records its campaign), the table with the rows of the
-    slides on another domain size (:data:`DOMAIN_VARIANT`: :func:`with_rows_of` the table ``domain_table``, when
-    given), and the table with its rows' fits at the simulated nodes (:data:`FORM_VARIANT`, a version 4 table).
-    Returns name -> path."""
+    slides on another domain size (for each variant name -> table file of ``domain_tables``, the names of
+    :data:`DOMAIN_TABLES`: :func:`with_rows_of` that table), and the table with its rows' fits at the simulated
+    nodes (:data:`FORM_VARIANT`, a version 4 table). Returns name -> path."""
     from tribocosim.components.stripdraw.table import read_table, write_table
 
     out = {}
@@ -208,9 +209,9 @@ def table_variants(table, folder: Path, domain_table: Path | None = None) -> dic
                 rebuilt = rebuild_from_metadata(meta, [c for c in meta["cases"] if c["labels"]["surface"] == s])
                 out[f"pair_{s}"] = str(folder / f"pair_{s}.npz")
                 write_table(out[f"pair_{s}"], rebuilt)
-        if domain_table is not None:
-            out[DOMAIN_VARIANT] = str(folder / f"{DOMAIN_VARIANT}.npz")
-            write_table(out[DOMAIN_VARIANT], with_rows_of(table, read_table(domain_table)))
+        for name, path in (domain_tables or {}).items():
+            out[name] = str(folder / f"{name}.npz")
+            write_table(out[name], with_rows_of(table, read_table(path)))
         if table.version >= 4 and "rows" in meta.get("fits", {}):
             out[FORM_VARIANT] = str(folder / f"{FORM_VARIANT}.npz")
             write_table(out[FORM_VARIANT], with_fitted_rows(table))
@@ -250,26 +251,30 @@ def calibrated_predictions(runs, params: dict, table, calibrate, log=None) -> di
 
 
 def budget(nominal: dict, varied: dict) -> list[dict]:
-    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop and of the 140 mm drop; two-sided
-    ranges as half the difference of their ends, one-sided ones whole."""
+    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop and of the 140 mm drop. A
+    two-sided range counts half the difference of its ends when they lie on either side of the nominal, and the
+    larger change when both lie on one side (a response that is not monotonic across the nominal); a one-sided
+    change counts whole. An end absent from ``varied`` leaves the other end one-sided; an end with an error makes
+    the row an error."""
     keys = {"scale": lambda r: r["scale"], "drop3": lambda r: r["drops"][2], "drop140": lambda r: r["drop_140"]}
     rows, seen = [], set()
     for v in VARIATIONS:
         if v.name in seen or v.name not in varied:
             continue
-        ends = [v] + ([w for w in VARIATIONS if w.name == v.pair] if v.pair else [])
+        ends = [v] + [w for w in VARIATIONS if w.name == v.pair and w.name in varied]
         seen.update(w.name for w in ends)
-        results = [varied.get(w.name) for w in ends]
+        results = [varied[w.name] for w in ends]
         row = {"quantity": v.quantity, "range": " / ".join(w.value for w in ends)}
-        if any(r is None or "error" in r for r in results):
-            row["error"] = "; ".join(r["error"] for r in results if r is not None and "error" in r) or "not run"
+        if any("error" in r for r in results):
+            row["error"] = "; ".join(r["error"] for r in results if "error" in r)
             rows.append(row)
             continue
         for key, get in keys.items():
-            if len(results) == 2:
-                row[key] = 0.5 * abs(get(results[1]) - get(results[0]))
+            changes = [get(r) - get(nominal) for r in results]
+            if len(changes) == 2 and changes[0] * changes[1] < 0.0:
+                row[key] = 0.5 * abs(changes[1] - changes[0])
             else:
-                row[key] = abs(get(results[0]) - get(nominal))
+                row[key] = max(abs(c) for c in changes)
         rows.append(row)
     return rows
 

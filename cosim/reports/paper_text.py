@@ -118,10 +118,10 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
     lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
               "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
               "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
-              "(a two-sided range: half the difference of its ends; a one-sided change whole). The quote of the 35 % "
-              f"alone gives s a standard error of {cal.stderr_quote:.2g}. The observable A_p stands for is a model "
-              "choice, not an input with a range: it is stated with its evidence in the next section and not summed "
-              "here.", "",
+              "(a two-sided range: half the difference of its ends, or the larger change when both ends move the "
+              "same way; a one-sided change whole). The quote of the 35 % alone gives s a standard error of "
+              f"{cal.stderr_quote:.2g}. The observable A_p stands for is a model choice, not an input with a range: "
+              "it is stated with its evidence in the next section and not summed here.", "",
               "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
     for r in rows:
         if "error" in r:

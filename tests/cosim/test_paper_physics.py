@@ -32,6 +32,24 @@ def test_budget_takes_half_a_two_sided_range_and_a_one_sided_change_whole():
     assert pp.budget_total(list(rows.values()), "scale", 0.1) == pytest.approx(math.sqrt(0.75**2 + 0.2**2 + 0.1**2))
 
 
+def test_a_two_sided_range_with_both_ends_on_one_side_counts_the_larger_change_and_a_missing_end_one_side():
+    """The domain size: 128 and 512 um around the nominal 256 um. Ends on either side: half their difference; both
+    above the nominal (not monotonic across it): the larger change, not the smaller half-difference; one end only
+    (no 512 um table): that change whole."""
+    nominal = _result(1.0, 0.7, 0.6)
+    row = lambda varied: next(r for r in pp.budget(nominal, varied) if r["quantity"] == "domain size of the slides")
+    across = row({"domain_128": _result(0.8, 0.6, 0.5), "domain_512": _result(1.4, 0.75, 0.7)})
+    assert (across["scale"], across["drop3"], across["drop140"]) == pytest.approx((0.3, 0.075, 0.1))
+    assert across["range"].endswith(" / 512 um")
+    same = row({"domain_128": _result(1.2, 0.8, 0.5), "domain_512": _result(1.1, 0.75, 0.7)})
+    assert (same["scale"], same["drop3"], same["drop140"]) == pytest.approx((0.2, 0.1, 0.1))
+    alone = row({"domain_128": _result(1.2, 0.8, 0.55)})
+    assert (alone["scale"], alone["drop3"], alone["drop140"]) == pytest.approx((0.2, 0.1, 0.05))
+    assert "512" not in alone["range"]
+    failed = row({"domain_128": _result(1.2, 0.8, 0.55), "domain_512": {"error": "cannot be calibrated"}})
+    assert failed["error"] == "cannot be calibrated" and "scale" not in failed
+
+
 def test_the_observable_is_not_a_row_of_the_budget_and_the_table_form_is():
     assert "particle_area_rule" not in {k for v in pp.VARIATIONS for k in v.parameters}
     assert pp.OBSERVABLE_CHOICE == {"particle_area_rule": "clusters"}
@@ -90,7 +108,9 @@ def test_the_budget_names_the_domain_size_unless_a_table_on_another_size_varies_
     (row,) = pp.inputs_not_varied(shipped, {})
     assert row["quantity"] == "domain size of the slides" and f"{size * 1e6:g} um domain only" in row["range"]
     assert pp.inputs_not_varied(shipped, {"domain_128": "x.npz"}) == []
-    assert [v.quantity for v in pp.VARIATIONS if v.table == "domain_128"] == ["domain size of the slides"]
+    assert pp.inputs_not_varied(shipped, {"domain_512": "x.npz"}) == []
+    assert {v.table: v.quantity for v in pp.VARIATIONS if v.table in pp.DOMAIN_TABLES} == {
+        "domain_128": "domain size of the slides", "domain_512": "domain size of the slides"}
 
 
 def test_with_rows_of_takes_the_other_tables_shared_rows_interpolated_in_beta(tmp_path):
@@ -107,7 +127,7 @@ def test_with_rows_of_takes_the_other_tables_shared_rows_interpolated_in_beta(tm
                           contact_area=ac, particle_area=ap, contact_area_std=zeros, particle_area_std=zeros,
                           extras={"simulated": np.ones((2, 2, 3)), "contact_area_se": zeros, "particle_area_se": zeros,
                                   "particle_area_clusters": zeros, "particle_area_clusters_se": zeros})
-    paths = pp.table_variants(t, tmp_path, _write(tmp_path / "other.npz", other))
+    paths = pp.table_variants(t, tmp_path, {"domain_128": _write(tmp_path / "other.npz", other)})
     got = read_table(paths["domain_128"])
     for i, j in ((0, 0), (0, 1), (2, 0), (2, 1)):  # 1 and 30 MPa at v = 0 and 0.08 m/s
         pressure = t.pressure[i]

@@ -80,24 +80,26 @@ def test_a_recorded_case_reruns_to_its_recorded_result(shipped):
     assert out["summary"]["mean_particle_fraction"] == rec["a_p"] == 0.0
 
 
-def test_the_domain_size_variations_table_is_its_presets_and_fits_the_shipped_rows(shipped):
-    """models/friction_table_128um.npz (the budget's domain-size variation): the domain_128um preset's table,
-    rebuilt exactly from its recorded cases by one version of the mesoscale code, on rows the shipped table has and a
-    beta axis that spans the shipped one's (what paper_physics.with_rows_of needs)."""
-    from tribocosim.cosim.reports.paper_physics import DOMAIN_TABLE
+@pytest.mark.parametrize("variant, preset, size", [("domain_128", "domain_128um", 128e-6)])
+def test_the_domain_size_variations_tables_are_their_presets_and_fit_the_shipped_rows(shipped, variant, preset, size):
+    """models/friction_table_128um.npz and _512um.npz (the budget's domain-size variation, both sides of the shipped
+    256 um): each its preset's table, rebuilt exactly from its recorded cases by one version of the mesoscale code,
+    on rows the shipped table has and a beta axis that spans the shipped one's (what paper_physics.with_rows_of
+    needs)."""
+    from tribocosim.cosim.reports.paper_physics import DOMAIN_TABLES
     from tribocosim.paths import MODELS_DIR
 
-    domain = read_table(MODELS_DIR / DOMAIN_TABLE)
+    domain = read_table(MODELS_DIR / DOMAIN_TABLES[variant])
     meta = domain.metadata
     recorded = {k: v for k, v in meta["campaign"]["sweep"].items() if k != "source"}
-    current = json.loads(json.dumps(load_preset("domain_128um").to_dict()))
+    current = json.loads(json.dumps(load_preset(preset).to_dict()))
     current.pop("source", None)
-    assert recorded == current, "the domain_128um preset changed since its table was built: rebuild and ship it"
+    assert recorded == current, f"the {preset} preset changed since its table was built: rebuild and ship it"
     assert len(meta["case_source_digests"]) == 1
     rebuilt = rebuild_from_metadata(meta)
     for name in domain.arrays():
         np.testing.assert_array_equal(rebuilt.array(name), domain.array(name), err_msg=name)
-    assert meta["campaign"]["sweep"]["slide"]["size"] == 128e-6
+    assert meta["campaign"]["sweep"]["slide"]["size"] == size
     assert set(domain.pressure) <= set(shipped.pressure) and set(domain.velocity) <= set(shipped.velocity)
     assert domain.beta[0] == shipped.beta[0] and domain.beta[-1] >= shipped.beta[-1]
 
