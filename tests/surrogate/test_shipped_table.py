@@ -80,7 +80,8 @@ def test_a_recorded_case_reruns_to_its_recorded_result(shipped):
     assert out["summary"]["mean_particle_fraction"] == rec["a_p"] == 0.0
 
 
-@pytest.mark.parametrize("variant, preset, size", [("domain_128", "domain_128um", 128e-6)])
+@pytest.mark.parametrize("variant, preset, size", [("domain_128", "domain_128um", 128e-6),
+                                                   ("domain_512", "domain_512um", 512e-6)])
 def test_the_domain_size_variations_tables_are_their_presets_and_fit_the_shipped_rows(shipped, variant, preset, size):
     """models/friction_table_128um.npz and _512um.npz (the budget's domain-size variation, both sides of the shipped
     256 um): each its preset's table, rebuilt exactly from its recorded cases by one version of the mesoscale code,
