@@ -17,8 +17,8 @@ predicted.
   change of s and of each prediction recorded; the total is the quadrature sum of the half-ranges (a one-sided
   variation counts whole), and a prediction's band is the interval it spans, clipped to [0, 100 %]
   (:func:`band`). The slides' domain size is varied with the shipped tables of the same slides on a 128 um and a
-  512 um domain at the rows the 3-pass and 140 mm tests read (:data:`DOMAIN_TABLES`); the table's form with the table whose simulated nodes hold
-  their row's fit instead of the ensemble means (:func:`with_fitted_rows`).
+  512 um domain at the rows the 3-pass and 140 mm tests read (:data:`DOMAIN_TABLES`); the table's form with the
+  table whose simulated nodes hold their row's fit instead of the ensemble means (:func:`with_fitted_rows`).
 - The observable (:func:`observable_evidence`): A_p of every load-bearing flake or of the paper's cluster rule alone
   is a model choice, not an input with a range: it is reported beside the budget with its evidence (the alpha of
   Eq. 23 the paper's own macro model needs for the 35 % drop, against the alpha_eff each observable's share gives at

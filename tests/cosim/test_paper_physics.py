@@ -37,7 +37,10 @@ def test_a_two_sided_range_with_both_ends_on_one_side_counts_the_larger_change_a
     above the nominal (not monotonic across it): the larger change, not the smaller half-difference; one end only
     (no 512 um table): that change whole."""
     nominal = _result(1.0, 0.7, 0.6)
-    row = lambda varied: next(r for r in pp.budget(nominal, varied) if r["quantity"] == "domain size of the slides")
+
+    def row(varied):
+        return next(r for r in pp.budget(nominal, varied) if r["quantity"] == "domain size of the slides")
+
     across = row({"domain_128": _result(0.8, 0.6, 0.5), "domain_512": _result(1.4, 0.75, 0.7)})
     assert (across["scale"], across["drop3"], across["drop140"]) == pytest.approx((0.3, 0.075, 0.1))
     assert across["range"].endswith(" / 512 um")
