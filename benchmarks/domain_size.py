@@ -43,11 +43,13 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--velocity", type=float, default=0.08, help="the velocity row [m/s]")
     args = ap.parse_args(argv)
+    from tribocosim.surrogate.campaign import case_cpu_seconds
+
     tables = _tables()
     ref = tables.pop("256 um")
     for name, t in tables.items():
         cases = t.metadata.get("cases", [])
-        cost = sum(c.get("wall_s", 0.0) for c in cases)
+        cost = case_cpu_seconds(cases)
         print(f"\n{name} table: {len(cases)} slides, {cost:.0f} core-s ({cost / 3600:.2f} core-hours) recorded")
         for p in t.pressure:
             if p not in ref.pressure or args.velocity not in t.velocity:
