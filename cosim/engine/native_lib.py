@@ -2,8 +2,9 @@
 
 The library holds the fixed-step loop of Jacobi and Gauss-Seidel with held coupling values (``tcm_run``), the output
 refresh and the feedthrough probe of the master's initialization (``tcm_refresh``, ``tcm_probe``), the start row of
-the recorder (``tcm_record_row``), and the FMI 2.0 callbacks a host passes to ``fmi2Instantiate`` (``tcm_logger``,
-which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``).
+the recorder (``tcm_record_row``), the FMI 2.0 callbacks a host passes to ``fmi2Instantiate`` (``tcm_logger``,
+which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``),
+and the rows of the results CSV (``native/tc_csv.c``, ``tcm_csv_rows``: :mod:`.results_csv`).
 :mod:`.native_loop` runs the loop for the Python master, :mod:`.native_session` a whole run in it. Nothing here
 imports numpy or fmpy.
 
@@ -23,10 +24,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-#: the C sources of the loop
+#: the C sources of the library and their headers
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-SOURCES = ("tc_master.c",)
-HEADER = "tc_master.h"
+SOURCES = ("tc_master.c", "tc_csv.c")
+HEADERS = ("tc_master.h", "tc_csv.h")
 #: accepted steps per call of the C loop (between two calls the progress reporters are told the time)
 CHUNK = 2048
 #: tcm_status
@@ -110,7 +111,7 @@ def digest() -> str:
     from tribocosim.components.native.toolchain.digests import memo
 
     folder = fmi_headers()
-    files = (*(NATIVE_DIR / s for s in SOURCES), NATIVE_DIR / HEADER, folder / "fmi2FunctionTypes.h",
+    files = (*(NATIVE_DIR / s for s in (*SOURCES, *HEADERS)), folder / "fmi2FunctionTypes.h",
              folder / "fmi2TypesPlatform.h")
     flags = " ".join((*compiler.CFLAGS, compiler.zig_version()))
 
@@ -156,4 +157,6 @@ def library() -> ctypes.CDLL:
     lib.tcm_probe.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState), _PI, _PU, _PB, _PD, _PB, _PD]
     lib.tcm_record_row.restype = _I
     lib.tcm_record_row.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState)]
+    lib.tcm_csv_rows.restype = _SZ
+    lib.tcm_csv_rows.argtypes = [_PD, _PD, _SZ, _SZ, ctypes.c_char_p, _SZ, _PSZ]
     return lib
