@@ -14,21 +14,15 @@ plan.
 
 from __future__ import annotations
 
-import datetime as _dt
 import hashlib
 import json
 import time
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
 from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
 from tribocosim.cosim.engine.graph import gauss_seidel_order
 from tribocosim.cosim.engine.schemes import LinkSpec
 from tribocosim.cosim.scene.validate import Plan
-
-if TYPE_CHECKING:  # the Python master: numpy, fmpy
-    from tribocosim.cosim.engine.master import Master
 
 
 class Result:
@@ -52,7 +46,7 @@ class Result:
     def __init__(self, time=None, columns=None, metadata=None, csv_path: Path | None = None,
                  metadata_path: Path | None = None, *, recording=None) -> None:
         self._time, self._columns, self._recording = time, columns, recording
-        self.metadata: dict[str, Any] = metadata if metadata is not None else {}
+        self.metadata: dict = metadata if metadata is not None else {}
         self.csv_path, self.metadata_path = csv_path, metadata_path
 
     @property
@@ -79,15 +73,15 @@ class Result:
         return self.columns[name]
 
 
-@dataclass
 class Build:
-    """A master assembled from a plan, plus what is needed to clean up afterwards."""
+    """A master assembled from a plan (:class:`~tribocosim.cosim.engine.master.Master`), the instance names, the
+    parameter values to set into each instance, the notes on the coupling; and what is needed to clean up
+    afterwards."""
 
-    master: Master
-    plan: Plan
-    names: list[str]
-    parameters: list[dict]
-    notes: list[str] = field(default_factory=list)
+    __slots__ = ("master", "plan", "names", "parameters", "notes")
+
+    def __init__(self, master, plan: Plan, names: list[str], parameters: list[dict], notes: list[str]) -> None:
+        self.master, self.plan, self.names, self.parameters, self.notes = master, plan, names, parameters, notes
 
     def close(self) -> None:
         """Terminate and free every slave; one whose FMU returned fmi2Fatal in any instance is only dropped
@@ -104,19 +98,18 @@ class Build:
                 pass
 
 
-@dataclass
 class Coupling:
     """How a plan's FMUs are coupled, in index form (what both masters need): instance names, links, the declared
     dependency structure (``structure[k][j]``: link k's source may depend directly on link j's target), declared
-    feedthrough, the Gauss-Seidel order, the order of accuracy of the coupling and the notes on it."""
+    feedthrough, the Gauss-Seidel order (:class:`~tribocosim.cosim.engine.graph.StepOrder`), the order of accuracy of
+    the coupling and the notes on it."""
 
-    names: list[str]
-    links: list[LinkSpec]
-    structure: list[list[bool]]
-    feedthrough: list
-    gauss_seidel: Any
-    order_of_accuracy: int
-    notes: list[str]
+    __slots__ = ("names", "links", "structure", "feedthrough", "gauss_seidel", "order_of_accuracy", "notes")
+
+    def __init__(self, names: list[str], links: list[LinkSpec], structure: list[list[bool]], feedthrough: list,
+                 gauss_seidel, order_of_accuracy: int, notes: list[str]) -> None:
+        self.names, self.links, self.structure, self.feedthrough = names, links, structure, feedthrough
+        self.gauss_seidel, self.order_of_accuracy, self.notes = gauss_seidel, order_of_accuracy, notes
 
 
 def coupling(plan: Plan) -> Coupling:
@@ -244,7 +237,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
 
         scene = load_scene(scene_file(scene), overrides)
     plan = scene
-    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    started = time.strftime("%Y-%m-%dT%H:%M:%S+00:00", time.gmtime())  # ISO 8601, UTC, as datetime.isoformat
     t0 = time.perf_counter()
     outcome = _session(plan, progress) if loop == "auto" else None
     if outcome is None:
@@ -277,29 +270,24 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     return result
 
 
-@dataclass
 class Outcome:
-    """What a run did, whichever master ran it: what :func:`_metadata` reports and what the result holds."""
+    """What a run did, whichever master ran it: what :func:`_metadata` reports and what the result holds. ``master``:
+    the metadata's "master" entries that depend on the run; ``recording``: (times, rows row after row) of the C
+    master; ``recorder``: the Python master's; ``failure``: what stopped the run early, or None."""
 
-    names: list[str]
-    columns: list[str]
-    notes: list[str]
-    warnings: list[str]
-    master: dict  # the metadata's "master" entries that depend on the run
-    feedthrough: list
-    gauss_seidel: Any
-    link_labels: list[str]
-    loops: list
-    hold_mean: list
-    steps: dict
-    calls: dict
-    fmu_times: dict
-    loop_time: float
-    end_time: float
-    rows: int
-    failure: Exception | None = None
-    recording: Any = None  # (times, rows row after row) of the C master
-    recorder: Any = None  # the Python master's
+    __slots__ = ("names", "columns", "notes", "warnings", "master", "feedthrough", "gauss_seidel", "link_labels",
+                 "loops", "hold_mean", "steps", "calls", "fmu_times", "loop_time", "end_time", "rows", "failure",
+                 "recording", "recorder")
+
+    def __init__(self, names: list[str], columns: list[str], notes: list[str], warnings: list[str], master: dict,
+                 feedthrough: list, gauss_seidel, link_labels: list[str], loops: list, hold_mean: list, steps: dict,
+                 calls: dict, fmu_times: dict, loop_time: float, end_time: float, rows: int,
+                 failure: Exception | None = None, recording=None, recorder=None) -> None:
+        self.names, self.columns, self.notes, self.warnings, self.master = names, columns, notes, warnings, master
+        self.feedthrough, self.gauss_seidel, self.link_labels, self.loops = feedthrough, gauss_seidel, link_labels, loops
+        self.hold_mean, self.steps, self.calls, self.fmu_times = hold_mean, steps, calls, fmu_times
+        self.loop_time, self.end_time, self.rows, self.failure = loop_time, end_time, rows, failure
+        self.recording, self.recorder = recording, recorder
 
     def result(self, meta: dict) -> Result:
         if self.recorder is not None:
@@ -494,14 +482,14 @@ def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
         "overrides": dict(scene.overrides),
         "started": started,
         "versions": {"tribocosim": distribution_version("tribocosim"), "fmpy": distribution_version("fmpy")},
-        "experiment": asdict(scene.experiment),
+        "experiment": scene.experiment.as_dict(),
         "master": {
             "algorithm": ms.algorithm,
             "extrapolation": ms.extrapolation,
             "output_update": ms.output_update,
             "step_control": o.master["step_control"],
-            "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
-            **({ms.algorithm: asdict(ms.algorithm_settings)} if ms.algorithm_settings is not None else {}),
+            "adaptive": ms.adaptive.as_dict() if ms.adaptive else None,
+            **({ms.algorithm: ms.algorithm_settings.as_dict()} if ms.algorithm_settings is not None else {}),
             "order_of_accuracy": o.master["order_of_accuracy"],
             "loop": o.master["loop"],
             **({"python_loop_because": o.master["python_loop_because"]} if "python_loop_because" in o.master else {}),

@@ -19,7 +19,6 @@ One small hierarchy so that callers can catch what they can handle:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 
 class TribocosimError(Exception):
@@ -60,16 +59,27 @@ class ConvergenceError(TribocosimError):
         self.iterations = int(iterations)
 
 
-@dataclass(frozen=True)
 class Problem:
     """One problem of a scene or sweep file: the file, the dotted key, what is wrong."""
 
-    file: str
-    key: str
-    message: str
+    __slots__ = ("file", "key", "message")
+
+    def __init__(self, file: str, key: str, message: str) -> None:
+        self.file, self.key, self.message = file, key, message
 
     def __str__(self) -> str:
         return f"{self.file}: {self.key}: {self.message}"
+
+    def __repr__(self) -> str:
+        return f"Problem({self.file!r}, {self.key!r}, {self.message!r})"
+
+    def __eq__(self, other) -> bool:
+        if other.__class__ is not Problem:
+            return NotImplemented
+        return (self.file, self.key, self.message) == (other.file, other.key, other.message)
+
+    def __hash__(self) -> int:
+        return hash((self.file, self.key, self.message))
 
 
 class SceneError(TribocosimError):

@@ -1,18 +1,18 @@
 """Where the shipped data lives: the package ``tribocosim.models`` (a wheel's or the source tree's).
 
-Found through :func:`importlib.resources.files`, so the same code works from a wheel installed in
-site-packages and from an editable install of the repository (where ``tribocosim.models`` is the
-``models/`` folder).
+Found as the folder of that package, so the same code works from a wheel installed in site-packages and from an
+editable install of the repository (where ``tribocosim.models`` is the ``models/`` folder); the package is a folder
+of files in both (numpy, the C code and the FMU build read them by path).
 """
 
 from __future__ import annotations
 
-from importlib.resources import files
+import importlib.util
 from pathlib import Path
 
 from tribocosim.errors import SceneError
 
-MODELS_DIR = Path(str(files("tribocosim.models")))
+MODELS_DIR = Path(importlib.util.find_spec("tribocosim.models").submodule_search_locations[0])
 DEFAULT_TABLE = MODELS_DIR / "friction_table.npz"
 SCENES_DIR = MODELS_DIR / "scenes"
 

@@ -21,7 +21,6 @@ import hashlib
 import importlib.util
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 #: the C sources of the library and their headers
@@ -128,6 +127,8 @@ def digest() -> str:
 
 def build(output: str | os.PathLike) -> Path:
     """Compile the loop's library for this machine into ``output`` (atomically)."""
+    import tempfile
+
     from tribocosim.components.native.toolchain import compiler
 
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"

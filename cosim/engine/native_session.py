@@ -35,7 +35,6 @@ import math
 import sys
 import time
 from collections import deque
-from dataclasses import dataclass, field
 from pathlib import Path
 from weakref import WeakValueDictionary
 
@@ -83,37 +82,33 @@ class _Callbacks(ctypes.Structure):
                 ("componentEnvironment", _VP)]
 
 
-@dataclass(frozen=True)
 class SessionSlave:
     """One FMU instance of a session: its name, the folder its FMU is extracted to, its model identifier and GUID,
     the parameter values to set (``[(value reference, type, value), ...]``) and its declared feedthrough (None:
     probed)."""
 
-    name: str
-    folder: Path
-    model_identifier: str
-    guid: str
-    parameters: list = field(default_factory=list)
-    feedthrough: bool | None = None
+    __slots__ = ("name", "folder", "model_identifier", "guid", "parameters", "feedthrough")
+
+    def __init__(self, name: str, folder: Path, model_identifier: str, guid: str, parameters: list | None = None,
+                 feedthrough: bool | None = None) -> None:
+        self.name, self.folder, self.model_identifier, self.guid = name, folder, model_identifier, guid
+        self.parameters = [] if parameters is None else parameters
+        self.feedthrough = feedthrough
 
 
-@dataclass
 class SessionResult:
-    """What a session did: the recorded rows, the counters and what the initialization found."""
+    """What a session did: the recorded rows (``times``; ``rows``: n_rows x n_columns, row after row), the counters
+    and what the initialization found."""
 
-    times: array.array
-    rows: array.array  # n_rows x n_columns, row after row
-    steps: int
-    min_step: float
-    max_step: float
-    feedthrough: list
-    loops: list
-    eval_order: list
-    wall_times: list
-    do_steps: list
-    loop_time: float
-    warnings: list
-    end_values: list
+    __slots__ = ("times", "rows", "steps", "min_step", "max_step", "feedthrough", "loops", "eval_order", "wall_times",
+                 "do_steps", "loop_time", "warnings", "end_values")
+
+    def __init__(self, times: array.array, rows: array.array, steps: int, min_step: float, max_step: float,
+                 feedthrough: list, loops: list, eval_order: list, wall_times: list, do_steps: list, loop_time: float,
+                 warnings: list, end_values: list) -> None:
+        self.times, self.rows, self.steps, self.min_step, self.max_step = times, rows, steps, min_step, max_step
+        self.feedthrough, self.loops, self.eval_order, self.wall_times = feedthrough, loops, eval_order, wall_times
+        self.do_steps, self.loop_time, self.warnings, self.end_values = do_steps, loop_time, warnings, end_values
 
 
 def supported(algorithm: str, extrapolation: int, adaptive, links: list[LinkSpec]) -> str | None:

@@ -33,9 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from tribocosim.errors import ParameterError, Problem
 from tribocosim.cosim.scene.problems import Problems, known
@@ -50,13 +48,15 @@ def component_of(spec):
     return registry.find(spec.component)
 
 
-@dataclass
 class Checked:
     """The component checks of a scene: every problem, and per component instance whose values are all good the
     scene's values as the FMU reads them (``{FMU variable: value}``)."""
 
-    problems: list[Problem] = field(default_factory=list)
-    values: dict[str, dict[str, Any]] = field(default_factory=dict)
+    __slots__ = ("problems", "values")
+
+    def __init__(self) -> None:
+        self.problems: list[Problem] = []
+        self.values: dict[str, dict] = {}
 
 
 def _instance(cls, given: dict, add, key: str):

@@ -333,29 +333,21 @@ def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(t
     assert second.rows[0]["mu_bar"] == pytest.approx(0.5 * first.rows[0]["mu_bar"], rel=0.05)
 
 
-def test_a_scene_is_parsed_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
-    """``tribocosim run``: one TOML parse of the scene file, and one range check of ``tool_length`` in Python (the
-    component declaration's; the model description's min/max derive from it and are not checked again)."""
+def test_a_scene_is_read_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
+    """``tribocosim run``: one read of the scene file's document (parsed once per content,
+    :mod:`tribocosim.cosim.scene.documents`), and one range check of ``tool_length`` in Python (the component
+    declaration's; the model description's min/max derive from it and are not checked again)."""
     from tribocosim.components import params
     from tribocosim.cosim.scene import schema
 
     tribocosim(["run", str(DEMO), "--out", str(tmp_path / "warm"), "--quiet", "--set", "experiment.stop=0.01"])
-    parses, checked = [], []
-    loads, check_field = schema.tomllib.loads, params.check_field
-
-    class CountingToml:
-        TOMLDecodeError = tomllib.TOMLDecodeError
-
-        @staticmethod
-        def loads(text):
-            parses.append(text)
-            return loads(text)
-
-    monkeypatch.setattr(schema, "tomllib", CountingToml)
+    reads, checked = [], []
+    read_toml, check_field = schema.read_toml, params.check_field
+    monkeypatch.setattr(schema, "read_toml", lambda path: (reads.append(Path(path)), read_toml(path))[1])
     monkeypatch.setattr(params, "check_field", lambda f, value: (checked.append(f.name), check_field(f, value))[1])
     assert tribocosim(["run", str(DEMO), "--out", str(tmp_path / "out"), "--quiet",
                        "--set", "experiment.stop=0.01"]) == 0
-    assert len([t for t in parses if "[fmus.strip]" in t]) == 1, "the scene file is parsed once"
+    assert [p.resolve() for p in reads] == [DEMO.resolve()], "the scene file is read once"
     assert checked.count("tool_length") == 1, checked
 
 
