@@ -20,11 +20,11 @@ our master; ``--set`` overrides the keys of the scene it is read as (``master.*`
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from pathlib import Path
 
 from tribocosim.errors import RunFailed, SceneError, TribocosimError
+from tribocosim.lazy import log_to_console
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -47,7 +47,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim run``."""
     args = _parser().parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
+    log_to_console("tribocosim: %(message)s")
     from tribocosim.cosim.api import run, run_ssp
     from tribocosim.cosim.scene.schema import is_sweep, parse_overrides, read_document
     from tribocosim.paths import scene_file

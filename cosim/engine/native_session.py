@@ -7,7 +7,7 @@ with held coupling values, Real links) and makes the FMI calls the Python master
 same order, with the same values:
 
 1. each FMU's library loaded (ctypes), ``fmi2Instantiate`` with the library's logger (``tcm_logger``: the FMU's
-   messages reach :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters set by
+   messages reach the logger :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters set by
    type (Real, Integer and Enumeration, Boolean, String), then ``fmi2SetupExperiment`` and
    ``fmi2EnterInitializationMode``;
 2. as many output refreshes with propagation as there are slaves (``tcm_refresh``), ``fmi2ExitInitializationMode``,
@@ -30,7 +30,6 @@ from __future__ import annotations
 import array
 import ctypes
 import itertools
-import logging
 import math
 import sys
 import time
@@ -39,13 +38,14 @@ from pathlib import Path
 from weakref import WeakValueDictionary
 
 from tribocosim.errors import TribocosimError
+from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, SINK, TCM_DONE, TcmGet, TcmLogEnv, TcmRig, TcmSet,
                                                 TcmSlave, TcmState, library)
 from tribocosim.cosim.engine.schemes import LinkSpec, loop_message
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
-LOG = logging.getLogger("tribocosim.cosim")
+LOG = "tribocosim.cosim"  # the logger of the FMUs' messages and the master's notes
 _LABELS = ("ok", "warning", "discard", "error", "fatal", "pending")
 _FATAL = 4
 _VP, _I, _D, _SZ, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_size_t, ctypes.c_uint
@@ -161,7 +161,7 @@ class _Fmu:
         label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
         self.messages.append(f"[{label}] {text}")
         if status >= 1:
-            LOG.warning("FMU %s: [%s] %s", self.slave.name, label, text)
+            log(LOG, WARNING, "FMU %s: [%s] %s", self.slave.name, label, text)
 
     def call(self, function: str, *args) -> int:
         t0 = time.perf_counter()
@@ -395,9 +395,9 @@ class NativeSession:
             msg, warn = loop_message(loop, ", ".join(self.links[k].label for k in loop.links), self.algorithm)
             if warn:
                 self.warnings.append(msg)
-                LOG.warning(msg)
+                log(LOG, WARNING, msg)
             else:
-                LOG.info(msg)
+                log(LOG, INFO, msg)
         self._c("tcm_record_row")
         self.rig.propagate = int(self.propagate)
         t0 = time.perf_counter()

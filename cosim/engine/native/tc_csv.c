@@ -58,21 +58,10 @@ typedef struct scaled {
     int fraction;
 } scaled;
 
-/* x 5^a 2^s, 5^a = {p_hi, p_lo}; for s >= 0, 5^a < 2^64 and the product < 2^64 */
-static scaled scale(uint64_t x, uint64_t p_hi, uint64_t p_lo, int s) {
+/* the 192-bit number w (low word first) shifted right by k (1 <= k < 192): whole part and fraction */
+static scaled shifted(const uint64_t w[3], unsigned k) {
     scaled out;
-    if (s >= 0) {
-        out.whole = (x * p_lo) << s;
-        out.fraction = FRACTION_NONE;
-        return out;
-    }
-    uint64_t w[3], h0, l0, h1, l1;  /* the product, low word first */
-    mul_64(x, p_lo, &h0, &l0);
-    mul_64(x, p_hi, &h1, &l1);
-    w[0] = l0;
-    w[1] = h0 + l1;
-    w[2] = h1 + (w[1] < h0);
-    unsigned k = (unsigned)(-s), word = k / 64, shift = k % 64;
+    unsigned word = k / 64, shift = k % 64;
     out.whole = w[word] >> shift;
     if (shift && word < 2) out.whole |= w[word + 1] << (64 - shift);
     unsigned half = k - 1;  /* the bit of one half */
@@ -82,6 +71,51 @@ static scaled scale(uint64_t x, uint64_t p_hi, uint64_t p_lo, int s) {
     out.fraction = half_set ? (below ? FRACTION_ABOVE_HALF : FRACTION_HALF)
                             : (below ? FRACTION_BELOW_HALF : FRACTION_NONE);
     return out;
+}
+
+/* w += sign d {d_hi, d_lo} (192 bits, no overflow or underflow past them) */
+static void add_128(uint64_t w[3], uint64_t d_hi, uint64_t d_lo, int negative) {
+    if (negative) {
+        uint64_t b0 = w[0] < d_lo;
+        w[0] -= d_lo;
+        uint64_t b1 = w[1] < d_hi || (w[1] == d_hi && b0);
+        w[1] -= d_hi + b0;
+        w[2] -= b1;
+    } else {
+        w[0] += d_lo;
+        uint64_t c0 = w[0] < d_lo;
+        uint64_t sum = w[1] + d_hi;
+        uint64_t c1 = sum < d_hi;
+        w[1] = sum + c0;
+        c1 |= w[1] < c0;
+        w[2] += c1;
+    }
+}
+
+/* The interval's ends and x of the module comment, X in {lo4, x4, hi4}, times 5^a 2^s (5^a = {p_hi, p_lo}); for
+ * s >= 0, 5^a < 2^64 and the products are below 2^64. */
+static void scale_all(uint64_t lo4, uint64_t x4, uint64_t hi4, uint64_t p_hi, uint64_t p_lo, int s, scaled *lo,
+                      scaled *x, scaled *hi) {
+    if (s >= 0) {
+        lo->whole = (lo4 * p_lo) << s;
+        x->whole = (x4 * p_lo) << s;
+        hi->whole = (hi4 * p_lo) << s;
+        lo->fraction = x->fraction = hi->fraction = FRACTION_NONE;
+        return;
+    }
+    uint64_t w[3], h0, l0, h1, l1;  /* x4 5^a, low word first */
+    mul_64(x4, p_lo, &h0, &l0);
+    mul_64(x4, p_hi, &h1, &l1);
+    w[0] = l0;
+    w[1] = h0 + l1;
+    w[2] = h1 + (w[1] < h0);
+    unsigned k = (unsigned)(-s);
+    *x = shifted(w, k);
+    uint64_t v[3] = {w[0], w[1], w[2]};
+    for (uint64_t i = lo4; i < x4; i++) add_128(v, p_hi, p_lo, 1);  /* lo4 = x4 - 1 or x4 - 2 */
+    *lo = shifted(v, k);
+    for (uint64_t i = x4; i < hi4; i++) add_128(w, p_hi, p_lo, 0);  /* hi4 = x4 + 2 */
+    *hi = shifted(w, k);
 }
 
 /* floor(e log10 2) for |e| <= 1100 (661971961083 = floor(log10(2) 2^41); e log10 2 is never within 1e-3 of a whole
@@ -94,13 +128,25 @@ static int floor_log10_pow2(int e) {
 
 /* the decimal digits of c (> 0) into digits; returns their number */
 static int digits_of(uint64_t c, char *digits) {
+    static const char pairs[] = "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+                                "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+                                "8081828384858687888990919293949596979899";
     char reversed[20];
-    int n = 0;
-    while (c) {
-        reversed[n++] = (char)('0' + (int)(c % 10));
-        c /= 10;
+    char *end = reversed + sizeof reversed, *p = end;
+    while (c >= 100) {
+        unsigned r = (unsigned)(c % 100);
+        c /= 100;
+        p -= 2;
+        memcpy(p, pairs + 2 * r, 2);
     }
-    for (int i = 0; i < n; i++) digits[i] = reversed[n - 1 - i];
+    if (c >= 10) {
+        p -= 2;
+        memcpy(p, pairs + 2 * c, 2);
+    } else {
+        *--p = (char)('0' + (int)c);
+    }
+    int n = (int)(end - p);
+    memcpy(digits, p, (size_t)n);
     return n;
 }
 
@@ -115,8 +161,8 @@ static int shortest_exact(unsigned biased, uint64_t fraction, const uint64_t pow
     uint64_t x4 = 4 * m, hi4 = x4 + 2, lo4 = x4 - (fraction == 0 && biased > 1 ? 1 : 2);
     int inclusive = (m & 1) == 0;
     int j0 = floor_log10_pow2(e2) - 1, a = -j0, s = e2 + a;
-    scaled lo = scale(lo4, pow5[a][0], pow5[a][1], s), x = scale(x4, pow5[a][0], pow5[a][1], s),
-           hi = scale(hi4, pow5[a][0], pow5[a][1], s);
+    scaled lo, x, hi;
+    scale_all(lo4, x4, hi4, pow5[a][0], pow5[a][1], s, &lo, &x, &hi);
     uint64_t low = lo.whole + (lo.fraction != FRACTION_NONE || !inclusive);
     uint64_t high = hi.whole - (hi.fraction == FRACTION_NONE && !inclusive);
     int t = 0;  /* the largest t with a multiple of 10^t in [low, high]: [low, high] / 10^t, rounded inwards */
