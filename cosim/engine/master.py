@@ -24,7 +24,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-from tribocosim.errors import ConvergenceError, CosimStepError
+from tribocosim.errors import ConvergenceError, CosimStepError, Interrupted
+from tribocosim.interrupt import raise_if_stopped
 from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.algorithms import Algorithm
 from tribocosim.cosim.engine.schemes import loop_message
@@ -238,4 +239,5 @@ class Master:
 
     def _python_loop(self) -> None:
         while self.n < self.grid.end_ticks:
+            raise_if_stopped(Interrupted)  # a signal: the run stops at this communication point
             self.controller.advance(self, self.n)

@@ -27,8 +27,11 @@ from pathlib import Path
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
 SOURCES = ("tc_master.c", "tc_csv.c")
 HEADERS = ("tc_master.h", "tc_csv.h")
-#: accepted steps per call of the C loop (between two calls the progress reporters are told the time)
-CHUNK = 2048
+#: accepted steps of the first call of the C loop, and the most of any call: between two calls the progress reporters
+#: are told the time and a stop asked for by a signal is seen (:mod:`tribocosim.interrupt`), so later calls take as
+#: many steps as last about POLL_S seconds (:func:`next_chunk`)
+CHUNK = 256
+MAX_CHUNK = 65536
 #: tcm_status
 TCM_DONE, TCM_STOPPED, TCM_FMI_ERROR = 0, 1, 2
 #: tcm_kind of each FMI type the recorder reads
@@ -94,6 +97,17 @@ SINK = ctypes.CFUNCTYPE(None, _VP, _I, ctypes.c_char_p)
 #: every ctypes structure of the library by its C name (tests/cosim/test_native_loop.py holds them to the header)
 STRUCTS = {"tcm_slave": TcmSlave, "tcm_get": TcmGet, "tcm_set": TcmSet, "tcm_rig": TcmRig, "tcm_state": TcmState,
            "tcm_log_env": TcmLogEnv}
+
+
+def next_chunk(steps: int, seconds: float) -> int:
+    """The steps of the next call of the C loop after one of ``steps`` steps took ``seconds``: as many as last about
+    :data:`tribocosim.interrupt.POLL_S` (the chunks change when the loop looks up from its steps, not what it
+    computes)."""
+    from tribocosim.interrupt import POLL_S
+
+    if seconds <= 0.0:
+        return MAX_CHUNK
+    return max(1, min(MAX_CHUNK, int(steps * POLL_S / seconds)))
 
 
 # ------------------------------------------------------------------------------------------------ the library

@@ -14,7 +14,8 @@ same order, with the same values:
    one more refresh; the feedthrough probe (``tcm_probe``), masked by the declared dependencies, from which the
    feedthrough of undeclared slaves, the algebraic loops and the evaluation order follow
    (:mod:`tribocosim.cosim.engine.graph`); one more refresh, and the start row recorded (``tcm_record_row``);
-3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time;
+3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time and a stop asked for by a
+   signal (:mod:`tribocosim.interrupt`) ends the run at that communication point (:attr:`SessionResult.interrupted`);
 4. the end-of-run outputs read, ``fmi2Terminate`` and ``fmi2FreeInstance``. The libraries stay loaded for the
    process (an FMU's extracted folder is named by its content, so a later run loads the same library again; unloading
    a library that embeds an interpreter, a pythonfmu FMU's, can leave objects behind that point into it).
@@ -38,10 +39,11 @@ from pathlib import Path
 from weakref import WeakValueDictionary
 
 from tribocosim.errors import TribocosimError
+from tribocosim.interrupt import stop_requested
 from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, SINK, TCM_DONE, TcmGet, TcmLogEnv, TcmRig, TcmSet,
-                                                TcmSlave, TcmState, library)
+                                                TcmSlave, TcmState, library, next_chunk)
 from tribocosim.cosim.engine.schemes import LinkSpec, loop_message
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
@@ -101,14 +103,17 @@ class SessionResult:
     and what the initialization found."""
 
     __slots__ = ("times", "rows", "steps", "min_step", "max_step", "feedthrough", "loops", "eval_order", "wall_times",
-                 "do_steps", "loop_time", "warnings", "end_values")
+                 "do_steps", "loop_time", "warnings", "end_values", "interrupted", "fmu_warnings")
 
     def __init__(self, times: array.array, rows: array.array, steps: int, min_step: float, max_step: float,
                  feedthrough: list, loops: list, eval_order: list, wall_times: list, do_steps: list, loop_time: float,
-                 warnings: list, end_values: list) -> None:
+                 warnings: list, end_values: list, interrupted: int | None = None,
+                 fmu_warnings: list | None = None) -> None:
         self.times, self.rows, self.steps, self.min_step, self.max_step = times, rows, steps, min_step, max_step
         self.feedthrough, self.loops, self.eval_order, self.wall_times = feedthrough, loops, eval_order, wall_times
         self.do_steps, self.loop_time, self.warnings, self.end_values = do_steps, loop_time, warnings, end_values
+        self.interrupted = interrupted  # the signal that stopped the run before the end of the grid, or None
+        self.fmu_warnings = fmu_warnings or []  # per slave, the messages it logged as warnings or worse
 
 
 def supported(algorithm: str, extrapolation: int, adaptive, links: list[LinkSpec]) -> str | None:
@@ -139,6 +144,7 @@ class _Fmu:
         self.component = None
         self.wall_time = 0.0
         self.messages: deque[str] = deque(maxlen=20)
+        self.warnings = 0  # messages logged with a status of warning or worse
         self.fatal = False  # a function returned fmi2Fatal: no function of the FMU's instances may be called again
         self.errored = False  # a function returned fmi2Error or fmi2Fatal: fmi2Terminate is not called
         key = next(_KEYS)
@@ -161,6 +167,7 @@ class _Fmu:
         label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
         self.messages.append(f"[{label}] {text}")
         if status >= 1:
+            self.warnings += 1
             log(LOG, WARNING, "FMU %s: [%s] %s", self.slave.name, label, text)
 
     def call(self, function: str, *args) -> int:
@@ -401,9 +408,14 @@ class NativeSession:
         self._c("tcm_record_row")
         self.rig.propagate = int(self.propagate)
         t0 = time.perf_counter()
+        chunk, interrupted = CHUNK, None
         while self.state.n < self.grid.end_ticks:
-            rows = self.state.n_rows
-            self._c("tcm_run", CHUNK)
+            interrupted = stop_requested()
+            if interrupted is not None:  # a signal: stop at this communication point
+                break
+            rows, started = self.state.n_rows, time.perf_counter()
+            self._c("tcm_run", chunk)
+            chunk = next_chunk(chunk, time.perf_counter() - started)
             if progress is not None and self.state.n_rows > rows:
                 progress.step_accepted(self.times[self.state.n_rows - 1])
             if self.state.n_rows == rows:  # no room left for a row (not reached: one row per step)
@@ -415,7 +427,8 @@ class NativeSession:
         return SessionResult(self.times[:st.n_rows], self.rows[:st.n_rows * cols], int(st.steps), st.min_step,
                              st.max_step, feedthrough, loops, order,
                              [f.wall_time + c.wall_time for f, c in zip(fmus, self.c_slaves)],
-                             [int(c.do_steps) for c in self.c_slaves], loop_time, self.warnings, end_values)
+                             [int(c.do_steps) for c in self.c_slaves], loop_time, self.warnings, end_values,
+                             interrupted, [f.warnings for f in fmus])
 
     def _free(self, fmus: list[_Fmu]) -> None:
         """``fmi2Terminate`` and ``fmi2FreeInstance`` of every instance; a failure here changes no result and is not

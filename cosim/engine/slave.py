@@ -151,6 +151,7 @@ class FmpySlave:
         self.wall_time = 0.0
         self.calls = {"doStep": 0, "getFMUstate": 0, "setFMUstate": 0}
         self.messages: deque[str] = deque(maxlen=20)
+        self.warnings = 0  # messages logged with a status of warning or worse
         #: an FMI function of this instance returned fmi2Fatal
         self.fatal = False
         #: an FMI function of this instance returned fmi2Error or fmi2Fatal: fmi2Terminate is not called
@@ -200,6 +201,7 @@ class FmpySlave:
         label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
         self.messages.append(f"[{label}] {text}")
         if status >= 1:
+            self.warnings += 1
             log(LOG, WARNING, "FMU %s: [%s] %s", self.name, label, text)
 
     def _refs(self, refs: Sequence[int]):

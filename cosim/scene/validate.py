@@ -91,12 +91,15 @@ class FmuModel:
 
 
 class EndCheck:
-    """An output to read at the end of a run: above 0 it means ``FMU instance '<instance>': <value> <message>``."""
+    """An output (``variable``) to read at the end of a run: above 0 it means ``FMU instance '<instance>': <value>
+    <message>``."""
 
-    __slots__ = ("instance", "value_reference", "type", "message")
+    __slots__ = ("instance", "value_reference", "type", "message", "variable")
 
-    def __init__(self, instance: str, value_reference: int, type: str, message: str) -> None:  # noqa: A002
+    def __init__(self, instance: str, value_reference: int, type: str, message: str,  # noqa: A002
+                 variable: str = "") -> None:
         self.instance, self.value_reference, self.type, self.message = instance, value_reference, type, message
+        self.variable = variable
 
 
 class Link:
@@ -226,7 +229,7 @@ def load_scene(path: str | Path, overrides: dict | None = None, document: dict |
         for output, message in (end_warnings(comp) if comp is not None else {}).items():
             var = model.variables.get(output)
             if var is not None and var.causality == "output":
-                plan.end_checks.append(EndCheck(name, var.valueReference, var.type, message))
+                plan.end_checks.append(EndCheck(name, var.valueReference, var.type, message, output))
 
     def lookup(ref: VariableRef, key: str, causalities: tuple[str, ...], role: str):
         if ref.instance not in scene.fmus:
