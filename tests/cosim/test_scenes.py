@@ -426,3 +426,40 @@ def test_the_guides_sweep_example_runs_without_warnings_or_clamped_lookups(tmp_p
     result = run_sweep(tmp_path / "example.toml", tmp_path / "out", workers=2)
     assert len(result.rows) == 12 and result.counts == ["warnings", "strip.table_clamp_count"]
     assert result.marked() == [], [r for r in result.marked()]
+
+
+def test_a_relative_table_file_is_found_beside_the_scene_then_among_the_packaged_tables(tmp_path):
+    """A table next to the scene (its friction halved) is the one the run reads; a packaged table's name finds it in
+    models/; the bundled default stays the FMU's own unless a file of its name lies beside the scene; a name found
+    nowhere is one problem naming both places."""
+    import shutil
+
+    from tribocosim.paths import MODELS_DIR
+
+    scene = tmp_path / "scene.toml"
+    shutil.copy(DEMO, scene)
+    t = read_table(DEFAULT_TABLE)
+    from tribocosim.components.stripdraw.table import write_table
+
+    write_table(tmp_path / "halved.npz", type(t)(t.pressure, t.velocity, t.beta, 0.5 * t.mu, t.metadata))
+
+    def table(value):
+        plan = load_scene(scene, {**CHEAP, "fmus.strip.parameters.table_file": value})
+        return plan, plan.scene.fmus["strip"].parameters["table_file"]
+
+    plan, found = table("halved.npz")
+    assert found == str(tmp_path / "halved.npz")
+    halved = run(plan, write=False)
+    full = run(load_scene(scene, CHEAP), write=False)
+    ratio = halved["strip.mu_mean"][-1] / full["strip.mu_mean"][-1]
+    assert ratio == pytest.approx(0.5, rel=0.05), "the table beside the scene is the one read"
+    assert table("friction_table_128um.npz")[1] == str((MODELS_DIR / "friction_table_128um.npz").resolve())
+    assert table("friction_table.npz")[1] == "friction_table.npz", "the bundled table: the FMU's own"
+    shutil.copy(tmp_path / "halved.npz", tmp_path / "friction_table.npz")
+    assert table("friction_table.npz")[1] == str(tmp_path / "friction_table.npz"), "beside the scene first"
+    with pytest.raises(SceneError) as info:
+        table("missing.npz")
+    assert len(info.value.problems) == 1
+    message = str(info.value.problems[0])
+    assert "fmus.strip.parameters.table_file: file 'missing.npz' not found" in message
+    assert str(tmp_path / "missing.npz") in message and str(MODELS_DIR / "missing.npz") in message
