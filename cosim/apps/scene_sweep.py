@@ -225,7 +225,9 @@ def load_sweep(path: str | Path) -> Sweep:
         add("sweep.scene", f"must name the base scene file, got {scene!r}")
         scene = ""
     scene_path = (path.parent / scene).resolve()
-    if scene and not scene_path.is_file():
+    if scene and scene_path.is_dir():
+        add("sweep.scene", f"{scene_path} is a folder, not a scene file")
+    elif scene and not scene_path.is_file():
         add("sweep.scene", f"scene file not found: {scene_path}")
     passes = s.get("passes", 1)
     if isinstance(passes, bool) or not isinstance(passes, int) or passes < 1:

@@ -188,6 +188,10 @@ def load_scene(path: str | Path, overrides: dict | None = None, document: dict |
                 continue
         if fmu_path is None:
             continue
+        if fmu_path.is_dir():
+            add(f"{key}.path", f"{fmu_path} is a folder, not an FMU file: give the .fmu file (the zip archive of an "
+                               "FMU's folder)")
+            continue
         if not fmu_path.is_file():
             add(f"{key}.path", f"FMU file not found: {fmu_path}")
             continue
