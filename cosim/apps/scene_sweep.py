@@ -496,7 +496,9 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                 if progress:
                     progress(len(by_case), len(cases), outcome)
     except (Interrupted, RunInterrupted) as exc:  # the cases finished before the signal are on disk
-        raise SweepInterrupted(str(exc).split(" at t = ")[0], exc.signum, len(by_case), len(cases)) from None
+        from tribocosim.interrupt import signal_name
+
+        raise SweepInterrupted(f"stopped by {signal_name(exc.signum)}", exc.signum, len(by_case), len(cases)) from None
     if failures:  # every other case finished and is kept; the first failure stops the sweep
         index, exc = min(failures, key=lambda f: f[0])
         raise exc
