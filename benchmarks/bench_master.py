@@ -261,7 +261,8 @@ def main(argv=None) -> int:
     if "tribocosim before" in results:
         before = results["tribocosim before"]
         print(f"# tribocosim before -> now, best: whole process {before['whole'][0]:.4f} -> {ours['whole'][0]:.4f} s "
-              f"({before['whole'][0] / ours['whole'][0]:.2f}x), loop {before['loop'][0]:.4f} -> {ours['loop'][0]:.4f} s")
+              f"({before['whole'][0] / ours['whole'][0]:.2f}x), loop {before['loop'][0]:.4f} -> "
+              f"{ours['loop'][0]:.4f} s")
     print(f"# ratios tribocosim / host, best of the rounds and median ({load()}):")
     for name, f in hosts.items():
         print(f"  {name:<28} whole process {ours['whole'][0] / f['whole'][0]:5.2f}x best, "

@@ -161,7 +161,8 @@ class Component:
     """The description of one runtime component (see the module docstring)."""
 
     __slots__ = ("name", "model_identifier", "summary", "parameters", "inputs", "outputs", "build", "files",
-                 "resources", "check", "setpoints", "input_limits", "observer", "native", "default_experiment", "author")
+                 "resources", "check", "setpoints", "input_limits", "observer", "native", "default_experiment",
+                 "author")
 
     def __init__(self, name: str, model_identifier: str, summary: str, parameters: type, inputs: tuple[Port, ...],
                  outputs: tuple[Port, ...], build: Callable[[object, object, Path], Built], files: type | None = None,

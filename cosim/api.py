@@ -307,7 +307,8 @@ class Outcome:
     the metadata's "master" entries that depend on the run; ``recording``: (times, rows row after row) of the C
     master; ``recorder``: the Python master's; ``failure``: what stopped the run early, or None; ``interrupted``: the
     signal that stopped it at a communication point, or None; ``fmu_warnings``: per instance the messages its FMU
-    logged as warnings or worse; ``end_values``: the values of the plan's end checks (``{"instance.output": value}``)."""
+    logged as warnings or worse; ``end_values``: the values of the plan's end checks (``{"instance.output":
+    value}``)."""
 
     __slots__ = ("names", "columns", "notes", "warnings", "master", "feedthrough", "gauss_seidel", "link_labels",
                  "loops", "hold_mean", "steps", "calls", "fmu_times", "loop_time", "end_time", "rows", "failure",
@@ -319,7 +320,8 @@ class Outcome:
                  failure: Exception | None = None, recording=None, recorder=None, interrupted: int | None = None,
                  fmu_warnings: dict | None = None, end_values: dict | None = None) -> None:
         self.names, self.columns, self.notes, self.warnings, self.master = names, columns, notes, warnings, master
-        self.feedthrough, self.gauss_seidel, self.link_labels, self.loops = feedthrough, gauss_seidel, link_labels, loops
+        self.feedthrough, self.gauss_seidel = feedthrough, gauss_seidel
+        self.link_labels, self.loops = link_labels, loops
         self.hold_mean, self.steps, self.calls, self.fmu_times = hold_mean, steps, calls, fmu_times
         self.loop_time, self.end_time, self.rows, self.failure = loop_time, end_time, rows, failure
         self.recording, self.recorder, self.interrupted = recording, recorder, interrupted

@@ -1,4 +1,5 @@
-"""Stopping long work on SIGINT (Ctrl-C) or SIGTERM: the first signal asks for a stop, a second ends the process at once.
+"""Stopping long work on SIGINT (Ctrl-C) or SIGTERM: the first signal asks for a stop, a second ends the process at
+once.
 
 :func:`stop_on_signals` (a context manager; it acts in the main thread only) installs handlers for SIGINT and
 SIGTERM. The first signal sets a flag and says on stderr what stopping keeps; the work looks at the flag

@@ -326,8 +326,9 @@ def _case_key(sweep: Sweep, case: Case, plan, folder: Path) -> str:
             if Path(value).resolve().is_relative_to(own):  # field files the case itself writes
                 continue
             deps[f"fmus.{name}.parameters.{pname}"] = file_digest(Path(value))
-    blob = json.dumps({"format": ROW_FORMAT, "scene": sweep.scene.read_text(encoding="utf-8"), "overrides": case.overrides,
-                       "passes": sweep.passes, "field": [sweep.field_instance, sweep.field_interval],
+    blob = json.dumps({"format": ROW_FORMAT, "scene": sweep.scene.read_text(encoding="utf-8"),
+                       "overrides": case.overrides, "passes": sweep.passes,
+                       "field": [sweep.field_instance, sweep.field_interval],
                        "summaries": [(x.name, x.expression.text, x.kind, x.last) for x in sweep.summaries],
                        "dependencies": deps}, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
@@ -401,10 +402,11 @@ def run_counts(metadata: dict) -> dict:
             **{name: int(value) for name, value in metadata.get("end_checks", {}).items()}}
 
 
-def count_columns(rows: list[dict]) -> list[str]:
-    """The columns of :func:`run_counts` in sweep rows."""
-    names = rows[0] if rows else {}
-    return [n for n in names if n == "warnings" or "." in n]
+def count_columns(sweep: Sweep, rows: list[dict]) -> list[str]:
+    """The columns of :func:`run_counts` in the sweep's rows (those that are neither a variable, ``pass``, a summary
+    nor ``wall_time``)."""
+    other = {*sweep.variables, "pass", *(x.name for x in sweep.summaries), "wall_time"}
+    return [n for n in (rows[0] if rows else {}) if n not in other]
 
 
 def _worker(payload: tuple[str, int, str]) -> list[dict]:
@@ -504,7 +506,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
         raise exc
     rows = [r for i in sorted(by_case) for r in by_case[i]]
     wall = time.perf_counter() - t0
-    counts = count_columns(rows)
+    counts = count_columns(sweep, rows)
     names = list(rows[0])
     csv_path = out / "sweep.csv"
     lines = [",".join(f'"{n}"' for n in names)]
@@ -547,8 +549,8 @@ def _same(a, b) -> bool:
 
 
 def main(args) -> int:
-    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`tribocosim.cosim.apps.run_cli`,
-    which maps a SceneError to exit 2). A signal stops it (exit 128 + its number) with its finished cases kept."""
+    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from
+    :mod:`tribocosim.cosim.apps.run_cli`, which maps a SceneError to exit 2). A signal stops it (exit 128 + its number) with its finished cases kept."""
     import sys
 
     def progress(done, total, rows):

@@ -7,8 +7,8 @@ with held coupling values, Real links) and makes the FMI calls the Python master
 same order, with the same values:
 
 1. each FMU's library loaded (ctypes), ``fmi2Instantiate`` with the library's logger (``tcm_logger``: the FMU's
-   messages reach the logger :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters set by
-   type (Real, Integer and Enumeration, Boolean, String), then ``fmi2SetupExperiment`` and
+   messages reach the logger :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters
+   set by type (Real, Integer and Enumeration, Boolean, String), then ``fmi2SetupExperiment`` and
    ``fmi2EnterInitializationMode``;
 2. as many output refreshes with propagation as there are slaves (``tcm_refresh``), ``fmi2ExitInitializationMode``,
    one more refresh; the feedthrough probe (``tcm_probe``), masked by the declared dependencies, from which the

@@ -91,7 +91,8 @@ def test_the_shipped_parameter_classes_are_frozen_dataclasses_of_their_fields():
     for cls in (MachineParameters, PressParameters, StripDrawFiles, StripDrawParameters):
         default = cls()
         names = [f.name for f in dataclasses.fields(cls)]
-        assert names and repr(default) == f"{cls.__qualname__}({', '.join(f'{n}={getattr(default, n)!r}' for n in names)})"
+        fields = ", ".join(f"{n}={getattr(default, n)!r}" for n in names)
+        assert names and repr(default) == f"{cls.__qualname__}({fields})"
         assert default == cls() and hash(default) == hash(cls()) and pickle.loads(pickle.dumps(default)) == default
         with pytest.raises(dataclasses.FrozenInstanceError):
             setattr(default, names[0], getattr(default, names[0]))
