@@ -38,15 +38,15 @@ def scene_file(scene) -> Path:
                          "(docs/scene-format.md)")
     if path.is_file():
         return path
+    name = path.name if path.suffix == ".toml" else f"{path.name}.toml"
+    packaged = SCENES_DIR / name
+    if path.parent == Path(".") and packaged.is_file():  # a packaged scene's name, also where its results went (./NAME)
+        return packaged
     if path.is_dir():
         inside = sorted(p.name for p in path.iterdir() if p.suffix.lower() in (".toml", ".ssp") and p.is_file())
         raise SceneError(f"{scene} is a folder, not a scene file: give a scene (TOML) or an SSP package (.ssp)"
                          + (f"; it holds {', '.join(inside[:10])}{', ...' if len(inside) > 10 else ''}" if inside
                             else ""))
-    name = path.name if path.suffix == ".toml" else f"{path.name}.toml"
-    packaged = SCENES_DIR / name
-    if path.parent == Path(".") and packaged.is_file():
-        return packaged
     raise SceneError(f"scene file not found: {scene} (and it is not one of the packaged scenes: "
                      f"{', '.join(packaged_scenes())})")
 

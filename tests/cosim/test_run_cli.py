@@ -152,6 +152,14 @@ def test_an_fmu_or_a_folder_given_as_the_scene_is_named_as_such(tmp_path, fmu_di
     assert not (tmp_path / "out").exists()
 
 
+def test_a_packaged_scene_runs_by_its_name_beside_the_folder_of_its_last_results(tmp_path, monkeypatch):
+    """``tribocosim run demo`` writes into ./demo; run again from there it is still the packaged scene."""
+    monkeypatch.chdir(tmp_path)
+    for _ in range(2):
+        assert tribocosim(["run", "demo", "--quiet", "--set", "experiment.stop=0.01"]) == 0
+    assert (tmp_path / "demo" / "demo.csv").is_file()
+
+
 def test_an_fmu_path_that_is_a_folder_is_named_as_such(tmp_path, osc_scene, fmu_dir, capsys):
     scene = osc_scene(tmp_path)
     (tmp_path / "extracted.fmu").mkdir()
