@@ -33,14 +33,15 @@ reports all read them. Adding a component is writing its model and its descripti
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
 
 from tribocosim.errors import ParameterError
 
+# The description's records are plain classes with slots: every run that checks a scene imports them, and a class made
+# by ``dataclasses`` costs the import the compilation of its generated methods (3 to 4 million instructions a class).
 
-@dataclass(frozen=True)
+
 class Port:
     """An input or output: FMU variable name, unit, description (without the unit), start value.
 
@@ -62,17 +63,18 @@ class Port:
     ``FMU instance '<name>': <value> <end_warning>``.
     """
 
-    name: str
-    unit: str
-    description: str
-    start: float = 0.0
-    key: str | None = None
-    integer: bool = False
-    low: float | str | None = None
-    high: float | str | None = None
-    why: str = ""
-    initial_inputs: tuple = ()
-    end_warning: str = ""
+    __slots__ = ("name", "unit", "description", "start", "key", "integer", "low", "high", "why", "initial_inputs",
+                 "end_warning")
+
+    def __init__(self, name: str, unit: str, description: str, start: float = 0.0, key: str | None = None,
+                 integer: bool = False, low: float | str | None = None, high: float | str | None = None,
+                 why: str = "", initial_inputs: tuple = (), end_warning: str = "") -> None:
+        self.name, self.unit, self.description, self.start, self.key = name, unit, description, start, key
+        self.integer, self.low, self.high, self.why = integer, low, high, why
+        self.initial_inputs, self.end_warning = initial_inputs, end_warning
+
+    def __repr__(self) -> str:
+        return f"Port({self.name!r}, {self.unit!r})"
 
     @property
     def model_key(self) -> str:
@@ -80,7 +82,6 @@ class Port:
         return self.key or self.name
 
 
-@dataclass(frozen=True)
 class SetPoint:
     """A value an output will follow (e.g. the press's force set-point), for the scene checks.
 
@@ -88,16 +89,19 @@ class SetPoint:
     that sets it (the key the problem is reported under).
     """
 
-    value: float
-    label: str
-    parameter: str
+    __slots__ = ("value", "label", "parameter")
+
+    def __init__(self, value: float, label: str, parameter: str) -> None:
+        self.value, self.label, self.parameter = value, label, parameter
+
+    def __repr__(self) -> str:
+        return f"SetPoint({self.value!r}, {self.label!r}, {self.parameter!r})"
 
 
 #: ``limit(value, label, instance) -> message or None``: whether an input accepts a set-point
 Limit = Callable[[float, str, str], "str | None"]
 
 
-@dataclass
 class Built:
     """What :attr:`Component.build` returns: the model and the facts a restored FMU state must match.
 
@@ -105,25 +109,26 @@ class Built:
     is restored only into an instance with the same fingerprint.
     """
 
-    model: Any
-    fingerprint: dict[str, Any] = field(default_factory=dict)
-    notes: list[str] = field(default_factory=list)
+    __slots__ = ("model", "fingerprint", "notes")
+
+    def __init__(self, model: object, fingerprint: dict[str, object] | None = None, notes: list[str] | None = None):
+        self.model = model
+        self.fingerprint = {} if fingerprint is None else fingerprint
+        self.notes = [] if notes is None else notes
 
 
-@dataclass(frozen=True)
 class ArraySize:
     """The length of a native FMU's array outputs (FMI 3.0): the UInt64 structural parameter ``name``,
     equal to the integer parameter ``parameter`` plus ``offset``. ``parameter`` is a structural
     parameter of the FMI 3.0 FMU too; setting either sets both (e.g. ``n_nodes = n_elements + 1``).
     """
 
-    name: str
-    parameter: str
-    offset: int
-    description: str
+    __slots__ = ("name", "parameter", "offset", "description")
+
+    def __init__(self, name: str, parameter: str, offset: int, description: str) -> None:
+        self.name, self.parameter, self.offset, self.description = name, parameter, offset, description
 
 
-@dataclass(frozen=True)
 class Native:
     """The C implementation of a component (sources in :mod:`tribocosim.components.native`).
 
@@ -140,36 +145,45 @@ class Native:
     converted form.
     """
 
-    prefix: str
-    sources: tuple[str, ...]
-    params_header: str
-    arrays: tuple[Port, ...] = ()
-    array_size: ArraySize | None = None
-    interpolates_inputs: bool = False
-    convert_resource: Callable[[Path, Path], Path] | None = None
-    resource_parameters: tuple[str, ...] = ()
+    __slots__ = ("prefix", "sources", "params_header", "arrays", "array_size", "interpolates_inputs",
+                 "convert_resource", "resource_parameters")
+
+    def __init__(self, prefix: str, sources: tuple[str, ...], params_header: str, arrays: tuple[Port, ...] = (),
+                 array_size: ArraySize | None = None, interpolates_inputs: bool = False,
+                 convert_resource: Callable[[Path, Path], Path] | None = None,
+                 resource_parameters: tuple[str, ...] = ()) -> None:
+        self.prefix, self.sources, self.params_header, self.arrays = prefix, sources, params_header, arrays
+        self.array_size, self.interpolates_inputs = array_size, interpolates_inputs
+        self.convert_resource, self.resource_parameters = convert_resource, resource_parameters
 
 
-@dataclass(frozen=True)
 class Component:
     """The description of one runtime component (see the module docstring)."""
 
-    name: str
-    model_identifier: str
-    summary: str
-    parameters: type
-    inputs: tuple[Port, ...]
-    outputs: tuple[Port, ...]
-    build: Callable[[Any, Any, Path], Built]
-    files: type | None = None
-    resources: tuple[tuple[str, str], ...] = ()
-    check: Callable[[Any, Any, Path], tuple[list[tuple[str, str]], dict[str, Limit]]] | None = None
-    setpoints: Callable[[Any], dict[str, list[SetPoint]]] | None = None
-    input_limits: Callable[[Any], dict[str, Limit]] | None = None
-    observer: Callable[[Any, Any, dict], Any] | None = None
-    native: Native | None = None
-    default_experiment: tuple[float, float, float] = (0.0, 1.75, 1e-3)
-    author: str = "tribocosim"
+    __slots__ = ("name", "model_identifier", "summary", "parameters", "inputs", "outputs", "build", "files",
+                 "resources", "check", "setpoints", "input_limits", "observer", "native", "default_experiment",
+                 "author")
+
+    def __init__(self, name: str, model_identifier: str, summary: str, parameters: type, inputs: tuple[Port, ...],
+                 outputs: tuple[Port, ...], build: Callable[[object, object, Path], Built], files: type | None = None,
+                 resources: tuple[tuple[str, str], ...] = (),
+                 check: Callable[[object, object, Path], tuple[list[tuple[str, str]], dict[str, Limit]]] | None = None,
+                 setpoints: Callable[[object], dict[str, list[SetPoint]]] | None = None,
+                 input_limits: Callable[[object], dict[str, Limit]] | None = None,
+                 observer: Callable[[object, object, dict], object] | None = None, native: Native | None = None,
+                 default_experiment: tuple[float, float, float] = (0.0, 1.75, 1e-3),
+                 author: str = "tribocosim") -> None:
+        self.name, self.model_identifier, self.summary, self.parameters = name, model_identifier, summary, parameters
+        self.inputs, self.outputs, self.build, self.files, self.resources = inputs, outputs, build, files, resources
+        self.check, self.setpoints, self.input_limits, self.observer = check, setpoints, input_limits, observer
+        self.native, self.default_experiment, self.author = native, default_experiment, author
+
+    def __repr__(self) -> str:
+        return f"Component({self.name!r})"
+
+    def replace(self, **changes) -> "Component":
+        """A copy with ``changes`` (``{attribute: value}``)."""
+        return Component(**{**{k: getattr(self, k) for k in self.__slots__}, **changes})
 
     # ------------------------------------------------------------------ derived
     @property
@@ -179,16 +193,17 @@ class Component:
         return (*dataclasses.fields(self.parameters), *extra)
 
     @property
-    def defaults(self) -> dict[str, Any]:
+    def defaults(self) -> dict[str, object]:
         """Default value of every FMU parameter, by name."""
         return {f.name: f.default for f in self.parameter_fields}
 
     @property
     def resource_files(self) -> tuple[Path, ...]:
-        """The resource files in this installation (an FMU has them at the root of ``resources/``)."""
-        from importlib.resources import files
+        """The resource files in this installation (an FMU has them at the root of ``resources/``): each in the folder
+        of its package."""
+        import importlib
 
-        return tuple(Path(str(files(package))) / name for package, name in self.resources)
+        return tuple(Path(importlib.import_module(package).__path__[0]) / name for package, name in self.resources)
 
     @property
     def resource_dir(self) -> Path:
@@ -198,7 +213,7 @@ class Component:
             raise ParameterError(f"component {self.name}: resources must share one folder, got {sorted(folders)}")
         return folders.pop() if folders else Path(".")
 
-    def split(self, values: dict[str, Any]) -> tuple[Any, Any]:
+    def split(self, values: dict[str, object]) -> tuple[object, object]:
         """(parameters, files) dataclass instances from ``{name: value}`` (missing names take their
         defaults; unknown names are ignored). Raises ParameterError naming the first bad field."""
         own = {f.name for f in dataclasses.fields(self.parameters)}
@@ -209,7 +224,7 @@ class Component:
             files = self.files(**{k: v for k, v in values.items() if k in names})
         return params, files
 
-    def make(self, values: dict[str, Any], resources: Path | None = None) -> Built:
+    def make(self, values: dict[str, object], resources: Path | None = None) -> Built:
         """The model for parameter ``values`` (``{name: value}``), resources from ``resources``
         (default: :attr:`resource_dir`)."""
         params, files = self.split(values)
@@ -219,7 +234,7 @@ class Component:
         """The output port ``name``."""
         return next(p for p in self.outputs if p.name == name)
 
-    def bounds(self, port: Port, values: dict[str, Any]) -> tuple[float | None, float | None]:
+    def bounds(self, port: Port, values: dict[str, object]) -> tuple[float | None, float | None]:
         """``(low, high)`` of a port for parameter ``values`` (``{name: value}``; missing names take their
         defaults): a bound that names a parameter is that parameter's value."""
         defaults = self.defaults

@@ -13,7 +13,7 @@ so that looking a component up stays cheap.
 from __future__ import annotations
 
 import importlib
-import pkgutil
+import os
 
 from tribocosim.components.description import Component
 from tribocosim.errors import SceneError
@@ -33,10 +33,11 @@ def _discover() -> dict[str, Component]:
         import tribocosim.components as package
 
         found = {}
-        for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):
-            if not info.ispkg or importlib.util.find_spec(f"{package.__name__}.{info.name}.component") is None:
-                continue
-            comp = importlib.import_module(f"{package.__name__}.{info.name}.component").COMPONENT
+        folders = sorted({entry.name for root in package.__path__ for entry in os.scandir(root)
+                          if entry.is_dir() and os.path.isfile(os.path.join(entry.path, "component.py"))
+                          and os.path.isfile(os.path.join(entry.path, "__init__.py"))})
+        for name in folders:
+            comp = importlib.import_module(f"{package.__name__}.{name}.component").COMPONENT
             found[normal(comp.name)] = comp
         _FOUND = found
     return _FOUND

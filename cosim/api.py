@@ -14,21 +14,15 @@ plan.
 
 from __future__ import annotations
 
-import datetime as _dt
 import hashlib
 import json
 import time
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
-from tribocosim.errors import ConvergenceError, CosimStepError, RunFailed
+from tribocosim.errors import ConvergenceError, CosimStepError, Interrupted, RunFailed, RunInterrupted
 from tribocosim.cosim.engine.graph import gauss_seidel_order
 from tribocosim.cosim.engine.schemes import LinkSpec
 from tribocosim.cosim.scene.validate import Plan
-
-if TYPE_CHECKING:  # the Python master: numpy, fmpy
-    from tribocosim.cosim.engine.master import Master
 
 
 class Result:
@@ -52,7 +46,7 @@ class Result:
     def __init__(self, time=None, columns=None, metadata=None, csv_path: Path | None = None,
                  metadata_path: Path | None = None, *, recording=None) -> None:
         self._time, self._columns, self._recording = time, columns, recording
-        self.metadata: dict[str, Any] = metadata if metadata is not None else {}
+        self.metadata: dict = metadata if metadata is not None else {}
         self.csv_path, self.metadata_path = csv_path, metadata_path
 
     @property
@@ -79,15 +73,15 @@ class Result:
         return self.columns[name]
 
 
-@dataclass
 class Build:
-    """A master assembled from a plan, plus what is needed to clean up afterwards."""
+    """A master assembled from a plan (:class:`~tribocosim.cosim.engine.master.Master`), the instance names, the
+    parameter values to set into each instance, the notes on the coupling; and what is needed to clean up
+    afterwards."""
 
-    master: Master
-    plan: Plan
-    names: list[str]
-    parameters: list[dict]
-    notes: list[str] = field(default_factory=list)
+    __slots__ = ("master", "plan", "names", "parameters", "notes")
+
+    def __init__(self, master, plan: Plan, names: list[str], parameters: list[dict], notes: list[str]) -> None:
+        self.master, self.plan, self.names, self.parameters, self.notes = master, plan, names, parameters, notes
 
     def close(self) -> None:
         """Terminate and free every slave; one whose FMU returned fmi2Fatal in any instance is only dropped
@@ -104,19 +98,18 @@ class Build:
                 pass
 
 
-@dataclass
 class Coupling:
     """How a plan's FMUs are coupled, in index form (what both masters need): instance names, links, the declared
     dependency structure (``structure[k][j]``: link k's source may depend directly on link j's target), declared
-    feedthrough, the Gauss-Seidel order, the order of accuracy of the coupling and the notes on it."""
+    feedthrough, the Gauss-Seidel order (:class:`~tribocosim.cosim.engine.graph.StepOrder`), the order of accuracy of
+    the coupling and the notes on it."""
 
-    names: list[str]
-    links: list[LinkSpec]
-    structure: list[list[bool]]
-    feedthrough: list
-    gauss_seidel: Any
-    order_of_accuracy: int
-    notes: list[str]
+    __slots__ = ("names", "links", "structure", "feedthrough", "gauss_seidel", "order_of_accuracy", "notes")
+
+    def __init__(self, names: list[str], links: list[LinkSpec], structure: list[list[bool]], feedthrough: list,
+                 gauss_seidel, order_of_accuracy: int, notes: list[str]) -> None:
+        self.names, self.links, self.structure, self.feedthrough = names, links, structure, feedthrough
+        self.gauss_seidel, self.order_of_accuracy, self.notes = gauss_seidel, order_of_accuracy, notes
 
 
 def coupling(plan: Plan) -> Coupling:
@@ -244,7 +237,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
 
         scene = load_scene(scene_file(scene), overrides)
     plan = scene
-    started = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    started = time.strftime("%Y-%m-%dT%H:%M:%S+00:00", time.gmtime())  # ISO 8601, UTC, as datetime.isoformat
     t0 = time.perf_counter()
     outcome = _session(plan, progress) if loop == "auto" else None
     if outcome is None:
@@ -261,6 +254,12 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     if failure is not None:
         meta["failure"] = {"message": str(failure), "last_accepted_time": outcome.end_time,
                            "recorded_rows": outcome.rows}
+    if outcome.interrupted is not None:
+        from tribocosim.interrupt import signal_name
+
+        meta["interrupted"] = {"signal": signal_name(outcome.interrupted), "last_accepted_time": outcome.end_time,
+                               "recorded_rows": outcome.rows, "steps": outcome.steps["accepted"],
+                               "steps_of_the_run": _steps_of(plan)}
     result = outcome.result(meta)
     if write:
         out = Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path)
@@ -271,35 +270,62 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
         else:
             result.metadata_path = out / f"{plan.scene.path.stem}.run.json"
         meta["outputs"]["csv"] = str(result.csv_path) if result.csv_path else None
-        result.metadata_path.write_text(json.dumps(meta, indent=2, default=_json_default), encoding="utf-8")
+        write_json(result.metadata_path, meta)
     if failure is not None:
         raise RunFailed(f"{failure}; the run stopped at t = {outcome.end_time:.9g} s", result) from failure
+    if outcome.interrupted is not None:
+        raise RunInterrupted(f"stopped by {meta['interrupted']['signal']} at t = {outcome.end_time:.9g} s",
+                             outcome.interrupted, result)
     return result
 
 
-@dataclass
-class Outcome:
-    """What a run did, whichever master ran it: what :func:`_metadata` reports and what the result holds."""
+def _steps_of(plan: Plan) -> int | None:
+    """The communication steps of a whole fixed-step run of ``plan`` (None for adaptive steps)."""
+    if plan.scene.master.adaptive is not None:
+        return None
+    from tribocosim.cosim.engine.timegrid import TimeGrid
 
-    names: list[str]
-    columns: list[str]
-    notes: list[str]
-    warnings: list[str]
-    master: dict  # the metadata's "master" entries that depend on the run
-    feedthrough: list
-    gauss_seidel: Any
-    link_labels: list[str]
-    loops: list
-    hold_mean: list
-    steps: dict
-    calls: dict
-    fmu_times: dict
-    loop_time: float
-    end_time: float
-    rows: int
-    failure: Exception | None = None
-    recording: Any = None  # (times, rows row after row) of the C master
-    recorder: Any = None  # the Python master's
+    ex = plan.scene.experiment
+    grid = TimeGrid.fixed(ex.start, ex.stop, ex.step)
+    return -(-grid.end_ticks // grid.macro_ticks)
+
+
+def write_json(path: Path, data: dict) -> Path:
+    """``data`` as indented JSON in ``path``, atomically (a ``.part`` file renamed into place)."""
+    tmp = path.with_suffix(path.suffix + ".part")
+    try:
+        tmp.write_text(json.dumps(data, indent=2, default=_json_default), encoding="utf-8")
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+class Outcome:
+    """What a run did, whichever master ran it: what :func:`_metadata` reports and what the result holds. ``master``:
+    the metadata's "master" entries that depend on the run; ``recording``: (times, rows row after row) of the C
+    master; ``recorder``: the Python master's; ``failure``: what stopped the run early, or None; ``interrupted``: the
+    signal that stopped it at a communication point, or None; ``fmu_warnings``: per instance the messages its FMU
+    logged as warnings or worse; ``end_values``: the values of the plan's end checks (``{"instance.output":
+    value}``)."""
+
+    __slots__ = ("names", "columns", "notes", "warnings", "master", "feedthrough", "gauss_seidel", "link_labels",
+                 "loops", "hold_mean", "steps", "calls", "fmu_times", "loop_time", "end_time", "rows", "failure",
+                 "recording", "recorder", "interrupted", "fmu_warnings", "end_values")
+
+    def __init__(self, names: list[str], columns: list[str], notes: list[str], warnings: list[str], master: dict,
+                 feedthrough: list, gauss_seidel, link_labels: list[str], loops: list, hold_mean: list, steps: dict,
+                 calls: dict, fmu_times: dict, loop_time: float, end_time: float, rows: int,
+                 failure: Exception | None = None, recording=None, recorder=None, interrupted: int | None = None,
+                 fmu_warnings: dict | None = None, end_values: dict | None = None) -> None:
+        self.names, self.columns, self.notes, self.warnings, self.master = names, columns, notes, warnings, master
+        self.feedthrough, self.gauss_seidel = feedthrough, gauss_seidel
+        self.link_labels, self.loops = link_labels, loops
+        self.hold_mean, self.steps, self.calls, self.fmu_times = hold_mean, steps, calls, fmu_times
+        self.loop_time, self.end_time, self.rows, self.failure = loop_time, end_time, rows, failure
+        self.recording, self.recorder, self.interrupted = recording, recorder, interrupted
+        self.fmu_warnings, self.end_values = fmu_warnings or {}, end_values or {}
 
     def result(self, meta: dict) -> Result:
         if self.recorder is not None:
@@ -312,6 +338,11 @@ class Outcome:
         from tribocosim.cosim.engine.results_csv import write_csv
 
         return write_csv(path, self.columns, *self.recording)
+
+
+def _end_checks(plan: Plan, values: list[float]) -> dict:
+    """``{"instance.output": value}`` of the plan's end checks (the metadata's ``end_checks``)."""
+    return {f"{check.instance}.{check.variable}": value for check, value in zip(plan.end_checks, values)}
 
 
 def _end_warnings(plan: Plan, names: list[str], values: list[float]) -> list[str]:
@@ -360,8 +391,9 @@ def _session(plan: Plan, progress: bool) -> Outcome | None:
          "observed_contraction": None, "min_step": r.min_step if r.steps else None,
          "max_step": r.max_step if r.steps else None},
         {n: {"doStep": d, "getFMUstate": 0, "setFMUstate": 0} for n, d in zip(c.names, r.do_steps)},
-        dict(zip(c.names, r.wall_times)), r.loop_time, grid.time(grid.end_ticks if n_rows else 0), n_rows,
-        recording=(r.times, r.rows))
+        dict(zip(c.names, r.wall_times)), r.loop_time, r.times[-1] if n_rows else grid.start, n_rows,
+        recording=(r.times, r.rows), interrupted=r.interrupted, fmu_warnings=dict(zip(c.names, r.fmu_warnings)),
+        end_values=_end_checks(plan, r.end_values))
 
 
 def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
@@ -377,7 +409,7 @@ def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
     bar = Progress(ex.start, ex.stop) if progress else None
     if bar is not None:
         m.observers.append(bar)
-    failure = None
+    failure = interrupted = None
     try:
         m.initialize(ex.start, ex.stop, b.parameters)
         m.run()
@@ -385,12 +417,16 @@ def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
         raise
     except (CosimStepError, ConvergenceError) as exc:
         failure = exc
+    except Interrupted as exc:  # a signal: the run ends at the last accepted communication point
+        interrupted = exc.signum
     finally:
         if bar is not None:
             bar.close()
         fmu_times = {n: s.wall_time for n, s in zip(b.names, m.system.slaves)}
         calls = {n: dict(s.calls) for n, s in zip(b.names, m.system.slaves)}
-        m.warnings.extend(_end_warnings(plan, b.names, _end_values(b)))
+        end_values = _end_values(b)
+        m.warnings.extend(_end_warnings(plan, b.names, end_values))
+        fmu_warnings = {n: s.warnings for n, s in zip(b.names, m.system.slaves)}
         b.close()
     sysm, st = m.system, m.stats
     return Outcome(
@@ -404,7 +440,8 @@ def _execute(plan: Plan, loop: str, progress: bool) -> Outcome:
          "iterations": st.iterations,
          "observed_contraction": st.observed_contraction if st.observed_contraction == st.observed_contraction else None,
          "min_step": st.min_step if st.steps else None, "max_step": st.max_step if st.steps else None},
-        calls, fmu_times, st.wall_time, m.grid.time(m.n), len(m.recorder.time), failure, recorder=m.recorder)
+        calls, fmu_times, st.wall_time, m.grid.time(m.n), len(m.recorder.time), failure, recorder=m.recorder,
+        interrupted=interrupted, fmu_warnings=fmu_warnings, end_values=_end_checks(plan, end_values))
 
 
 def _end_values(b: Build) -> list[float]:
@@ -438,7 +475,7 @@ def run_ssp(path: str | Path, out_dir: str | Path | None = None, overrides: dict
     plan = load_ssp(ssp, overrides)
     try:
         result = run(plan, Path(out_dir) if out_dir is not None else ssp.parent, progress=progress, write=write)
-    except RunFailed as exc:
+    except (RunFailed, RunInterrupted) as exc:
         _note_package(exc.result, ssp, plan.scene.path)
         raise
     _note_package(result, ssp, plan.scene.path)
@@ -452,7 +489,7 @@ def _note_package(result, ssp: Path, scene: Path) -> None:
     if result.metadata_path is not None and result.metadata_path.is_file():
         meta = json.loads(result.metadata_path.read_text(encoding="utf-8"))
         meta.update(note)
-        result.metadata_path.write_text(json.dumps(meta, indent=2), encoding="utf-8")
+        write_json(result.metadata_path, meta)
 
 
 def default_out_dir(scene_path: Path) -> Path:
@@ -494,14 +531,14 @@ def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
         "overrides": dict(scene.overrides),
         "started": started,
         "versions": {"tribocosim": distribution_version("tribocosim"), "fmpy": distribution_version("fmpy")},
-        "experiment": asdict(scene.experiment),
+        "experiment": scene.experiment.as_dict(),
         "master": {
             "algorithm": ms.algorithm,
             "extrapolation": ms.extrapolation,
             "output_update": ms.output_update,
             "step_control": o.master["step_control"],
-            "adaptive": asdict(ms.adaptive) if ms.adaptive else None,
-            **({ms.algorithm: asdict(ms.algorithm_settings)} if ms.algorithm_settings is not None else {}),
+            "adaptive": ms.adaptive.as_dict() if ms.adaptive else None,
+            **({ms.algorithm: ms.algorithm_settings.as_dict()} if ms.algorithm_settings is not None else {}),
             "order_of_accuracy": o.master["order_of_accuracy"],
             "loop": o.master["loop"],
             **({"python_loop_because": o.master["python_loop_because"]} if "python_loop_because" in o.master else {}),
@@ -521,6 +558,8 @@ def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
         "wall_time": {"total": total, "loop": o.loop_time, "fmus": o.fmu_times,
                       "master": total - sum(o.fmu_times.values())},
         "warnings": plan.warnings + o.warnings,
+        "fmu_warnings": o.fmu_warnings,
+        "end_checks": o.end_values,
         "notes": o.notes,
         "outputs": {"columns": ["time", *o.columns]},
     }

@@ -22,7 +22,7 @@ last: a case counts as finished when its ``.json`` and ``.npz`` pass their diges
 rerunning only the cases without such a pair. A case whose files fail the check (edited, truncated,
 garbage) is reported with the file and rerun; a table is never built from it (:func:`load_records`).
 Failed cases are retried by a rerun unless ``retry_failed=False``. A run stopped by a signal
-(:mod:`tribocosim.surrogate.interrupt`) keeps every case finished before it and discards the slides in
+(:mod:`tribocosim.interrupt`) keeps every case finished before it and discards the slides in
 progress. If the environment variable ``TRIBOCOSIM_CASE_LOG`` names a file, every computed case appends
 its id there (an audit of computations across runs).
 """
@@ -274,7 +274,7 @@ class CampaignStore:
 
     def write_manifest(self, sweep: Sweep | None, cases: list[Case]) -> None:
         """Write ``OUT/campaign.json``; drop the temporary files of a writer that ended before its rename (a
-        process stopped at once: :mod:`tribocosim.surrogate.interrupt`)."""
+        process stopped at once: :mod:`tribocosim.interrupt`)."""
         self.cases_dir.mkdir(parents=True, exist_ok=True)
         for tmp in [*self.cases_dir.glob(".*.tmp"), *self.out.glob(".*.tmp")]:
             pid = tmp.name.rsplit(".", 2)[-2]
@@ -428,7 +428,7 @@ def run_campaign(cases: list[Case], out: str | Path, executor, *, sweep: Sweep |
     Raises
     ------
     CampaignInterrupted
-        When a signal stops the executor (:mod:`tribocosim.surrogate.interrupt`): the cases finished before it
+        When a signal stops the executor (:mod:`tribocosim.interrupt`): the cases finished before it
         are written, the slides in progress discarded; ``exc.report`` is this run's report so far.
     """
     store = CampaignStore(out)

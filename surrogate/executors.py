@@ -4,7 +4,7 @@ The interface is one method, :meth:`map_unordered`: it takes a picklable, import
 ``(key, payload)`` pairs and yields ``(key, outcome)`` as cases finish, in any order, where
 ``outcome`` is the function's return value or the exception it raised (a failed case never stops
 the others). Results come back to the calling process, which writes them: Dask workers need no
-shared file system. Both executors look at the stop flag of :mod:`tribocosim.surrogate.interrupt`
+shared file system. Both executors look at the stop flag of :mod:`tribocosim.interrupt`
 while they wait: on a stop they yield the results already finished, discard the slides in progress and
 raise :class:`~tribocosim.errors.CampaignInterrupted`.
 
@@ -30,7 +30,7 @@ from multiprocessing.connection import wait as wait_ready
 
 from tribocosim.errors import ParameterError, TribocosimError
 
-from . import interrupt
+from tribocosim import interrupt
 
 _ADDRESS = re.compile(r"^(tcp|tls|inproc|ws|wss)://[^\s:/]+(:\d+)?/?$")
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -51,7 +51,7 @@ class ProcessPoolCaseExecutor:
     Each worker is a fresh interpreter (the ``spawn`` start method: it inherits neither the caller's threads nor
     its FFTW plans, and needs no temporary folder) that runs one case at a time, handed to it over a pipe. The
     workers ignore SIGINT and SIGTERM: a Ctrl-C in a terminal reaches the whole process group, and the caller
-    decides (:mod:`tribocosim.surrogate.interrupt`); on a stop or any exception in the caller they are killed
+    decides (:mod:`tribocosim.interrupt`); on a stop or any exception in the caller they are killed
     (SIGKILL; the slides in progress are discarded). They also die with the process that started them
     (PR_SET_PDEATHSIG = SIGKILL on Linux, set by the worker for the thread that started it; a watchdog on the
     parent's pid elsewhere), so that a killed campaign leaves no worker behind. A worker that dies while it runs

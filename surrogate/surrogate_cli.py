@@ -16,7 +16,7 @@ cases), then fits and writes the table (default ``DIR/friction_table.npz``) and 
 The table is written only when every case of the campaign is finished and intact (``--allow-failed``: from the
 finished ones), to a temporary name that replaces the old table only once it reads back: a build or ``table``
 that fails leaves the old table as it was. SIGINT (Ctrl-C) or SIGTERM stops ``build`` within a second: the cases
-finished before it are kept, the slides in progress discarded (:mod:`tribocosim.surrogate.interrupt`).
+finished before it are kept, the slides in progress discarded (:mod:`tribocosim.interrupt`).
 Exit status: 0 on success; 1 on bad input, when cases failed, are missing or refused (no table is written
 then, unless ``--allow-failed``); 2 on usage errors; 128 + the signal's number when a signal stopped it.
 """
@@ -150,7 +150,7 @@ def _build(argv: list[str]) -> int:
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     args = ap.parse_args(argv)
 
-    from . import interrupt
+    from tribocosim import interrupt
     from .campaign import case_cpu_seconds, load_records, run_sweep
     from .executors import make_executor
     from .sweep import load_preset, load_sweep
@@ -275,7 +275,7 @@ def _verify(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     from tribocosim.components.stripdraw.table import read_table
 
-    from . import interrupt
+    from tribocosim import interrupt
     from .campaign import write_json
     from .executors import make_executor
     from .table_build import json_clean

@@ -13,13 +13,14 @@ One small hierarchy so that callers can catch what they can handle:
   :class:`Problem` (file, key, message), in ``.problems`` and in one message.
 - ``CosimStepError``: a co-simulation step that failed (names FMU, variable and time).
 - ``CaseRecordError``: a campaign case file that cannot be read or does not match its digest (names the file).
-- ``CampaignInterrupted``: a campaign stopped by a signal (SIGINT, SIGTERM); its finished cases are kept.
+- ``Interrupted``: work stopped by a signal (SIGINT, SIGTERM; :mod:`tribocosim.interrupt`): ``CampaignInterrupted``
+  (its finished cases are kept), ``RunInterrupted`` (a co-simulation run: its accepted steps are written),
+  ``SweepInterrupted`` (a sweep of runs: its finished cases are kept).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 
 class TribocosimError(Exception):
@@ -60,16 +61,27 @@ class ConvergenceError(TribocosimError):
         self.iterations = int(iterations)
 
 
-@dataclass(frozen=True)
 class Problem:
     """One problem of a scene or sweep file: the file, the dotted key, what is wrong."""
 
-    file: str
-    key: str
-    message: str
+    __slots__ = ("file", "key", "message")
+
+    def __init__(self, file: str, key: str, message: str) -> None:
+        self.file, self.key, self.message = file, key, message
 
     def __str__(self) -> str:
         return f"{self.file}: {self.key}: {self.message}"
+
+    def __repr__(self) -> str:
+        return f"Problem({self.file!r}, {self.key!r}, {self.message!r})"
+
+    def __eq__(self, other) -> bool:
+        if other.__class__ is not Problem:
+            return NotImplemented
+        return (self.file, self.key, self.message) == (other.file, other.key, other.message)
+
+    def __hash__(self) -> int:
+        return hash((self.file, self.key, self.message))
 
 
 class SceneError(TribocosimError):
@@ -111,13 +123,35 @@ class CaseRecordError(TribocosimError):
         self.path = path
 
 
-class CampaignInterrupted(TribocosimError):
-    """A campaign stopped on a signal; ``signum`` is the signal's number. The cases finished before it are on
-    disk; the slides in progress were discarded."""
+class Interrupted(TribocosimError):
+    """Work stopped on a signal (:mod:`tribocosim.interrupt`); ``signum`` is the signal's number."""
 
     def __init__(self, message: str, signum: int) -> None:
         super().__init__(message)
         self.signum = int(signum)
+
+
+class CampaignInterrupted(Interrupted):
+    """A campaign stopped on a signal. The cases finished before it are on disk; the slides in progress were
+    discarded."""
+
+
+class SweepInterrupted(Interrupted):
+    """A sweep of scene runs stopped on a signal: ``finished`` of its ``total`` cases are written and kept (a rerun
+    resumes); the cases in progress were discarded."""
+
+    def __init__(self, message: str, signum: int, finished: int = 0, total: int = 0) -> None:
+        super().__init__(message, signum)
+        self.finished, self.total = int(finished), int(total)
+
+
+class RunInterrupted(Interrupted):
+    """A co-simulation run stopped on a signal at a communication point; ``result`` holds (and, when the run writes
+    files, has written) every step accepted up to it."""
+
+    def __init__(self, message: str, signum: int, result=None) -> None:
+        super().__init__(message, signum)
+        self.result = result
 
 
 def check_finite(name: str, value: float) -> float:

@@ -7,12 +7,11 @@ the FMU variable declarations (:mod:`tribocosim.components.machine.component`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-from tribocosim.components.params import param, validate_fields
+from tribocosim.components.params import param, parameters, validate_fields
 
 
-@dataclass(frozen=True)
+@parameters
 class MachineParameters:
     """Parameters of the drawing machine (SI units)."""
 

@@ -8,10 +8,9 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 
 from tribocosim.errors import ParameterError
-from tribocosim.components.params import param, validate_fields
+from tribocosim.components.params import param, parameters, validate_fields
 
 
 #: the grammar of one set-point table entry (the native press reads the same, tc_press.c): a time and a force,
@@ -20,7 +19,7 @@ _NUMBER = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 _ENTRY = re.compile(rf"[ \t]*{_NUMBER}[ \t]+{_NUMBER}[ \t]*")
 
 
-@dataclass(frozen=True)
+@parameters
 class PressParameters:
     """Parameters of the press (SI units)."""
 

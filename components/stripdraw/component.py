@@ -46,12 +46,11 @@ Errors particular to this model
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 from tribocosim.components.description import ArraySize, Built, Component, Native, Port
 from tribocosim.errors import ParameterError
-from tribocosim.components.params import param, validate_fields
+from tribocosim.components.params import param, parameters, validate_fields
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 
 #: The shipped friction table (package data), bundled at the root of the FMU's ``resources/``.
@@ -61,7 +60,7 @@ DEFAULT_NORMAL_FORCE = 12250.0  # N = 10 MPa x 0.035 m x 0.035 m
 DEFAULT_GRIP_VELOCITY = 0.08
 
 
-@dataclass(frozen=True)
+@parameters
 class StripDrawFiles:
     """The StripDraw FMU's files (parameters that are not the model's)."""
 

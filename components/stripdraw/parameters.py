@@ -15,9 +15,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 
-from tribocosim.components.params import param, validate_fields
+from tribocosim.components.params import param, parameters, validate_fields
 
 FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
@@ -30,7 +29,7 @@ PARTICLE_AREA_RULES = ("load_bearing", "clusters")
 _p = param
 
 
-@dataclass(frozen=True)
+@parameters
 class StripDrawParameters:
     """All parameters of the strip-draw model, SI units.
 

@@ -11,7 +11,11 @@ Before the run the output folder is made and checked writable, and locked agains
 Exit codes: 0 success, 1 the run failed (an FMU error, or a discarded step or non-finite output that a
 smaller step does not recover; the message names the FMU, the variable, the time and the step, and what
 was accepted up to then is written, with a ``failure`` entry in the JSON), 2 the scene has problems, or its
-results cannot be written where asked (a file in the way, a folder that cannot be written, another run there).
+results cannot be written where asked (a file in the way, a folder that cannot be written, another run there),
+130 and 143 a SIGINT (Ctrl-C) or SIGTERM stopped it (:mod:`tribocosim.interrupt`): the run stops at the next
+communication point (the C loop looks up from its steps every quarter second) and writes the steps accepted up to
+there, the CSV as always and the JSON with an ``interrupted`` entry (the signal, the last time, the rows and steps),
+and one line says so; a sweep keeps its finished cases (a rerun resumes). A second signal ends the process at once.
 
 An SSP 1.0 package (``.ssp``, :mod:`tribocosim.cosim.ssp.reader`) runs with its default experiment and
 our master; ``--set`` overrides the keys of the scene it is read as (``master.*``, ``experiment.*``, ...).
@@ -20,11 +24,11 @@ our master; ``--set`` overrides the keys of the scene it is read as (``master.*`
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from pathlib import Path
 
-from tribocosim.errors import RunFailed, SceneError, TribocosimError
+from tribocosim.errors import Interrupted, RunFailed, RunInterrupted, SceneError, TribocosimError
+from tribocosim.lazy import log_to_console
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -47,7 +51,15 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim run``."""
     args = _parser().parse_args(argv)
-    logging.basicConfig(level=logging.WARNING, format="tribocosim: %(message)s")
+    log_to_console("tribocosim: %(message)s")
+    from tribocosim import interrupt
+
+    with interrupt.stop_on_signals(None):  # the first SIGINT/SIGTERM stops at a communication point (module docstring)
+        return _main(args)
+
+
+def _main(args) -> int:
+    from tribocosim.interrupt import raise_if_stopped
     from tribocosim.cosim.api import run, run_ssp
     from tribocosim.cosim.scene.schema import is_sweep, parse_overrides, read_document
     from tribocosim.paths import scene_file
@@ -60,6 +72,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
             out = Path(args.out) if args.out is not None else args.scene.resolve().parent
             with OutputFolder(out, []):
+                raise_if_stopped(Interrupted)
                 result = run_ssp(args.scene, out, parse_overrides(args.set), progress=not args.quiet)
                 png = _plot(args, result)
         elif is_sweep(document := read_document(args.scene)):  # a sweep or chained passes over a base scene
@@ -76,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             plan = load_scene(args.scene, parse_overrides(args.set), document)
             out = Path(args.out) if args.out is not None else default_out_dir(plan.scene.path)
             with OutputFolder(out, run_files(plan, out, args.plot)):  # writable, and no other run writes there
+                raise_if_stopped(Interrupted)
                 result = run(plan, out, progress=not args.quiet)
                 png = _plot(args, result)
     except (SceneError, OutputError) as exc:
@@ -84,10 +98,25 @@ def main(argv: list[str] | None = None) -> int:
     except RunFailed as exc:
         r = exc.result
         print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
-        kept = f"{len(r.time)} rows up to t = {r.time[-1]:.9g} s" if len(r.time) else "no rows"
-        where = ", ".join(str(p) for p in (r.csv_path, r.metadata_path) if p is not None)
-        print(f"tribocosim run: what was accepted is written ({kept}): {where}", file=sys.stderr)
+        print(f"tribocosim run: what was accepted is written ({_kept(r)}): {_written(r)}", file=sys.stderr)
         return 1
+    except RunInterrupted as exc:
+        r = exc.result
+        mark = r.metadata["interrupted"]
+        of = f" of {mark['steps_of_the_run']}" if mark["steps_of_the_run"] is not None else ""
+        files = [f"{r.csv_path} ({_kept(r)})" if r.csv_path else None,
+                 f"{r.metadata_path} (marked interrupted)" if r.metadata_path else None]
+        print(f"tribocosim run: {exc} after {mark['steps']}{of} steps; the accepted steps are written: "
+              f"{', '.join(f for f in files if f)}", file=sys.stderr)
+        return 128 + exc.signum
+    except Interrupted as exc:  # before the run started
+        print(f"tribocosim run: {exc} before the run started; nothing was written", file=sys.stderr)
+        return 128 + exc.signum
+    try:
+        raise_if_stopped(Interrupted)
+    except Interrupted as exc:  # after the last step: every result is written, the run is whole
+        print(f"tribocosim run: {exc} after the last step; the results are whole and written", file=sys.stderr)
+        return 128 + exc.signum
     except TribocosimError as exc:
         print(f"tribocosim run: the run failed: {exc}", file=sys.stderr)
         return 1
@@ -114,6 +143,16 @@ def main(argv: list[str] | None = None) -> int:
             print(f"results:  {result.csv_path}")
         print(f"metadata: {result.metadata_path}")
     return 0
+
+
+def _kept(result) -> str:
+    """How much of a run a result holds: its rows and the time of the last."""
+    rows = len(result.time)
+    return f"{rows} row{'s' if rows != 1 else ''} up to t = {result.time[-1]:.9g} s" if rows else "no rows"
+
+
+def _written(result) -> str:
+    return ", ".join(str(p) for p in (result.csv_path, result.metadata_path) if p is not None)
 
 
 def _plot(args, result):

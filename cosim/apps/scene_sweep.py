@@ -43,9 +43,16 @@ as when the strip is drawn again without cleaning.
 Output folder: ``cases/case-NNN/`` per case (the run's CSV and JSON per pass, the field files,
 ``summary.json`` written last and atomically: a case with a ``summary.json`` of the same settings
 is not run again, so an interrupted sweep resumes), then ``sweep.csv`` (one row per case and
-pass: the variables, ``pass``, the summaries), ``sweep.json`` and, with ``--plot``, ``sweep.png``
-and ``maps.png``. Cases run in a :class:`concurrent.futures.ProcessPoolExecutor` (spawned workers,
-so no FMU is ever forked); the FMUs are built or found in the cache once, before the workers start.
+pass: the variables, ``pass``, the summaries, then what the run counted (:func:`run_counts`): ``warnings``, the
+FMUs' warning messages, and the outputs the components watch at the end of a run, e.g.
+``strip.table_clamp_count``, the friction-table lookups outside the table's axes), ``sweep.json`` and, with
+``--plot``, ``sweep.png`` (the runs with a count above 0 marked) and ``maps.png``. A run that warned or read the
+table outside its axes rests on values the model or its table does not cover: ``tribocosim run`` says how many did.
+
+Cases run in the local worker processes of :class:`tribocosim.surrogate.executors.ProcessPoolCaseExecutor`
+(spawned, so no FMU is ever forked; they ignore SIGINT and SIGTERM and die with the sweep); the FMUs are built or
+found in the cache once, before the workers start. A SIGINT or SIGTERM (:mod:`tribocosim.interrupt`) stops the
+sweep: the finished cases are kept, the workers and their cases in progress killed (a rerun resumes).
 """
 
 from __future__ import annotations
@@ -58,14 +65,14 @@ import math
 import operator
 import os
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from tribocosim.errors import SceneError
+from tribocosim.errors import Interrupted, RunInterrupted, SceneError, SweepInterrupted
+from tribocosim.interrupt import raise_if_stopped
 
 _SWEEP_KEYS = ("scene", "title", "passes", "field_instance", "field_interval", "workers", "variables", "set",
                "summary", "plot")
@@ -202,9 +209,11 @@ def load_sweep(path: str | Path) -> Sweep:
     problems = Problems(path, "sweep")
     add = problems.add
 
+    from tribocosim.cosim.scene.documents import TomlError, read_toml
+
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        doc = read_toml(path)
+    except (OSError, UnicodeDecodeError, TomlError) as exc:
         raise SceneError(f"sweep file {path}: cannot read: {exc}") from None
     for k in doc:
         if k != "sweep":
@@ -216,7 +225,9 @@ def load_sweep(path: str | Path) -> Sweep:
         add("sweep.scene", f"must name the base scene file, got {scene!r}")
         scene = ""
     scene_path = (path.parent / scene).resolve()
-    if scene and not scene_path.is_file():
+    if scene and scene_path.is_dir():
+        add("sweep.scene", f"{scene_path} is a folder, not a scene file")
+    elif scene and not scene_path.is_file():
         add("sweep.scene", f"scene file not found: {scene_path}")
     passes = s.get("passes", 1)
     if isinstance(passes, bool) or not isinstance(passes, int) or passes < 1:
@@ -297,6 +308,10 @@ def load_sweep(path: str | Path) -> Sweep:
 
 
 # ------------------------------------------------------------------ running
+#: the layout of a case's summary rows (in its key: a case summarised in another layout runs again)
+ROW_FORMAT = 2
+
+
 def _case_key(sweep: Sweep, case: Case, plan, folder: Path) -> str:
     """What a finished case depends on: the scene text, the case's settings, and the bytes of every
     FMU the scene loads and of every file a parameter names (a friction table, say), except the
@@ -311,8 +326,9 @@ def _case_key(sweep: Sweep, case: Case, plan, folder: Path) -> str:
             if Path(value).resolve().is_relative_to(own):  # field files the case itself writes
                 continue
             deps[f"fmus.{name}.parameters.{pname}"] = file_digest(Path(value))
-    blob = json.dumps({"scene": sweep.scene.read_text(encoding="utf-8"), "overrides": case.overrides,
-                       "passes": sweep.passes, "field": [sweep.field_instance, sweep.field_interval],
+    blob = json.dumps({"format": ROW_FORMAT, "scene": sweep.scene.read_text(encoding="utf-8"),
+                       "overrides": case.overrides, "passes": sweep.passes,
+                       "field": [sweep.field_instance, sweep.field_interval],
                        "summaries": [(x.name, x.expression.text, x.kind, x.last) for x in sweep.summaries],
                        "dependencies": deps}, sort_keys=True, default=str)
     return hashlib.sha256(blob.encode()).hexdigest()
@@ -366,6 +382,7 @@ def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
         result = run(plan, folder / f"pass-{k}", write=True)
         row = {**case.variables, "pass": k}
         row.update({x.name: x.evaluate(result) for x in sweep.summaries})
+        row.update(run_counts(result.metadata))
         row["wall_time"] = time.perf_counter() - t0
         rows.append(row)
     tmp = folder / f".summary.{os.getpid()}.partial"
@@ -375,9 +392,27 @@ def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
     return rows
 
 
-def _worker(sweep_path: str, index: int, out: str) -> tuple[int, list[dict]]:
+def run_counts(metadata: dict) -> dict:
+    """What a run's metadata counts that a sweep's summary shows per case: ``warnings``, the messages its FMUs logged
+    as warnings or worse (the strip leaving its valid range: a grip moving back, a draw past its length), and the
+    value of every output its components watch at the end of a run (``instance.output``: the strip's
+    ``table_clamp_count``, its friction-table lookups outside the table's axes). Above 0, the case's summaries rest
+    on values outside what the model or its table covers."""
+    return {"warnings": int(sum(metadata.get("fmu_warnings", {}).values())),
+            **{name: int(value) for name, value in metadata.get("end_checks", {}).items()}}
+
+
+def count_columns(sweep: Sweep, rows: list[dict]) -> list[str]:
+    """The columns of :func:`run_counts` in the sweep's rows (those that are neither a variable, ``pass``, a summary
+    nor ``wall_time``)."""
+    other = {*sweep.variables, "pass", *(x.name for x in sweep.summaries), "wall_time"}
+    return [n for n in (rows[0] if rows else {}) if n not in other]
+
+
+def _worker(payload: tuple[str, int, str]) -> list[dict]:
+    sweep_path, index, out = payload
     sweep = load_sweep(sweep_path)
-    return index, run_case(sweep, sweep.cases()[index], Path(out))
+    return run_case(sweep, sweep.cases()[index], Path(out))
 
 
 @dataclass
@@ -390,6 +425,12 @@ class SweepResult:
     json_path: Path
     wall_time: float
     plots: list[Path] = field(default_factory=list)
+    #: the columns of :func:`run_counts` (``warnings``, the end checks): a row with one above 0 is marked
+    counts: list[str] = field(default_factory=list)
+
+    def marked(self) -> list[dict]:
+        """The rows (runs) with warnings or with lookups outside the friction table (any count above 0)."""
+        return [r for r in self.rows if any(r[c] for c in self.counts)]
 
     def column(self, name: str) -> np.ndarray:
         return np.array([r[name] for r in self.rows])
@@ -437,34 +478,48 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     n = max(1, min(n or os.cpu_count() or 1, len(cases)))
     t0 = time.perf_counter()
     by_case: dict[int, list[dict]] = {}
-    if n == 1:
-        for case in cases:
-            by_case[case.index] = run_case(sweep, case, out)
-            if progress:
-                progress(len(by_case), len(cases), by_case[case.index])
-    else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor, as_completed  # not on the path of a single run
-
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = [pool.submit(_worker, str(sweep.path), c.index, str(out)) for c in cases]
-            for fut in as_completed(futures):
-                i, rows = fut.result()
-                by_case[i] = rows
+    failures: list[tuple[int, BaseException]] = []
+    try:
+        if n == 1:
+            for case in cases:
+                raise_if_stopped(Interrupted)
+                by_case[case.index] = run_case(sweep, case, out)
                 if progress:
-                    progress(len(by_case), len(cases), rows)
+                    progress(len(by_case), len(cases), by_case[case.index])
+        else:
+            from tribocosim.surrogate.executors import ProcessPoolCaseExecutor  # not on the path of a single run
+
+            items = [(c.index, (str(sweep.path), c.index, str(out))) for c in cases]
+            for index, outcome in ProcessPoolCaseExecutor(n).map_unordered(_worker, items):
+                if isinstance(outcome, BaseException):
+                    failures.append((index, outcome))
+                    continue
+                by_case[index] = outcome
+                if progress:
+                    progress(len(by_case), len(cases), outcome)
+    except (Interrupted, RunInterrupted) as exc:  # the cases finished before the signal are on disk
+        from tribocosim.interrupt import signal_name
+
+        raise SweepInterrupted(f"stopped by {signal_name(exc.signum)}", exc.signum, len(by_case), len(cases)) from None
+    if failures:  # every other case finished and is kept; the first failure stops the sweep
+        index, exc = min(failures, key=lambda f: f[0])
+        raise exc
     rows = [r for i in sorted(by_case) for r in by_case[i]]
     wall = time.perf_counter() - t0
+    counts = count_columns(sweep, rows)
     names = list(rows[0])
     csv_path = out / "sweep.csv"
     lines = [",".join(f'"{n}"' for n in names)]
     lines += [",".join(repr(r[n]) if not isinstance(r[n], str) else f'"{r[n]}"' for n in names) for r in rows]
     csv_path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     json_path = out / "sweep.json"
+    marked = [r for r in rows if any(r[c] for c in counts)]
     json_path.write_text(json.dumps({"sweep": str(sweep.path), "scene": str(sweep.scene), "cases": len(cases),
-                                     "passes": sweep.passes, "workers": n, "wall_time": wall, "rows": rows},
+                                     "passes": sweep.passes, "workers": n, "wall_time": wall,
+                                     "counts": {c: sum(r[c] for r in rows) for c in counts},
+                                     "runs_with_warnings_or_clamps": len(marked), "rows": rows},
                                     indent=2, default=str), encoding="utf-8")
-    result = SweepResult(sweep, rows, csv_path, json_path, wall)
+    result = SweepResult(sweep, rows, csv_path, json_path, wall, counts=counts)
     if plot:
         from tribocosim.cosim.studies.plotting import plot_beta_maps, plot_sweep
 
@@ -494,7 +549,8 @@ def _same(a, b) -> bool:
 
 
 def main(args) -> int:
-    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from :mod:`tribocosim.cosim.apps.run_cli`)."""
+    """``tribocosim run SWEEP.toml [--out DIR] [--plot] [--quiet] [--workers N]`` (from
+    :mod:`tribocosim.cosim.apps.run_cli`, which maps a SceneError to exit 2). A signal stops it (exit 128 + its number) with its finished cases kept."""
     import sys
 
     def progress(done, total, rows):
@@ -503,7 +559,21 @@ def main(args) -> int:
                              if k != "wall_time")
             print(f"[{done}/{total}] {what}", file=sys.stderr, flush=True)
 
-    res = run_sweep(args.scene, args.out, workers=getattr(args, "workers", None), plot=args.plot, progress=progress)
+    try:
+        res = run_sweep(args.scene, args.out, workers=getattr(args, "workers", None), plot=args.plot,
+                        progress=progress)
+    except SweepInterrupted as exc:
+        out = Path(args.out) if args.out is not None else Path.cwd() / Path(args.scene).stem
+        print(f"tribocosim run: {exc}: {exc.finished} of {exc.total} cases are finished and kept in {out / 'cases'} "
+              "(the cases in progress were discarded); run the same command again to resume", file=sys.stderr)
+        return 128 + exc.signum
+    marked = res.marked()
+    if marked:
+        total = {c: sum(r[c] for r in res.rows) for c in res.counts}
+        what = ", ".join(f"{v} {c}" for c, v in total.items() if v)
+        print(f"warning:  {len(marked)} of {len(res.rows)} runs warned or read the friction table outside its axes "
+              f"({what}): their summaries rest on values the model or its table does not cover (columns "
+              f"{', '.join(res.counts)} of {res.csv_path.name}; marked in the plot)", file=sys.stderr)
     if not args.quiet:
         s = res.sweep
         print(f"sweep:    {s.path} ({len(s.cases())} cases x {s.passes} pass(es), base scene {s.scene.name})")

@@ -19,8 +19,6 @@ ZAMM 96:1061-1081, doi:10.1002/zamm.201500196):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 
 def strongly_connected(n: int, edges: list[tuple[int, int]]) -> list[list[int]]:
     """Strongly connected components of a directed graph, in topological order.
@@ -87,7 +85,6 @@ def strongly_connected(n: int, edges: list[tuple[int, int]]) -> list[list[int]]:
     return out
 
 
-@dataclass(frozen=True)
 class StepOrder:
     """A Gauss-Seidel order and what it had to extrapolate.
 
@@ -102,9 +99,10 @@ class StepOrder:
         self-link).
     """
 
-    order: tuple[int, ...]
-    backward: frozenset[int]
-    cycles: tuple[tuple[int, ...], ...]
+    __slots__ = ("order", "backward", "cycles")
+
+    def __init__(self, order: tuple[int, ...], backward: frozenset[int], cycles: tuple[tuple[int, ...], ...]) -> None:
+        self.order, self.backward, self.cycles = order, backward, cycles
 
 
 def gauss_seidel_order(n: int, links: list[tuple[int, int]], preferred: list[int] | None = None) -> StepOrder:
@@ -132,12 +130,16 @@ def gauss_seidel_order(n: int, links: list[tuple[int, int]], preferred: list[int
     return StepOrder(tuple(order), backward, cycles)
 
 
-@dataclass(frozen=True)
 class LoopReport:
     """An algebraic loop: the links in it and the contraction factor rho of its Jacobian."""
 
-    links: tuple[int, ...]
-    contraction: float
+    __slots__ = ("links", "contraction")
+
+    def __init__(self, links: tuple[int, ...], contraction: float) -> None:
+        self.links, self.contraction = links, contraction
+
+    def __repr__(self) -> str:
+        return f"LoopReport(links={self.links!r}, contraction={self.contraction!r})"
 
 
 def feedthrough_edges(dep) -> list[tuple[int, int]]:

@@ -21,11 +21,12 @@ stable, i.e. rho >= 1).
 
 from __future__ import annotations
 
-import logging
 import time
 from dataclasses import dataclass, field
 
-from tribocosim.errors import ConvergenceError, CosimStepError
+from tribocosim.errors import ConvergenceError, CosimStepError, Interrupted
+from tribocosim.interrupt import raise_if_stopped
+from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.algorithms import Algorithm
 from tribocosim.cosim.engine.schemes import loop_message
 from tribocosim.cosim.engine.observers import Observer
@@ -33,7 +34,7 @@ from tribocosim.cosim.engine.recorder import Recorder
 from tribocosim.cosim.engine.system import CoupledSystem, NonFiniteOutput
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
-LOG = logging.getLogger("tribocosim.cosim")
+LOG = "tribocosim.cosim"  # the logger of the master's notes
 #: the loops a master can run: "auto" (the C loop where it takes the run) or "python"
 LOOPS = ("auto", "python")
 
@@ -131,9 +132,9 @@ class Master:
             msg, warn = loop_message(loop, ", ".join(sysm.links[k].label for k in loop.links), self.algorithm.name)
             if warn:
                 self.warnings.append(msg)
-                LOG.warning(msg)
+                log(LOG, WARNING, msg)
             else:
-                LOG.info(msg)
+                log(LOG, INFO, msg)
         self.accept(0)
         self.stats.steps = 0
 
@@ -238,4 +239,5 @@ class Master:
 
     def _python_loop(self) -> None:
         while self.n < self.grid.end_ticks:
+            raise_if_stopped(Interrupted)  # a signal: the run stops at this communication point
             self.controller.advance(self, self.n)

@@ -2,8 +2,9 @@
 
 The library holds the fixed-step loop of Jacobi and Gauss-Seidel with held coupling values (``tcm_run``), the output
 refresh and the feedthrough probe of the master's initialization (``tcm_refresh``, ``tcm_probe``), the start row of
-the recorder (``tcm_record_row``), and the FMI 2.0 callbacks a host passes to ``fmi2Instantiate`` (``tcm_logger``,
-which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``).
+the recorder (``tcm_record_row``), the FMI 2.0 callbacks a host passes to ``fmi2Instantiate`` (``tcm_logger``,
+which formats an FMU's variadic log message and hands it to a sink; ``tcm_allocate_memory``, ``tcm_free_memory``),
+and the rows of the results CSV (``native/tc_csv.c``, ``tcm_csv_rows``: :mod:`.results_csv`).
 :mod:`.native_loop` runs the loop for the Python master, :mod:`.native_session` a whole run in it. Nothing here
 imports numpy or fmpy.
 
@@ -20,15 +21,17 @@ import hashlib
 import importlib.util
 import os
 import sys
-import tempfile
 from pathlib import Path
 
-#: the C sources of the loop
+#: the C sources of the library and their headers
 NATIVE_DIR = Path(__file__).resolve().parent / "native"
-SOURCES = ("tc_master.c",)
-HEADER = "tc_master.h"
-#: accepted steps per call of the C loop (between two calls the progress reporters are told the time)
-CHUNK = 2048
+SOURCES = ("tc_master.c", "tc_csv.c")
+HEADERS = ("tc_master.h", "tc_csv.h")
+#: accepted steps of the first call of the C loop, and the most of any call: between two calls the progress reporters
+#: are told the time and a stop asked for by a signal is seen (:mod:`tribocosim.interrupt`), so later calls take as
+#: many steps as last about POLL_S seconds (:func:`next_chunk`)
+CHUNK = 256
+MAX_CHUNK = 65536
 #: tcm_status
 TCM_DONE, TCM_STOPPED, TCM_FMI_ERROR = 0, 1, 2
 #: tcm_kind of each FMI type the recorder reads
@@ -96,6 +99,17 @@ STRUCTS = {"tcm_slave": TcmSlave, "tcm_get": TcmGet, "tcm_set": TcmSet, "tcm_rig
            "tcm_log_env": TcmLogEnv}
 
 
+def next_chunk(steps: int, seconds: float) -> int:
+    """The steps of the next call of the C loop after one of ``steps`` steps took ``seconds``: as many as last about
+    :data:`tribocosim.interrupt.POLL_S` (the chunks change when the loop looks up from its steps, not what it
+    computes)."""
+    from tribocosim.interrupt import POLL_S
+
+    if seconds <= 0.0:
+        return MAX_CHUNK
+    return max(1, min(MAX_CHUNK, int(steps * POLL_S / seconds)))
+
+
 # ------------------------------------------------------------------------------------------------ the library
 def fmi_headers() -> Path:
     """The folder of the FMI 2.0 headers that fmpy ships (``fmi2FunctionTypes.h``; found without importing fmpy)."""
@@ -110,7 +124,7 @@ def digest() -> str:
     from tribocosim.components.native.toolchain.digests import memo
 
     folder = fmi_headers()
-    files = (*(NATIVE_DIR / s for s in SOURCES), NATIVE_DIR / HEADER, folder / "fmi2FunctionTypes.h",
+    files = (*(NATIVE_DIR / s for s in (*SOURCES, *HEADERS)), folder / "fmi2FunctionTypes.h",
              folder / "fmi2TypesPlatform.h")
     flags = " ".join((*compiler.CFLAGS, compiler.zig_version()))
 
@@ -127,6 +141,8 @@ def digest() -> str:
 
 def build(output: str | os.PathLike) -> Path:
     """Compile the loop's library for this machine into ``output`` (atomically)."""
+    import tempfile
+
     from tribocosim.components.native.toolchain import compiler
 
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
@@ -156,4 +172,6 @@ def library() -> ctypes.CDLL:
     lib.tcm_probe.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState), _PI, _PU, _PB, _PD, _PB, _PD]
     lib.tcm_record_row.restype = _I
     lib.tcm_record_row.argtypes = [ctypes.POINTER(TcmRig), ctypes.POINTER(TcmState)]
+    lib.tcm_csv_rows.restype = _SZ
+    lib.tcm_csv_rows.argtypes = [_PD, _PD, _SZ, _SZ, ctypes.c_char_p, _SZ, _PSZ]
     return lib

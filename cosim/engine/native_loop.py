@@ -7,7 +7,8 @@ but the recorder and progress reporters. The Python master has loaded, instantia
 the FMUs and probed their feedthrough; the C loop then calls the FMI functions of their libraries through the same
 function pointers, with the same batches, in the same order, on the same integer time grid, so that its results
 are the Python loop's to the last bit (``tests/cosim/test_native_loop.py``). It records the scene's outputs into
-memory, in chunks of :data:`CHUNK` steps between which the progress reporters are told the time.
+memory, in chunks of steps (:func:`~tribocosim.cosim.engine.native_lib.next_chunk`) between which the progress
+reporters are told the time and a stop asked for by a signal ends the run (:mod:`tribocosim.interrupt`).
 
 The C loop saves no FMU state. A step it cannot take (an FMU discards it, or a linked or recorded output is not
 finite) raises :class:`NativeLoopStopped`; :func:`tribocosim.cosim.api.run` then repeats the run with the Python
@@ -22,12 +23,14 @@ The library and its ctypes structures are :mod:`.native_lib`.
 from __future__ import annotations
 
 import ctypes
+import time
 
 import numpy as np
 
-from tribocosim.errors import CosimStepError, TribocosimError
+from tribocosim.errors import CosimStepError, Interrupted, TribocosimError
+from tribocosim.interrupt import raise_if_stopped, stop_requested
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, STATUS_LABELS, TCM_DONE, TCM_FMI_ERROR, TCM_STOPPED,
-                                                TcmGet, TcmRig, TcmSet, TcmSlave, TcmState, library)
+                                                TcmGet, TcmRig, TcmSet, TcmSlave, TcmState, library, next_chunk)
 
 _I, _SZ = ctypes.c_int, ctypes.c_size_t
 _PD, _PB, _PI = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_ubyte), ctypes.POINTER(ctypes.c_int)
@@ -148,10 +151,11 @@ class NativeLoop:
         """Take the master to the end of its grid; raise on an FMI error or where the Python loop must take over."""
         sysm, rec = master.system, master.recorder
         others = master.observers[1:]
-        status = TCM_DONE
-        while status == TCM_DONE and self.state.n < master.grid.end_ticks:
-            before = self.state.n_rows
-            status = self.lib.tcm_run(ctypes.byref(self.rig), ctypes.byref(self.state), CHUNK)
+        status, chunk = TCM_DONE, CHUNK
+        while status == TCM_DONE and self.state.n < master.grid.end_ticks and stop_requested() is None:
+            before, started = self.state.n_rows, time.perf_counter()
+            status = self.lib.tcm_run(ctypes.byref(self.rig), ctypes.byref(self.state), chunk)
+            chunk = next_chunk(chunk, time.perf_counter() - started)
             rows = self.state.n_rows
             rec.extend(self.times[before:rows], self.rows[before:rows])
             if rows > before:
@@ -178,3 +182,4 @@ class NativeLoop:
             what = st.failed_function.decode()
             who = f"FMU instance '{master.names[st.failed_slave]}'" if st.failed_slave >= 0 else "a recorded variable"
             raise NativeLoopStopped(f"{who}: {what} in the step from t = {st.failed_time:.9g} s")
+        raise_if_stopped(Interrupted)  # a signal: the run stops at this communication point

@@ -7,14 +7,15 @@ with held coupling values, Real links) and makes the FMI calls the Python master
 same order, with the same values:
 
 1. each FMU's library loaded (ctypes), ``fmi2Instantiate`` with the library's logger (``tcm_logger``: the FMU's
-   messages reach :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters set by
-   type (Real, Integer and Enumeration, Boolean, String), then ``fmi2SetupExperiment`` and
+   messages reach the logger :data:`LOG` as under :class:`~tribocosim.cosim.engine.slave.FmpySlave`), its parameters
+   set by type (Real, Integer and Enumeration, Boolean, String), then ``fmi2SetupExperiment`` and
    ``fmi2EnterInitializationMode``;
 2. as many output refreshes with propagation as there are slaves (``tcm_refresh``), ``fmi2ExitInitializationMode``,
    one more refresh; the feedthrough probe (``tcm_probe``), masked by the declared dependencies, from which the
    feedthrough of undeclared slaves, the algebraic loops and the evaluation order follow
    (:mod:`tribocosim.cosim.engine.graph`); one more refresh, and the start row recorded (``tcm_record_row``);
-3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time;
+3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time and a stop asked for by a
+   signal (:mod:`tribocosim.interrupt`) ends the run at that communication point (:attr:`SessionResult.interrupted`);
 4. the end-of-run outputs read, ``fmi2Terminate`` and ``fmi2FreeInstance``. The libraries stay loaded for the
    process (an FMU's extracted folder is named by its content, so a later run loads the same library again; unloading
    a library that embeds an interpreter, a pythonfmu FMU's, can leave objects behind that point into it).
@@ -30,23 +31,23 @@ from __future__ import annotations
 import array
 import ctypes
 import itertools
-import logging
 import math
 import sys
 import time
 from collections import deque
-from dataclasses import dataclass, field
 from pathlib import Path
 from weakref import WeakValueDictionary
 
 from tribocosim.errors import TribocosimError
+from tribocosim.interrupt import stop_requested
+from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, SINK, TCM_DONE, TcmGet, TcmLogEnv, TcmRig, TcmSet,
-                                                TcmSlave, TcmState, library)
+                                                TcmSlave, TcmState, library, next_chunk)
 from tribocosim.cosim.engine.schemes import LinkSpec, loop_message
 from tribocosim.cosim.engine.timegrid import TimeGrid
 
-LOG = logging.getLogger("tribocosim.cosim")
+LOG = "tribocosim.cosim"  # the logger of the FMUs' messages and the master's notes
 _LABELS = ("ok", "warning", "discard", "error", "fatal", "pending")
 _FATAL = 4
 _VP, _I, _D, _SZ, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_size_t, ctypes.c_uint
@@ -83,37 +84,36 @@ class _Callbacks(ctypes.Structure):
                 ("componentEnvironment", _VP)]
 
 
-@dataclass(frozen=True)
 class SessionSlave:
     """One FMU instance of a session: its name, the folder its FMU is extracted to, its model identifier and GUID,
     the parameter values to set (``[(value reference, type, value), ...]``) and its declared feedthrough (None:
     probed)."""
 
-    name: str
-    folder: Path
-    model_identifier: str
-    guid: str
-    parameters: list = field(default_factory=list)
-    feedthrough: bool | None = None
+    __slots__ = ("name", "folder", "model_identifier", "guid", "parameters", "feedthrough")
+
+    def __init__(self, name: str, folder: Path, model_identifier: str, guid: str, parameters: list | None = None,
+                 feedthrough: bool | None = None) -> None:
+        self.name, self.folder, self.model_identifier, self.guid = name, folder, model_identifier, guid
+        self.parameters = [] if parameters is None else parameters
+        self.feedthrough = feedthrough
 
 
-@dataclass
 class SessionResult:
-    """What a session did: the recorded rows, the counters and what the initialization found."""
+    """What a session did: the recorded rows (``times``; ``rows``: n_rows x n_columns, row after row), the counters
+    and what the initialization found."""
 
-    times: array.array
-    rows: array.array  # n_rows x n_columns, row after row
-    steps: int
-    min_step: float
-    max_step: float
-    feedthrough: list
-    loops: list
-    eval_order: list
-    wall_times: list
-    do_steps: list
-    loop_time: float
-    warnings: list
-    end_values: list
+    __slots__ = ("times", "rows", "steps", "min_step", "max_step", "feedthrough", "loops", "eval_order", "wall_times",
+                 "do_steps", "loop_time", "warnings", "end_values", "interrupted", "fmu_warnings")
+
+    def __init__(self, times: array.array, rows: array.array, steps: int, min_step: float, max_step: float,
+                 feedthrough: list, loops: list, eval_order: list, wall_times: list, do_steps: list, loop_time: float,
+                 warnings: list, end_values: list, interrupted: int | None = None,
+                 fmu_warnings: list | None = None) -> None:
+        self.times, self.rows, self.steps, self.min_step, self.max_step = times, rows, steps, min_step, max_step
+        self.feedthrough, self.loops, self.eval_order, self.wall_times = feedthrough, loops, eval_order, wall_times
+        self.do_steps, self.loop_time, self.warnings, self.end_values = do_steps, loop_time, warnings, end_values
+        self.interrupted = interrupted  # the signal that stopped the run before the end of the grid, or None
+        self.fmu_warnings = fmu_warnings or []  # per slave, the messages it logged as warnings or worse
 
 
 def supported(algorithm: str, extrapolation: int, adaptive, links: list[LinkSpec]) -> str | None:
@@ -144,6 +144,7 @@ class _Fmu:
         self.component = None
         self.wall_time = 0.0
         self.messages: deque[str] = deque(maxlen=20)
+        self.warnings = 0  # messages logged with a status of warning or worse
         self.fatal = False  # a function returned fmi2Fatal: no function of the FMU's instances may be called again
         self.errored = False  # a function returned fmi2Error or fmi2Fatal: fmi2Terminate is not called
         key = next(_KEYS)
@@ -166,7 +167,8 @@ class _Fmu:
         label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
         self.messages.append(f"[{label}] {text}")
         if status >= 1:
-            LOG.warning("FMU %s: [%s] %s", self.slave.name, label, text)
+            self.warnings += 1
+            log(LOG, WARNING, "FMU %s: [%s] %s", self.slave.name, label, text)
 
     def call(self, function: str, *args) -> int:
         t0 = time.perf_counter()
@@ -400,15 +402,20 @@ class NativeSession:
             msg, warn = loop_message(loop, ", ".join(self.links[k].label for k in loop.links), self.algorithm)
             if warn:
                 self.warnings.append(msg)
-                LOG.warning(msg)
+                log(LOG, WARNING, msg)
             else:
-                LOG.info(msg)
+                log(LOG, INFO, msg)
         self._c("tcm_record_row")
         self.rig.propagate = int(self.propagate)
         t0 = time.perf_counter()
+        chunk, interrupted = CHUNK, None
         while self.state.n < self.grid.end_ticks:
-            rows = self.state.n_rows
-            self._c("tcm_run", CHUNK)
+            interrupted = stop_requested()
+            if interrupted is not None:  # a signal: stop at this communication point
+                break
+            rows, started = self.state.n_rows, time.perf_counter()
+            self._c("tcm_run", chunk)
+            chunk = next_chunk(chunk, time.perf_counter() - started)
             if progress is not None and self.state.n_rows > rows:
                 progress.step_accepted(self.times[self.state.n_rows - 1])
             if self.state.n_rows == rows:  # no room left for a row (not reached: one row per step)
@@ -420,7 +427,8 @@ class NativeSession:
         return SessionResult(self.times[:st.n_rows], self.rows[:st.n_rows * cols], int(st.steps), st.min_step,
                              st.max_step, feedthrough, loops, order,
                              [f.wall_time + c.wall_time for f, c in zip(fmus, self.c_slaves)],
-                             [int(c.do_steps) for c in self.c_slaves], loop_time, self.warnings, end_values)
+                             [int(c.do_steps) for c in self.c_slaves], loop_time, self.warnings, end_values,
+                             interrupted, [f.warnings for f in fmus])
 
     def _free(self, fmus: list[_Fmu]) -> None:
         """``fmi2Terminate`` and ``fmi2FreeInstance`` of every instance; a failure here changes no result and is not

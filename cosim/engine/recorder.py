@@ -127,4 +127,4 @@ class Recorder(Observer):
         """Write ``time`` and the recorded columns (in the scene's order) to a CSV file
         (:func:`tribocosim.cosim.engine.results_csv.write_csv`)."""
         data = np.array(self._rows, dtype=float).reshape(len(self._rows), len(self.names))
-        return write_csv(path, self.names, self._times, data.ravel().tolist())
+        return write_csv(path, self.names, self._times, np.ascontiguousarray(data).ravel())

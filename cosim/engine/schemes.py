@@ -2,7 +2,7 @@
 their settings tables, and what the scene checks must know of them (numpy-free, so that reading a scene imports no
 numerical code).
 
-- :data:`ALGORITHMS`: every coupling scheme by its scene name (``[master] algorithm``), with the dataclass of its
+- :data:`ALGORITHMS`: every coupling scheme by its scene name (``[master] algorithm``), with the class of its
   ``[master.<name>]`` table and whether it rolls back or solves algebraic loops; the classes that run them are
   :data:`tribocosim.cosim.engine.algorithms.ALGORITHM_CLASSES`.
 - :data:`ESTIMATORS`: every error estimator of adaptive steps by its scene name (``[master.adaptive] estimator``);
@@ -14,56 +14,81 @@ numerical code).
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
-
 #: a fixed macro step is 2**FIXED_SUBDIVISION ticks (room for this many halvings; :mod:`.timegrid`)
 FIXED_SUBDIVISION = 10
 #: ticks per minimum step in variable-step runs (:mod:`.timegrid`)
 VARIABLE_SUBDIVISION = 6
 ITERATION_METHODS = ("fixed-point", "quasi-newton")
 
+# The records of the run path are plain classes with slots: a class made by ``dataclasses`` costs the import of its
+# module the compilation of its generated methods, 3 to 4 million instructions a class (callgrind), which is more
+# than a run spends on most of its scene checks.
 
-@dataclass(frozen=True)
+
 class VariableRef:
-    """``instance.variable`` (the instance name is everything before the first dot)."""
+    """``instance.variable`` (the instance name is everything before the first dot); equal and hashed as the pair."""
 
-    instance: str
-    variable: str
+    __slots__ = ("instance", "variable")
+
+    def __init__(self, instance: str, variable: str) -> None:
+        self.instance, self.variable = instance, variable
 
     def __str__(self) -> str:
         return f"{self.instance}.{self.variable}"
 
+    def __repr__(self) -> str:
+        return f"VariableRef({self.instance!r}, {self.variable!r})"
 
-@dataclass(frozen=True)
+    def __eq__(self, other) -> bool:
+        if other.__class__ is not VariableRef:
+            return NotImplemented
+        return self.instance == other.instance and self.variable == other.variable
+
+    def __hash__(self) -> int:
+        return hash((self.instance, self.variable))
+
+
 class LinkSpec:
-    """One link in index form (what the master needs from a validated connection)."""
+    """One link in index form (what the master needs from a validated connection): source and target instance
+    index, value reference and FMI type, whether it carries a continuous Real, its label, and the value references
+    of the target's derivative inputs ``der(u)``, ``der(u, 2)`` (None where there is none)."""
 
-    source: int
-    source_vr: int
-    source_type: str
-    target: int
-    target_vr: int
-    target_type: str
-    continuous: bool
-    label: str
-    derivative_vrs: tuple[int | None, int | None] = (None, None)
+    __slots__ = ("source", "source_vr", "source_type", "target", "target_vr", "target_type", "continuous", "label",
+                 "derivative_vrs")
+
+    def __init__(self, source: int, source_vr: int, source_type: str, target: int, target_vr: int, target_type: str,
+                 continuous: bool, label: str, derivative_vrs: tuple[int | None, int | None] = (None, None)) -> None:
+        self.source, self.source_vr, self.source_type = source, source_vr, source_type
+        self.target, self.target_vr, self.target_type = target, target_vr, target_type
+        self.continuous, self.label, self.derivative_vrs = continuous, label, derivative_vrs
+
+    def __repr__(self) -> str:
+        return f"LinkSpec({self.label!r})"
 
 
-@dataclass(frozen=True)
 class Iterative:
     """[master.iterative]: the fixed-point / quasi-Newton iteration of a macro step."""
 
-    method: str = "quasi-newton"
-    relaxation: float | str = 1.0
-    tolerance: float = 1e-8
-    max_iterations: int = 50
-    reuse: int = 2
+    __slots__ = ("method", "relaxation", "tolerance", "max_iterations", "reuse")
+    #: the keys of the table, in order
+    FIELDS = __slots__
+
+    def __init__(self, method: str = "quasi-newton", relaxation: float | str = 1.0, tolerance: float = 1e-8,
+                 max_iterations: int = 50, reuse: int = 2) -> None:
+        self.method, self.relaxation, self.tolerance = method, relaxation, tolerance
+        self.max_iterations, self.reuse = max_iterations, reuse
+
+    def as_dict(self) -> dict:
+        """The settings by key (as the results' metadata records them)."""
+        return {k: getattr(self, k) for k in self.FIELDS}
+
+    def __repr__(self) -> str:
+        return f"Iterative({', '.join(f'{k}={v!r}' for k, v in self.as_dict().items())})"
 
     @classmethod
     def parse(cls, p, table: dict, key: str) -> "Iterative":
         """The settings of a ``[master.iterative]`` table; problems go to the collector ``p``."""
-        p.unknown_keys(table, [f.name for f in dataclasses.fields(cls)], key)
+        p.unknown_keys(table, cls.FIELDS, key)
         d = cls()
         method = p.choice(table, "method", key, ITERATION_METHODS, d.method)
         relax = table.get("relaxation", d.relaxation)
@@ -79,7 +104,6 @@ class Iterative:
         )
 
 
-@dataclass(frozen=True)
 class Adaptive:
     """[master.adaptive]: error-controlled variable step.
 
@@ -94,22 +118,32 @@ class Adaptive:
     (min_step / 2**VARIABLE_SUBDIVISION), e.g. min_step = 2 * step_quantum.
     """
 
-    tolerance: float = 1e-4
-    absolute_tolerance: float | None = None
-    min_step: float = 1e-7
-    max_step: float = 1e-2
-    estimator: str = "step-doubling"
-    safety: float = 0.9
-    step_quantum: float | None = None
+    __slots__ = ("tolerance", "absolute_tolerance", "min_step", "max_step", "estimator", "safety", "step_quantum")
+    #: the keys of the table, in order
+    FIELDS = __slots__
+
+    def __init__(self, tolerance: float = 1e-4, absolute_tolerance: float | None = None, min_step: float = 1e-7,
+                 max_step: float = 1e-2, estimator: str = "step-doubling", safety: float = 0.9,
+                 step_quantum: float | None = None) -> None:
+        self.tolerance, self.absolute_tolerance, self.min_step, self.max_step = (tolerance, absolute_tolerance,
+                                                                                 min_step, max_step)
+        self.estimator, self.safety, self.step_quantum = estimator, safety, step_quantum
 
     @property
     def atol(self) -> float:
         return self.tolerance if self.absolute_tolerance is None else self.absolute_tolerance
 
+    def as_dict(self) -> dict:
+        """The settings by key (as the results' metadata records them)."""
+        return {k: getattr(self, k) for k in self.FIELDS}
+
+    def __repr__(self) -> str:
+        return f"Adaptive({', '.join(f'{k}={v!r}' for k, v in self.as_dict().items())})"
+
     @classmethod
     def parse(cls, p, table: dict, key: str, step: float) -> "Adaptive":
         """The settings of a ``[master.adaptive]`` table for the experiment's ``step``; problems go to ``p``."""
-        p.unknown_keys(table, [f.name for f in dataclasses.fields(cls)], key)
+        p.unknown_keys(table, cls.FIELDS, key)
         d = cls()
         tol = p.number(table, "tolerance", key, d.tolerance, positive=True)
         atol = p.number(table, "absolute_tolerance", key, None, positive=True)
@@ -136,22 +170,24 @@ class Adaptive:
                    quantum if quantum is None else float(quantum))
 
 
-@dataclass(frozen=True)
 class AlgorithmSpec:
-    """A coupling scheme as the scene checks see it: the dataclass of its ``[master.<name>]`` table (or None), and
+    """A coupling scheme as the scene checks see it: the class of its ``[master.<name>]`` table (or None), and
     whether it repeats every macro step from saved FMU states or converges algebraic loops within a step."""
 
-    settings: type | None = None
-    rolls_back: bool = False
-    solves_loops: bool = False
+    __slots__ = ("settings", "rolls_back", "solves_loops")
+
+    def __init__(self, settings: type | None = None, rolls_back: bool = False, solves_loops: bool = False) -> None:
+        self.settings, self.rolls_back, self.solves_loops = settings, rolls_back, solves_loops
 
 
-@dataclass(frozen=True)
 class EstimatorSpec:
-    """An error estimator of adaptive steps as the scene checks see it."""
+    """An error estimator of adaptive steps as the scene checks see it: whether it rejects steps by restoring saved
+    FMU states, whether it needs [[power_bonds]]."""
 
-    rolls_back: bool  # rejects steps by restoring saved FMU states
-    needs_bonds: bool  # needs [[power_bonds]]
+    __slots__ = ("rolls_back", "needs_bonds")
+
+    def __init__(self, rolls_back: bool, needs_bonds: bool) -> None:
+        self.rolls_back, self.needs_bonds = rolls_back, needs_bonds
 
 
 #: every coupling scheme by its scene name (``[master] algorithm``): the one list of them

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import ctypes
 import itertools
-import logging
 import time
 import weakref
 from collections import deque
@@ -44,8 +43,9 @@ from fmpy.fmi2 import (
 )
 
 from tribocosim.errors import CosimStepError
+from tribocosim.lazy import WARNING, log
 
-LOG = logging.getLogger("tribocosim.cosim")
+LOG = "tribocosim.cosim"  # the logger of the FMUs' messages
 
 #: do_step outcomes
 OK = 0
@@ -151,6 +151,7 @@ class FmpySlave:
         self.wall_time = 0.0
         self.calls = {"doStep": 0, "getFMUstate": 0, "setFMUstate": 0}
         self.messages: deque[str] = deque(maxlen=20)
+        self.warnings = 0  # messages logged with a status of warning or worse
         #: an FMI function of this instance returned fmi2Fatal
         self.fatal = False
         #: an FMI function of this instance returned fmi2Error or fmi2Fatal: fmi2Terminate is not called
@@ -200,7 +201,8 @@ class FmpySlave:
         label = _LABELS[status] if 0 <= status < len(_LABELS) else str(status)
         self.messages.append(f"[{label}] {text}")
         if status >= 1:
-            LOG.warning("FMU %s: [%s] %s", self.name, label, text)
+            self.warnings += 1
+            log(LOG, WARNING, "FMU %s: [%s] %s", self.name, label, text)
 
     def _refs(self, refs: Sequence[int]):
         key = tuple(refs)
@@ -269,7 +271,7 @@ class FmpySlave:
                 try:
                     self._fmu.freeInstance()
                 except Exception as exc:  # pragma: no cover
-                    LOG.warning("FMU %s: freeInstance failed: %s", self.name, exc)
+                    log(LOG, WARNING, "FMU %s: freeInstance failed: %s", self.name, exc)
                 self._fmu = None
                 self._dll = {}
 

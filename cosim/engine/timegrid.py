@@ -16,14 +16,12 @@ nanosecond ticks).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 from tribocosim.errors import ParameterError
 
 from tribocosim.cosim.engine.schemes import FIXED_SUBDIVISION, VARIABLE_SUBDIVISION
 
 
-@dataclass(frozen=True)
 class TimeGrid:
     """An integer time grid.
 
@@ -37,9 +35,13 @@ class TimeGrid:
         Number of ticks from start to stop.
     """
 
-    start: float
-    tick: float
-    end_ticks: int
+    __slots__ = ("start", "tick", "end_ticks")
+
+    def __init__(self, start: float, tick: float, end_ticks: int) -> None:
+        self.start, self.tick, self.end_ticks = start, tick, end_ticks
+
+    def __repr__(self) -> str:
+        return f"TimeGrid(start={self.start!r}, tick={self.tick!r}, end_ticks={self.end_ticks!r})"
 
     @classmethod
     def fixed(cls, start: float, stop: float, step: float) -> "TimeGrid":

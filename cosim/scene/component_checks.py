@@ -7,6 +7,10 @@ and the model description's ranges are not checked again (:mod:`tribocosim.cosim
 given by path):
 
 - every name is a parameter, a file or an input of the component;
+- a resource file the C code reads (``Native.resource_parameters``: the strip's ``table_file``) given by a relative
+  name is looked for beside the scene file first, then among the packaged files (``models/``, the component's
+  ``resource_dir``); the file found replaces the name in the scene's values (a packaged file the FMU carries keeps its
+  name), and a name found in neither is a problem naming both places;
 - the parameters make the component's parameter dataclass, built once from the scene's values: each field's type,
   range or choices (:func:`tribocosim.components.params.validate_fields`), then the rules across fields (a
   malformed press ``setpoint_table``); every bad field is reported under its own key;
@@ -33,9 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from tribocosim.errors import ParameterError, Problem
 from tribocosim.cosim.scene.problems import Problems, known
@@ -50,13 +52,15 @@ def component_of(spec):
     return registry.find(spec.component)
 
 
-@dataclass
 class Checked:
     """The component checks of a scene: every problem, and per component instance whose values are all good the
     scene's values as the FMU reads them (``{FMU variable: value}``)."""
 
-    problems: list[Problem] = field(default_factory=list)
-    values: dict[str, dict[str, Any]] = field(default_factory=dict)
+    __slots__ = ("problems", "values")
+
+    def __init__(self) -> None:
+        self.problems: list[Problem] = []
+        self.values: dict[str, dict] = {}
 
 
 def _instance(cls, given: dict, add, key: str):
@@ -95,6 +99,13 @@ def check_components(scene) -> Checked:
         files_names = {f.name for f in dataclasses.fields(comp.files)} if comp.files is not None else set()
         inputs = {p.name: p for p in comp.inputs}
         given = scene.fmus[name].parameters
+        missing = set()  # resource files found nowhere (the component's own check would say it again)
+        for pname, file in _resource_files(comp, given, scene.path.parent).items():
+            if isinstance(file, str):
+                problems.add(f"{key}.{pname}", file)
+                missing.add(pname)
+            else:
+                given[pname] = str(file)
         for pname, value in given.items():
             if pname in own or pname in files_names or pname in inputs:
                 continue
@@ -115,7 +126,8 @@ def check_components(scene) -> Checked:
         if comp.check is not None:
             own_problems, limits[name] = comp.check(params, files, comp.resource_dir)
             for pname, message in own_problems:
-                problems.add(f"{key}.{pname}" if pname else key, message)
+                if pname not in missing:
+                    problems.add(f"{key}.{pname}" if pname else key, message)
         if comp.setpoints is not None:
             setpoints[name] = comp.setpoints(params)
         if comp.input_limits is not None:
@@ -146,6 +158,31 @@ def check_components(scene) -> Checked:
                 if message:
                     problems.add(f"fmus.{src.instance}.parameters.{sp.parameter}", message)
     out.problems = problems.items
+    return out
+
+
+def _resource_files(comp, given: dict, folder: Path) -> dict:
+    """``{parameter: the file found (Path), or why none is (str)}`` of the resource files ``given`` names relatively
+    (see the module docstring); a name of a file the FMU carries is left out when no file of that name lies beside the
+    scene (the FMU reads its own)."""
+    native = comp.native
+    if native is None:
+        return {}
+    carried = {name for _, name in comp.resources}
+    out = {}
+    for pname in native.resource_parameters:
+        value = given.get(pname)
+        if not isinstance(value, str) or not value or Path(value).is_absolute():
+            continue
+        beside, packaged = (folder / value).resolve(), Path(comp.resource_dir) / value
+        if beside.is_file():
+            out[pname] = beside
+        elif packaged.is_file():
+            if value not in carried:
+                out[pname] = packaged.resolve()
+        else:
+            out[pname] = (f"file {value!r} not found: looked for it beside the scene ({beside}) and among the packaged "
+                          f"files ({packaged}); give a path relative to the scene's folder, or an absolute one")
     return out
 
 

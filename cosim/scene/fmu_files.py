@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from tribocosim.components.native.toolchain.digests import file_sha256
@@ -33,36 +32,47 @@ from tribocosim.cosim.scene.binaries import host_platform
 SUMMARY_VERSION = 2
 
 
-@dataclass(frozen=True)
 class Variable:
     """A model variable as the scene checks and the master see it (fmpy's attribute names). ``unit``, ``min`` and
     ``max`` are the variable's own or else its declared type's; ``start`` is the model description's text."""
 
-    name: str
-    valueReference: int
-    type: str
-    causality: str
-    variability: str
-    start: str | None = None
-    unit: str | None = None
-    min: str | None = None
-    max: str | None = None
+    __slots__ = ("name", "valueReference", "type", "causality", "variability", "start", "unit", "min", "max")
+
+    def __init__(self, name: str, valueReference: int, type: str, causality: str, variability: str,  # noqa: A002
+                 start: str | None = None, unit: str | None = None, min: str | None = None,  # noqa: A002
+                 max: str | None = None) -> None:  # noqa: A002
+        self.name, self.valueReference, self.type, self.causality = name, valueReference, type, causality
+        self.variability, self.start, self.unit, self.min, self.max = variability, start, unit, min, max
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__slots__}
+
+    def __repr__(self) -> str:
+        return f"Variable({self.name!r}, {self.causality}, {self.type})"
 
 
-@dataclass(frozen=True)
 class FmuSummary:
-    """What an FMU's model description says that a run needs; ``binary_problem``: why this machine's library in the
-    FMU cannot be loaded safely, or None."""
+    """What an FMU's model description says that a run needs: its FMI version and GUID, the model identifier of its
+    co-simulation interface (None: it has none), two capability flags, the variables, the outputs' direct dependencies
+    (output name -> the input names, or None when not declared), ``binary_problem`` (why this machine's library in
+    the FMU cannot be loaded safely, or None) and the generation tool."""
 
-    fmi_version: str
-    guid: str
-    model_identifier: str | None  # of the co-simulation interface; None: the FMU has none
-    can_get_and_set_fmu_state: bool
-    can_interpolate_inputs: bool
-    variables: tuple[Variable, ...]
-    dependencies: dict  # output name -> the input names it depends on directly, or None when not declared
-    binary_problem: str | None = None
-    generation_tool: str = ""
+    __slots__ = ("fmi_version", "guid", "model_identifier", "can_get_and_set_fmu_state", "can_interpolate_inputs",
+                 "variables", "dependencies", "binary_problem", "generation_tool")
+
+    def __init__(self, fmi_version: str, guid: str, model_identifier: str | None, can_get_and_set_fmu_state: bool,
+                 can_interpolate_inputs: bool, variables: tuple[Variable, ...], dependencies: dict,
+                 binary_problem: str | None = None, generation_tool: str = "") -> None:
+        self.fmi_version, self.guid, self.model_identifier = fmi_version, guid, model_identifier
+        self.can_get_and_set_fmu_state, self.can_interpolate_inputs = can_get_and_set_fmu_state, can_interpolate_inputs
+        self.variables, self.dependencies, self.binary_problem = variables, dependencies, binary_problem
+        self.generation_tool = generation_tool
+
+    def as_dict(self) -> dict:
+        """The summary as JSON holds it (the variables as dicts)."""
+        out = {k: getattr(self, k) for k in self.__slots__}
+        out["variables"] = [v.as_dict() for v in self.variables]
+        return out
 
 
 class FmuFileError(Exception):
@@ -121,7 +131,7 @@ def summary(path: str | Path) -> FmuSummary:
         pass
     found = _read(path)
     if file_sha256(path) == digest:  # not rewritten while it was read
-        _write_atomically(stored, json.dumps({"version": SUMMARY_VERSION, **asdict(found)}))
+        _write_atomically(stored, json.dumps({"version": SUMMARY_VERSION, **found.as_dict()}))
     return found
 
 

@@ -8,7 +8,6 @@ collect into it, so a user sees everything wrong with a file at once.
 
 from __future__ import annotations
 
-import difflib
 import math
 from pathlib import Path
 
@@ -20,6 +19,8 @@ def known(names, given: str | None = None, limit: int = 40) -> str:
     names = sorted(names)
     hint = ""
     if given is not None:
+        import difflib
+
         close = difflib.get_close_matches(given, names, n=3, cutoff=0.6)
         if close:
             hint = "did you mean " + " or ".join(repr(c) for c in close) + "? "

@@ -1,4 +1,4 @@
-"""Scene files (TOML): the schema, its dataclasses and the first validation pass.
+"""Scene files (TOML): the schema, its records and the first validation pass.
 
 A scene names the FMUs of a co-simulation, their parameters, the connections, the master
 settings and the outputs to record; nothing else is loaded, computed or written. Example::
@@ -54,12 +54,10 @@ listing all problems, each with the file and the key (:mod:`tribocosim.cosim.sce
 
 from __future__ import annotations
 
-import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from tribocosim.cosim.engine.schemes import ALGORITHMS, ESTIMATORS, Adaptive, VariableRef
+from tribocosim.cosim.scene.documents import TomlError, parse_toml, read_toml
 from tribocosim.cosim.scene.problems import Problems
 from tribocosim.errors import SceneError
 
@@ -81,85 +79,94 @@ _BOND_KEYS = ("effort", "flow")
 _OUTPUT_KEYS = ("file", "variables")
 
 
-@dataclass(frozen=True)
 class Experiment:
     """[experiment]: start and stop time [s], communication step [s] (initial step if adaptive)."""
 
-    start: float = 0.0
-    stop: float = 1.0
-    step: float = 1e-3
+    __slots__ = ("start", "stop", "step")
+
+    def __init__(self, start: float = 0.0, stop: float = 1.0, step: float = 1e-3) -> None:
+        self.start, self.stop, self.step = start, stop, step
+
+    def as_dict(self) -> dict:
+        """``{"start": ..., "stop": ..., "step": ...}`` (as the results' metadata records it)."""
+        return {"start": self.start, "stop": self.stop, "step": self.step}
+
+    def __repr__(self) -> str:
+        return f"Experiment(start={self.start!r}, stop={self.stop!r}, step={self.step!r})"
 
 
-@dataclass(frozen=True)
 class MasterSettings:
-    """[master]: the algorithm (a name of :data:`tribocosim.cosim.engine.algorithms.ALGORITHMS`) and its
+    """[master]: the algorithm (a name of :data:`tribocosim.cosim.engine.schemes.ALGORITHMS`) and its
     settings (its ``[master.<name>]`` table), the input extrapolation, and the step control."""
 
-    algorithm: str = "jacobi"
-    extrapolation: int = 0
-    output_update: str = "propagate"
-    order: tuple[str, ...] | None = None
-    adaptive: Adaptive | None = None
-    algorithm_settings: Any = None
+    __slots__ = ("algorithm", "extrapolation", "output_update", "order", "adaptive", "algorithm_settings")
+
+    def __init__(self, algorithm: str = "jacobi", extrapolation: int = 0, output_update: str = "propagate",
+                 order: tuple[str, ...] | None = None, adaptive: Adaptive | None = None,
+                 algorithm_settings=None) -> None:
+        self.algorithm, self.extrapolation, self.output_update = algorithm, extrapolation, output_update
+        self.order, self.adaptive, self.algorithm_settings = order, adaptive, algorithm_settings
 
 
-@dataclass(frozen=True)
 class FmuSpec:
-    """[fmus.NAME]: where the FMU comes from and the parameters to set before initialization."""
+    """[fmus.NAME]: where the FMU comes from (a file, resolved; or a component's name) and the parameters to set
+    before initialization; ``feedthrough`` as declared in the scene (None: from the model description)."""
 
-    name: str
-    path: Path | None = None
-    component: str | None = None
-    parameters: dict[str, Any] = field(default_factory=dict)
-    feedthrough: bool | None = None
+    __slots__ = ("name", "path", "component", "parameters", "feedthrough")
+
+    def __init__(self, name: str, path: Path | None = None, component: str | None = None,
+                 parameters: dict | None = None, feedthrough: bool | None = None) -> None:
+        self.name, self.path, self.component = name, path, component
+        self.parameters = {} if parameters is None else parameters
+        self.feedthrough = feedthrough
 
 
-@dataclass(frozen=True)
 class Connection:
-    """[[connections]]: an output feeding an input."""
+    """[[connections]]: an output feeding an input; ``key`` is where the scene says it."""
 
-    source: VariableRef
-    target: VariableRef
-    key: str = ""
+    __slots__ = ("source", "target", "key")
+
+    def __init__(self, source: VariableRef, target: VariableRef, key: str = "") -> None:
+        self.source, self.target, self.key = source, target, key
 
 
-@dataclass(frozen=True)
 class PowerBond:
     """[[power_bonds]]: an effort connection and the opposite flow connection."""
 
-    effort: Connection
-    flow: Connection
-    key: str = ""
+    __slots__ = ("effort", "flow", "key")
+
+    def __init__(self, effort: Connection, flow: Connection, key: str = "") -> None:
+        self.effort, self.flow, self.key = effort, flow, key
 
 
-@dataclass(frozen=True)
 class OutputSpec:
     """[output]: the CSV file and the recorded variables (in column order)."""
 
-    file: str | None = None
-    variables: tuple[VariableRef, ...] = ()
+    __slots__ = ("file", "variables")
+
+    def __init__(self, file: str | None = None, variables: tuple[VariableRef, ...] = ()) -> None:
+        self.file, self.variables = file, variables
 
 
-@dataclass(frozen=True)
 class Scene:
-    """A parsed scene."""
+    """A parsed scene; ``overrides``: the dotted keys set over the file's (``--set``), as given (recorded with the
+    results)."""
 
-    path: Path
-    experiment: Experiment
-    master: MasterSettings
-    fmus: dict[str, FmuSpec]
-    connections: tuple[Connection, ...]
-    power_bonds: tuple[PowerBond, ...]
-    output: OutputSpec
-    #: the dotted keys set over the file's (``--set``), as given; recorded with the results
-    overrides: dict = field(default_factory=dict)
+    __slots__ = ("path", "experiment", "master", "fmus", "connections", "power_bonds", "output", "overrides")
+
+    def __init__(self, path: Path, experiment: Experiment, master: MasterSettings, fmus: dict[str, FmuSpec],
+                 connections: tuple[Connection, ...], power_bonds: tuple[PowerBond, ...], output: OutputSpec,
+                 overrides: dict | None = None) -> None:
+        self.path, self.experiment, self.master, self.fmus = path, experiment, master, fmus
+        self.connections, self.power_bonds, self.output = connections, power_bonds, output
+        self.overrides = {} if overrides is None else overrides
 
     @property
     def folder(self) -> Path:
         return self.path.parent
 
 
-def parse_ref(p: Problems, text: Any, key: str) -> VariableRef | None:
+def parse_ref(p: Problems, text, key: str) -> VariableRef | None:
     """Parse 'instance.variable' (reports a problem and returns None if malformed)."""
     if not isinstance(text, str) or "." not in text or text.startswith(".") or text.endswith("."):
         p.add(key, f"must be 'instance.variable', got {text!r}")
@@ -168,7 +175,7 @@ def parse_ref(p: Problems, text: Any, key: str) -> VariableRef | None:
     return VariableRef(inst, var)
 
 
-def parse_overrides(items: list[str]) -> dict[str, Any]:
+def parse_overrides(items: list[str]) -> dict:
     """``--set KEY=VALUE`` items as ``{dotted key: value}``: the value in TOML syntax (``1e-3``, ``"jacobi"``,
     ``[1, 2]``), else the text as it is; SceneError for an item that is not ``KEY=VALUE``."""
     out = {}
@@ -177,13 +184,13 @@ def parse_overrides(items: list[str]) -> dict[str, Any]:
         if not sep or not key.strip():
             raise SceneError(f"--set {item!r}: expected KEY=VALUE")
         try:
-            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
+            out[key.strip()] = parse_toml(f"v = {value.strip()}")["v"]
+        except TomlError:
             out[key.strip()] = value.strip()
     return out
 
 
-def apply_overrides(doc: dict, overrides: dict[str, Any]) -> dict:
+def apply_overrides(doc: dict, overrides: dict) -> dict:
     """Set dotted keys (``"master.extrapolation"``) in a parsed TOML document, in place."""
     for dotted, value in overrides.items():
         node = doc
@@ -198,8 +205,8 @@ def read_document(path: str | Path) -> dict | None:
     """The TOML document of a scene or sweep file, or None when it cannot be read as TOML (:func:`parse_scene` then
     says why)."""
     try:
-        return tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return read_toml(path)
+    except (OSError, UnicodeDecodeError, TomlError):
         return None
 
 
@@ -208,7 +215,7 @@ def is_sweep(document: dict | None) -> bool:
     return isinstance(document, dict) and isinstance(document.get("sweep"), dict)
 
 
-def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None,
+def parse_scene(path: str | Path, overrides: dict | None = None,
                 document: dict | None = None) -> tuple[Scene | None, list[str]]:
     """Read and structurally check a scene file.
 
@@ -231,14 +238,14 @@ def parse_scene(path: str | Path, overrides: dict[str, Any] | None = None,
     path = Path(path).resolve()
     p = Problems(path)
     try:
-        doc = document if document is not None else tomllib.loads(path.read_text(encoding="utf-8"))
+        doc = document if document is not None else read_toml(path)
     except FileNotFoundError:
         p.add("(file)", "scene file not found")
         return None, p.items
     except (OSError, UnicodeDecodeError) as exc:
         p.add("(file)", f"cannot read: {exc}")
         return None, p.items
-    except tomllib.TOMLDecodeError as exc:
+    except TomlError as exc:
         p.add("(syntax)", f"not valid TOML: {exc}")
         return None, p.items
     if overrides:

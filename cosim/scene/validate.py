@@ -26,10 +26,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
-
-from typing import Any
 
 from tribocosim.errors import SceneError
 from tribocosim.cosim.engine.schemes import ALGORITHMS, ESTIMATORS, VariableRef
@@ -42,7 +39,6 @@ _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
 _DER = re.compile(r"^der\((?P<name>.+?)(?:,\s*(?P<order>\d+))?\)$")
 
 
-@dataclass
 class FmuModel:
     """One FMU of a scene with its model description.
 
@@ -61,16 +57,20 @@ class FmuModel:
         description does not say (then the master probes it numerically).
     derivative_inputs : dict
         Input name -> {order: value reference} of companion inputs ``der(u)``/``der(u,2)``.
+    feedthrough : bool or None
+        As the scene declares it (None: from the model description, else probed).
     """
 
-    name: str
-    path: Path
-    summary: FmuSummary
-    variables: dict
-    dependencies: dict
-    derivative_inputs: dict
-    feedthrough: bool | None = None
-    _md: Any = field(default=None, repr=False)
+    __slots__ = ("name", "path", "summary", "variables", "dependencies", "derivative_inputs", "feedthrough", "_md")
+
+    def __init__(self, name: str, path: Path, summary: FmuSummary, variables: dict, dependencies: dict,
+                 derivative_inputs: dict, feedthrough: bool | None = None) -> None:
+        self.name, self.path, self.summary, self.variables = name, path, summary, variables
+        self.dependencies, self.derivative_inputs, self.feedthrough = dependencies, derivative_inputs, feedthrough
+        self._md = None
+
+    def __repr__(self) -> str:
+        return f"FmuModel({self.name!r}, {str(self.path)!r})"
 
     @property
     def can_roll_back(self) -> bool:
@@ -90,44 +90,48 @@ class FmuModel:
         return self._md
 
 
-@dataclass(frozen=True)
 class EndCheck:
-    """An output to read at the end of a run: above 0 it means ``FMU instance '<instance>': <value> <message>``."""
+    """An output (``variable``) to read at the end of a run: above 0 it means ``FMU instance '<instance>': <value>
+    <message>``."""
 
-    instance: str
-    value_reference: int
-    type: str
-    message: str
+    __slots__ = ("instance", "value_reference", "type", "message", "variable")
+
+    def __init__(self, instance: str, value_reference: int, type: str, message: str,  # noqa: A002
+                 variable: str = "") -> None:
+        self.instance, self.value_reference, self.type, self.message = instance, value_reference, type, message
+        self.variable = variable
 
 
-@dataclass(frozen=True)
 class Link:
-    """A resolved connection: source output -> target input, with value references."""
+    """A resolved connection: source output -> target input, with value references and FMI types, whether it
+    carries a continuous Real, and the scene key of the connection."""
 
-    source: VariableRef
-    target: VariableRef
-    source_vr: int
-    target_vr: int
-    source_type: str
-    target_type: str
-    continuous: bool
-    key: str
+    __slots__ = ("source", "target", "source_vr", "target_vr", "source_type", "target_type", "continuous", "key")
+
+    def __init__(self, source: VariableRef, target: VariableRef, source_vr: int, target_vr: int, source_type: str,
+                 target_type: str, continuous: bool, key: str) -> None:
+        self.source, self.target, self.source_vr, self.target_vr = source, target, source_vr, target_vr
+        self.source_type, self.target_type, self.continuous, self.key = source_type, target_type, continuous, key
+
+    def __repr__(self) -> str:
+        return f"Link({self.source} -> {self.target})"
 
 
-@dataclass
 class Plan:
-    """A validated scene with every reference resolved."""
+    """A validated scene with every reference resolved: the FMUs, the links, the recorded variables (``[(ref, value
+    reference, type), ...]`` in column order), the power bonds as pairs of link indices, warnings and notes, per
+    instance the scene's parameter values as the FMU reads them (``[(value reference, type, value), ...]``), and the
+    outputs to read at the end of the run."""
 
-    scene: Scene
-    fmus: dict[str, FmuModel]
-    links: list[Link]
-    recorded: list[tuple[VariableRef, int, str]]
-    bonds: list[tuple[int, int]] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    #: per instance, the scene's parameter values as the FMU reads them: ``[(value reference, type, value), ...]``
-    parameters: dict[str, list[tuple[int, str, Any]]] = field(default_factory=dict)
-    end_checks: list[EndCheck] = field(default_factory=list)
+    __slots__ = ("scene", "fmus", "links", "recorded", "bonds", "warnings", "notes", "parameters", "end_checks")
+
+    def __init__(self, scene: Scene, fmus: dict[str, FmuModel], links: list[Link], recorded: list) -> None:
+        self.scene, self.fmus, self.links, self.recorded = scene, fmus, links, recorded
+        self.bonds: list[tuple[int, int]] = []
+        self.warnings: list[str] = []
+        self.notes: list[str] = []
+        self.parameters: dict[str, list] = {}
+        self.end_checks: list[EndCheck] = []
 
 
 def unit_of(var) -> str | None:
@@ -184,6 +188,10 @@ def load_scene(path: str | Path, overrides: dict | None = None, document: dict |
                 continue
         if fmu_path is None:
             continue
+        if fmu_path.is_dir():
+            add(f"{key}.path", f"{fmu_path} is a folder, not an FMU file: give the .fmu file (the zip archive of an "
+                               "FMU's folder)")
+            continue
         if not fmu_path.is_file():
             add(f"{key}.path", f"FMU file not found: {fmu_path}")
             continue
@@ -225,7 +233,7 @@ def load_scene(path: str | Path, overrides: dict | None = None, document: dict |
         for output, message in (end_warnings(comp) if comp is not None else {}).items():
             var = model.variables.get(output)
             if var is not None and var.causality == "output":
-                plan.end_checks.append(EndCheck(name, var.valueReference, var.type, message))
+                plan.end_checks.append(EndCheck(name, var.valueReference, var.type, message, output))
 
     def lookup(ref: VariableRef, key: str, causalities: tuple[str, ...], role: str):
         if ref.instance not in scene.fmus:

@@ -36,7 +36,6 @@ connections. Geometry, graphical elements and other tools' annotations are ignor
 from __future__ import annotations
 
 import atexit
-import logging
 import posixpath
 import shutil
 import tempfile
@@ -48,12 +47,12 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 from tribocosim.errors import Problem, SceneError
+from tribocosim.lazy import WARNING, log
 from tribocosim.cosim.scene.problems import Problems
 from tribocosim.cosim.ssp.names import (FMU_TYPE, OSP_ANNOTATION, PARAMETER_SET_TYPE, SCENE_ANNOTATION, SCENE_TABLES, SSD_NAME,
                                   prefixed, q, toml_text)
 from tribocosim.cosim.scene.validate import unit_of
 
-log = logging.getLogger(__name__)
 
 _TYPES = ("Real", "Integer", "Boolean", "String", "Enumeration", "Binary")
 _NUMERIC = ("Real", "Integer", "Boolean", "Enumeration")
@@ -374,7 +373,7 @@ class _Reader:
             var = target.variable(var_name) if target is not None else None
             if var is None:
                 if target is None or target.md is not None:
-                    log.warning("%s: %s: %s matches no variable; ignored", self.ssp.name, where, name)
+                    log(__name__, WARNING, "%s: %s: %s matches no variable; ignored", self.ssp.name, where, name)
                     self.ignored.append(f"{name} ({where})")
                 continue
             converted = self._value(value, var, where)

@@ -156,7 +156,8 @@ def plot_demo(result, field_file, out_dir, mu_bar: float | None = None) -> list[
 
 
 def plot_sweep(result, path: Path) -> Path:
-    """A sweep's summary ``[sweep.plot] y`` against ``x``, one curve per ``series`` value."""
+    """A sweep's summary ``[sweep.plot] y`` against ``x``, one curve per ``series`` value; hollow where ``flag`` says a
+    run is not steady, crossed where it warned or read the friction table outside its axes (``result.counts``)."""
     plt = _pyplot()
     sw = result.sweep
     spec = sw.plot
@@ -179,10 +180,15 @@ def plot_sweep(result, path: Path) -> Path:
             ax.plot([r[x] for r in bad], [r[y] for r in bad], "o", ms=8, mfc="white", mec=line.get_color(), zorder=3)
     if flagged:
         ax.plot([], [], "o", ms=8, mfc="white", mec="k", label=f"not steady ({flag} > 5 % of {y})")
+    counts = getattr(result, "counts", [])
+    marked = [r for r in result.rows if any(r.get(c) for c in counts)]
+    if marked:  # the runs that warned or read the friction table outside its axes
+        ax.plot([r[x] for r in marked], [r[y] for r in marked], "x", ms=9, mew=1.6, color="crimson", zorder=4,
+                label=f"warned or read outside the table ({len(marked)} runs)")
     ax.set_xlabel(spec.get("xlabel", x))
     ax.set_ylabel(spec.get("ylabel", y))
     ax.grid(True, alpha=0.3)
-    if series or flagged:
+    if series or flagged or marked:
         ax.legend(fontsize=8)
     ax.set_title(spec.get("title", sw.title), fontsize=10)
     return _save(fig, path)

@@ -32,11 +32,9 @@ def test_component_is_built_once_and_cached(tmp_path):
 
 
 def test_a_component_without_a_c_implementation_is_a_scene_error_that_says_what_to_do(tmp_path, monkeypatch):
-    import dataclasses
-
     from tribocosim.components import registry
 
-    python_only = dataclasses.replace(registry.find("press"), name="pylag", model_identifier="PyLag", native=None)
+    python_only = registry.find("press").replace(name="pylag", model_identifier="PyLag", native=None)
     monkeypatch.setitem(registry._REGISTERED, "pylag", python_only)  # a component written in Python only
     with pytest.raises(SceneError, match="no native implementation.*pythonfmu FMU of its own, named by path"):
         fmucache.component_fmu("pylag", cache=tmp_path)

@@ -126,3 +126,46 @@ def test_run_says_when_the_friction_table_was_read_outside_its_simulated_range(t
     cold.write_text(scene.read_text().replace("73500.0", "12250.0").replace("hot.csv", "cold.csv"))
     assert tribocosim(["run", str(cold), "--out", str(tmp_path)]) == 0
     assert "friction-table lookups" not in capsys.readouterr().err
+
+
+def test_an_fmu_or_a_folder_given_as_the_scene_is_named_as_such(tmp_path, fmu_dir, capsys):
+    """``tribocosim run X.fmu`` says that an FMU is not a scene and how to run one; a folder is named a folder (with
+    the scenes in it), not "not found": one line each, exit 2, nothing written."""
+    import shutil
+
+    fmu = shutil.copy(fmu_dir / "OscMassA.fmu", tmp_path / "OscMassA.fmu")
+    assert tribocosim(["run", str(fmu), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"tribocosim run: {fmu} is an FMU, not a scene: write a scene file (TOML) that names it, e.g. "
+                   '[experiment] stop = 1.0, step = 1e-3 and [fmus.oscmassa] path = "OscMassA.fmu", and run that '
+                   "(docs/scene-format.md)"]
+    folder = tmp_path / "scenes"
+    folder.mkdir()
+    (folder / "b.toml").write_text("", encoding="utf-8")
+    (folder / "a.ssp").write_bytes(b"")
+    for given, holds in ((folder, "; it holds a.ssp, b.toml"), (tmp_path / "empty.toml", "")):
+        given.mkdir(exist_ok=True)
+        assert tribocosim(["run", str(given), "--out", str(tmp_path / "out")]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [
+            f"tribocosim run: {given} is a folder, not a scene file: give a scene (TOML) or an SSP package (.ssp)"
+            + holds]
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_packaged_scene_runs_by_its_name_beside_the_folder_of_its_last_results(tmp_path, monkeypatch):
+    """``tribocosim run demo`` writes into ./demo; run again from there it is still the packaged scene."""
+    monkeypatch.chdir(tmp_path)
+    for _ in range(2):
+        assert tribocosim(["run", "demo", "--quiet", "--set", "experiment.stop=0.01"]) == 0
+    assert (tmp_path / "demo" / "demo.csv").is_file()
+
+
+def test_an_fmu_path_that_is_a_folder_is_named_as_such(tmp_path, osc_scene, fmu_dir, capsys):
+    scene = osc_scene(tmp_path)
+    (tmp_path / "extracted.fmu").mkdir()
+    scene.write_text(scene.read_text().replace(str(fmu_dir / "OscMassA.fmu"), str(tmp_path / "extracted.fmu")))
+    assert str(tmp_path / "extracted.fmu") in scene.read_text()
+    assert tribocosim(["run", str(scene), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert (f"fmus.a.path: {tmp_path / 'extracted.fmu'} is a folder, not an FMU file: give the .fmu file (the zip "
+            "archive of an FMU's folder)") in err, err

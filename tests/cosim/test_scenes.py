@@ -333,29 +333,21 @@ def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(t
     assert second.rows[0]["mu_bar"] == pytest.approx(0.5 * first.rows[0]["mu_bar"], rel=0.05)
 
 
-def test_a_scene_is_parsed_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
-    """``tribocosim run``: one TOML parse of the scene file, and one range check of ``tool_length`` in Python (the
-    component declaration's; the model description's min/max derive from it and are not checked again)."""
+def test_a_scene_is_read_once_and_each_component_value_checked_once(tmp_path, monkeypatch):
+    """``tribocosim run``: one read of the scene file's document (parsed once per content,
+    :mod:`tribocosim.cosim.scene.documents`), and one range check of ``tool_length`` in Python (the component
+    declaration's; the model description's min/max derive from it and are not checked again)."""
     from tribocosim.components import params
     from tribocosim.cosim.scene import schema
 
     tribocosim(["run", str(DEMO), "--out", str(tmp_path / "warm"), "--quiet", "--set", "experiment.stop=0.01"])
-    parses, checked = [], []
-    loads, check_field = schema.tomllib.loads, params.check_field
-
-    class CountingToml:
-        TOMLDecodeError = tomllib.TOMLDecodeError
-
-        @staticmethod
-        def loads(text):
-            parses.append(text)
-            return loads(text)
-
-    monkeypatch.setattr(schema, "tomllib", CountingToml)
+    reads, checked = [], []
+    read_toml, check_field = schema.read_toml, params.check_field
+    monkeypatch.setattr(schema, "read_toml", lambda path: (reads.append(Path(path)), read_toml(path))[1])
     monkeypatch.setattr(params, "check_field", lambda f, value: (checked.append(f.name), check_field(f, value))[1])
     assert tribocosim(["run", str(DEMO), "--out", str(tmp_path / "out"), "--quiet",
                        "--set", "experiment.stop=0.01"]) == 0
-    assert len([t for t in parses if "[fmus.strip]" in t]) == 1, "the scene file is parsed once"
+    assert [p.resolve() for p in reads] == [DEMO.resolve()], "the scene file is read once"
     assert checked.count("tool_length") == 1, checked
 
 
@@ -364,3 +356,110 @@ def test_the_variant_key_accepts_native_and_refuses_the_rest(tmp_path):
     with pytest.raises(SceneError, match="fmus.strip.variant: 'python' is not allowed: the project builds the FMUs of "
                                          "its components in C only"):
         load_scene(DEMO, {**CHEAP, "fmus.strip.variant": "python"})
+
+
+RINGING = """
+workers = 1
+[sweep.variables]
+tool_length = [0.035, 0.14]
+pressure_mpa = [10, 30]
+[sweep.set]
+"experiment.step" = 2e-3
+"fmus.strip.parameters.tool_length" = { expr = "tool_length" }
+"fmus.press.parameters.force_setpoint" = { expr = "pressure_mpa * 1e6 * tool_length * 0.035" }
+[sweep.summary]
+mu_bar = { mean = "strip.pull_force / (2 * press.normal_force)", last = 0.2 }
+[sweep.plot]
+x = "pressure_mpa"
+y = "mu_bar"
+series = "tool_length"
+"""
+
+
+def test_a_sweep_counts_each_runs_warnings_and_clamped_lookups_and_marks_them(tmp_path, capsys, monkeypatch):
+    """At 2 ms the Jacobi coupling of the demo rig rings where the strip sticks under the long pad: the grip moves
+    back (the strip FMU warns) and, at 30 MPa on the 140 mm pad, the friction table is read outside its axes. The
+    35 mm pad at 10 MPa runs clean. sweep.csv, sweep.json and the plot say which run is which, as each run's own
+    JSON counts it."""
+    from tribocosim.cosim.studies import plotting
+
+    sweep = tmp_path / "ringing.toml"
+    sweep.write_text(f'[sweep]\nscene = "{DEMO}"\n' + RINGING, encoding="utf-8")
+    figures = []
+    save = plotting._save
+    monkeypatch.setattr(plotting, "_save", lambda fig, path, **kw: (figures.append(fig), save(fig, path, **kw))[1])
+    assert tribocosim(["run", str(sweep), "--out", str(tmp_path / "out"), "--plot", "--quiet"]) == 0
+    out = tmp_path / "out"
+    header, *lines = (out / "sweep.csv").read_text().splitlines()
+    names = [n.strip('"') for n in header.split(",")]
+    assert names[-3:] == ["warnings", "strip.table_clamp_count", "wall_time"]
+    rows = [dict(zip(names, map(float, line.split(",")))) for line in lines]
+    for i, row in enumerate(rows):  # each count is the run's own
+        meta = json.loads((out / "cases" / f"case-{i:03d}" / "pass-1" / "demo.json").read_text())
+        assert row["warnings"] == sum(meta["fmu_warnings"].values())
+        assert row["strip.table_clamp_count"] == meta["end_checks"]["strip.table_clamp_count"]
+    clean = [r for r in rows if r["warnings"] == 0 and r["strip.table_clamp_count"] == 0]
+    assert [(r["tool_length"], r["pressure_mpa"]) for r in clean] == [(0.035, 10)], rows
+    long_30 = next(r for r in rows if (r["tool_length"], r["pressure_mpa"]) == (0.14, 30))
+    assert long_30["warnings"] > 0 and long_30["strip.table_clamp_count"] > 0
+    assert all(r["strip.table_clamp_count"] == 0 for r in rows if r is not long_30)
+    summary = json.loads((out / "sweep.json").read_text())
+    assert summary["runs_with_warnings_or_clamps"] == 3
+    assert summary["counts"] == {"warnings": sum(r["warnings"] for r in rows),
+                                 "strip.table_clamp_count": long_30["strip.table_clamp_count"]}
+    err = capsys.readouterr().err
+    assert "warning:  3 of 4 runs warned or read the friction table outside its axes" in err
+    crosses = [line for line in figures[0].axes[0].get_lines() if line.get_marker() == "x" and len(line.get_xdata())]
+    assert len(crosses) == 1 and sorted(zip(crosses[0].get_xdata(), crosses[0].get_ydata())) == sorted(
+        (r["pressure_mpa"], r["mu_bar"]) for r in rows if r not in clean), "the plot crosses exactly the warned runs"
+
+
+def test_the_guides_sweep_example_runs_without_warnings_or_clamped_lookups(tmp_path):
+    """docs/scene-format.md's sweep file, as written, over the demo scene beside it."""
+    import re
+    import shutil
+
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "scene-format.md").read_text(encoding="utf-8")
+    example = re.search(r"```toml\n(\[sweep\].*?)```", guide, re.S).group(1)
+    shutil.copy(DEMO, tmp_path / "demo.toml")
+    (tmp_path / "example.toml").write_text(example, encoding="utf-8")
+    result = run_sweep(tmp_path / "example.toml", tmp_path / "out", workers=2)
+    assert len(result.rows) == 12 and result.counts == ["warnings", "strip.table_clamp_count"]
+    assert result.marked() == [], [r for r in result.marked()]
+
+
+def test_a_relative_table_file_is_found_beside_the_scene_then_among_the_packaged_tables(tmp_path):
+    """A table next to the scene (its friction halved) is the one the run reads; a packaged table's name finds it in
+    models/; the bundled default stays the FMU's own unless a file of its name lies beside the scene; a name found
+    nowhere is one problem naming both places."""
+    import shutil
+
+    from tribocosim.paths import MODELS_DIR
+
+    scene = tmp_path / "scene.toml"
+    shutil.copy(DEMO, scene)
+    t = read_table(DEFAULT_TABLE)
+    from tribocosim.components.stripdraw.table import write_table
+
+    write_table(tmp_path / "halved.npz", type(t)(t.pressure, t.velocity, t.beta, 0.5 * t.mu, t.metadata))
+
+    def table(value):
+        plan = load_scene(scene, {**CHEAP, "fmus.strip.parameters.table_file": value})
+        return plan, plan.scene.fmus["strip"].parameters["table_file"]
+
+    plan, found = table("halved.npz")
+    assert found == str(tmp_path / "halved.npz")
+    halved = run(plan, write=False)
+    full = run(load_scene(scene, CHEAP), write=False)
+    ratio = halved["strip.mu_mean"][-1] / full["strip.mu_mean"][-1]
+    assert ratio == pytest.approx(0.5, rel=0.05), "the table beside the scene is the one read"
+    assert table("friction_table_128um.npz")[1] == str((MODELS_DIR / "friction_table_128um.npz").resolve())
+    assert table("friction_table.npz")[1] == "friction_table.npz", "the bundled table: the FMU's own"
+    shutil.copy(tmp_path / "halved.npz", tmp_path / "friction_table.npz")
+    assert table("friction_table.npz")[1] == str(tmp_path / "friction_table.npz"), "beside the scene first"
+    with pytest.raises(SceneError) as info:
+        table("missing.npz")
+    assert len(info.value.problems) == 1
+    message = str(info.value.problems[0])
+    assert "fmus.strip.parameters.table_file: file 'missing.npz' not found" in message
+    assert str(tmp_path / "missing.npz") in message and str(MODELS_DIR / "missing.npz") in message

@@ -1,5 +1,5 @@
 """Tests of surrogate.executors: the local process pool and a real Dask LocalCluster on loopback
-return results and exceptions per case, stop at once on a signal (surrogate.interrupt) after handing over
+return results and exceptions per case, stop at once on a signal (tribocosim.interrupt) after handing over
 what has finished, a crashed worker gives its case an outcome and is replaced, and the Dask path builds the
 same friction table as the process pool from the same (tiny, real) campaign."""
 
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tribocosim.errors import CampaignInterrupted, ParameterError
-from tribocosim.surrogate import interrupt
+from tribocosim import interrupt
 from tribocosim.surrogate.campaign import expand_cases, load_records, run_campaign
 from tribocosim.surrogate.executors import DaskCaseExecutor, ProcessPoolCaseExecutor, WorkerDied, make_executor
 from tribocosim.surrogate.sweep import parse_sweep

@@ -15,8 +15,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any, Callable, Iterable
 
 from tribocosim.components.native.toolchain.library import cache_dir
 
@@ -33,11 +33,17 @@ def signature(files: Iterable[Path]) -> list[list]:
     return out
 
 
+#: the installation whose files the records describe: two checkouts that share a cache keep their records apart (a
+#: record names its files, so :func:`remembered` would otherwise hand one checkout the digest of the other's files)
+_INSTALLATION = str(Path(__file__).resolve().parents[3])
+
+
 def _record(key: str) -> Path:
-    return cache_dir() / "digests" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+    name = hashlib.sha256(f"{_INSTALLATION}\n{key}".encode()).hexdigest()[:32]
+    return cache_dir() / "digests" / f"{name}.json"
 
 
-def remembered(key: str) -> Any:
+def remembered(key: str) -> object:
     """The value :func:`memo` stored for ``key`` while every file it was computed from is unchanged, else None (for
     a caller that would have to do work to name the files)."""
     try:
@@ -50,7 +56,7 @@ def remembered(key: str) -> Any:
     return None
 
 
-def memo(key: str, files: Iterable[Path], compute: Callable[[], Any]) -> Any:
+def memo(key: str, files: Iterable[Path], compute: Callable[[], object]) -> object:
     """The value ``compute()`` returns for ``key`` (a digest, or any value JSON holds as it is), computed again only
     when one of ``files`` changed. An exception of ``compute`` is raised, and nothing is remembered."""
     files = list(files)

@@ -22,11 +22,9 @@ import functools
 import hashlib
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 from tribocosim.errors import ParameterError, TribocosimError
-from tribocosim.components.native.toolchain.prototypes import ctypes_signature
 
 #: the C sources of the core library beside the components' model sources: the helpers every model uses
 COMMON_SOURCES = ("core/tc_common.c",)
@@ -149,6 +147,8 @@ def digest() -> str:
 
 def build(output: str | os.PathLike, defines=()) -> Path:
     """Compile the core library for this machine into ``output`` (atomically); CoreBuildError saying why not."""
+    import tempfile
+
     from tribocosim.components.native.toolchain import compiler
 
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
@@ -177,6 +177,8 @@ class Core:
     """The loaded library, its prototypes and the status check."""
 
     def __init__(self, path: str | os.PathLike):
+        from tribocosim.components.native.toolchain.prototypes import ctypes_signature
+
         try:
             self.lib = lib = ctypes.CDLL(str(path))
         except OSError as exc:
