@@ -1,4 +1,4 @@
-"""Wall time of exporting the shipped friction table (issue 45's target: under 2 s).
+"""Wall time of exporting the shipped friction table (the target: under 2 s).
 
 Each case runs ``tribocosim export`` as a user does, in a new process (interpreter start, imports, the native core
 loaded from the cache, the law sampled, checked and written), ``--repeat`` times; the script prints the median and

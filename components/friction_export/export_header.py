@@ -31,6 +31,7 @@ class FileFacts:
     largest: float
     tolerance: float
     checked: int
+    floor: float = 0.0  # below this mu the deviation is taken relative to it
     band: str = ""  # the band, in words (upper and lower files)
     unsimulated: str = ""  # the lookups that read unsimulated nodes, in words ("" when none)
     warnings: tuple = ()
@@ -66,9 +67,10 @@ def header_lines(f: FileFacts) -> list[str]:
     for line in f.range_lines:
         out += _wrap(line)
     out += _wrap(f"beyond it: {f.fe_beyond}")
+    floor = f" (of {f.floor:g} where mu is below it)" if f.floor > 0 else ""
     out += _wrap(f"the FE code reads this file {f.fe_rule}; read that way it deviates from tribocosim's mu by at most "
-                 f"{percent_up(f.accuracy)} % (target {100 * f.tolerance:g} %) in the range: the largest deviation "
-                 f"at {f.checked} points checked (nodes, points inside every interval, random points) is "
+                 f"{percent_up(f.accuracy)} % (target {100 * f.tolerance:g} %) of mu{floor} in the range: the largest "
+                 f"deviation at {f.checked} points checked (nodes, points inside every interval, random points) is "
                  f"{percent_up(f.largest)} %, and the bound adds what a peak between them can add "
                  "(components/friction_export/grid_refinement.py)")
     if f.band:

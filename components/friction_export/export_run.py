@@ -328,7 +328,7 @@ def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
                 format_title=fmt.title, role=role, fe_rule=fmt.rule, fe_beyond=beyond,
                 provenance=law.provenance(), state=state.description, units_line=units.header(),
                 range_lines=(range_line,), accuracy=grid.accuracy, largest=grid.largest, tolerance=grid.tolerance,
-                checked=grid.checked,
+                checked=grid.checked, floor=ACCURACY_FLOOR,
                 band=_band_words(law, request.band, role), unsimulated=unsimulated, warnings=warnings,
                 code_version=code_version, command=request.command, notes=_notes(law))
             contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged)

@@ -29,10 +29,12 @@ SUFFIX = ".k"
 
 
 def real20(x: float) -> str:
-    """A real in a 20-column field: 13 significant digits, a blank before it."""
-    text = f"{x:20.12E}"
-    assert len(text) == 20
-    return text
+    """A real in a 20-column field: 13 significant digits (fewer where a sign and a three-digit exponent need the
+    room), a blank before it."""
+    digits = 12
+    while len(text := f"{x:.{digits}E}") > 19:
+        digits -= 1
+    return text.rjust(20)
 
 
 def real10(x: float) -> str:

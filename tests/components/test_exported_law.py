@@ -150,3 +150,22 @@ def test_only_the_table_law_is_exported_and_settings_are_checked():
     assert dataclasses.asdict(law.params) == law.provenance()["parameters"]
     assert law.params.table_policy == "clamp"  # lookups flagged, never refused
 
+
+
+def test_the_standard_error_under_eq8_and_the_cluster_rule():
+    """eq8: se(mu) = mu0 s se(A_p) / A_c(Eq. 8); the cluster rule: se(A_p/A_c) from the standard errors of its A_p
+    and of A_c, their covariance left out. At nodes, where the interpolation reproduces the node values."""
+    t = read_table(DEFAULT_TABLE)
+    p, v, b, at = _simulated_nodes(t)
+    eq8 = load_law(settings={"contact_area": "eq8", "particle_area_scale": 0.05})
+    mu, _ = eq8.mu(p, v, b)
+    live = mu > 0
+    ac8 = 2.0 * p / (0.34 * 55e9)
+    expected = 0.15 * 0.05 * t.array("particle_area_se")[at] / ac8
+    np.testing.assert_allclose(eq8.standard_error(p, v, b)[live], expected[live], rtol=1e-9)
+    clusters = load_law(settings={"particle_area_rule": "clusters"})
+    mu, _ = clusters.mu(p, v, b)
+    ap, ap_se = t.array("particle_area_clusters")[at], t.array("particle_area_clusters_se")[at]
+    ac, ac_se = t.contact_area[at], t.array("contact_area_se")[at]
+    expected = 0.15 * np.hypot(ap_se / ac, ap * ac_se / ac**2)
+    np.testing.assert_allclose(clusters.standard_error(p, v, b)[mu > 0], expected[mu > 0], rtol=1e-9)
