@@ -88,6 +88,7 @@ class ExportRequest:
     table_id: int = lsdyna_deck.DEFAULT_TABLE_ID
     interaction_name: str = abaqus_friction.DEFAULT_NAME
     command: str = ""
+    notes: tuple = ()  # further lines for every header (the multi-pass option chosen, ...)
 
 
 @dataclass(frozen=True)
@@ -330,7 +331,7 @@ def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
                 range_lines=(range_line,), accuracy=grid.accuracy, largest=grid.largest, tolerance=grid.tolerance,
                 checked=grid.checked, floor=ACCURACY_FLOOR,
                 band=_band_words(law, request.band, role), unsimulated=unsimulated, warnings=warnings,
-                code_version=code_version, command=request.command, notes=_notes(law))
+                code_version=code_version, command=request.command, notes=request.notes + _notes(law))
             contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged)
             files.append(ExportedFile(path, role, state, tuple(a.size for a in grid.axes), grid.accuracy,
                                       grid.tolerance, grid.checked, unsimulated, warnings))

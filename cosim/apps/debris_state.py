@@ -9,7 +9,7 @@ a point of the tool slides little, while debris builds up over strokes. So the u
   mm pad by default): the strip-draw test run through the same native core
   (:func:`tribocosim.cosim.studies.stripdraw_experiment.draw`, the multi-pass runs of the calibration and the paper
   report, with the export's parameters: the multi-pass options ``debris_carry_over``, ``debris_sink_length``,
-  ``flake_shear_ratio`` are strip-draw parameters, ``--set``). The state after pass N is the debris the strip
+  ``flake_shear_ratio`` are strip-draw parameters, ``--set``, or the paper report's named options, ``--option``). The state after pass N is the debris the strip
   carries then: the mean beta over the strip that passed under the pad (``beta_left``), the debris a tool meets at
   the start of pass N + 1. Several N: one draw, one file per N.
 

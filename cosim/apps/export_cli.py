@@ -2,6 +2,7 @@
 
     tribocosim export FORMAT -o FILE [--beta B ... | --passes N ... --pressure P [--velocity V] [--pad-length L]]
                      [--units mm-t-s|SI] [--band K] [--table T | --calibration C] [--set NAME=VALUE ...]
+                     [--option NAME]
                      [--pressure-range LO HI] [--beta-levels B ...] [--allow-unsimulated] [--tolerance X]
                      [--table-id N] [--interaction-name NAME]
 
@@ -57,6 +58,9 @@ def _parser() -> argparse.ArgumentParser:
     law.add_argument("--table", default=None, help="the friction table (default: the shipped one)")
     law.add_argument("--calibration", default=None, help="a calibration file written by tribocosim calibrate")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a strip-draw parameter")
+    p.add_argument("--option", default=None, metavar="NAME", help="a multi-pass option of the paper report "
+                   "(shear_0.25, shear_0.5, sink_140, sink_35, carry_0.5; paper: the defaults): its parameters for the "
+                   "law and the passes; --set overrides them")
     p.add_argument("--pressure-range", nargs=2, default=None, metavar=("LO", "HI"),
                    help="the pressures to export (default: the table's axis)")
     p.add_argument("--beta-levels", nargs="+", default=None, metavar="B",
@@ -114,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         result = export_friction(
             args.format, args.out, state, units=args.units,
             band=None if args.band is None else _number("--band", args.band),
-            table=args.table, calibration=args.calibration, settings=_settings(args.set),
+            table=args.table, calibration=args.calibration, settings=_settings(args.set), option=args.option,
             pressure_range=None if args.pressure_range is None else
             tuple(_number("--pressure-range", x) for x in args.pressure_range),
             beta_levels=None if args.beta_levels is None else tuple(_number("--beta-levels", x)

@@ -24,6 +24,7 @@ from tribocosim.cosim.apps.debris_state import DebrisChoice, debris_states
 
 def export_friction(format: str, out, state: DebrisChoice | None = None, *, units: str = DEFAULT_UNITS,
                     band: float | None = None, table=None, calibration=None, settings: dict | None = None,
+                    option: str | None = None,
                     pressure_range=None, beta_levels=None, allow_unsimulated: bool = False,
                     tolerance: float = DEFAULT_TOLERANCE, table_id: int = DEFAULT_TABLE_ID,
                     interaction_name: str = DEFAULT_NAME, command: str = "", log=None) -> ExportResult:
@@ -45,7 +46,10 @@ def export_friction(format: str, out, state: DebrisChoice | None = None, *, unit
     table, calibration : path, optional
         The friction table (default: the shipped one), or a calibration file of ``tribocosim calibrate``.
     settings : dict, optional
-        Strip-draw parameters (name -> value) on top of the table's or calibration's.
+        Strip-draw parameters (name -> value) on top of the table's or calibration's (and of ``option``'s).
+    option : str, optional
+        A multi-pass option of the paper report by name (:data:`tribocosim.cosim.reports.paper_physics.OPTIONS`:
+        ``shear_0.25``, ``sink_35``, ``carry_0.5``, ...): its strip-draw parameters, for the law and the passes.
     pressure_range : (low, high), optional
         The pressures to export (default: the table's axis), in ``units``.
     beta_levels : sequence, optional
@@ -72,11 +76,28 @@ def export_friction(format: str, out, state: DebrisChoice | None = None, *, unit
     if format not in FORMATS:
         raise ParameterError(f"FORMAT {format!r} is not an export format; choose one of {', '.join(FORMATS)}")
     system = unit_system(units)
-    law = load_law(table, calibration, settings)
+    chosen, notes = multipass_option(option)
+    law = load_law(table, calibration, {**chosen, **(settings or {})})
     states = debris_states(state or DebrisChoice(), law, system, log)
     prange = None if pressure_range is None else tuple(system.pressure_from_file(float(x)) for x in pressure_range)
     request = ExportRequest(format=format, out=Path(out), states=states, units=system, band=band,
                             pressure_range=prange, beta_levels=None if beta_levels is None else tuple(beta_levels),
                             allow_unsimulated=allow_unsimulated, tolerance=tolerance, table_id=table_id,
-                            interaction_name=interaction_name, command=command)
+                            interaction_name=interaction_name, command=command, notes=notes)
     return run_export(law, request)
+
+
+def multipass_option(name: str | None) -> tuple[dict, tuple]:
+    """The strip-draw parameters of the paper report's multi-pass option ``name`` and a header line saying so;
+    ``({}, ())`` for None; ParameterError naming ``--option`` for another name."""
+    if name is None:
+        return {}, ()
+    from tribocosim.cosim.reports.paper_physics import OPTIONS
+
+    found = {o.name: o for o in OPTIONS}
+    if name not in found:
+        raise ParameterError(f"--option {name!r} is not a multi-pass option of the paper report; choose one of "
+                             f"{', '.join(found)}")
+    o = found[name]
+    values = ", ".join(f"{k} = {v}" for k, v in o.parameters.items()) or "the defaults"
+    return dict(o.parameters), (f"multi-pass option {o.name} of the paper report: {o.label} ({values}): {o.why}",)

@@ -53,6 +53,7 @@ BAD = [
     (["lsdyna", "-o", "f.k", "--passes", "3"], "--passes needs --pressure"),
     (["lsdyna", "-o", "f.k"], "FORMAT lsdyna needs a debris state"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--units", "inch"], "--units 'inch' is not a unit system"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--option", "nope"], "--option 'nope' is not a multi-pass option"),
     (["lsdyna", "--beta", "0.1"], "the following arguments are required: -o/--out"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--table", "nowhere.npz"], "friction table file not found"),
 ]

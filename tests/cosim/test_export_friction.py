@@ -51,3 +51,23 @@ def test_a_calibration_files_band_holds_the_interval_of_its_scale(tmp_path):
     upper = json.loads(calibrated.files[1].path.read_text())
     assert "status converged, s = 1.5 +- 0.3" in " ".join(" ".join(b["header"]).split())
     assert "the calibration's scale s = 1.5 +- 0.3 (in quadrature)" in upper["band"]["definition"]
+
+
+def test_a_multi_pass_option_of_the_paper_report_sets_the_law_and_the_passes(tmp_path):
+    """debris_sink_length = 35 mm (the report's sink_35) takes debris out while it slides under the pad: less of it
+    after three passes than with the paper's model, and the option is written in the header."""
+    from tribocosim.cosim.reports.paper_physics import OPTIONS
+
+    state = tribocosim.DebrisChoice(passes=(3,), pressure=25)
+    paper = tribocosim.export_friction("table", tmp_path / "paper.json", state, pressure_range=(10, 30))
+    sink = tribocosim.export_friction("table", tmp_path / "sink.json", state, option="sink_35")
+    doc = json.loads(sink.files[0].path.read_text())
+    assert doc["provenance"]["parameters"]["debris_sink_length"] == dict(
+        (o.name, o.parameters) for o in OPTIONS)["sink_35"]["debris_sink_length"]
+    assert 0 < sink.files[0].state.beta < paper.files[0].state.beta
+    assert any("multi-pass option sink_35 of the paper report" in line for line in doc["header"])
+    overridden = tribocosim.export_friction("table", tmp_path / "o.json", tribocosim.DebrisChoice(beta=(0.1,)),
+                                            option="sink_35", settings={"debris_sink_length": "0.07"})
+    assert json.loads(overridden.files[0].path.read_text())["provenance"]["parameters"]["debris_sink_length"] == 0.07
+    with pytest.raises(ParameterError, match="--option 'nope' is not a multi-pass option"):
+        tribocosim.export_friction("table", tmp_path / "x.json", option="nope")
