@@ -17,6 +17,9 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
     p = tribocosim.StripDrawParameters(tool_length=0.07)
     table = tribocosim.read_table(tribocosim.DEFAULT_TABLE)  # the shipped friction table
     model = tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p, table))
+
+    # the friction law for a forming simulation (docs/forming-friction.md)
+    tribocosim.export_friction("lsdyna", "friction.k", tribocosim.DebrisChoice(beta=(0.1,)))
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ __getattr__, __all__ = lazy_exports(__name__, {
     "StripDrawModel": "tribocosim.components.stripdraw.model",
     "StripDrawParameters": "tribocosim.components.stripdraw.parameters",
     "make_friction_law": "tribocosim.components.stripdraw.friction",
+    "export_friction": "tribocosim.cosim.apps.export_friction",
+    "DebrisChoice": "tribocosim.cosim.apps.debris_state",
     "FrictionTable": "tribocosim.components.stripdraw.table",
     "read_table": "tribocosim.components.stripdraw.table",
     "write_table": "tribocosim.components.stripdraw.table",

@@ -1,0 +1,404 @@
+"""One export: the law sampled for the FE code's interpolation, checked, and written in a format, for every debris
+state asked for and for the band.
+
+For every debris state (a beta, or none: beta is then an axis, Abaqus' field variable 1) the grid is chosen by
+:func:`~tribocosim.components.friction_export.grid_refinement.sample` over the range (the table's pressure axis or
+``--pressure-range``, its velocity axis, and for a beta axis the beta nodes up to the highest level simulated at
+every pressure and velocity of the range, or ``--beta-levels``), with the band's upper and lower mu on the same
+grid. A lookup anywhere in the range that reads a table node the mesoscale campaign did not simulate makes the
+export fail with the reason, unless ``allow_unsimulated`` asks for it to be written and marked. Then every file of
+the export is written, or none (:mod:`.file_set`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tribocosim.errors import ParameterError
+from tribocosim.components.friction_export import abaqus_friction, lsdyna_deck, neutral_table
+from tribocosim.components.friction_export.export_header import FileFacts, header_lines
+from tribocosim.components.friction_export.exported_law import ExportedLaw, value_warnings
+from tribocosim.components.friction_export.export_units import UnitSystem
+from tribocosim.components.friction_export.file_set import check_target, tagged, write_all
+from tribocosim.components.friction_export.grid_refinement import AxisSpec, percent_up, sample
+
+#: the deviation of the FE code's reading from the law, relative to mu (0.005: 0.5 %)
+DEFAULT_TOLERANCE = 0.005
+#: deviations are taken relative to max(mu, this): below it, absolute (a law that reaches mu = 0)
+ACCURACY_FLOOR = 1e-3
+#: a point of the range is on an axis end within this (relative), as the table's lookup takes it
+END_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class Format:
+    """A target: its title, file suffix, whether it needs a debris state, how its FE code reads it."""
+
+    name: str
+    title: str
+    suffix: str
+    needs_state: bool
+    rule: str
+
+
+FORMATS = {
+    "lsdyna": Format("lsdyna", "LS-DYNA include: *DEFINE_TABLE of contact pressures with one *DEFINE_CURVE of mu "
+                     "against relative sliding velocity each (contact FS = 2, FD = the table id)", lsdyna_deck.SUFFIX,
+                     True, "linearly between the table's pressures and along each curve"),
+    "abaqus": Format("abaqus", "Abaqus *SURFACE INTERACTION with a tabulated *FRICTION (mu against slip rate and "
+                     "contact pressure)", abaqus_friction.SUFFIX, False,
+                     "linearly in slip rate and contact pressure (and in field variable 1, beta)"),
+    "table": Format("table", "neutral JSON table of mu and its standard error", neutral_table.SUFFIX, False,
+                    neutral_table.RULE),
+}
+
+
+@dataclass(frozen=True)
+class DebrisState:
+    """One debris state of an export: its beta (None: beta is an axis of the file), its tag in the file names when an
+    export has several states, what it is in words, and how it was chosen (a JSON record)."""
+
+    beta: float | None
+    label: str
+    description: str
+    record: dict = field(default_factory=dict)
+
+
+AXIS_STATE = DebrisState(None, "", "none chosen: beta is an axis of the file", {"beta": None,
+                                                                                  "how": "an axis of the file"})
+
+
+@dataclass(frozen=True)
+class ExportRequest:
+    """What to export (SI throughout; ``units`` is the files' system)."""
+
+    format: str
+    out: Path
+    states: tuple
+    units: UnitSystem
+    band: float | None = None
+    pressure_range: tuple | None = None
+    beta_levels: tuple | None = None
+    allow_unsimulated: bool = False
+    tolerance: float = DEFAULT_TOLERANCE
+    table_id: int = lsdyna_deck.DEFAULT_TABLE_ID
+    interaction_name: str = abaqus_friction.DEFAULT_NAME
+    command: str = ""
+    notes: tuple = ()  # further lines for every header (the multi-pass option chosen, ...)
+
+
+@dataclass(frozen=True)
+class ExportedFile:
+    """One file written: its path, role (nominal, upper, lower), debris state, grid size and the accuracy reached."""
+
+    path: Path
+    role: str
+    state: DebrisState
+    shape: tuple
+    accuracy: float
+    tolerance: float
+    checked: int
+    unsimulated: str
+    warnings: tuple
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    """The files of an export and what the command says about them."""
+
+    files: tuple
+    range_line: str
+    beyond: str
+
+    def summary(self) -> list[str]:
+        """Lines for the command's output."""
+        out = []
+        for f in self.files:
+            size = " x ".join(f"{n} {what}" for n, what in zip(f.shape, ("pressures", "velocities", "beta levels")))
+            out.append(f"wrote {f.path} ({f.role}; {size}): the FE code's linear interpolation of it reproduces "
+                       f"tribocosim's mu within {percent_up(f.accuracy)} % (target {100 * f.tolerance:g} %) in the "
+                       f"range ({f.checked} points checked)")
+            out += [f"  unsimulated: {f.unsimulated}"] if f.unsimulated else []
+            out += [f"  WARNING: {w}" for w in f.warnings]
+        return out + [self.range_line, f"beyond it: {self.beyond}"]
+
+
+def _nodes_in(axis: np.ndarray, low: float, high: float) -> tuple:
+    """``low``, the axis's nodes strictly inside (low, high), ``high``."""
+    inner = [float(x) for x in axis if low * (1 + END_TOLERANCE) < x < high * (1 - END_TOLERANCE)]
+    return tuple([low, *inner, high]) if high > low else (low,)
+
+
+def _code_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    from tribocosim.components.native.toolchain.library import core
+
+    try:
+        v = version("tribocosim")
+    except PackageNotFoundError:  # pragma: no cover - a source tree without an install
+        v = "(not installed)"
+    return f"{v} (native core {core().path.name})"
+
+
+def _pressure_range(law: ExportedLaw, request: ExportRequest) -> tuple[float, float]:
+    lo_axis, hi_axis = law.pressure_axis
+    if request.pressure_range is None:
+        return lo_axis, hi_axis
+    lo, hi = (float(x) for x in request.pressure_range)
+    u = request.units
+    shown = f"{u.pressure_to_file(lo):g} {u.pressure_to_file(hi):g}"
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(f"--pressure-range {shown} {u.pressure}: two finite pressures, the lower first")
+    if lo < lo_axis * (1 - END_TOLERANCE) or hi > hi_axis * (1 + END_TOLERANCE):
+        raise ParameterError(f"--pressure-range {shown} {u.pressure} leaves the table's pressure axis "
+                             f"[{u.pressure_to_file(lo_axis):g}, {u.pressure_to_file(hi_axis):g}] {u.pressure}")
+    return max(lo, lo_axis), min(hi, hi_axis)
+
+
+def _check_request(law: ExportedLaw, request: ExportRequest) -> Format:
+    if request.format not in FORMATS:
+        raise ParameterError(f"FORMAT {request.format!r} is not an export format; choose one of {', '.join(FORMATS)}")
+    fmt = FORMATS[request.format]
+    if not (math.isfinite(request.tolerance) and 0 < request.tolerance <= 0.5):
+        raise ParameterError(f"--tolerance {request.tolerance!r}: a relative deviation in (0, 0.5] is required")
+    if request.band is not None:
+        if not (math.isfinite(request.band) and request.band > 0):
+            raise ParameterError(f"--band {request.band!r}: a number of standard errors above 0 is required")
+        law.check_band()
+    if not request.states:
+        raise ParameterError("no debris state: give --beta or --passes, or none for a beta axis")
+    if fmt.needs_state and any(s.beta is None for s in request.states):
+        raise ParameterError(f"FORMAT {fmt.name} needs a debris state, --beta B or --passes N: an LS-DYNA friction "
+                             "table has no axis for the debris (several states: several files)")
+    if request.beta_levels is not None and any(s.beta is not None for s in request.states):
+        raise ParameterError("--beta-levels gives the levels of a beta axis; with --beta or --passes the file holds "
+                             "one debris state")
+    if not 1 <= int(request.table_id) <= lsdyna_deck.MAX_ID - 10_000:
+        raise ParameterError(f"--table-id {request.table_id}: an id in [1, {lsdyna_deck.MAX_ID - 10_000}] is required "
+                             "(the curves take the ids after it)")
+    check_target(request.out)
+    return fmt
+
+
+def _beta_nodes(law: ExportedLaw, request: ExportRequest, prange, vrange, cap: float) -> AxisSpec:
+    """The beta axis of a file without a debris state: ``--beta-levels`` as given, or the table's beta nodes up to
+    the highest level simulated everywhere in the range (the table's last with ``allow_unsimulated``), below the
+    cap."""
+    b0, b1 = law.beta_axis
+    if request.beta_levels is not None:
+        levels = np.unique(np.asarray(request.beta_levels, dtype=float))
+        if levels.size < 2 or not np.all(np.isfinite(levels)):
+            raise ParameterError(f"--beta-levels {list(request.beta_levels)}: at least two finite levels")
+        bad = levels[(levels < b0) | (levels > min(b1, cap))]
+        if bad.size:
+            raise ParameterError(f"--beta-levels: {bad[0]:g} is outside the table's beta axis [{b0:g}, {b1:g}] or "
+                                 f"above the cap of beta in the range, {cap:.6g} (Eq. 24)")
+        return AxisSpec("beta", tuple(levels), refine=False)
+    top = b1 if request.allow_unsimulated else law.simulated_beta_top(prange, vrange)
+    top = min(top, cap)
+    return AxisSpec("beta", _nodes_in(law.table.beta, b0, top))
+
+
+def _check_beta(law: ExportedLaw, beta: float, cap: float, state: DebrisState) -> None:
+    b0, b1 = law.beta_axis
+    how = "--beta" if state.record.get("how") == "given" else f"the debris state {state.description!r}"
+    if not math.isfinite(beta) or beta < b0 or beta > b1 * (1 + END_TOLERANCE):
+        raise ParameterError(f"{how}: beta = {beta!r} is outside the table's beta axis [{b0:g}, {b1:g}]")
+    if beta > cap * (1 + END_TOLERANCE):
+        raise ParameterError(f"{how}: beta = {beta!r} is above the cap of beta in the range, {cap:.6g} (Eq. 24: "
+                             "where the flake-borne area reaches the contact area); the strip-draw model never "
+                             "holds more debris")
+
+
+class _Flags:
+    """The points of an export's evaluations whose lookups read unsimulated nodes."""
+
+    def __init__(self):
+        self.count, self.total = 0, 0
+        self.pressure = [math.inf, -math.inf]
+        self.beta = [math.inf, -math.inf]
+
+    def add(self, flagged: np.ndarray, pressure: np.ndarray, beta) -> None:
+        self.total += flagged.size
+        if not flagged.any():
+            return
+        self.count += int(flagged.sum())
+        p = pressure[flagged]
+        b = np.broadcast_to(beta, flagged.shape)[flagged]
+        self.pressure = [min(self.pressure[0], p.min()), max(self.pressure[1], p.max())]
+        self.beta = [min(self.beta[0], b.min()), max(self.beta[1], b.max())]
+
+    def where(self, units: UnitSystem) -> str:
+        p0, p1 = (units.pressure_to_file(x) for x in self.pressure)
+        text = f"contact pressure {p0:.4g}-{p1:.4g} {units.pressure}"
+        return text + (f", beta {self.beta[0]:.4g}-{self.beta[1]:.4g}" if self.beta[1] > self.beta[0] else
+                       f", beta {self.beta[0]:.4g}")
+
+
+def _refusal(law: ExportedLaw, request: ExportRequest, state: DebrisState, flags: _Flags, prange) -> str:
+    u = request.units
+    how = state.record.get("how")
+    what = {"given": f"--beta {state.beta:g}", "passes": f"--passes {state.record.get('after_pass')} (beta = "
+            f"{state.beta:.6g} after that pass)"}.get(how, "the beta axis")
+    hint = ""
+    above = law.table.pressure[law.table.pressure > flags.pressure[1] * (1 + END_TOLERANCE)]
+    if state.beta is not None and above.size and flags.pressure[0] <= prange[0] * (1 + END_TOLERANCE):
+        hint = (f"--pressure-range {u.pressure_to_file(above[0]):g} {u.pressure_to_file(prange[1]):g} exports the "
+                "range where it was simulated; ")
+    return (f"{what}: {flags.count} of {flags.total} lookups in the exported range read friction-table nodes the "
+            f"mesoscale campaign did not simulate ({flags.where(u)}; the table's simulated levels: "
+            "docs/physics/table_domain.md); " + hint + "--allow-unsimulated writes them marked")
+
+
+def _range_line(units: UnitSystem, prange, vrange, betas) -> str:
+    u = units
+    text = (f"range: contact pressure {u.pressure_to_file(prange[0]):g}-{u.pressure_to_file(prange[1]):g} "
+            f"{u.pressure}, relative sliding velocity {u.velocity_to_file(vrange[0]):g}-"
+            f"{u.velocity_to_file(vrange[1]):g} {u.velocity}")
+    return text + (f", beta {betas[0]:.6g}-{betas[-1]:.6g}" if betas is not None else "")
+
+
+def _beyond(fmt: Format, units: UnitSystem, prange, vrange, betas) -> str:
+    u = units
+    code = {"lsdyna": "LS-DYNA", "abaqus": "Abaqus", "table": "a reader following the rule"}[fmt.name]
+    p0, p1 = (f"{u.pressure_to_file(x):g} {u.pressure}" for x in prange)
+    v1 = f"{u.velocity_to_file(vrange[1]):g} {u.velocity}"
+    text = (f"{code} holds the end values (clamps): below {p0} it reads mu at {p0}, above {p1} mu at {p1}, above "
+            f"{v1} mu at {v1}")
+    if betas is not None:
+        text += f", beta outside {betas[0]:.6g}-{betas[-1]:.6g} the end level"
+    return text + "; tribocosim's table holds no simulation there"
+
+
+def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
+    """Sample, check and write the export (module docstring); ParameterError naming the option when the request
+    cannot be written, and then no file is written."""
+    fmt = _check_request(law, request)
+    units = request.units
+    prange = _pressure_range(law, request)
+    vrange = law.velocity_axis
+    p_nodes = _nodes_in(law.table.pressure, *prange)
+    v_nodes = _nodes_in(law.table.velocity, *vrange)
+    cap = min(law.cap(p, v) for p in p_nodes for v in v_nodes)
+    several = len(request.states) > 1
+    roles = ("nominal",) if request.band is None else ("nominal", "upper", "lower")
+    code_version = _code_version()
+    contents, files = {}, []
+    range_line = beyond = ""
+    for state in request.states:
+        specs = [AxisSpec("pressure", p_nodes, geometric=True), AxisSpec("velocity", v_nodes)]
+        if state.beta is None:
+            specs.append(_beta_nodes(law, request, prange, vrange, cap))
+        else:
+            _check_beta(law, float(state.beta), cap, state)
+        flags = _Flags()
+
+        def evaluate(points, state=state, flags=flags):
+            p, v = points[0], points[1]
+            b = points[2] if state.beta is None else float(state.beta)
+            mu, flagged = law.mu(p, v, b)
+            flags.add(flagged, p, b)
+            columns = [mu]
+            if request.band is not None:
+                columns += list(law.band(p, v, b, request.band))
+            return np.stack(columns, axis=-1)
+
+        grid = sample(evaluate, specs, request.tolerance, ACCURACY_FLOOR)
+        if flags.count and not request.allow_unsimulated:
+            raise ParameterError(_refusal(law, request, state, flags, prange))
+        betas = grid.axes[2] if state.beta is None else None
+        range_line = _range_line(units, prange, vrange, betas)
+        beyond = _beyond(fmt, units, prange, vrange, betas)
+        mesh = np.meshgrid(*grid.axes, indexing="ij")
+        node_beta = mesh[2] if betas is not None else float(state.beta)
+        _, node_flagged = law.mu(mesh[0], mesh[1], node_beta)
+        unsimulated = "" if not flags.count else (
+            f"{flags.count} of {flags.total} lookups in the range read friction-table nodes the mesoscale campaign "
+            f"did not simulate ({flags.where(units)}); written as asked (--allow-unsimulated), "
+            f"{int(node_flagged.sum())} of the file's {node_flagged.size} nodes marked")
+        for r, role in enumerate(roles):
+            path = tagged(request.out, state.label if several else "", "" if role == "nominal" else role)
+            values = grid.values[..., r]
+            warnings = tuple(value_warnings(law, values)) + _accuracy_warning(grid, request)
+            facts = FileFacts(
+                format_title=fmt.title, role=role, fe_rule=fmt.rule, fe_beyond=beyond,
+                provenance=law.provenance(), state=state.description, units_line=units.header(),
+                range_lines=(range_line,), accuracy=grid.accuracy, largest=grid.largest, tolerance=grid.tolerance,
+                checked=grid.checked, floor=ACCURACY_FLOOR,
+                band=_band_words(law, request.band, role), unsimulated=unsimulated, warnings=warnings,
+                code_version=code_version, command=request.command, notes=request.notes + _notes(law))
+            contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged)
+            files.append(ExportedFile(path, role, state, tuple(a.size for a in grid.axes), grid.accuracy,
+                                      grid.tolerance, grid.checked, unsimulated, warnings))
+    write_all(contents)
+    return ExportResult(tuple(files), range_line, beyond)
+
+
+def _accuracy_warning(grid, request: ExportRequest) -> tuple:
+    if grid.reached:
+        return ()
+    why = ("the --beta-levels given are too far apart for it" if request.beta_levels is not None else
+           "the refinement stopped at its limits (grid_refinement.py)")
+    return (f"the FE code's reading of this file deviates from tribocosim's mu by up to {percent_up(grid.accuracy)} %, "
+            f"above the target {100 * grid.tolerance:g} %: {why}",)
+
+
+def _band_words(law: ExportedLaw, k: float | None, role: str) -> str:
+    if k is None:
+        return ""
+    scale = law.scale_interval
+    extra = (f" and the calibration's scale s = {scale[0]:.6g} +- {scale[1]:.2g} (in quadrature)" if scale else "")
+    held = {"nominal": f"mu; its .upper and .lower files hold mu +- {k:g} se(mu)", "upper": f"mu + {k:g} se(mu)",
+            "lower": f"mu - {k:g} se(mu)"}[role]
+    return (f"this file holds {held}, clipped to [0, mu0], se(mu) from the table's ensemble standard error{extra} "
+            "(components/friction_export/exported_law.py); the three files share ids and nodes")
+
+
+def _notes(law: ExportedLaw) -> tuple:
+    notes = ["velocity: the FE code's relative sliding velocity of the contact; the strip-draw test's is the "
+             "drawing speed (friction_velocity = grip)"]
+    vmeta = law.table.metadata.get("axes", {}).get("velocity", {})
+    if vmeta.get("quasi_static_row"):
+        notes.append(f"the table's velocity row at 0 holds the values of its slowest simulated velocity "
+                     f"({min(vmeta.get('campaign', [float('nan')])):g} m/s): mu is constant below it")
+    return tuple(notes)
+
+
+def _render(fmt: Format, facts: FileFacts, grid, values, law: ExportedLaw, request: ExportRequest,
+            state: DebrisState, node_flagged: np.ndarray) -> str:
+    u = request.units
+    header = header_lines(facts)
+    pressures = u.pressure_to_file(grid.axes[0])
+    velocities = u.velocity_to_file(grid.axes[1])
+    if fmt.name == "lsdyna":
+        marked = {i: "UNSIMULATED: lookups at this pressure read table nodes not simulated"
+                  for i in range(pressures.size) if node_flagged[i].any()}
+        return lsdyna_deck.render(header, pressures, velocities, values, int(request.table_id), u, marked)
+    if fmt.name == "abaqus":
+        betas = grid.axes[2] if state.beta is None else None
+        return abaqus_friction.render(header, velocities, pressures, values, u, betas, request.interaction_name)
+    axes = [{"name": "pressure", "unit": u.pressure, "values": pressures.tolist()},
+            {"name": "velocity", "unit": u.velocity, "values": velocities.tolist()}]
+    if state.beta is None:
+        axes.append({"name": "beta", "unit": "1", "values": grid.axes[2].tolist()})
+    mesh = np.meshgrid(*grid.axes, indexing="ij")
+    node_beta = mesh[2] if state.beta is None else float(state.beta)
+    mu_se = law.standard_error(mesh[0], mesh[1], node_beta) if law.table.version >= 3 else None
+    table_axes = (law.table.pressure, law.table.velocity, law.table.beta)
+    on_node = [np.isclose(m[..., None], ax, rtol=END_TOLERANCE, atol=0).any(axis=-1)
+               for m, ax in zip(mesh, table_axes)]
+    if state.beta is not None:
+        on_node.append(np.full(mesh[0].shape, bool(np.isclose(law.table.beta, state.beta, rtol=END_TOLERANCE,
+                                                              atol=0).any())))
+    provenance = {**law.provenance(), "code_version": facts.code_version, "command": facts.command}
+    band = None if request.band is None else {"k": request.band, "role": facts.role, "definition": facts.band}
+    return neutral_table.render(
+        role=facts.role, axes=axes, mu=values, mu_se=mu_se, simulated=~node_flagged,
+        table_node=np.logical_and.reduce(on_node), accuracy=grid.accuracy, tolerance=grid.tolerance,
+        checked=grid.checked, debris_state={"beta": state.beta, "description": state.description, **state.record},
+        units=u, provenance=provenance, band=band, warnings=list(facts.warnings), header=header)

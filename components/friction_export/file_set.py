@@ -1,0 +1,57 @@
+"""The files one export writes, all of them or none: their names, and writing them through temporary files.
+
+Names: a file ``FILE`` (``friction.k``) of several debris states becomes ``friction.<state>.k`` (``friction.pass2.k``,
+``friction.beta0.1.k``); a band adds ``.upper`` and ``.lower`` before the suffix (``friction.upper.k``,
+``friction.pass2.lower.k``). Writing: every file is first written in full to a temporary name in its target folder,
+then each is renamed onto its name (an atomic replace on one file system); when any write fails, the temporary
+files are removed and nothing is left behind.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from tribocosim.errors import ParameterError
+
+
+def tagged(path: Path, *tags: str) -> Path:
+    """``path`` with ``.tag`` inserted before its suffix for each non-empty tag (``friction.k`` ->
+    ``friction.pass2.upper.k``)."""
+    path = Path(path)
+    middle = "".join(f".{t}" for t in tags if t)
+    return path.with_name(f"{path.stem}{middle}{path.suffix}")
+
+
+def check_target(path: Path) -> None:
+    """ParameterError naming ``-o`` when ``path`` cannot be written: its folder is missing or is not a folder, or the
+    path is a folder."""
+    path = Path(path)
+    folder = path.parent
+    if not folder.is_dir():
+        raise ParameterError(f"-o {path}: its folder {folder} does not exist or is not a folder")
+    if path.is_dir():
+        raise ParameterError(f"-o {path} is a folder; give the file to write")
+    if not os.access(folder, os.W_OK):
+        raise ParameterError(f"-o {path}: the folder {folder} is not writable")
+
+
+def write_all(contents: dict) -> list[Path]:
+    """Write ``{path: text}``: all files or none (module docstring); ParameterError naming the file that failed."""
+    for path in contents:
+        check_target(path)
+    temporary: dict[Path, Path] = {}
+    try:
+        for path, text in contents.items():
+            path = Path(path)
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            temporary[path] = tmp
+            with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+                f.write(text)
+        for path, tmp in temporary.items():
+            os.replace(tmp, path)
+    except OSError as exc:
+        for tmp in temporary.values():
+            tmp.unlink(missing_ok=True)
+        raise ParameterError(f"-o: {exc.filename or ''} cannot be written: {exc.strerror or exc}") from None
+    return list(temporary)

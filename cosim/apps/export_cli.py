@@ -1,0 +1,138 @@
+"""``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table).
+
+    tribocosim export FORMAT -o FILE [--beta B ... | --passes N ... --pressure P [--velocity V] [--pad-length L]]
+                     [--units mm-t-s|SI] [--band K] [--table T | --calibration C] [--set NAME=VALUE ...]
+                     [--option NAME]
+                     [--pressure-range LO HI] [--beta-levels B ...] [--allow-unsimulated] [--tolerance X]
+                     [--table-id N] [--interaction-name NAME]
+
+FORMAT: ``lsdyna`` (an include file: *DEFINE_TABLE and its *DEFINE_CURVEs for contact FS = 2), ``abaqus`` (a *SURFACE
+INTERACTION with a tabulated *FRICTION; without a debris state beta is field variable 1), ``table`` (a neutral JSON
+table). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line naming the option
+on stderr, exit code 2, and no file written. docs/forming-friction.md is the guide.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+from tribocosim.errors import TribocosimError
+
+FORMATS = ("lsdyna", "abaqus", "table")
+
+
+class _ArgumentError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line (exit 2), without the usage text."""
+
+    def error(self, message):
+        raise _ArgumentError(message)
+
+
+def _parser() -> argparse.ArgumentParser:
+    from tribocosim.components.friction_export.abaqus_friction import DEFAULT_NAME
+    from tribocosim.components.friction_export.export_run import DEFAULT_TOLERANCE
+    from tribocosim.components.friction_export.export_units import DEFAULT_UNITS, UNIT_SYSTEMS
+    from tribocosim.components.friction_export.lsdyna_deck import DEFAULT_TABLE_ID
+
+    p = _Parser(prog="tribocosim export", description=__doc__.split("\n\n")[2].strip())
+    p.add_argument("format", metavar="FORMAT", help=f"one of {', '.join(FORMATS)}")
+    p.add_argument("-o", "--out", required=True, help="the file to write")
+    state = p.add_argument_group("debris state (none: beta is an axis of the file; abaqus and table only)")
+    state.add_argument("--beta", nargs="+", default=[], metavar="B", help="debris area fraction(s): one file each")
+    state.add_argument("--passes", nargs="+", default=[], metavar="N",
+                       help="the state a strip-draw test reaches after N passes: one file each")
+    state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure (required)")
+    state.add_argument("--velocity", default=None, help="--passes: the drawing speed (default: the paper's 0.08 m/s)")
+    state.add_argument("--pad-length", default=None, help="--passes: the pad length (default: tool_length, 35 mm)")
+    p.add_argument("--units", default=DEFAULT_UNITS, help=f"{' or '.join(UNIT_SYSTEMS)} (default {DEFAULT_UNITS}: "
+                   "N, MPa, mm/s, mm)")
+    p.add_argument("--band", default=None, metavar="K", help="also write FILE.upper.SUFFIX and FILE.lower.SUFFIX: mu "
+                   "+- K standard errors")
+    law = p.add_mutually_exclusive_group()
+    law.add_argument("--table", default=None, help="the friction table (default: the shipped one)")
+    law.add_argument("--calibration", default=None, help="a calibration file written by tribocosim calibrate")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a strip-draw parameter")
+    p.add_argument("--option", default=None, metavar="NAME", help="a multi-pass option of the paper report "
+                   "(shear_0.25, shear_0.5, sink_140, sink_35, carry_0.5; paper: the defaults): its parameters for the "
+                   "law and the passes; --set overrides them")
+    p.add_argument("--pressure-range", nargs=2, default=None, metavar=("LO", "HI"),
+                   help="the pressures to export (default: the table's axis)")
+    p.add_argument("--beta-levels", nargs="+", default=None, metavar="B",
+                   help="the levels of the beta axis (default: refined up to the highest level simulated in the range)")
+    p.add_argument("--allow-unsimulated", action="store_true", help="write, marked, values whose lookups read table "
+                   "nodes the mesoscale campaign did not simulate (refused without it)")
+    p.add_argument("--tolerance", default=str(DEFAULT_TOLERANCE), help="largest relative deviation of the FE code's "
+                   f"linear interpolation from tribocosim's mu (default {DEFAULT_TOLERANCE})")
+    p.add_argument("--table-id", default=str(DEFAULT_TABLE_ID), help="lsdyna: the *DEFINE_TABLE id; its curves take "
+                   f"the ids after it (default {DEFAULT_TABLE_ID})")
+    p.add_argument("--interaction-name", default=DEFAULT_NAME, help=f"abaqus: the *SURFACE INTERACTION's name "
+                   f"(default {DEFAULT_NAME})")
+    return p
+
+
+def _number(option: str, text, integer: bool = False):
+    from tribocosim.errors import ParameterError
+
+    try:
+        value = float(text)
+        if integer and value != int(value):
+            raise ValueError
+    except (TypeError, ValueError):
+        raise ParameterError(f"{option} {text!r} is not {'an integer' if integer else 'a number'}") from None
+    return int(value) if integer else value
+
+
+def _settings(items) -> dict:
+    from tribocosim.errors import ParameterError
+
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ParameterError(f"--set {item!r}: expected NAME=VALUE with a strip-draw parameter name")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``tribocosim export``."""
+    parser = _parser()
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = parser.parse_args(args_list)
+    except _ArgumentError as exc:
+        print(f"tribocosim export: {exc}", file=sys.stderr)
+        return 2
+    from tribocosim.cosim.apps.debris_state import DebrisChoice
+    from tribocosim.cosim.apps.export_friction import export_friction
+
+    try:
+        state = DebrisChoice(beta=tuple(args.beta), passes=tuple(args.passes), pressure=args.pressure,
+                             velocity=args.velocity, pad_length=args.pad_length)
+        result = export_friction(
+            args.format, args.out, state, units=args.units,
+            band=None if args.band is None else _number("--band", args.band),
+            table=args.table, calibration=args.calibration, settings=_settings(args.set), option=args.option,
+            pressure_range=None if args.pressure_range is None else
+            tuple(_number("--pressure-range", x) for x in args.pressure_range),
+            beta_levels=None if args.beta_levels is None else tuple(_number("--beta-levels", x)
+                                                                    for x in args.beta_levels),
+            allow_unsimulated=args.allow_unsimulated, tolerance=_number("--tolerance", args.tolerance),
+            table_id=_number("--table-id", args.table_id, integer=True), interaction_name=args.interaction_name,
+            command=shlex.join(["tribocosim", "export", *args_list]),
+            log=lambda s: print(s, file=sys.stderr))
+    except TribocosimError as exc:
+        print(f"tribocosim export: {exc}", file=sys.stderr)
+        return 2
+    print("\n".join(result.summary()))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

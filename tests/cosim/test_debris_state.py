@@ -1,0 +1,70 @@
+"""The debris state of an export: given, or the one the strip-draw test reaches after N passes (the multi-pass runs
+of the calibration and the paper report, with the export's parameters and units)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from tribocosim.errors import ParameterError
+from tribocosim.components.friction_export.export_units import UNIT_SYSTEMS
+from tribocosim.components.friction_export.exported_law import load_law
+from tribocosim.cosim.apps.debris_state import DebrisChoice, debris_states
+from tribocosim.cosim.studies.stripdraw_experiment import Point, draw
+
+MM, SI = UNIT_SYSTEMS["mm-t-s"], UNIT_SYSTEMS["SI"]
+
+
+@pytest.fixture(scope="module")
+def law():
+    return load_law()
+
+
+def test_the_state_after_n_passes_is_the_debris_the_strip_draw_test_leaves(law):
+    states = debris_states(DebrisChoice(passes=(1, 2), pressure=25, velocity=80, pad_length=35), law, MM)
+    parameters = {"table_file": str(law.table_path)}
+    reference = draw(Point(25e6, 0.035, 2, parameters, 0.08))
+    assert [s.beta for s in states] == [r["beta_left"] for r in reference]
+    assert [s.label for s in states] == ["pass1", "pass2"]
+    assert 0 < states[0].beta < states[1].beta, "debris builds up over passes (all of it carried over)"
+    record = states[1].record
+    assert record["after_pass"] == 2 and record["test"]["pressure"] == 25e6 and record["test"]["velocity"] == 0.08
+    assert record["test"]["passes"][1]["mu_bar"] == reference[1]["mu_bar"]
+    assert "after 2 pass(es) of the strip-draw test at 25 MPa, 80 mm/s, 35 mm pad" in states[1].description
+    si = debris_states(DebrisChoice(passes=(1,), pressure=25e6), law, SI)
+    assert si[0].beta == states[0].beta, "the same test in SI units (the paper's 0.08 m/s and 35 mm by default)"
+
+
+def test_the_multi_pass_options_are_the_exports_parameters():
+    """With none of the debris carried into the next pass (debris_carry_over = 0), every pass starts clean."""
+    law = load_law(settings={"debris_carry_over": "0"})
+    first, second = debris_states(DebrisChoice(passes=(1, 2), pressure=10), law, MM)
+    assert second.beta == pytest.approx(first.beta, rel=1e-12)
+
+
+def test_given_betas_and_the_beta_axis(law):
+    states = debris_states(DebrisChoice(beta=(0.05, "0.1")), law, MM)
+    assert [(s.beta, s.label, s.record["how"]) for s in states] == [(0.05, "beta0.05", "given"),
+                                                                     (0.1, "beta0.1", "given")]
+    (axis,) = debris_states(DebrisChoice(), law, MM)
+    assert axis.beta is None
+
+
+@pytest.mark.parametrize("choice, message", [
+    (DebrisChoice(passes=(2,)), "--passes needs --pressure"),
+    (DebrisChoice(pressure=25), "--pressure describes the strip-draw test of --passes"),
+    (DebrisChoice(beta=(0.1,), passes=(1,), pressure=25), "--beta and --passes both given"),
+    (DebrisChoice(passes=(0,), pressure=25), r"--passes 0: a number of passes is an integer >= 1"),
+    (DebrisChoice(passes=("1.5",), pressure=25), r"--passes 1.5: a number of passes is an integer"),
+    (DebrisChoice(beta=(-0.1,)), "--beta -0.1 is negative"),
+    (DebrisChoice(beta=("nan",)), "--beta nan is not finite"),
+    (DebrisChoice(beta=("x",)), "--beta 'x' is not a number"),
+    (DebrisChoice(passes=(1,), pressure=60), r"--pressure 60 MPa is outside the table's pressure axis \[1, 30\]"),
+    (DebrisChoice(passes=(1,), pressure=25, velocity=0), r"--velocity 0 mm/s: the drawing speed must lie in \(0, 500\]"),
+    (DebrisChoice(passes=(1,), pressure=25, pad_length=-35), "--pad-length -35 mm"),
+    (DebrisChoice(passes=(1,), pressure=math.inf), "--pressure inf is not finite"),
+])
+def test_a_bad_choice_names_the_option(law, choice, message):
+    with pytest.raises(ParameterError, match=message):
+        debris_states(choice, law, MM)

@@ -1,0 +1,111 @@
+"""``tribocosim export`` as a user runs it: its output, its exit codes, one line naming the option for bad input and
+no file written, and what it imports."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tribocosim.components.stripdraw.friction import closed_form_table
+from tribocosim.components.stripdraw.table import write_table
+from tribocosim.cosim.apps.export_cli import main
+
+
+def _cli(args, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "tribocosim.cli", "export", *args], cwd=cwd, capture_output=True,
+                          text=True, timeout=300)
+
+
+def test_an_export_prints_the_files_their_accuracy_and_the_range(tmp_path, capsys):
+    assert main(["lsdyna", "-o", str(tmp_path / "friction.k"), "--beta", "0.1", "--band", "2"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert [line.split(" (")[0] for line in out if line.startswith("wrote")] == [
+        f"wrote {tmp_path / name}" for name in ("friction.k", "friction.upper.k", "friction.lower.k")]
+    assert all("reproduces tribocosim's mu within" in line for line in out if line.startswith("wrote"))
+    assert out[-2] == "range: contact pressure 1-30 MPa, relative sliding velocity 0-500 mm/s"
+    assert out[-1].startswith("beyond it: LS-DYNA holds the end values (clamps)")
+    header = (tmp_path / "friction.k").read_text()
+    assert "$   with: tribocosim export lsdyna -o" in header
+
+
+@pytest.fixture(scope="module")
+def table_without_standard_errors(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("table") / "closed_form.npz"
+    write_table(path, closed_form_table(pressure=np.array([1e6, 3e7]), velocity=np.array([0.0, 0.5]),
+                                        beta=np.array([0.0, 0.2])))
+    return path
+
+
+BAD = [
+    (["nastran", "-o", "f.k", "--beta", "0.1"], "FORMAT 'nastran' is not an export format"),
+    (["lsdyna", "-o", "f.k", "--beta", "1.5"], "--beta: beta = 1.5 is outside the table's beta axis"),
+    (["lsdyna", "-o", "f.k", "--beta", "-0.1"], "--beta -0.1 is negative"),
+    (["lsdyna", "-o", "f.k", "--beta", "nan"], "--beta nan is not finite"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--band", "nan"], "--band nan"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--band", "-2"], "--band -2.0"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--set", "mu0=-0.1"], "mu0 = -0.1 is out of range"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--pressure-range", "2", "nan"], "--pressure-range 2 nan MPa"),
+    (["lsdyna", "-o", "missing/f.k", "--beta", "0.1"], "-o missing/f.k: its folder missing does not exist"),
+    (["lsdyna", "-o", "f.k", "--passes", "3"], "--passes needs --pressure"),
+    (["lsdyna", "-o", "f.k"], "FORMAT lsdyna needs a debris state"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--units", "inch"], "--units 'inch' is not a unit system"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--option", "nope"], "--option 'nope' is not a multi-pass option"),
+    (["lsdyna", "--beta", "0.1"], "the following arguments are required: -o/--out"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--table", "nowhere.npz"], "friction table file not found"),
+]
+
+
+@pytest.mark.parametrize("args, message", BAD, ids=[m.split(":")[0][:30] for _, m in BAD])
+def test_bad_input_is_one_line_naming_the_option_exit_2_and_no_file(tmp_path, monkeypatch, capsys, args, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("tribocosim export: "), err
+    assert message in lines[0]
+    assert out == "" and list(tmp_path.iterdir()) == []
+
+
+def test_the_console_script_reports_bad_input_without_a_traceback(tmp_path):
+    proc = _cli(["lsdyna", "-o", "f.k", "--beta", "0.5"], tmp_path)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("tribocosim export: --beta 0.5: ") and len(proc.stderr.strip().splitlines()) == 1
+    assert "--allow-unsimulated writes them marked" in proc.stderr and "Traceback" not in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_band_from_a_table_without_standard_errors_and_an_unwritable_output_write_nothing(
+        tmp_path, table_without_standard_errors):
+    proc = _cli(["lsdyna", "-o", "f.k", "--beta", "0.01", "--band", "2", "--table",
+                 str(table_without_standard_errors)], tmp_path)
+    assert proc.returncode == 2 and "--band needs a table with the ensemble standard errors" in proc.stderr
+    (tmp_path / "blocker").write_text("a file where a folder is expected")
+    proc = _cli(["table", "-o", "blocker/f.json", "--beta", "0.1"], tmp_path)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
+    (tmp_path / "f.upper.k").mkdir()  # the band's second file cannot be written: none of the three is
+    proc = _cli(["lsdyna", "-o", "f.k", "--beta", "0.1", "--band", "2"], tmp_path)
+    assert proc.returncode == 2 and "-o" in proc.stderr and "is a folder" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker", "f.upper.k"]
+
+
+def test_the_command_imports_neither_numba_nor_the_mesoscale_code(tmp_path):
+    script = ("import sys\n"
+              "from tribocosim.cli import main\n"
+              f"rc = main(['export', 'abaqus', '-o', {str(tmp_path / 'f.inp')!r}, '--passes', '1', '--pressure', "
+              "'20', '--set', 'draw_length=0.035'])\n"
+              "heavy = ('numba', 'pyfftw', 'tribocosim.surrogate')\n"
+              "print(rc, [m for m in sys.modules if m.split('.')[0] in heavy or m.startswith(heavy)])\n")
+    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "0 []"
+    assert (tmp_path / "f.inp").is_file()
+
+
+def test_the_console_lists_the_command():
+    proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "--help"], capture_output=True, text=True,
+                          timeout=60)
+    assert any(line.split()[:1] == ["export"] for line in proc.stdout.splitlines())
