@@ -290,10 +290,14 @@ def _table(argv: list[str]) -> int:
 def _show(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog=f"{PROG} show", description="summary and mu-vs-P plot of a table")
     ap.add_argument("table", help="friction table (.npz)")
-    ap.add_argument("--plot", default=None, help="PNG path (default ./<table stem>_mu_vs_P.png)")
-    ap.add_argument("--no-plot", action="store_true")
+    where = ap.add_mutually_exclusive_group()
+    where.add_argument("--out", default=None, metavar="DIR",
+                       help="folder of the plot <table stem>_mu_vs_P.png (default: the table's folder)")
+    where.add_argument("--plot", default=None, metavar="PNG", help="the plot's file")
+    where.add_argument("--no-plot", action="store_true")
     args = ap.parse_args(argv)
     from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import MODELS_DIR
 
     from .table_build import describe, plot_table
 
@@ -303,10 +307,26 @@ def _show(argv: list[str]) -> int:
         print(f"{PROG} show: error: {exc}", file=sys.stderr)
         return 1
     print(describe(table))
-    if not args.no_plot:
-        png = Path(args.plot) if args.plot else Path(f"{Path(args.table).stem}_mu_vs_P.png")
+    if args.no_plot:
+        return 0
+    name = f"{Path(args.table).stem}_mu_vs_P.png"
+    if args.plot:
+        png = Path(args.plot)
+    elif args.out:
+        png = Path(args.out) / name
+    elif Path(args.table).resolve().parent == MODELS_DIR.resolve():  # the package's own folder: not a place to write
+        print(f"{PROG} show: the plot is not written beside a table of the package ({MODELS_DIR}); --out DIR or "
+              "--plot PNG writes it", file=sys.stderr)
+        return 0
+    else:
+        png = Path(args.table).parent / name
+    try:
+        png.parent.mkdir(parents=True, exist_ok=True)
         plot_table(table, png)
-        print(f"plot: {png}")
+    except OSError as exc:
+        print(f"{PROG} show: error: cannot write the plot {png}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    print(f"plot: {png}")
     return 0
 
 
