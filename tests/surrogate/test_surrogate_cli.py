@@ -235,3 +235,18 @@ def test_show_of_a_text_file_says_it_is_not_a_table(tmp_path, capsys):
     assert surrogate_cli.main(["show", str(tmp_path / "notes.txt")]) == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "notes.txt is not a friction table: a text file" in err, err
+
+
+@pytest.mark.slow
+def test_the_first_preset_builds_a_table(tmp_path, capsys):
+    """The user guide's first campaign: its 15 cases finish, the table is built, and its recorded cases rerun the
+    same."""
+    from tribocosim.surrogate.campaign import load_records
+
+    out = tmp_path / "first"
+    assert surrogate_cli.main(["build", "--preset", "first", "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    _, done, unfinished = load_records(out)
+    assert len(done) == 15 and not unfinished
+    capsys.readouterr()
+    assert surrogate_cli.main(["verify", str(out / "friction_table.npz"), "--workers", "2"]) == 0
+    assert "0 differ" in capsys.readouterr().out
