@@ -17,8 +17,8 @@ SurfaceTopography holds while it reads and detrends a scan (:data:`SCAN_COPIES`)
 statistics (:data:`LIBRARY_STATISTICS_GRIDS`), and the resident size of a process that has imported and compiled
 the slide's code (:data:`SLIDE_CODE_BYTES`).
 tests/surrogate/test_memory.py runs each computation on a grid large enough that the grids dominate and holds its
-measured peak (the growth of ``ru_maxrss`` over the resident size before the run, in a fresh process) between 2/3
-of the estimate and the estimate.
+measured peak (the growth of the resident size's high-water mark over the resident size before the run, in a fresh
+process) between 2/3 of the estimate and the estimate.
 """
 
 from __future__ import annotations

@@ -17,6 +17,10 @@ Subcommands (each prints JSON on stdout; the key names are a stable contract):
   units; ``mean_cluster_distance`` is null with fewer than two clusters). Exit status 1 if a
   solve did not converge (the object says so), 2 on bad input.
 - ``slide``: the BEM-DEM sliding run, implemented in :mod:`tribocosim.surrogate.slide_cli`.
+
+Each estimates its peak memory before it allocates and refuses (exit 2, one line naming the size and the estimate)
+above the memory available or ``--max-memory`` (:mod:`tribocosim.surrogate.memory`). Files are written through a
+temporary name and a rename; an error names the path as the user gave it.
 """
 
 from __future__ import annotations
