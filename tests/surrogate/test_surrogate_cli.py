@@ -82,7 +82,7 @@ def test_bad_sweep_and_usage_errors(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"sweep file {f}, line 7: [grid] betas: unknown key 'betas'" in err
     assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 1
-    shipped = ['cluster_sizes', 'domain_128um', 'domain_512um', 'paper', 'quick']
+    shipped = ['cluster_sizes', 'domain_128um', 'domain_512um', 'first', 'paper', 'quick']
     assert f"preset = 'nope' is not known; available: {shipped}" in capsys.readouterr().err
     assert surrogate_cli.main(["frobnicate"]) == 2
     assert surrogate_cli.main(["build"]) == 2
