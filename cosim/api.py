@@ -19,7 +19,7 @@ import json
 import time
 from pathlib import Path
 
-from tribocosim.errors import ConvergenceError, CosimStepError, Interrupted, RunFailed, RunInterrupted
+from tribocosim.errors import ConvergenceError, CosimStepError, Interrupted, ParameterError, RunFailed, RunInterrupted
 from tribocosim.cosim.engine.graph import gauss_seidel_order
 from tribocosim.cosim.engine.schemes import LinkSpec
 from tribocosim.cosim.scene.validate import Plan
@@ -230,13 +230,27 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     Returns
     -------
     Result
+
+    Raises
+    ------
+    ParameterError
+        Before anything runs: ``overrides`` that is not a dict (or given with a plan, which is validated already), an
+        output folder that is a file (the message of ``tribocosim run``).
     """
+    if overrides is not None and (not isinstance(overrides, dict) or isinstance(scene, Plan)):
+        why = ("a validated plan takes no overrides (give them to load_scene)" if isinstance(overrides, dict) else
+               f"a {type(overrides).__name__}")
+        raise ParameterError(f"overrides = {overrides!r}: {why}; allowed: a dict of dotted scene keys and values, "
+                             "e.g. {'master.extrapolation': 1} (tribocosim run --set KEY=VALUE is its command-line "
+                             "form)")
     if not isinstance(scene, Plan):
         from tribocosim.paths import scene_file
         from tribocosim.cosim.scene.validate import load_scene
 
         scene = load_scene(scene_file(scene), overrides)
     plan = scene
+    if write:
+        _check_out_dir(Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path))
     started = time.strftime("%Y-%m-%dT%H:%M:%S+00:00", time.gmtime())  # ISO 8601, UTC, as datetime.isoformat
     t0 = time.perf_counter()
     outcome = _session(plan, progress) if loop == "auto" else None
@@ -263,6 +277,7 @@ def run(scene: str | Path | Plan, out_dir: str | Path | None = None, *, override
     result = outcome.result(meta)
     if write:
         out = Path(out_dir) if out_dir is not None else default_out_dir(plan.scene.path)
+        _check_out_dir(out)
         out.mkdir(parents=True, exist_ok=True)
         if plan.scene.output.file:
             result.csv_path = outcome.write_csv(out / plan.scene.output.file)
@@ -490,6 +505,15 @@ def _note_package(result, ssp: Path, scene: Path) -> None:
         meta = json.loads(result.metadata_path.read_text(encoding="utf-8"))
         meta.update(note)
         write_json(result.metadata_path, meta)
+
+
+def _check_out_dir(out: Path) -> None:
+    """Refuse an output folder that a file is in the way of, before the run (the messages of ``tribocosim run``)."""
+    if out.exists() and not out.is_dir():
+        raise ParameterError(f"cannot write the results into {out}: a file of that name is in the way")
+    above = next((p for p in out.parents if p.exists()), None)
+    if above is not None and not above.is_dir():
+        raise ParameterError(f"cannot make the output folder {out}: {above} is a file")
 
 
 def default_out_dir(scene_path: Path) -> Path:

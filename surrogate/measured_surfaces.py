@@ -159,20 +159,7 @@ def read_scan(path, detrend: str = "plane", fill_missing: bool = False, sha256: 
         raise ParameterError(f"measured surface file {p!r} has SHA-256 {digest}, not the {sha256} the "
                              "configuration records: the file has changed since the case was defined")
     st = surface_topography()
-    ext = os.path.splitext(p)[1].lower().lstrip(".")
-    known = {reader.format() for reader in st.IO.readers}
-    try:  # a known extension names its reader (whose message then says what is wrong with the file)
-        reader = st.open_topography(p, format=ext if ext in known else None)
-        topo = reader.topography()
-    except Exception as exc:  # noqa: BLE001 - the readers raise many types; all mean 'not readable'
-        if isinstance(exc, st.Exceptions.CannotDetectFileFormat):
-            why = f"no reader of the {len(known)} formats recognises it"
-        else:
-            lines = str(exc).strip().splitlines()
-            why = f"{type(exc).__name__}: {lines[0] if lines else ''}{' ...' if len(lines) > 1 else ''}"
-        raise ParameterError(f"measured surface file {p!r} is not a height map SurfaceTopography can read "
-                             f"({why}); allowed: the formats of SurfaceTopography.open_topography (X3P, SUR, "
-                             "DATX, PLU, OPD, AL3D, ...)") from None
+    topo = _read(p, st, lambda reader: reader.topography())
     if topo.dim != 2:
         raise ParameterError(f"measured surface file {p!r} holds a line scan (dimension {topo.dim}); "
                              "allowed: an areal map (dimension 2)")
@@ -205,6 +192,31 @@ def read_scan(path, detrend: str = "plane", fill_missing: bool = False, sha256: 
     if min(heights.shape) < 2:
         raise ParameterError(f"measured surface file {p!r} has {heights.shape} points; allowed: >= 2 x 2")
     return Scan(heights, float(dx), p, digest, detrend, n_missing)
+
+
+def _read(p: str, st, what):
+    """``what(reader)`` of the file's SurfaceTopography reader; ParameterError naming the file when it cannot be
+    read."""
+    ext = os.path.splitext(p)[1].lower().lstrip(".")
+    known = {reader.format() for reader in st.IO.readers}
+    try:  # a known extension names its reader (whose message then says what is wrong with the file)
+        return what(st.open_topography(p, format=ext if ext in known else None))
+    except Exception as exc:  # noqa: BLE001 - the readers raise many types; all mean 'not readable'
+        if isinstance(exc, st.Exceptions.CannotDetectFileFormat):
+            why = f"no reader of the {len(known)} formats recognises it"
+        else:
+            lines = str(exc).strip().splitlines()
+            why = f"{type(exc).__name__}: {lines[0] if lines else ''}{' ...' if len(lines) > 1 else ''}"
+        raise ParameterError(f"measured surface file {p!r} is not a height map SurfaceTopography can read "
+                             f"({why}); allowed: the formats of SurfaceTopography.open_topography (X3P, SUR, "
+                             "DATX, PLU, OPD, AL3D, ...)") from None
+
+
+def scan_points(path) -> int:
+    """Number of points of a measured map, from its file's header (the data are not read): what reading it
+    allocates (:func:`tribocosim.surrogate.memory.measured_bytes`)."""
+    p = _existing(path)
+    return _read(p, surface_topography(), lambda reader: math.prod(reader.default_channel.nb_grid_pts))
 
 
 def resample_centred(h: np.ndarray, pixel: float, n: int, new_pixel: float) -> np.ndarray:

@@ -17,6 +17,10 @@ Subcommands (each prints JSON on stdout; the key names are a stable contract):
   units; ``mean_cluster_distance`` is null with fewer than two clusters). Exit status 1 if a
   solve did not converge (the object says so), 2 on bad input.
 - ``slide``: the BEM-DEM sliding run, implemented in :mod:`tribocosim.surrogate.slide_cli`.
+
+Each estimates its peak memory before it allocates and refuses (exit 2, one line naming the size and the estimate)
+above the memory available or ``--max-memory`` (:mod:`tribocosim.surrogate.memory`). Files are written through a
+temporary name and a rename; an error names the path as the user gave it.
 """
 
 from __future__ import annotations
@@ -25,10 +29,13 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
+import tempfile
 import time
+from pathlib import Path
 
-from tribocosim.errors import TribocosimError
+from tribocosim.errors import ParameterError, TribocosimError
 
 _SUBCOMMANDS = {"surface": "generate a periodic self-affine rough surface (.npy)",
                 "contact": "BEM contact of a rough surface against a flat at given pressures",
@@ -70,8 +77,15 @@ def _surface_parser() -> argparse.ArgumentParser:
                       help="fill undefined points by harmonic interpolation (default: refuse the file)")
     meas.add_argument("--side", choices=("sheet", "tool"), default="sheet",
                       help="a tool is turned over about x: h(x, y) -> -h(x, -y)")
-    ap.add_argument("-o", "--output", required=True, help="output .npy file")
+    ap.add_argument("-o", "--output", required=True, help="output .npy file (.npy is added when missing)")
+    _max_memory(ap)
     return ap
+
+
+def _max_memory(ap: argparse.ArgumentParser) -> None:
+    ap.add_argument("--max-memory", default=None, metavar="SIZE",
+                    help="refuse when the estimated peak memory exceeds SIZE (e.g. 8G, 512M; powers of 1024) instead "
+                         "of the memory available (MemAvailable)")
 
 
 def _contact_parser() -> argparse.ArgumentParser:
@@ -90,6 +104,7 @@ def _contact_parser() -> argparse.ArgumentParser:
     ap.add_argument("--max-iter", type=int, default=10000, help="iteration limit")
     ap.add_argument("--threads", type=int, default=1, help="FFTW threads")
     ap.add_argument("--json", action="store_true", help="JSON lines (default: a table)")
+    _max_memory(ap)
     return ap
 
 
@@ -97,11 +112,41 @@ _GENERATION = ("hurst", "q_roll", "q_cut", "rms_slope", "rms_height", "slope_def
 _MEASURED = ("detrend", "periodization")
 
 
+def _output_file(name: str) -> Path:
+    """The ``.npy`` file ``-o`` names, refused when it (or its ``.npy`` name) is a folder or its folder is missing."""
+    out = Path(name if name.endswith(".npy") else name + ".npy")
+    given = Path(name)
+    if given.is_dir() or out.is_dir():
+        folder = given if given.is_dir() else out
+        raise ParameterError(f"-o {name}: {folder} is a folder; allowed: a file name (e.g. {folder / 'surface.npy'})")
+    if not out.parent.is_dir():
+        raise ParameterError(f"-o {name}: the folder {out.parent} does not exist; allowed: a file in an existing folder")
+    return out
+
+
+def _save_npy(out: Path, heights) -> None:
+    """Save ``heights`` to ``out`` through a temporary name in its folder and a rename (no partial file is left)."""
+    import numpy as np
+
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent)
+        with os.fdopen(fd, "wb") as fh:
+            np.save(fh, heights)
+        os.replace(tmp, out)
+    except OSError as exc:
+        raise TribocosimError(f"cannot write {out}: {exc.strerror or exc}") from None
+    finally:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+
+
 def _surface(argv: list[str]) -> int:
     ap = _surface_parser()
     args = ap.parse_args(argv)
     import numpy as np
 
+    from . import memory
     from .surfaces import rms_height, rms_slope, self_affine_surface
 
     given = [f"--{k.replace('_', '-')}" for k in (_GENERATION if args.source else _MEASURED)
@@ -112,9 +157,17 @@ def _surface(argv: list[str]) -> int:
         why = ("not allowed with --from (they shape a generated surface)" if args.source
                else "allowed only with --from FILE (a measured map)")
         ap.error(f"{', '.join(given)}: {why}")
+    limit = None if args.max_memory is None else memory.parse_bytes(args.max_memory)
+    out = _output_file(args.output)
     if args.source:
-        from .measured_surfaces import library_statistics, prepared_heights
+        from .measured_surfaces import library_statistics, prepared_heights, scan_points
 
+        periodization = args.periodization or "smooth"
+        points = scan_points(args.source)
+        memory.check(memory.Need(f"--n {args.n} with --from {args.source} ({points} points)",
+                                 memory.measured_surface_bytes(args.n, points, periodization),
+                                 f"the scan's {points} points, then up to "
+                                 f"{memory.grids(args.n, 1 + memory.LIBRARY_STATISTICS_GRIDS)}"), limit, "a smaller --n")
         detrend = args.detrend or ("mean" if args.periodization == "none" else "plane")
         h, info = prepared_heights(args.source, args.n, args.size, detrend=detrend,
                                    periodization=args.periodization or "smooth", fill_missing=args.fill_missing,
@@ -129,26 +182,34 @@ def _surface(argv: list[str]) -> int:
         if missing:
             ap.error(f"a generated surface needs {', '.join(missing)} (or --from FILE for a measured one)")
         hurst = 0.8 if args.hurst is None else args.hurst
+        memory.check(memory.Need(f"--n {args.n}", memory.surface_bytes(args.n), memory.grids(args.n, memory.SURFACE_GRIDS)),
+                     limit, "a smaller --n")
         h = self_affine_surface(args.n, args.size, hurst, args.q_roll, args.q_cut,
                                 rms_height=args.rms_height, rms_slope=args.rms_slope, seed=args.seed,
                                 slope_definition=args.slope_definition or "spectral")
         record = {"n": args.n, "size": args.size, "hurst": hurst, "q_roll": args.q_roll, "q_cut": args.q_cut,
                   "seed": args.seed}
-    out = args.output if args.output.endswith(".npy") else args.output + ".npy"
-    np.save(out, h)
+    _save_npy(out, h)
     print(json.dumps({**record, "rms_height": rms_height(h),
                       "rms_slope_spectral": rms_slope(h, args.size, "spectral"),
                       "rms_slope_finite_difference": rms_slope(h, args.size, "finite_difference"),
-                      "output": out}))
+                      "output": str(out)}))
     return 0
 
 
 def _contact(argv: list[str]) -> int:
     args = _contact_parser().parse_args(argv)
+    from . import memory
     from .bem import ContactSolver, gap_against_flat
     from .clusters import cluster_statistics
-    from .surfaces import load_height_map
+    from .surfaces import height_map_side, load_height_map
 
+    limit = None if args.max_memory is None else memory.parse_bytes(args.max_memory)
+    n = height_map_side(args.surface)
+    if n is not None:  # else load_height_map says what is wrong with the file
+        grids = memory.CONTACT_GRIDS + (3.0 if len(args.pressure) > 1 else 0.0)
+        memory.check(memory.Need(f"--surface {args.surface} ({n} x {n} points)", memory.contact_bytes(n, len(args.pressure)),
+                                 memory.grids(n, grids)), limit, "a smaller map")
     h = load_height_map(args.surface)
     gap = gap_against_flat(h)
     solver = ContactSolver(h.shape[0], args.size, args.e_star, p_crit=args.p_crit, tol=args.tol,
@@ -204,6 +265,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         return handlers[name](rest)
-    except (TribocosimError, OSError) as exc:
+    except TribocosimError as exc:
         print(f"tribocosim meso {name}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # the path as the user gave it, the reason in words
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"tribocosim meso {name}: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2

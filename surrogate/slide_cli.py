@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribocosim.errors import TribocosimError
+from tribocosim.errors import MemoryLimitError, ParameterError, TribocosimError
 
 UNITS = {"slide_distance": "m", "contact_fraction": "1", "particle_fraction": "1",
          "particle_fraction_clusters": "1", "n_blocked": "1", "n_blocked_clusters": "1",
@@ -42,8 +42,14 @@ def _version() -> str:
 
 def _atomic(path: Path, write) -> None:
     tmp = path.with_name(path.name + ".tmp")
-    write(tmp)
-    os.replace(tmp, path)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:  # named by the file the user asked for, not by the temporary one
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
+    finally:
+        if tmp.exists():
+            tmp.unlink()
 
 
 def write_result(result, out: Path) -> dict:
@@ -119,9 +125,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", required=True, help="output directory")
     ap.add_argument("--plot", action="store_true", help="also write Fig. 9/10-style PNGs")
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    ap.add_argument("--max-memory", default=None, metavar="SIZE",
+                    help="refuse when the estimated peak memory exceeds SIZE (e.g. 8G, 512M; powers of 1024) instead "
+                         "of the memory available (MemAvailable)")
     args = ap.parse_args(argv)
 
-    from .coupling import run_slide
+    from . import memory
     from .slide_config import SlideConfig
 
     def progress(k, rec):
@@ -130,18 +139,49 @@ def main(argv: list[str] | None = None) -> int:
                   f"A_p/A0 = {rec['particle_fraction']:.5f}, blocked = {rec['n_blocked']}",
                   flush=True)
 
+    out = Path(args.out)
     try:
+        if out.exists() and not out.is_dir():
+            raise ParameterError(f"--out {args.out} is a file; allowed: a folder (made if missing)")
         cfg = SlideConfig.from_toml(args.config)
+        limit = None if args.max_memory is None else memory.parse_bytes(args.max_memory)
+        memory.check(slide_need(cfg, args.config), limit, "a smaller n, or fewer snapshots")
+    except MemoryLimitError as exc:
+        print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
+        return 2
+    except TribocosimError as exc:
+        print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
+        return 1
+    from .coupling import run_slide
+
+    try:
         result = run_slide(cfg, progress=progress)
     except TribocosimError as exc:
         print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
         return 1
-    out = Path(args.out)
-    summary = write_result(result, out)
-    if args.plot:
-        plot_result(result, out)
+    try:
+        summary = write_result(result, out)
+        if args.plot:
+            plot_result(result, out)
+    except OSError as exc:
+        print(f"tribocosim meso slide: error: cannot write the results into {args.out}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 2
     print(json.dumps(summary, indent=2))
     return 0
+
+
+def slide_need(cfg, source: str):
+    """What the slide of ``cfg`` (read from ``source``) will allocate (:func:`tribocosim.surrogate.memory.
+    slide_bytes`), with its measured files' points."""
+    from . import memory
+    from .measured_surfaces import scan_points
+
+    points = {side: scan_points(getattr(cfg, f"{side}_file")) for side in ("sheet", "tool")
+              if getattr(cfg, f"{side}_file") is not None}
+    how = (f"{memory.grids(cfg.n, memory.SLIDE_GRIDS)} in a sliding step, and the slide's compiled code"
+           + (f"; measured scans of {', '.join(str(v) for v in points.values())} points" if points else ""))
+    return memory.Need(f"n = {cfg.n} ({source})", memory.slide_bytes(cfg, points), how)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -10,6 +10,10 @@ A TOML file holds the same keys, either at the top level or under a ``[slide]`` 
 
 Unknown keys are reported all at once.
 
+The keys that shape a generated surface (``hurst``, ``wavelength_ratio``, ``sheet_rms_height``, ``tool_rms_height``
+and the roll-off wavelengths) apply only to the sides generated, and are checked only for these: a pair of measured
+files (``sheet_file``, ``tool_file``) leaves them unchecked, whatever their defaults (:attr:`SlideConfig.generated_sides`).
+
 The roll-off wavelengths (``sheet_rolloff_wavelength``, ``tool_rolloff_wavelength``) default to None,
 a pure power law, and :meth:`SlideConfig.to_dict` leaves them out while they are None; so is
 ``oil_viscosity`` when the expert override ``damping_rate`` is given instead.
@@ -211,11 +215,13 @@ class SlideConfig:
         check_range("v0", self.v0, unit="m/s", **pos)
         check_range("e_star", self.e_star, unit="Pa", **pos)
         check_range("p_crit", self.p_crit, unit="Pa", **pos)
-        check_range("hurst", self.hurst, 0.0, 1.0, low_inclusive=False)
-        check_range("wavelength_ratio", self.wavelength_ratio, 2.0 / self.n, 1.0)
-        check_range("sheet_rms_height", self.sheet_rms_height, unit="m", **pos)
-        check_range("tool_rms_height", self.tool_rms_height, unit="m", **pos)
-        for name in ("sheet_rolloff_wavelength", "tool_rolloff_wavelength"):
+        generated = self.generated_sides
+        if generated:  # the keys that shape a generated surface: not checked for a measured pair (module docstring)
+            check_range("hurst", self.hurst, 0.0, 1.0, low_inclusive=False)
+            check_range("wavelength_ratio", self.wavelength_ratio, 2.0 / self.n, 1.0)
+        for side in generated:
+            check_range(f"{side}_rms_height", getattr(self, f"{side}_rms_height"), unit="m", **pos)
+        for name in (f"{side}_rolloff_wavelength" for side in generated):
             value = getattr(self, name)
             if value is None:
                 continue
@@ -289,6 +295,13 @@ class SlideConfig:
         check_range("bem_tol", self.bem_tol, 0.0, 1.0, low_inclusive=False)
         _int("bem_max_iter", self.bem_max_iter, 1)
         _int("threads", self.threads, 1)
+
+    @property
+    def generated_sides(self) -> tuple[str, ...]:
+        """The sides ("sheet", "tool") generated as self-affine surfaces: those without a measured file. The keys that
+        shape a generated surface (``hurst``, ``wavelength_ratio``, the side's ``*_rms_height`` and
+        ``*_rolloff_wavelength``) apply to these only, and are checked for these only."""
+        return tuple(side for side in ("sheet", "tool") if getattr(self, f"{side}_file") is None)
 
     @property
     def overdamped(self) -> bool:
@@ -374,15 +387,22 @@ class SlideConfig:
         return d
 
     @classmethod
-    def from_dict(cls, data: dict) -> "SlideConfig":
-        """Build from a dict, reporting every unknown key at once."""
+    def from_dict(cls, data: dict, where: str = "the configuration") -> "SlideConfig":
+        """Build from a dict, reporting every unknown key at once; an error about a key the dict does not hold says
+        that the value is the default and that ``where`` sets it."""
         data = dict(data.get("slide", data))
         names = {f.name for f in fields(cls)}
         unknown = sorted(set(data) - names)
         if unknown:
             raise ParameterError(f"unknown slide configuration keys {unknown}; "
                                  f"allowed: {sorted(names)}")
-        return cls(**data)
+        try:
+            return cls(**data)
+        except ParameterError as exc:
+            key = error_key(exc)
+            if key is None or key in data:
+                raise
+            raise ParameterError(f"{exc} ({key} is not set: this is its default; set {key} in {where})") from None
 
     @classmethod
     def from_toml(cls, path) -> "SlideConfig":
@@ -396,7 +416,14 @@ class SlideConfig:
         except tomllib.TOMLDecodeError as exc:
             raise ParameterError(f"configuration file {str(path)!r} is not valid TOML: {exc}") \
                 from None
-        return cls.from_dict(data)
+        return cls.from_dict(data, f"{path}")
+
+
+def error_key(exc: ParameterError) -> str | None:
+    """The SlideConfig key a ParameterError of :meth:`SlideConfig.__post_init__` is about (its messages start with
+    the key), or None."""
+    word = str(exc).split(" ", 1)[0]
+    return word if word in {f.name for f in fields(SlideConfig)} else None
 
 
 def _number(name: str, value, unit: str) -> None:

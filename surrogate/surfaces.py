@@ -396,6 +396,27 @@ def summit_count(h) -> int:
     return int(peak.sum())
 
 
+def height_map_side(path) -> int | None:
+    """Points per side of the height map in a file, from its header alone (what :func:`load_height_map` will
+    allocate): an ``.npy`` file's first dimension, a text grid's numbers on its first line of data; None when the
+    file does not tell (:func:`load_height_map` then says what is wrong with it)."""
+    p = os.fspath(path)
+    try:
+        with open(p, "rb") as fh:
+            if p.lower().endswith(".npy"):
+                version = np.lib.format.read_magic(fh)
+                shape = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
+                         else np.lib.format.read_array_header_2_0(fh))[0]
+                return int(shape[0]) if shape else None
+            for raw in fh:
+                line = raw.decode("utf-8", errors="replace").split("#", 1)[0].strip()
+                if line:
+                    return len(line.replace(",", " ").split())
+    except (OSError, ValueError):
+        return None
+    return None
+
+
 def load_height_map(path) -> np.ndarray:
     """Load a measured or generated height map (m) from ``.npy`` or a plain-text grid.
 

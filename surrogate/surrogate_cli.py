@@ -4,9 +4,10 @@ Subcommands::
 
     tribocosim surrogate build (--sweep FILE | --preset NAME) --out DIR [--workers N]
                                [--scheduler tcp://HOST:PORT] [--table PATH] [--no-retry-failed] [--allow-failed]
-                               [--quiet]
-    tribocosim surrogate table --out DIR [--table PATH] [--allow-failed]   # fits + table from the finished cases
-    tribocosim surrogate show TABLE [--plot PNG | --no-plot]
+                               [--max-memory SIZE] [--quiet]
+    tribocosim surrogate table --out DIR [--table PATH] [--allow-failed] [--max-memory SIZE]
+                                                          # fits + table from the finished cases
+    tribocosim surrogate show TABLE [--out DIR | --plot PNG | --no-plot]
     tribocosim surrogate compare TABLE_A TABLE_B          # node by node, against their standard errors
     tribocosim surrogate verify TABLE [--budget-s S] [--workers N]   # rerun a sample of its recorded cases
     tribocosim surrogate presets                          # list the presets
@@ -17,8 +18,12 @@ The table is written only when every case of the campaign is finished and intact
 finished ones), to a temporary name that replaces the old table only once it reads back: a build or ``table``
 that fails leaves the old table as it was. SIGINT (Ctrl-C) or SIGTERM stops ``build`` within a second: the cases
 finished before it are kept, the slides in progress discarded (:mod:`tribocosim.interrupt`).
+Before any case runs, ``build`` and ``verify`` estimate the memory of their local workers together (workers x the
+peak of a case, :mod:`tribocosim.surrogate.memory`), and ``build`` and ``table`` that of the table build, and
+refuse when it exceeds the memory available or ``--max-memory``.
 Exit status: 0 on success; 1 on bad input, when cases failed, are missing or refused (no table is written
-then, unless ``--allow-failed``); 2 on usage errors; 128 + the signal's number when a signal stopped it.
+then, unless ``--allow-failed``); 2 on usage errors and on a refusal for memory; 128 + the signal's number when a
+signal stopped it.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ import sys
 import time
 from pathlib import Path
 
-from tribocosim.errors import CampaignInterrupted, TribocosimError
+from tribocosim.errors import CampaignInterrupted, MemoryLimitError, TribocosimError
 
 PROG = "tribocosim surrogate"
 #: at most this many files are named per kind of unfinished case
@@ -48,7 +53,7 @@ def _usage() -> str:
 
 
 def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None = None, *,
-                allow_failed: bool = False, command: str = "table") -> int:
+                allow_failed: bool = False, command: str = "table", max_memory: int | None = None) -> int:
     from tribocosim.components.stripdraw.table import read_table
 
     from .campaign import load_records
@@ -56,6 +61,7 @@ def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None =
     from .table_build import build_table, describe
 
     manifest, done, unfinished = load_records(out)
+    _check_table_memory(manifest, max_memory)
     path = table_path or out / "friction_table.npz"
     legacy = sum(1 for r in done if DIGEST_KEY not in r)
     if legacy:
@@ -79,6 +85,47 @@ def _make_table(out: Path, table_path: Path | None, campaign_info: dict | None =
               f"{len(unfinished)} case(s) are not finished (listed in its metadata):\n"
               + _describe_unfinished(unfinished), file=sys.stderr)
     return 0
+
+
+def _check_table_memory(manifest: dict, max_memory: int | None) -> None:
+    """Refuse a table build whose surface statistics (every pair generated on the sweep's grid) exceed the limit."""
+    from . import memory
+    from .measured_surfaces import scan_points
+    from .slide_config import SlideConfig
+
+    sweep = manifest.get("sweep") or {}
+    slide, worst, n = sweep.get("slide", {}), 0, 0
+    for surf in sweep.get("surfaces", []):
+        cfg = SlideConfig(**{**slide, **surf})
+        files = [scan_points(getattr(cfg, f"{side}_file")) for side in ("sheet", "tool")
+                 if getattr(cfg, f"{side}_file") is not None]
+        size = memory.table_bytes(cfg.n, max(files, default=0), cfg.surface_periodization or "smooth")
+        if size > worst:
+            worst, n = size, cfg.n
+    if worst:
+        memory.check(memory.Need(f"the table build's surface statistics on the n = {n} grid", worst,
+                                 memory.grids(n, memory.TABLE_PAIR_GRIDS)), max_memory, "a smaller grid")
+
+
+def _check_campaign_memory(configs, n_cases: int, label: str, executor, max_memory: int | None) -> None:
+    """Refuse a campaign whose local workers, each running a case, would exceed the limit together; on a Dask
+    cluster (whose workers' memory is not known here) one case against ``--max-memory`` when it is given."""
+    from . import memory
+
+    case = memory.case_need(configs, label)
+    workers = getattr(executor, "workers", None)
+    if workers is None:
+        if max_memory is not None:
+            memory.check(case, max_memory, "a smaller grid")
+        return
+    memory.check(memory.workers_need(case, min(workers, max(n_cases, 1))), max_memory,
+                 "fewer --workers or a smaller grid")
+
+
+def _max_memory(ap: argparse.ArgumentParser) -> None:
+    ap.add_argument("--max-memory", default=None, metavar="SIZE",
+                    help="refuse when the estimated peak memory exceeds SIZE (e.g. 8G, 512M; powers of 1024) instead "
+                         "of the memory available (MemAvailable)")
 
 
 def _describe_unfinished(unfinished: list[dict]) -> str:
@@ -148,16 +195,25 @@ def _build(argv: list[str]) -> int:
                     help="build the table from the finished cases when others failed or are missing")
     ap.add_argument("--no-table", action="store_true", help="run the cases only")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
+    _max_memory(ap)
     args = ap.parse_args(argv)
 
     from tribocosim import interrupt
-    from .campaign import case_cpu_seconds, load_records, run_sweep
+    from . import memory
+    from .campaign import case_cpu_seconds, expand_cases, load_records, run_sweep
     from .executors import make_executor
     from .sweep import load_preset, load_sweep
 
     try:
         sweep = load_preset(args.preset) if args.preset else load_sweep(args.sweep)
+        limit = None if args.max_memory is None else memory.parse_bytes(args.max_memory)
         executor = make_executor(args.workers, args.scheduler)
+        cases = expand_cases(sweep)
+        pairs = {c.labels.get("surface"): c.config for c in cases}  # the grid and files of each surface pair
+        _check_campaign_memory(list(pairs.values()), len(cases), f"sweep {sweep.name}", executor, limit)
+    except MemoryLimitError as exc:
+        print(f"{PROG} build: error: {exc}", file=sys.stderr)
+        return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
         return 1
@@ -184,7 +240,10 @@ def _build(argv: list[str]) -> int:
             "cases_skipped_this_run": len(report.skipped)}
     try:
         status = _make_table(out, Path(args.table) if args.table else None, info, allow_failed=args.allow_failed,
-                             command="build")
+                             command="build", max_memory=limit)
+    except MemoryLimitError as exc:
+        print(f"{PROG} build: error: {exc}", file=sys.stderr)
+        return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
         return 1
@@ -214,9 +273,16 @@ def _table(argv: list[str]) -> int:
     ap.add_argument("--table", default=None, help="table path (default OUT/friction_table.npz)")
     ap.add_argument("--allow-failed", action="store_true",
                     help="build the table from the finished cases when others failed or are missing")
+    _max_memory(ap)
     args = ap.parse_args(argv)
+    from . import memory
+
     try:
-        return _make_table(Path(args.out), Path(args.table) if args.table else None, allow_failed=args.allow_failed)
+        return _make_table(Path(args.out), Path(args.table) if args.table else None, allow_failed=args.allow_failed,
+                           max_memory=None if args.max_memory is None else memory.parse_bytes(args.max_memory))
+    except MemoryLimitError as exc:
+        print(f"{PROG} table: error: {exc}", file=sys.stderr)
+        return 2
     except TribocosimError as exc:
         print(f"{PROG} table: error: {exc}", file=sys.stderr)
         return 1
@@ -225,10 +291,14 @@ def _table(argv: list[str]) -> int:
 def _show(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog=f"{PROG} show", description="summary and mu-vs-P plot of a table")
     ap.add_argument("table", help="friction table (.npz)")
-    ap.add_argument("--plot", default=None, help="PNG path (default ./<table stem>_mu_vs_P.png)")
-    ap.add_argument("--no-plot", action="store_true")
+    where = ap.add_mutually_exclusive_group()
+    where.add_argument("--out", default=None, metavar="DIR",
+                       help="folder of the plot <table stem>_mu_vs_P.png (default: the table's folder)")
+    where.add_argument("--plot", default=None, metavar="PNG", help="the plot's file")
+    where.add_argument("--no-plot", action="store_true")
     args = ap.parse_args(argv)
     from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import MODELS_DIR
 
     from .table_build import describe, plot_table
 
@@ -238,10 +308,26 @@ def _show(argv: list[str]) -> int:
         print(f"{PROG} show: error: {exc}", file=sys.stderr)
         return 1
     print(describe(table))
-    if not args.no_plot:
-        png = Path(args.plot) if args.plot else Path(f"{Path(args.table).stem}_mu_vs_P.png")
+    if args.no_plot:
+        return 0
+    name = f"{Path(args.table).stem}_mu_vs_P.png"
+    if args.plot:
+        png = Path(args.plot)
+    elif args.out:
+        png = Path(args.out) / name
+    elif Path(args.table).resolve().parent == MODELS_DIR.resolve():  # the package's own folder: not a place to write
+        print(f"{PROG} show: the plot is not written beside a table of the package ({MODELS_DIR}); --out DIR or "
+              "--plot PNG writes it", file=sys.stderr)
+        return 0
+    else:
+        png = Path(args.table).parent / name
+    try:
+        png.parent.mkdir(parents=True, exist_ok=True)
         plot_table(table, png)
-        print(f"plot: {png}")
+    except OSError as exc:
+        print(f"{PROG} show: error: cannot write the plot {png}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    print(f"plot: {png}")
     return 0
 
 
@@ -272,10 +358,12 @@ def _verify(argv: list[str]) -> int:
                     help="recorded wall seconds the sample may add up to (default 300)")
     ap.add_argument("--workers", type=int, default=None, help="local worker processes (default: CPUs)")
     ap.add_argument("--json", default=None, help="write the per-case results here")
+    _max_memory(ap)
     args = ap.parse_args(argv)
     from tribocosim.components.stripdraw.table import read_table
 
     from tribocosim import interrupt
+    from . import memory
     from .campaign import write_json
     from .executors import make_executor
     from .table_build import json_clean
@@ -288,6 +376,8 @@ def _verify(argv: list[str]) -> int:
             sample = sample_cases(recorded_cases(table), args.budget_s)
             n = table.metadata["campaign"]["sweep"]["slide"].get("n", 256)
             executor = make_executor(args.workers)
+            _check_campaign_memory([r.case.config for r in sample], len(sample), f"the sample of {args.table}", executor,
+                                   None if args.max_memory is None else memory.parse_bytes(args.max_memory))
             try:
                 results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table))
             finally:
@@ -295,6 +385,9 @@ def _verify(argv: list[str]) -> int:
         except CampaignInterrupted as exc:
             print(f"{PROG} verify: {exc}; nothing compared", file=sys.stderr)
             return 128 + exc.signum
+        except MemoryLimitError as exc:
+            print(f"{PROG} verify: error: {exc}", file=sys.stderr)
+            return 2
         except TribocosimError as exc:
             print(f"{PROG} verify: error: {exc}", file=sys.stderr)
             return 1

@@ -22,6 +22,7 @@ by every slide. Example (SI units everywhere)::
     [[surfaces]]                   # surface pairs; the ensemble runs over surfaces x seeds
     sheet_seed = 1
     tool_seed = 2                  # optional: wavelength_ratio, hurst, *_rms_height, *_rolloff_wavelength
+                                   # (they shape generated sides only: a measured pair does not check them)
 
     [[surfaces]]                   # a measured sheet (any format SurfaceTopography reads; the measured extra)
     sheet_file = "scans/sheet.x3p" # relative to the sweep file's folder
@@ -62,7 +63,7 @@ from pathlib import Path
 from tribocosim.errors import ParameterError
 
 from .measured_surfaces import MEASURED_KEYS, file_sha256
-from .slide_config import SlideConfig
+from .slide_config import SlideConfig, error_key
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 
@@ -161,8 +162,9 @@ class Sweep:
     source: str = ""
 
     def base_config(self) -> SlideConfig:
-        """The SlideConfig of the [slide] section alone (domain, moduli and other shared settings)."""
-        return SlideConfig(**self.slide)
+        """The SlideConfig of the [slide] section with the first surface pair: the domain, moduli and other settings
+        every slide shares (a pair's keys apply to its generated sides, which [slide] alone does not know)."""
+        return SlideConfig(**{**self.slide, **self.surfaces[0]})
 
     def flake_beta(self, count: int, diameter: float) -> float:
         """beta = count pi (d/2)^2 / L^2 (Eq. 10) on this sweep's domain."""
@@ -311,6 +313,48 @@ def _measured_file(chk: _Checker, entry: dict, side: str, folder: Path, index: i
     entry[key], entry[f"{key}_sha256"] = str(path), digest
 
 
+def _surfaces(chk: _Checker, data: dict, slide: dict, source: str) -> list[dict]:
+    """The [[surfaces]] entries, each checked together with [slide] as the slides of the pair will be made: the keys
+    that shape a generated surface apply to the pair's generated sides only (:attr:`SlideConfig.generated_sides`),
+    so [slide] is never checked alone. An error about a key neither sets is about its default and says so."""
+    defaults = {f.name: f.default for f in fields(SlideConfig)}
+    surfaces_raw = data.get("surfaces", [{"sheet_seed": defaults["sheet_seed"], "tool_seed": defaults["tool_seed"]}])
+    if not isinstance(surfaces_raw, list) or not surfaces_raw:
+        chk.fail("", "surfaces", "must be one or more [[surfaces]] entries")
+    surfaces = []
+    for i, s in enumerate(surfaces_raw):
+        if not isinstance(s, dict):
+            chk.fail("surfaces", None, f"= {s!r}; a table of keys is required", i)
+        chk.unknown("surfaces", s, SURFACE_KEYS, i)
+        s = dict(s)
+        for side in ("sheet", "tool"):
+            key = f"{side}_seed"
+            if key not in s and f"{side}_file" not in s:
+                chk.fail("surfaces", None, f"key {key!r} (or {side}_file) is missing", i)
+            if key in s and (isinstance(s[key], bool) or not isinstance(s[key], int) or s[key] < 0):
+                chk.fail("surfaces", key, f"= {s[key]!r}; an integer >= 0 is required", i)
+            if f"{side}_file" in s:
+                _measured_file(chk, s, side, Path(source).parent if source != "<string>" else Path.cwd(), i)
+        try:
+            SlideConfig(**{**slide, **s})
+        except ParameterError as exc:
+            key = error_key(exc)
+            if key in s:
+                chk.fail("surfaces", key, str(exc), i)
+            elif key in slide:
+                chk.fail("slide", key, str(exc))
+            elif key is not None:
+                where = "[slide] or in this [[surfaces]] entry" if key in SURFACE_KEYS else "[slide]"
+                chk.fail("surfaces", None, f"{exc} ({key} is not set: this is its default; set {key} in {where})", i)
+            chk.fail("slide", None, str(exc))
+        except TypeError as exc:  # pragma: no cover - unknown keys are caught above
+            chk.fail("slide", None, str(exc))
+        if dict(s) in surfaces:
+            chk.fail("surfaces", "sheet_seed", "entry is repeated", i)
+        surfaces.append(dict(s))
+    return surfaces
+
+
 def parse_sweep(text: str, source: str = "<string>") -> Sweep:
     """Validate the TOML ``text`` of a sweep (``source`` names it in messages)."""
     chk = _Checker(text, source)
@@ -339,13 +383,8 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         if key in SWEPT_KEYS:
             chk.fail("slide", key, f"is swept by the grid/flakes/surfaces and is not allowed in [slide]")
     chk.unknown("slide", slide, allowed_slide)
-    try:
-        base = SlideConfig(**slide)
-    except ParameterError as exc:
-        key = str(exc).split(" ", 1)[0]
-        chk.fail("slide", key if key in slide else None, str(exc))
-    except TypeError as exc:  # pragma: no cover - unknown keys are caught above
-        chk.fail("slide", None, str(exc))
+    surfaces = _surfaces(chk, data, slide, source)
+    base = SlideConfig(**{**slide, **surfaces[0]})  # size and p_crit: [slide]'s, the same for every pair
 
     pressures = chk.numbers("grid", "pressure", grid["pressure"])
     for p in pressures:
@@ -393,30 +432,6 @@ def parse_sweep(text: str, source: str = "<string>") -> Sweep:
         if not any(level.at(p, v) for p in pressures for v in velocities):
             chk.fail("flakes", "min_pressure", "selects no grid point", i)
         flakes.append(level)
-
-    surfaces_raw = data.get("surfaces", [{"sheet_seed": base.sheet_seed, "tool_seed": base.tool_seed}])
-    if not isinstance(surfaces_raw, list) or not surfaces_raw:
-        chk.fail("", "surfaces", "must be one or more [[surfaces]] entries")
-    surfaces = []
-    for i, s in enumerate(surfaces_raw):
-        chk.unknown("surfaces", s, SURFACE_KEYS, i)
-        s = dict(s)
-        for side in ("sheet", "tool"):
-            key = f"{side}_seed"
-            if key not in s and f"{side}_file" not in s:
-                chk.fail("surfaces", None, f"key {key!r} (or {side}_file) is missing", i)
-            if key in s and (isinstance(s[key], bool) or not isinstance(s[key], int) or s[key] < 0):
-                chk.fail("surfaces", key, f"= {s[key]!r}; an integer >= 0 is required", i)
-            if f"{side}_file" in s:
-                _measured_file(chk, s, side, Path(source).parent if source != "<string>" else Path.cwd(), i)
-        try:
-            SlideConfig(**{**slide, **s})
-        except ParameterError as exc:
-            key = str(exc).split(" ", 1)[0]
-            chk.fail("surfaces", key if key in s else None, str(exc), i)
-        if dict(s) in surfaces:
-            chk.fail("surfaces", "sheet_seed", "entry is repeated", i)
-        surfaces.append(dict(s))
 
     tbl = data.get("table", {})
     chk.unknown("table", tbl, _TABLE_KEYS)

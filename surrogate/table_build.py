@@ -232,7 +232,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     if not sweep.get("particle_free", True):
         raise TableError("the sweep has no particle-free cases (particle_free = false); A_c at beta = 0 and tau0 "
                          "need them")
-    base = SlideConfig(**sweep["slide"])
+    base = SlideConfig(**{**sweep["slide"], **sweep["surfaces"][0]})  # [slide] checked with a pair (sweep.py)
     e_star, p_crit, n_pixels = base.e_star, base.p_crit, base.n * base.n
     tset = sweep["table"]
     mu0 = float(tset["mu0"])

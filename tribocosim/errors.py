@@ -16,6 +16,9 @@ One small hierarchy so that callers can catch what they can handle:
 - ``Interrupted``: work stopped by a signal (SIGINT, SIGTERM; :mod:`tribocosim.interrupt`): ``CampaignInterrupted``
   (its finished cases are kept), ``RunInterrupted`` (a co-simulation run: its accepted steps are written),
   ``SweepInterrupted`` (a sweep of runs: its finished cases are kept).
+- ``MemoryLimitError``: a command would need more memory than it may take; refused before it allocates.
+- ``RangeWarning`` (a warning category, also a ``RuntimeWarning``): a model's input or output outside the range it
+  is built for; the model still computes, the results from there on are outside what it describes.
 """
 
 from __future__ import annotations
@@ -152,6 +155,20 @@ class RunInterrupted(Interrupted):
     def __init__(self, message: str, signum: int, result=None) -> None:
         super().__init__(message, signum)
         self.result = result
+
+
+class MemoryLimitError(TribocosimError):
+    """A command would need more memory than the limit (the memory available, or the user's ``--max-memory``);
+    ``need`` and ``limit`` in bytes. Raised before the allocation."""
+
+    def __init__(self, message: str, need: int = 0, limit: int = 0) -> None:
+        super().__init__(message)
+        self.need = int(need)
+        self.limit = int(limit)
+
+
+class RangeWarning(RuntimeWarning):
+    """A model's input or output is outside the range it is built for (a component's declared port range)."""
 
 
 def check_finite(name: str, value: float) -> float:

@@ -2,7 +2,8 @@
 
     tribocosim fmu build [--out DIR] [--only NAME ...] [--platform P ...] [--fmi {2,3}]
         the FMUs (C; binaries for linux64, win64, darwin64 (universal: Intel and Apple Silicon); with --fmi 3
-        also aarch64-linux and aarch64-darwin), into build/fmus;
+        also aarch64-linux and aarch64-darwin), into build/fmus; one line on stderr before each FMU's compile for
+        each platform and before its validation; the paths built on stdout;
         --fmi 3: FMI 3.0 co-simulation variants of the native FMUs, same file names (StripDraw.fmu...),
         into build/fmus/fmi3 unless --out is given
     tribocosim fmu list                                  the FMUs this project builds
@@ -65,7 +66,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     out = args.out or (DEFAULT_OUT_FMI3 if args.fmi == 3 else DEFAULT_OUT)
     try:
-        built = build_native_fmus(out, args.only, args.platform or PLATFORMS, fmi_version=args.fmi)
+        built = build_native_fmus(out, args.only, args.platform or PLATFORMS, fmi_version=args.fmi,
+                                  progress=lambda line: print(f"tribocosim fmu build: {line}", file=sys.stderr,
+                                                              flush=True))
     except FmuBuildError as exc:
         print(f"tribocosim fmu build: {exc}", file=sys.stderr)
         return 1

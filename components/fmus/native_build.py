@@ -254,9 +254,10 @@ def model_description(comp: Component, fmu_guid: str) -> str:
 
 
 def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, digest: str | None = None,
-                     fmi_version: int = 2) -> dict:
+                     fmi_version: int = 2, progress=None) -> dict:
     """Generate the headers of FMU ``name`` into ``folder/include`` and compile its binaries into
-    ``folder/`` at their places in the FMU (:func:`binary_path`); returns ``{platform: library path}``."""
+    ``folder/`` at their places in the FMU (:func:`binary_path`); returns ``{platform: library path}``.
+    ``progress(platform)`` is called before each platform's compile."""
     comp = component(name)
     folder = Path(folder)
     include = folder / "include"
@@ -271,6 +272,8 @@ def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, 
     built = {}
     for platform, target in _targets(platforms, fmi_version).items():
         out = folder / binary_path(name, platform, fmi_version)
+        if progress is not None:
+            progress(platform)
         try:
             built[platform] = compiler.compile_shared(sources(comp, fmi_version), out, target, **headers)
         except compiler.CompileError as exc:
@@ -279,11 +282,12 @@ def compile_binaries(name: str, folder: str | os.PathLike, platforms=PLATFORMS, 
 
 
 def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORMS,
-                      fmi_version: int = 2) -> dict[str, Path]:
+                      fmi_version: int = 2, progress=None) -> dict[str, Path]:
     """Build native FMUs into ``out_dir`` and return ``{name: path to .fmu}`` (see the module docstring).
 
     ``fmi_version`` 2 or 3; the file names are the same (``<ModelIdentifier>.fmu``), so FMUs of the two
-    versions go to different folders.
+    versions go to different folders. ``progress(line)``, if given, receives one line before each compile (the FMU,
+    the FMI version, the platform, its number among all) and before each validation.
 
     Raises
     ------
@@ -298,7 +302,16 @@ def build_native_fmus(out_dir: str | os.PathLike, names=None, platforms=PLATFORM
         for path in component(name).resource_files:
             if not path.is_file():
                 raise FmuBuildError(f"FMU {name}: required file {path} is missing")
-    return {name: _build_one(name, out, tuple(platforms), fmi_version) for name in selected}
+    total = len(selected) * len(_targets(platforms, fmi_version))
+    done = iter(range(1, total + 1))
+
+    def line(name: str):
+        if progress is None:
+            return None
+        return lambda platform: progress(f"compiling {name} (FMI {fmi_version}.0) for {platform} "
+                                         f"({next(done)}/{total})")
+
+    return {name: _build_one(name, out, tuple(platforms), fmi_version, line(name), progress) for name in selected}
 
 
 #: the time stamp of every member of a native FMU's zip: a fixed one (the earliest a zip can hold), so that two builds
@@ -315,13 +328,13 @@ def _member(z: zipfile.ZipFile, name: str, data: bytes) -> None:
     z.writestr(info, data)
 
 
-def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
+def _build_one(name: str, out: Path, platforms, fmi_version: int, compiling=None, progress=None) -> Path:
     comp = component(name)
     digest = source_digest(name, fmi_version)
     targets = _targets(platforms, fmi_version)
     with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp:
         stage = Path(tmp)
-        compile_binaries(name, stage, platforms, digest, fmi_version)
+        compile_binaries(name, stage, platforms, digest, fmi_version, compiling)
         partial = out / f".{name}.{os.getpid()}.partial.fmu"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             _member(z, "modelDescription.xml", description(comp, guid(digest), fmi_version).encode("utf-8"))
@@ -336,6 +349,8 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int) -> Path:
                 _member(z, "resources/", b"")
     # the platforms whose binaries the zip holds (FMI 2.0 has no ARM Linux folder, and darwin64 serves both Macs)
     held = sorted(targets)
+    if progress is not None:
+        progress(f"validating {name}.fmu (fmpy validate)")
     return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
                                                     "source_digest": digest, "platforms": held,
                                                     "python": sys.version.split()[0], "ziglang": compiler.zig_version()})

@@ -22,18 +22,27 @@ Outputs (one pad, one face; ``pull_force`` for the whole strip), functions of th
 - ``beta_mean`` (contact-weighted, under the pad), ``beta_max`` (whole strip);
 - ``contact_pressure`` P, ``grip_position`` (grip displacement), ``table_clamp_count``
   (cumulative number of nodal table lookups outside the table, under the clamp policy).
+
+Inputs are checked as the FMU checks them: ``step`` refuses a missing input, an unknown name and a value that is
+not a number (ParameterError, the state unchanged), and warns (:class:`tribocosim.errors.RangeWarning`) when a step
+takes an input outside the range the component declares for it (:mod:`.ports`: a grip moving backwards), or when an
+output leaves its range after a step (the grip beyond ``draw_length``: the strip's tail runs into the pad; a nominal
+pressure above the hardness), once each time it leaves it.
 """
 
 from __future__ import annotations
 
 import ctypes
+import numbers
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from tribocosim.errors import ConvergenceError, ParameterError, TableDomainError
+from tribocosim.errors import ConvergenceError, ParameterError, RangeWarning, TableDomainError
 from tribocosim.components.native.toolchain.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
+from tribocosim.components.stripdraw.ports import INPUTS, OUTPUTS
 
 OUTPUT_NAMES = (
     "pull_force",
@@ -47,6 +56,7 @@ OUTPUT_NAMES = (
     "table_clamp_count",
 )
 INPUT_NAMES = ("normal_force", "grip_velocity")
+_UNITS = {p.name: p.unit for p in (*INPUTS, *OUTPUTS)}
 
 # enum tc_stripdraw_nodal and enum tc_stripdraw_info (tc_stripdraw.h)
 _NODAL = {"X": 0, "U": 1, "V": 2, "A": 3, "Up": 4, "beta": 5, "slip_rate": 6, "contact_weight": 7, "mass": 8,
@@ -116,6 +126,12 @@ class StripDrawModel:
         self._out = (ctypes.c_double * len(OUTPUT_NAMES))()
         self._out_p = ctypes.cast(self._out, DBL_P)
         self._held_p = ctypes.cast(self._held, DBL_P)
+        # the declared ranges (ports.py) with their parameter bounds evaluated, and whether each is left now
+        value_of = lambda name: float(getattr(params, name))  # noqa: E731
+        self._bounds = [(is_input, port, *port.limits(value_of)) for is_input, ports in ((True, INPUTS), (False, OUTPUTS))
+                        for port in ports if port.low is not None or port.high is not None]
+        self._inputs = {p.name: float(p.start) for p in INPUTS}
+        self._outside = [0] * len(self._bounds)
 
     def __del__(self):
         handle = getattr(self, "_handle", None)
@@ -164,6 +180,7 @@ class StripDrawModel:
         """Restore a state from :meth:`get_state`; ParameterError for bytes of another model."""
         buf = np.ascontiguousarray(state, dtype=np.uint8)
         self._core.call(self._core.lib.tc_stripdraw_set_state, self._handle, buf.ctypes.data_as(VP), buf.size)
+        self._note_outside()
 
     # ------------------------------------------------------------------ stepping
     def step(self, dt: float, inputs: dict, derivatives: dict | None = None) -> dict:
@@ -182,26 +199,66 @@ class StripDrawModel:
         Raises
         ------
         ParameterError
-            For a non-finite or negative input or step, or a non-finite derivative; the state is unchanged.
+            For a missing input, an unknown input name, a value that is not a number, a non-finite or negative
+            input or step, or a non-finite derivative; the state is unchanged.
         TableDomainError
             For a table lookup outside the table under ``table_policy = "error"``; the state is unchanged.
         ConvergenceError
             If the implicit solve fails even after step halving; the state is unchanged.
+
+        Warns
+        -----
+        RangeWarning
+            When the step takes an input outside its declared range, or an output leaves its range after it
+            (module docstring).
         """
         c = self._core
+        fn, v = _checked_inputs(inputs)
         if derivatives:
-            dn = ptr(np.array(derivatives.get("normal_force", (0.0, 0.0)), dtype=float))
-            dv = ptr(np.array(derivatives.get("grip_velocity", (0.0, 0.0)), dtype=float))
+            _check_names(derivatives, "derivatives")
+            try:
+                dn = ptr(np.array(derivatives.get("normal_force", (0.0, 0.0)), dtype=float))
+                dv = ptr(np.array(derivatives.get("grip_velocity", (0.0, 0.0)), dtype=float))
+            except (TypeError, ValueError):
+                raise ParameterError(f"derivatives = {derivatives!r}; allowed: input name -> (first, second) time "
+                                     "derivatives, two numbers") from None
         else:
             dn = dv = self._held_p
-        status = c.lib.tc_stripdraw_step_poly(self._handle, float(dt), float(inputs["normal_force"]), dn,
-                                              float(inputs["grip_velocity"]), dv, self._msg)
+        status = c.lib.tc_stripdraw_step_poly(self._handle, float(dt), fn, dn, v, dv, self._msg)
         if status != TC_OK:
             text = self._msg_buf.value.decode(errors="replace")
             if status == TC_NOMEM:
                 raise MemoryError(text)
             raise _REFUSALS.get(c.lib.tc_stripdraw_refusal(self._handle), ParameterError)(text)
-        return self.outputs()
+        self._inputs = {"normal_force": fn, "grip_velocity": v}
+        out = self.outputs()
+        self._warn_outside(out)
+        return out
+
+    def _warn_outside(self, outputs: dict) -> None:
+        """A RangeWarning for each declared range an input of the step is outside, or an output has just left
+        (the native FMU's messages, tc_fmu_instance.c)."""
+        for k, (is_input, port, low, high) in enumerate(self._bounds):
+            value = self._inputs[port.name] if is_input else outputs[port.name]
+            side = port.outside(value, low, high)
+            if side and not self._outside[k]:
+                bound, label = (low, port.low) if side < 0 else (high, port.high)
+                unit = f" {port.unit}" if port.unit != "1" else ""
+                named = f"{label} = " if isinstance(label, str) else ""
+                where = f"in the step to t = {_repr(self.time)} s" if is_input else f"at t = {_repr(self.time)} s"
+                warnings.warn(f"StripDrawModel: {where} {port.name} = {_repr(value)}{unit} is "
+                              f"{'below' if side < 0 else 'above'} {named}{_repr(bound)}{unit}, the "
+                              f"{'least' if side < 0 else 'largest'} {port.name} the model is built for "
+                              f"({port.why or port.description}); the results from here on are outside what it "
+                              "describes", RangeWarning, stacklevel=3)
+            self._outside[k] = side
+
+    def _note_outside(self) -> None:
+        """Which ranges the state (and the last inputs) are outside now: a restored state warns only of what it
+        leaves after it."""
+        out = self.outputs()
+        self._outside = [port.outside(self._inputs[port.name] if is_input else out[port.name], low, high)
+                         for is_input, port, low, high in self._bounds]
 
     # ------------------------------------------------------------------ outputs
     def outputs(self) -> dict:
@@ -214,3 +271,40 @@ class StripDrawModel:
         return {"X": self._nodal("X"), "U": self._nodal("U"), "beta": self._nodal("beta"), "slip": self._nodal("Up"),
                 "contact": self._nodal("contact_weight")}
 
+
+
+def _check_names(values, what: str) -> None:
+    """Refuse a mapping ``what`` that is not one, or holds a name that is not an input."""
+    if not hasattr(values, "keys"):
+        raise ParameterError(f"{what} = {values!r} is not a dict; allowed: a dict of the inputs "
+                             f"{', '.join(f'{n} [{_UNITS[n]}]' for n in INPUT_NAMES)}")
+    unknown = [k for k in values if k not in INPUT_NAMES]
+    if unknown:
+        raise ParameterError(f"{what} has {', '.join(map(repr, unknown))}, not an input of the strip-draw model; "
+                             f"allowed: {', '.join(f'{n} [{_UNITS[n]}]' for n in INPUT_NAMES)}")
+
+
+def _checked_inputs(inputs) -> tuple[float, float]:
+    """(normal_force, grip_velocity) of a step's inputs, refused (ParameterError) when one is missing, a name is not
+    an input, or a value is not a real number."""
+    _check_names(inputs, "inputs")
+    values = []
+    for name in INPUT_NAMES:
+        if name not in inputs:
+            raise ParameterError(f"inputs has no {name!r} [{_UNITS[name]}]; allowed: a dict with every input, "
+                                 f"{', '.join(f'{n} [{_UNITS[n]}]' for n in INPUT_NAMES)}")
+        x = inputs[name]
+        if isinstance(x, bool) or not isinstance(x, numbers.Real):
+            raise ParameterError(f"inputs[{name!r}] = {x!r} is not a number; allowed: a real number [{_UNITS[name]}]")
+        values.append(float(x))
+    return values[0], values[1]
+
+
+def _repr(x: float) -> str:
+    """The shortest ``%g`` form that reads back as ``x``: the native FMU's tc_repr_double, so that a warning reads as
+    the FMU's."""
+    for digits in range(1, 18):
+        text = f"{x:.{digits}g}"
+        if float(text) == x:
+            return text
+    return text

@@ -374,6 +374,7 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
     path = Path(path)
     if not path.is_file():
         raise TableError(f"friction table file not found: {path}")
+    _check_is_archive(path)
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(np.array(data["metadata"])))
@@ -400,6 +401,29 @@ def read_table(path: str | os.PathLike) -> FrictionTable:
     if table.content_hash() != meta.get("content_hash"):
         raise TableError(f"friction table {path} fails its content hash check (modified or corrupt)")
     return table
+
+
+def _check_is_archive(path: Path) -> None:
+    """TableError unless the file starts as a zip archive (an ``.npz``): a text file, an ``.npy`` array or another
+    format is named for what it is, not by numpy's reading of it."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+    except OSError as exc:
+        raise TableError(f"friction table {path} cannot be read: {exc.strerror or exc}") from None
+    if head.startswith(b"PK\x03\x04") or head.startswith(b"PK\x05\x06"):
+        return
+    if head.startswith(b"\x93NUMPY"):
+        what = "a single numpy array (.npy)"
+    elif not head:
+        what = "empty"
+    elif all(32 <= b < 127 or b in (9, 10, 13) for b in head):
+        what = "a text file"
+    else:
+        what = "not a zip archive"
+    raise TableError(f"friction table {path} is not a friction table: {what}; allowed: an .npz archive written by "
+                     "tribocosim's write_table (tribocosim surrogate build or table, or "
+                     "python -m tribocosim.components.stripdraw.make_table)")
 
 
 #: the suffix of a table's resource form (the native reader takes ``X.npz`` to mean ``X.tca``)

@@ -107,6 +107,8 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
     """
     from tribocosim.cosim.scene.validate import load_scene
 
+    out = Path(out)
+    _check_out(out)  # before the scene's FMUs are built
     plan = load_scene(scene, overrides)
     sc = plan.scene
     doc = apply_overrides(tomllib.loads(sc.path.read_text(encoding="utf-8")), dict(overrides or {}))
@@ -170,7 +172,6 @@ def export_ssp(scene: str | Path, out: str | Path, overrides: dict | None = None
     members = {SSD_NAME: _xml_bytes(root)}
     members.update({m: Path(p).read_bytes() for m, p in fmu_files.items()})
     members.update(ssv_files)
-    out = Path(out)
     _write_zip(out, members)
     return Package(out, tuple(plan.fmus), len(plan.links), n_parameters, tuple(m for m in members if m != SSD_NAME))
 
@@ -282,12 +283,24 @@ def _xml_bytes(root: ET.Element) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
 
 
+def _check_out(out: Path) -> None:
+    """TribocosimError naming ``out`` when a folder, or a file in place of a folder above it, is in its way."""
+    if out.is_dir():
+        raise TribocosimError(f"cannot write the SSP package {out}: it is a folder; allowed: a file name "
+                              f"(e.g. {out / 'rig.ssp'})")
+    above = next((p for p in out.parents if p.exists()), None)
+    if above is not None and not above.is_dir():
+        raise TribocosimError(f"cannot write the SSP package {out}: {above} is a file, not a folder")
+
+
 def _write_zip(out: Path, members: dict[str, bytes]) -> None:
-    """Write the members (in order, fixed timestamps) to ``out`` via a temporary file and a rename."""
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".ssp", dir=out.parent)
-    os.close(fd)
+    """Write the members (in order, fixed timestamps) to ``out`` via a temporary file and a rename; an OS error is a
+    TribocosimError naming ``out`` (not the temporary file)."""
+    tmp = None
     try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".ssp", dir=out.parent)
+        os.close(fd)
         with zipfile.ZipFile(tmp, "w") as zf:
             for name, data in members.items():
                 info = zipfile.ZipInfo(name, date_time=_EPOCH)
@@ -297,6 +310,8 @@ def _write_zip(out: Path, members: dict[str, bytes]) -> None:
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; the package is an ordinary file
         os.replace(tmp, out)
+    except OSError as exc:
+        raise TribocosimError(f"cannot write the SSP package {out}: {exc.strerror or exc}") from None
     finally:
-        if os.path.exists(tmp):
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)

@@ -28,8 +28,12 @@ def test_unknown_fmu_name_is_refused_before_building(tmp_path):
 def test_cli_builds_into_a_relative_folder(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert fmu_cli.main(["build", "--out", "rel/fmus", "--only", "Press", "--platform", "linux64"]) == 0
-    printed = capsys.readouterr().out.split()
+    out = capsys.readouterr()
+    printed = out.out.split()
     assert printed == [str(tmp_path / "rel" / "fmus" / "Press.fmu")] and Path(printed[0]).is_file()
+    # progress on stderr while it compiles: one line per FMU and platform, one before validating
+    assert out.err.splitlines() == ["tribocosim fmu build: compiling Press (FMI 2.0) for linux64 (1/1)",
+                                    "tribocosim fmu build: validating Press.fmu (fmpy validate)"], out.err
 
 
 def test_cli_lists_and_reports_errors(capsys, tmp_path):

@@ -215,3 +215,70 @@ def test_the_implicit_solver_converges_over_the_declared_shear_stiffness_range(f
     for k in range(int(round(0.03 / dt))):
         model.step(dt, {"normal_force": force, "grip_velocity": 0.08 * min(1.0, k * dt / 0.02)})
     assert model.outputs()["mu_mean"] > 0
+
+
+def _warnings_of(run) -> list[str]:
+    import warnings
+
+    from tribocosim.errors import RangeWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run()
+    return [str(w.message) for w in caught if issubclass(w.category, RangeWarning)]
+
+
+@pytest.mark.parametrize("velocity, parameters", [(-0.08, {}), (4.0, {}), (0.08, {"draw_length": 0.002})],
+                         ids=["grip-moving-back", "one-step-draws-the-strip-out", "beyond-draw-length"])
+def test_steps_outside_the_declared_ranges_warn_as_the_fmu_does(stripdraw_fmu_instance, velocity, parameters):
+    """The ranges of the strip's ports (ports.py: grip_velocity >= 0, grip_position <= draw_length): the Python model
+    warns (RangeWarning) with the native FMU's message, once when a step takes an input outside its range or an
+    output leaves it, and computes on."""
+    parameters = {"n_elements": 40, "friction_model": "constant", **parameters}
+    fmu = stripdraw_fmu_instance("strip", parameters).initialize()
+    model = _model(**parameters)
+    outputs = []
+
+    def run_model():
+        for _ in range(60):
+            outputs.append(model.step(1e-3, {"normal_force": 12250.0, "grip_velocity": velocity}))
+
+    python = _warnings_of(run_model)
+    for _ in range(60):
+        fmu.step(1e-3, 12250.0, velocity)
+    native = [m for status, m in fmu.messages if status == 1]
+    assert len(python) == 1 and python == [f"StripDrawModel: {m}" for m in native], (python, native)
+    assert all(math.isfinite(o["pull_force"]) for o in outputs)
+
+
+def test_a_restored_state_warns_only_of_what_it_leaves_after_it():
+    model = _model(n_elements=40, friction_model="constant", draw_length=0.002)
+    step = {"normal_force": 12250.0, "grip_velocity": 0.08}
+    assert len(_warnings_of(lambda: _drive(model, 0.05, 1e-3))) == 1  # 3.6 mm drawn
+    state = model.get_state()
+    fresh = _model(n_elements=40, friction_model="constant", draw_length=0.002)
+    fresh.set_state(state)  # beyond draw_length already: no warning for what it held
+    assert _warnings_of(lambda: fresh.step(1e-3, step)) == []
+    assert len(_warnings_of(lambda: fresh.step(1e-3, {**step, "grip_velocity": -0.01}))) == 1
+
+
+@pytest.mark.parametrize("inputs, words", [
+    ({"normal_force": 100.0}, "inputs has no 'grip_velocity' [m/s]"),
+    ({"grip_velocity": 0.08}, "inputs has no 'normal_force' [N]"),
+    ({"normal_force": 100.0, "grip_velocity": 0.08, "grip_speed": 1.0}, "'grip_speed', not an input"),
+    ({"normal_force": "100", "grip_velocity": 0.08}, "inputs['normal_force'] = '100' is not a number"),
+    ({"normal_force": 100.0, "grip_velocity": None}, "inputs['grip_velocity'] = None is not a number"),
+    ({"normal_force": True, "grip_velocity": 0.08}, "inputs['normal_force'] = True is not a number"),
+    ([100.0, 0.08], "inputs = [100.0, 0.08] is not a dict"),
+])
+def test_a_missing_unknown_or_non_number_input_is_refused_with_the_state_unchanged(inputs, words):
+    model = _model(draw_length=0.01, n_elements=50, friction_model="constant")
+    _drive(model, 0.003, 1e-3)
+    before = model.get_state()
+    with pytest.raises(ParameterError) as err:
+        model.step(1e-3, inputs)
+    assert words in str(err.value) and "allowed:" in str(err.value), str(err.value)
+    assert np.array_equal(model.get_state(), before)
+    with pytest.raises(ParameterError, match="'speed', not an input"):
+        model.step(1e-3, {"normal_force": 100.0, "grip_velocity": 0.08}, derivatives={"speed": (0.0, 0.0)})
+    assert model.step(1e-3, {"normal_force": np.float64(100.0), "grip_velocity": np.int64(0)})["pull_force"] >= 0

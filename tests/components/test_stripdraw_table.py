@@ -78,9 +78,22 @@ def test_a_malformed_member_is_a_table_error_not_a_crash(tmp_path, member, value
     np.savez(path, **arrays)
     with pytest.raises(TableError, match="malformed"):
         read_table(path)
-    (tmp_path / "garbage.npz").write_bytes(b"not a zip file")
-    with pytest.raises(TableError, match="malformed"):
+    (tmp_path / "garbage.npz").write_bytes(b"\x00\x01 not a zip file")
+    with pytest.raises(TableError, match="garbage.npz is not a friction table: not a zip archive"):
         read_table(tmp_path / "garbage.npz")
+
+
+def test_a_file_that_is_no_table_is_named_for_what_it_is(tmp_path):
+    """A text file, an .npy array or an empty file: what it is, not numpy's reading of it (a pickle)."""
+    (tmp_path / "table.csv").write_text("pressure,velocity,beta,mu\n1e7,0.08,0,0.15\n")
+    np.save(tmp_path / "mu.npy", np.zeros(3))
+    (tmp_path / "empty.npz").write_bytes(b"")
+    for name, what in (("table.csv", "a text file"), ("mu.npy", "a single numpy array (.npy)"), ("empty.npz", "empty")):
+        with pytest.raises(TableError) as err:
+            read_table(tmp_path / name)
+        message = str(err.value)
+        assert f"{tmp_path / name} is not a friction table: {what}; allowed: an .npz archive" in message, message
+        assert "pickle" not in message
 
 
 def test_interpolation_is_exact_on_nodes_and_for_trilinear_functions():

@@ -143,6 +143,24 @@ def test_export_of_a_scene_with_problems_exits_2(tmp_path, capsys):
     assert not bad.exists()
 
 
+def test_export_os_errors_name_the_path_given(tmp_path, capsys):
+    """A folder in place of the package, a file in place of its folder, a folder that cannot hold files: one line
+    naming the path given, not a temporary name; nothing left behind."""
+    folder = tmp_path / "rigs"
+    folder.mkdir()
+    (tmp_path / "file").write_text("")
+    cases = [(folder, f"cannot write the SSP package {folder}: it is a folder"),
+             (tmp_path / "file" / "rig.ssp", f"cannot write the SSP package {tmp_path / 'file' / 'rig.ssp'}: "
+                                            f"{tmp_path / 'file'} is a file")]
+    if Path("/proc").is_dir():
+        cases.append((Path("/proc/rig.ssp"), "cannot write the SSP package /proc/rig.ssp: "))
+    for out, words in cases:
+        assert tribocosim(["ssp", "export", "demo", "-o", str(out)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and words in err and ".rig-" not in err, err
+    assert list(folder.iterdir()) == []
+
+
 # ------------------------------------------------------------------ other tools
 def test_fmpy_simulate_ssp_gives_our_jacobi_pull_force(rig, scene_run):
     from fmpy.ssp.simulation import simulate_ssp

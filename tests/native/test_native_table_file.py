@@ -170,7 +170,7 @@ def test_the_command_line_writes_the_resource(folder):
     (folder / "broken.npz").write_bytes(b"not a table")
     proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "fmu", "table-resource",
                            str(folder / "broken.npz")], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 1 and "broken.npz is malformed" in proc.stderr
+    assert proc.returncode == 1 and "broken.npz is not a friction table: a text file" in proc.stderr
     assert not (folder / "broken.tca").exists()
 
 

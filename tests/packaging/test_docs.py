@@ -48,10 +48,32 @@ def test_the_fmu_reference_lists_the_variables_the_fmus_declare():
 
 
 def test_the_readme_quick_start_is_what_ci_runs():
+    """A virtual environment made and activated first (CI makes its own, .ci-venv), then the three commands."""
     readme = (ROOT / "README.md").read_text()
     block = re.search(r"```bash\n(.*?)```", readme, re.S).group(1).split("\n")
     commands = [line.split("#")[0].strip() for line in block if line.strip()]
-    assert commands == ['pip install -e ".[test]"', "tribocosim demo", "pytest"]
+    assert commands == ["python3 -m venv .venv && source .venv/bin/activate", 'pip install -e ".[test]"',
+                        "tribocosim demo", "pytest"]
     ci = (ROOT / ".ci" / "run").read_text()
-    for command in commands:
+    assert re.search(r"^python3 -m venv (\S+)\n(?:#.*\n)*source \1/bin/activate$", ci, re.M), \
+        ".ci/run does not make and activate a virtual environment first"
+    for command in commands[1:]:
         assert re.search(rf"^{re.escape(command)}\s", ci, re.M), f".ci/run does not run {command!r}"
+
+
+def test_what_the_demo_the_docs_and_ci_write_in_the_checkout_is_ignored_by_git():
+    """The demo's folder, the user guide's campaigns and the example's results, CI's virtual environment and build
+    folder, the README's virtual environment: untracked output never shows up in ``git status``."""
+    import shutil
+    import subprocess
+
+    import pytest
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    written = ["tribocosim-demo/mu.png", "runs/first/friction_table.npz", "reports/paper/paper.md",
+               "docs/examples/measured_drive/results/results.csv", "docs/examples/measured_drive/MeasuredDrive.fmu",
+               "build/fmus/StripDraw.fmu", ".ci-venv/bin/python", ".venv/bin/python"]
+    proc = subprocess.run(["git", "check-ignore", "--no-index", *written], cwd=ROOT, capture_output=True, text=True)
+    ignored = set(proc.stdout.split())
+    assert ignored == set(written), f"not ignored by .gitignore: {sorted(set(written) - ignored)}"

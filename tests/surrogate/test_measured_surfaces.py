@@ -322,3 +322,87 @@ def test_sweep_and_config_refuse_bad_measured_entries(tmp_path):
         with pytest.raises(ParameterError, match=words):
             SlideConfig(**base, **kw)
     assert "sheet_file" not in SlideConfig(**base).to_dict(), "a generated pair's configuration (and id) is unchanged"
+
+
+def guide_surfaces_block() -> str:
+    """The [[surfaces]] entries of the user guide's measured-pair example, as the guide prints them."""
+    from pathlib import Path
+
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "user-guide.md").read_text()
+    section = guide.split("**2. A sweep over your surface pairs.**", 1)[1]
+    return section.split("```toml\n", 1)[1].split("```", 1)[0]
+
+
+def without_surfaces(preset_text: str) -> str:
+    """A preset's text with its [[surfaces]] entries removed (the guide: replace them by your pairs)."""
+    out, skipping = [], False
+    for line in preset_text.splitlines():
+        header = line.strip().startswith("[")
+        if header:
+            skipping = line.strip().startswith("[[surfaces]]")
+        if not skipping:
+            out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def write_guide_scans(folder, points=300):
+    """scans/sheet_1.x3p ... tool_2.x3p of the guide: non-periodic patches at 1 um of a larger generated surface,
+    large enough for the quick preset's 256 um domain."""
+    (folder / "scans").mkdir(parents=True)
+    big = self_affine_surface(2 * points, 2 * points * 1e-6, 0.8, 2 * math.pi / 50e-6, 2 * math.pi / 5e-6,
+                              rms_height=1.40e-6, seed=9)  # roll-off at 50 um, shortest wavelength 5 um
+    for name, (i, j, scale) in {"sheet_1": (0, 0, 1.0), "sheet_2": (points, 0, 1.0), "tool_1": (0, points, 0.5),
+                                "tool_2": (points, points, 0.5)}.items():
+        ms.write_x3p(scale * big[i:i + points, j:j + points], points * 1e-6, folder / "scans" / f"{name}.x3p",
+                     periodic=False)
+
+
+def test_the_user_guides_measured_pairs_run_as_written(tmp_path):
+    """The guide's example: the quick preset next to the scans, its [[surfaces]] replaced by the guide's three pairs.
+    The sweep loads (the defaults of generated sides are not checked for the measured pairs), and the first slide
+    steps of a case of every pair run as a campaign's worker runs them."""
+    from dataclasses import replace
+
+    from tribocosim.surrogate.sweep import PRESET_DIR
+
+    write_guide_scans(tmp_path)
+    (tmp_path / "my_sweep.toml").write_text(without_surfaces((PRESET_DIR / "quick.toml").read_text())
+                                            + guide_surfaces_block())
+    sweep = load_sweep(tmp_path / "my_sweep.toml")
+    assert len(sweep.surfaces) == 3 and sweep.surfaces[0]["tool_file"].endswith("tool_1.x3p")
+    cases = expand_cases(sweep)
+    for pair in range(3):
+        case = next(c for c in cases if c.labels["surface"] == pair and c.config.n_flakes == 12)
+        config = replace(case.config, n_slide_steps=2)
+        outcome = run_case({"case_id": case.case_id, "config": config.to_dict()})
+        assert outcome["status"] == "done", outcome.get("error")
+        assert 0 < outcome["summary"]["mean_contact_fraction"] < 1
+
+
+def test_a_measured_pair_on_a_small_grid_leaves_the_generated_defaults_unchecked(tmp_path):
+    """The issue's sweep: two measured pairs on a 32^2 grid, where the default wavelength_ratio 0.02 is below 2/n and
+    would be refused for a generated side; a generated side without a wavelength_ratio is refused with a message
+    that says the value is the default and where to set it."""
+    write_guide_scans(tmp_path, points=80)
+    measured = guide_surfaces_block().split("[[surfaces]]                    # pair 3")[0]
+    head = ('name = "mine"\n[grid]\npressure = [20e6]\nvelocity = [0.08]\nseeds = [11]\n'
+            '[[flakes]]\ncount = 2\ndiameter = 8e-6\n[slide]\nn = 32\nsize = 64e-6\nn_slide_steps = 2\n')
+    (tmp_path / "sweep.toml").write_text(head + measured)
+    sweep = load_sweep(tmp_path / "sweep.toml")
+    assert SlideConfig(**{**sweep.slide, **sweep.surfaces[0]}).generated_sides == ()
+    outcome = run_case(expand_cases(sweep)[1].payload())
+    assert outcome["status"] == "done", outcome.get("error")
+    generated = measured + '[[surfaces]]\nsheet_file = "scans/sheet_1.x3p"\ntool_seed = 2\n'
+    (tmp_path / "sweep.toml").write_text(head + generated)
+    with pytest.raises(ParameterError) as err:
+        load_sweep(tmp_path / "sweep.toml")
+    message = str(err.value)
+    assert "[[surfaces]] entry 3: wavelength_ratio = 0.02 is out of range" in message, message
+    assert ("wavelength_ratio is not set: this is its default; set wavelength_ratio in [slide] or in this "
+            "[[surfaces]] entry") in message, message
+    # a slide configuration file says the same of its defaults
+    (tmp_path / "slide.toml").write_text("n = 32\nsize = 64e-6\n")
+    with pytest.raises(ParameterError, match=r"this is its default; set wavelength_ratio in .*slide.toml"):
+        SlideConfig.from_toml(tmp_path / "slide.toml")
+    (tmp_path / "pair.toml").write_text('n = 32\nsize = 64e-6\nsheet_file = "a.x3p"\ntool_file = "b.x3p"\n')
+    assert SlideConfig.from_toml(tmp_path / "pair.toml").generated_sides == ()

@@ -109,3 +109,31 @@ def test_console_script_end_to_end(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert set(json.loads(run.stdout)) == CONTACT_KEYS
+
+
+def test_output_folders_and_os_errors_are_named_as_given(tmp_path, capsys):
+    """-o naming a folder is refused as a folder (not written as DIR.npy); an OS error names the path the user gave,
+    not a temporary name, in one line; meso slide's --out that is a file is refused before the slide."""
+    _, argv = _surface(tmp_path)
+    folder = tmp_path / "maps"
+    folder.mkdir()
+    cases = [([*argv[:-1], str(folder)], f"-o {folder}: {folder} is a folder"),
+             ([*argv[:-1], str(tmp_path / "absent" / "s")], f"the folder {tmp_path / 'absent'} does not exist")]
+    if Path("/proc").is_dir():
+        cases.append(([*argv[:-1], "/proc/surf"], "cannot write /proc/surf.npy: "))
+    for args, words in cases:
+        assert meso_cli.main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and words in err and ".partial" not in err, err
+    assert list(folder.iterdir()) == [] and not (tmp_path / "maps.npy").exists()
+    config = tmp_path / "slide.toml"
+    config.write_text("n = 16\nsize = 64e-6\nwavelength_ratio = 0.25\nn_flakes = 1\nn_slide_steps = 2\n")
+    blocker = tmp_path / "results"
+    blocker.write_text("")
+    assert meso_cli.main(["slide", "--config", str(config), "--out", str(blocker), "--quiet"]) == 1
+    assert f"--out {blocker} is a file" in capsys.readouterr().err
+    if Path("/proc").is_dir():
+        assert meso_cli.main(["slide", "--config", str(config), "--out", "/proc/slide", "--quiet"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.splitlines()[-1] == ("tribocosim meso slide: error: cannot write the results into /proc/slide: "
+                                        "No such file or directory"), err

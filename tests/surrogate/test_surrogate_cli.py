@@ -82,7 +82,7 @@ def test_bad_sweep_and_usage_errors(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"sweep file {f}, line 7: [grid] betas: unknown key 'betas'" in err
     assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 1
-    shipped = ['cluster_sizes', 'domain_128um', 'domain_512um', 'paper', 'quick']
+    shipped = ['cluster_sizes', 'domain_128um', 'domain_512um', 'first', 'paper', 'quick']
     assert f"preset = 'nope' is not known; available: {shipped}" in capsys.readouterr().err
     assert surrogate_cli.main(["frobnicate"]) == 2
     assert surrogate_cli.main(["build"]) == 2
@@ -207,3 +207,46 @@ def test_direct_slide_check_of_a_table(built):
             run_check(t, ex, points=((5e6, 50.0, 1.5 * beta),), seeds=(1,))
     finally:
         ex.close()
+
+
+def test_show_writes_its_plot_beside_the_table_or_into_out(built, tmp_path, capsys, monkeypatch):
+    """Not into the current folder: beside the table by default, into --out DIR when given; a table of the package
+    gets no plot unless --out or --plot says where."""
+    from tribocosim.paths import DEFAULT_TABLE
+
+    d, _ = built
+    monkeypatch.chdir(tmp_path)
+    table = tmp_path / "tables" / "mine.npz"
+    table.parent.mkdir()
+    table.write_bytes((d / "out" / "friction_table.npz").read_bytes())
+    assert surrogate_cli.main(["show", str(table)]) == 0
+    assert f"plot: {table.parent / 'mine_mu_vs_P.png'}" in capsys.readouterr().out
+    assert (table.parent / "mine_mu_vs_P.png").stat().st_size > 1000
+    assert surrogate_cli.main(["show", str(table), "--out", str(tmp_path / "figures")]) == 0
+    assert (tmp_path / "figures" / "mine_mu_vs_P.png").is_file()
+    assert surrogate_cli.main(["show", str(DEFAULT_TABLE)]) == 0
+    assert "--out DIR or --plot PNG writes it" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["figures", "tables"], "nothing in the current folder"
+    assert not (DEFAULT_TABLE.parent / "friction_table_mu_vs_P.png").exists()
+
+
+def test_show_of_a_text_file_says_it_is_not_a_table(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("P [MPa], mu\n10, 0.12\n")
+    assert surrogate_cli.main(["show", str(tmp_path / "notes.txt")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "notes.txt is not a friction table: a text file" in err, err
+
+
+@pytest.mark.slow
+def test_the_first_preset_builds_a_table(tmp_path, capsys):
+    """The user guide's first campaign: its 15 cases finish, the table is built, and its recorded cases rerun the
+    same."""
+    from tribocosim.surrogate.campaign import load_records
+
+    out = tmp_path / "first"
+    assert surrogate_cli.main(["build", "--preset", "first", "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    _, done, unfinished = load_records(out)
+    assert len(done) == 15 and not unfinished
+    capsys.readouterr()
+    assert surrogate_cli.main(["verify", str(out / "friction_table.npz"), "--workers", "2"]) == 0
+    assert "0 differ" in capsys.readouterr().out

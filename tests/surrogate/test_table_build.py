@@ -264,3 +264,13 @@ def test_compare_tables_within_two_standard_errors(built):
     shorter = FrictionTable(t.pressure, t.velocity[1:], t.beta, t.mu[:, 1:], t.metadata)
     with pytest.raises(TableError, match="different velocity axes"):
         compare_tables(t, shorter)
+
+
+def test_a_sweep_whose_pairs_set_the_surface_keys_builds_its_table():
+    """[slide] is taken with a surface pair, as the sweep checks it: here n = 64 with the wavelength_ratio only in the
+    [[surfaces]] entry (the default 0.02 alone is below 2/n)."""
+    text = SWEEP.replace("n = 256\n", "n = 64\n").replace("wavelength_ratio = 0.25\n", "").replace(
+        "[slide]", "[[surfaces]]\nsheet_seed = 1\ntool_seed = 2\nwavelength_ratio = 0.25\n[slide]")
+    manifest, records = campaign(sweep_text=text)
+    table, _ = build_table(records, manifest, surface_stats=STATS)
+    assert table.mu.shape == (3, 3, 5)
