@@ -33,7 +33,6 @@ reports all read them. Adding a component is writing its model and its descripti
 from __future__ import annotations
 
 import dataclasses
-import difflib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -241,6 +240,8 @@ class Component:
         inputs = {p.name for p in self.inputs}
         unknown = [k for k in values if k not in own and k not in names and k not in inputs]
         if unknown:
+            import difflib  # only for the message: a run that checks its scene never needs it
+
             outputs = {p.name for p in self.outputs}
             why = [f"{k!r} is an output" if k in outputs else
                    f"{k!r}" + (f" (did you mean {close[0]!r}?)" if (close := difflib.get_close_matches(
