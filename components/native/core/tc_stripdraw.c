@@ -110,7 +110,12 @@ void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, d
 /* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
 static int positions_in_order(size_t n, const double *X, const double *U) {
     int sorted = 1;
-    for (size_t i = 1; i < n; ++i) sorted &= X[i - 1] + U[i - 1] <= X[i] + U[i]; /* pairs apart: in vector lanes */
+    double before = X[0] + U[0];
+    for (size_t i = 1; i < n; ++i) {
+        const double x = X[i] + U[i];
+        sorted &= before <= x;
+        before = x;
+    }
     return sorted;
 }
 /* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
@@ -206,10 +211,15 @@ static int friction_limits(tc_stripdraw *m, double pressure, double speed, int p
     p.table_policy = policy;
     int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, &m->rows, msg);
     if (rc != TC_OK) return rc;
+    const double *mu = m->mu;
+    const unsigned char *clamped = m->clamped;
+    double *tmax = m->tmax + l;
+    int any = 0;
     for (size_t k = 0; k < cnt; ++k) {
-        m->tmax[l + k] = m->mu[k] * pressure;
-        m->limit_clamped |= m->clamped[k];
+        tmax[k] = mu[k] * pressure;
+        any |= clamped[k];
     }
+    m->limit_clamped = any;
     m->limit_lo = l;
     m->limit_hi = l + cnt;
     return TC_OK;
@@ -275,25 +285,30 @@ static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const
     return implicit_step(m, 0.5 * h, &mid, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
-/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d and
- * 0 a in four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers) */
+/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d in
+ * four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers). A finite
+ * difference has finite operands, so a is scanned only when a d is not finite. */
 static int difference_finite(size_t n, const double *restrict a, const double *restrict b, double *restrict d,
                              int *a_finite) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0}, sa[4] = {0.0, 0.0, 0.0, 0.0};
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
     size_t i = 0;
     for (; i + 4 <= n; i += 4)
         for (int k = 0; k < 4; ++k) {
             d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
             s[k] += 0.0 * d[i + (size_t)k];
-            sa[k] += 0.0 * a[i + (size_t)k];
         }
     for (; i < n; ++i) {
         d[i] = a[i] - b[i];
         s[0] += 0.0 * d[i];
-        sa[0] += 0.0 * a[i];
     }
-    *a_finite = isfinite(sa[0] + sa[1] + sa[2] + sa[3]);
-    return isfinite(s[0] + s[1] + s[2] + s[3]);
+    if (isfinite(s[0] + s[1] + s[2] + s[3])) {
+        *a_finite = 1;
+        return 1;
+    }
+    double sa = 0.0;
+    for (i = 0; i < n; ++i) sa += 0.0 * a[i];
+    *a_finite = isfinite(sa);
+    return 0;
 }
 
 /* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
@@ -331,16 +346,19 @@ static int bar_at_rest(const tc_stripdraw *m) {
  *   - a node that slid at the interval's limit (slipped, over [lo, hi)) is at the state's limit, with its sign.
  * The plastic slip Up = U - T / k_s carries the traction. */
 static void settle_interface(tc_stripdraw *m, const unsigned char *slipped, size_t lo, size_t hi) {
-    const double ks = m->ks;
+    const double ks = m->ks, le = m->le;
+    const double *w = m->w, *dU = m->dU, *tmax = m->tmax, *U = m->U;
+    double *Up = m->Up;
+    signed char *contact = m->contact;
     for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
-        if (!(m->w[i] > 0.0)) continue;
-        if (!m->contact[i]) {
-            if (m->dU[i] == 0.0) continue;
-            const double t = fmin(m->tmax[i], ks * m->w[i] * m->le);
-            m->contact[i] = 1;
-            m->Up[i] = m->U[i] - copysign(t, m->dU[i]) / ks;
+        if (!(w[i] > 0.0)) continue;
+        if (!contact[i]) {
+            if (dU[i] == 0.0) continue;
+            const double t = fmin(tmax[i], ks * w[i] * le);
+            contact[i] = 1;
+            Up[i] = U[i] - copysign(t, dU[i]) / ks;
         } else if (i >= lo && i < hi && slipped[i]) {
-            m->Up[i] = m->U[i] - copysign(m->tmax[i], m->U[i] - m->Up[i]) / ks;
+            Up[i] = U[i] - copysign(tmax[i], U[i] - Up[i]) / ks;
         }
     }
 }
@@ -414,9 +432,10 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     tc_sd_debris_interval(m, pressure, speed, w0, f0, l0, du_finite);
     unsigned char *slipped = (unsigned char *)m->giwork + m->n; /* of the interval's limits, over [lo, hi) */
     const size_t lo = m->limit_lo, hi = m->limit_hi;
+    const double ks = m->ks, *U = m->U, *Up = m->Up, *tmax = m->tmax;
+    const signed char *contact = m->contact;
     for (size_t i = lo; i < hi; ++i) /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
-        slipped[i] = m->contact[i] && fabs(m->ks * (m->U[i] - m->Up[i])) >=
-                                          m->tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * m->ks * fabs(m->U[i]);
+        slipped[i] = contact[i] && fabs(ks * (U[i] - Up[i])) >= tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * ks * fabs(U[i]);
     state_limits(m);
     settle_interface(m, slipped, lo, hi);
     return TC_OK;
@@ -554,29 +573,16 @@ void tc_stripdraw_free(tc_stripdraw *m) {
     free(m);
 }
 
+int tc_stripdraw_check_params(const tc_stripdraw_params *p, tc_msg msg) { return tc_stripdraw_params_check(p, msg); }
+
 int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
                         size_t n_beta, tc_stripdraw **out, tc_msg msg) {
     if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no place for the model (out is NULL)");
     *out = NULL;
     if (p == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no parameters (p is NULL)");
-    if (p->friction_model < 0 || p->friction_model > 2)
-        return tc_fail(msg, TC_ERROR, "friction_model = %d is not allowed; choose 0 (table), 1 (closed_form) or 2 "
-                       "(constant)", p->friction_model);
-    if (p->friction_velocity < 0 || p->friction_velocity > 1)
-        return tc_fail(msg, TC_ERROR, "friction_velocity = %d is not allowed; choose 0 (grip) or 1 (slip_rate)",
-                       p->friction_velocity);
-    if (p->table_policy < 0 || p->table_policy > 1)
-        return tc_fail(msg, TC_ERROR, "table_policy = %d is not allowed; choose 0 (clamp) or 1 (error)",
-                       p->table_policy);
-    if (p->contact_area < 0 || p->contact_area > 1)
-        return tc_fail(msg, TC_ERROR, "contact_area = %d is not allowed; choose 0 (mesoscale) or 1 (eq8)",
-                       p->contact_area);
-    if (p->integrator < 0 || p->integrator > 1)
-        return tc_fail(msg, TC_ERROR, "integrator = %d is not allowed; choose 0 (explicit) or 1 (implicit)",
-                       p->integrator);
-    if (p->n_elements < 1 || p->n_elements > 100000000)
-        return tc_fail(msg, TC_ERROR, "n_elements = %d is out of range; allowed: [1, 100000000]", p->n_elements);
-    int rc = tc_law_check(p, table, msg);
+    int rc = tc_stripdraw_params_check(p, msg);
+    if (rc != TC_OK) return rc;
+    rc = tc_law_check(p, table, msg);
     if (rc != TC_OK) return rc;
     const size_t n = (size_t)p->n_elements + 1;
     const double cap = p->beta_threshold > 0 ? p->beta_threshold : tc_law_beta_threshold(p, table);

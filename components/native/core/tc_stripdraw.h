@@ -35,11 +35,14 @@ typedef struct tc_stripdraw tc_stripdraw;
 
 /* Create a model. table is borrowed (it must outlive the model) and required when p->friction_model is
  * TC_STRIPDRAW_FRICTION_MODEL_TABLE; beta_field (n_beta values, copied) is the initial debris field, NULL for
- * p->beta_initial everywhere. TC_ERROR for a beta_field of the wrong length, not finite or < 0, an initial beta
- * above the cap, a law the table cannot give (tc_law_check), bad choice indices or n_elements < 1; the ranges of
- * the other parameters are the caller's to check (the field metadata of StripDrawParameters). */
+ * p->beta_initial everywhere. TC_ERROR for a parameter outside its declared range or choices
+ * (tc_stripdraw_check_params), a beta_field of the wrong length, not finite or < 0, an initial beta above the cap and
+ * a law the table cannot give (tc_law_check). */
 TC_API int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
                                size_t n_beta, tc_stripdraw **out, tc_msg msg);
+/* Every parameter against the range and choices StripDrawParameters declares (tc_stripdraw_params_check, generated
+ * from it by components/native/toolchain/declarations.py): TC_ERROR naming the first that is not allowed. */
+TC_API int tc_stripdraw_check_params(const tc_stripdraw_params *p, tc_msg msg);
 
 TC_API void tc_stripdraw_free(tc_stripdraw *m);
 
