@@ -268,7 +268,8 @@ def test_the_kept_slopes_give_the_lookup_of_slopes_taken_at_each_query(mask):
 def test_rows_kept_between_lookups_change_no_number():
     """The strip-draw model keeps the interpolated rows of its last lookup (tc_table_rows) for the next at the same
     pressure and velocity cell (the friction limits, the cap of beta and the state's limits of an interval): lookups
-    through one kept buffer, in an order that hits and misses it, give the numbers of lookups without it, bit for bit."""
+    through one kept buffer, in an order that hits and misses it, give the numbers of lookups without it, bit for
+    bit."""
     import ctypes
 
     from tribocosim.components.native.toolchain.library import UBYTE_P, core, ptr

@@ -168,6 +168,7 @@ static void fill_row(const tc_table *t, const tc_table_cubic *c, int row, tc_tab
         reads |= top > TC_TABLE_READ_WEIGHT;
     }
     if (nb < TC_TABLE_BETA_MAX) w[nb] = 0.0; /* the second node of a one-point axis's cell (weight tb = 0) */
+    for (size_t k = 0; k + 1 < nb || k == 0; ++k) r->unsimulated_cell[row][k] = w[k] != 0.0 || w[k + 1] != 0.0;
     r->reads_unsimulated |= reads;
 }
 
@@ -204,8 +205,7 @@ static double rows_value(const tc_table *t, const tc_table_rows *r, double tv, s
  * weight exactly when one of them does (rounding keeps the order of products). */
 static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, double tv, size_t ib, double tb) {
     if (!r->reads_unsimulated) return 0;
-    const double *w0 = r->unsimulated[0], *w1 = r->unsimulated[1];
-    if (w0[ib] == 0.0 && w0[ib + 1] == 0.0 && (tv == 0.0 || (w1[ib] == 0.0 && w1[ib + 1] == 0.0)))
+    if (!r->unsimulated_cell[0][ib] && (tv == 0.0 || !r->unsimulated_cell[1][ib]))
         return 0; /* the cell's nodes were all simulated */
     const double wv[2] = {1.0 - tv, tv}, wb[2] = {1.0 - tb, tb};
     for (int b = 0; b < 2; ++b) {

@@ -37,6 +37,7 @@ typedef struct tc_table_rows {
     double tp;
     double y[2][TC_TABLE_BETA_MAX], dl[2][TC_TABLE_BETA_MAX], dr[2][TC_TABLE_BETA_MAX];
     double unsimulated[2][TC_TABLE_BETA_MAX];
+    unsigned char unsimulated_cell[2][TC_TABLE_BETA_MAX]; /* whether either node of beta cell ib has such a weight */
     int reads_unsimulated; /* whether an unsimulated weight above TC_TABLE_READ_WEIGHT is among them */
 } tc_table_rows;
 
