@@ -7,7 +7,9 @@ again and again. :func:`memo` keeps each digest (or any value JSON can hold) in 
 together with the signature of the files it was computed from, each file's (path, size, modification time in ns, inode): while every file still has
 its signature the stored digest is returned, otherwise it is computed again and stored. An edit changes a file's
 modification time (and usually its size), a replaced file its inode. The store is written atomically (a temporary
-file renamed into place): concurrent processes never read half a record, and a lost race only recomputes.
+file renamed into place): concurrent processes never read half a record, and a lost race only recomputes. Each
+installation of the package has records of its own (the record's name carries the package's folder): two checkouts
+that share one cache folder never take each other's digests (:func:`remembered` trusts the files a record names).
 """
 
 from __future__ import annotations
@@ -33,8 +35,13 @@ def signature(files: Iterable[Path]) -> list[list]:
     return out
 
 
+#: the folder of this installation's components package: part of every record's name
+INSTALLATION = str(Path(__file__).resolve().parents[2])
+
+
 def _record(key: str) -> Path:
-    return cache_dir() / "digests" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+    name = hashlib.sha256(f"{INSTALLATION}\n{key}".encode()).hexdigest()[:32]
+    return cache_dir() / "digests" / f"{name}.json"
 
 
 def remembered(key: str) -> Any:
