@@ -4,8 +4,13 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
 
 0. the FMU: per-step cost of ``setReal + doStep + getReal`` through fmpy, and the default 140 mm draw
    at 1 ms steps in the C host of tests/native/host (a process with no Python): wall time of the stepping
-   loop, per-step cost and real-time factor (target >= 500), and the same draw on other meshes (MESHES:
-   the step's cost grows with the bar's nodes);
+   loop, per-step cost and real-time factor (target >= 500: <= 2.0 us per step), and the same draw on other meshes
+   (MESHES: the step's cost grows with the bar's nodes); with ``--baseline-rev REV`` (or ``--baseline-fmu PATH``)
+   the same draw on the FMU of another git revision, timed in turns with this one (best of ``--repeat`` each), and
+   the ratio (target <= 0.75 against 2a6e61a's); then where the step's time goes (``benchmarks/callgrind_fmu.py``:
+   callgrind's inclusive instruction counts of the parts of a step, integrator, friction lookup, debris transport,
+   state backup, bar bookkeeping, outputs, FMI layer, per step and per node from two meshes; the time split is taken
+   as the instruction split) and what bounds the step;
 
 1. overhead per doStep: ``setReal(inputs) + doStep + getReal(outputs)`` through fmpy's
    ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
@@ -16,18 +21,23 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    line (extraction, imports, loading the FMU's library) against a fresh process
    that imports the model and runs the same draw.
 
-    python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold]
+    python benchmarks/bench_fmu.py [--fmu PATH] [--repeat 5] [--cold] [--baseline-rev 2a6e61a] [--host-only]
 
-Without ``--fmu`` the FMU is built into a temporary folder first. Times are wall-clock minima
+Without ``--fmu`` the FMU is built into a temporary folder first; a baseline revision's FMU is built from
+``git archive REV`` in a temporary folder by that revision's own toolchain (nothing is written into the checkout).
+``--host-only`` times the C host alone (items 0 and the split; not the fmpy figures 1-3). Times are wall-clock minima
 over ``--repeat`` runs (the machine may be shared: report the load with the figures).
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import os
+import shutil
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 from pathlib import Path
@@ -175,6 +185,74 @@ def host_command(tmp: Path, unzipped: str, md, steps: int) -> list[str]:
 
 #: n_elements of the C host's mesh-scaling line (the default's is the main figure)
 MESHES = (100, 450, 900)
+#: the targets of the default draw in the C host: at most this many seconds per step (a real-time factor of 500), and
+#: at most this share of the baseline revision's step (issue 46: 2a6e61a's)
+TARGET_STEP = 2.0e-6
+TARGET_RATIO = 0.75
+
+_BUILD_REVISION = """
+import sys
+from pathlib import Path
+from tribocosim.components.fmus.native_build import build_native_fmus
+print(build_native_fmus(Path(sys.argv[1]), names=["StripDraw"], platforms=["linux64"])["StripDraw"])
+"""
+
+
+def revision_fmu(rev: str, folder: Path) -> Path:
+    """The StripDraw FMU (linux64) of git revision ``rev`` of this checkout, built in ``folder``: the revision's files
+    (``git archive``) laid out as the package they install (tribocosim/ with its subpackages), built in a fresh
+    process by that revision's own code. Nothing is written into the checkout."""
+    folder = Path(folder)
+    src, pkg = folder / "src", folder / "pkg"
+    src.mkdir(parents=True)
+    archive = subprocess.run(["git", "-C", str(PROJECT_ROOT), "archive", rev], capture_output=True)
+    if archive.returncode != 0:
+        raise SystemExit(f"git archive {rev}: {archive.stderr.decode(errors='replace').strip()}")
+    with tarfile.open(fileobj=io.BytesIO(archive.stdout)) as tar:
+        tar.extractall(src)
+    shutil.copytree(src / "tribocosim", pkg / "tribocosim")
+    for sub in ("components", "cosim", "surrogate", "models"):
+        (pkg / "tribocosim" / sub).symlink_to(src / sub, target_is_directory=True)
+    proc = subprocess.run([sys.executable, "-c", _BUILD_REVISION, str(folder / "fmu")], capture_output=True,
+                          text=True, cwd=folder, env={**os.environ, "PYTHONPATH": str(pkg)})
+    if proc.returncode != 0:
+        raise SystemExit(f"building the StripDraw FMU of {rev} failed:\n{proc.stderr[-3000:]}")
+    return Path(proc.stdout.strip().splitlines()[-1])
+
+
+def host_times(tmp: Path, fmus: dict[str, Path], repeat: int, extra=()) -> dict[str, float]:
+    """Wall time of the default draw's stepping loop in the C host for each FMU (label -> path), best of ``repeat``
+    runs each, the FMUs taking turns (so that a change of the machine's load falls on all of them alike)."""
+    from fmpy import extract, read_model_description
+
+    cmds = {}
+    for label, fmu in fmus.items():
+        md = read_model_description(str(fmu))
+        cmds[label] = host_command(tmp, str(extract(str(fmu), str(tmp / f"host_{label}"))), md, N_DRAW) + list(extra)
+    best = dict.fromkeys(fmus, float("inf"))
+    for _ in range(repeat):
+        for label, cmd in cmds.items():
+            proc = subprocess.run(cmd, capture_output=True, text=True, check=True, env={"PATH": "/usr/bin:/bin"})
+            line = [ln for ln in proc.stderr.splitlines() if " steps in " in ln][-1]
+            best[label] = min(best[label], float(line.split()[-2]))
+    return best
+
+
+def bounds_of_the_step(by_mesh: dict[int, dict[str, float]]) -> str:
+    """What bounds the step, from the split of callgrind_fmu.report_where: the parts that grow with the mesh and the
+    largest part at the default mesh."""
+    meshes = sorted(by_mesh)
+    row = by_mesh[meshes[0]] if 150 not in by_mesh else by_mesh[150]
+    shares = sorted(((row[p] / row["total"], p) for p in row if p != "total"), reverse=True)
+    text = (f"the step is bound by {shares[0][1]} ({100 * shares[0][0]:.0f} %) and {shares[1][1]} "
+            f"({100 * shares[1][0]:.0f} %)")
+    if len(meshes) > 1:
+        n0, n1 = meshes[0] + 1, meshes[-1] + 1
+        per_node = (by_mesh[meshes[-1]]["total"] - by_mesh[meshes[0]]["total"]) / (n1 - n0)
+        grows = per_node * n0 / by_mesh[meshes[0]]["total"]
+        text += (f"; {per_node:.0f} instructions per node of the bar ({100 * grows:.0f} % of the step at {meshes[0]} "
+                 "elements grows with the mesh)")
+    return text
 
 
 def native(tmp: Path, fmu: Path, repeat: int, steps: int) -> dict:
@@ -213,6 +291,12 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--steps", type=int, default=1000, help="steps timed for the per-step figure")
     parser.add_argument("--cold", action="store_true", help="also time fresh processes")
+    base = parser.add_mutually_exclusive_group()
+    base.add_argument("--baseline-rev", help="also time the FMU of this git revision in the C host (e.g. 2a6e61a)")
+    base.add_argument("--baseline-fmu", type=Path, help="also time this StripDraw.fmu in the C host")
+    parser.add_argument("--host-only", action="store_true",
+                        help="the C host's figures and the split only (not the fmpy figures)")
+    parser.add_argument("--no-where", action="store_true", help="skip the callgrind split (valgrind not needed)")
     args = parser.parse_args(argv)
     from fmpy import extract, read_model_description
 
@@ -230,6 +314,34 @@ def main(argv=None) -> int:
         load = os.getloadavg()
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
               f"{os.cpu_count()} CPUs")  # fmt: skip
+        fmus = {"this": Path(fmu)}
+        label = args.baseline_rev or "baseline"
+        if args.baseline_rev or args.baseline_fmu:
+            fmus[label] = Path(args.baseline_fmu or revision_fmu(args.baseline_rev, tmp / "baseline"))
+        times = host_times(tmp, fmus, args.repeat)
+        step = times["this"] / N_DRAW
+        line = (f"C host, 140 mm draw at 1 ms, 150 elements, best of {args.repeat}{' in turns' * (len(fmus) > 1)}: "
+                f"this checkout {step * 1e6:.2f} us/step (real-time factor {DT / step:.0f}; target <= "
+                f"{TARGET_STEP * 1e6:.1f} us/step {'met' if step <= TARGET_STEP else 'MISSED'})")
+        if len(fmus) > 1:
+            b_step = times[label] / N_DRAW
+            met = "met" if step / b_step <= TARGET_RATIO else "MISSED"
+            line += (f", {label} {b_step * 1e6:.2f} us/step (real-time factor {DT / b_step:.0f}); ratio "
+                     f"{step / b_step:.3f} (target <= {TARGET_RATIO} {met})")
+        print(line)
+        if not args.no_where:
+            if shutil.which("valgrind") is None:
+                print("where the time goes: skipped (valgrind is not on the PATH)")
+            else:
+                import callgrind_fmu
+
+                by_mesh = callgrind_fmu.report_where(N_DRAW, [150, 450])
+                row = by_mesh[150]
+                print("  in time, taking the time split as the instruction split: " + ", ".join(
+                    f"{p} {step * 1e6 * row[p] / row['total']:.2f} us" for p in row if p != "total"))
+                print("what bounds the step: " + bounds_of_the_step(by_mesh))
+        if args.host_only:
+            return 0
         nat = native(tmp, Path(fmu), args.repeat, args.steps)
         print(f"native FMU   fmpy set+doStep+get {nat['fmpy_native'] * 1e6:8.1f} us/step")
         rtf = N_DRAW * DT / nat["host_loop"]

@@ -51,7 +51,8 @@ from pathlib import Path
 
 from tribocosim.components.description import ArraySize, Built, Component, Native, Port
 from tribocosim.errors import ParameterError
-from tribocosim.components.params import param, parameters, validate_fields
+from tribocosim.components.params import (BOUND_RTOL, bound_text, outside_text, param, parameters, validate_fields,
+                                         within_bounds)
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.ports import (  # noqa: F401 - the declaration's public names
     DEFAULT_GRIP_VELOCITY, DEFAULT_NORMAL_FORCE, INPUTS, OUTPUTS)
@@ -185,15 +186,18 @@ def check(params: StripDrawParameters, files: StripDrawFiles, resources: Path):
 
         def force_limit(force: float, label: str, instance: str) -> str | None:
             pressure = params.pressure(force)
-            if lo <= pressure <= hi:
+            if within_bounds(pressure, lo, hi):  # on an axis end to round-off: on the axis (BOUND_RTOL)
                 return None
-            return (f"{label} on the {pad} of '{instance}', is a nominal pressure of {pressure / 1e6:.4g} MPa, "
-                    f"outside the friction table's pressure axis [{lo / 1e6:g}, {hi / 1e6:g}] MPa")
+            shown = outside_text(pressure / 1e6, lo / 1e6, hi / 1e6)
+            return (f"{label} on the {pad} of '{instance}', is a nominal pressure of {shown} MPa, outside the "
+                    f"friction table's pressure axis [{bound_text(lo / 1e6)}, {bound_text(hi / 1e6)}] MPa (by more "
+                    f"than {BOUND_RTOL:g} of its end)")
 
         def velocity_limit(v: float, label: str, instance: str) -> str | None:
-            if abs(v) <= vmax:
+            if within_bounds(abs(v), None, vmax):
                 return None
-            return f"{label} is above the friction table's velocity axis (up to {vmax:g} m/s) of '{instance}'"
+            return (f"{label} is above the friction table's velocity axis (up to {bound_text(vmax)} m/s) of "
+                    f"'{instance}' (by more than {BOUND_RTOL:g} of its end)")
 
         limits = {"normal_force": force_limit, "grip_velocity": velocity_limit}
     return problems, limits
@@ -206,11 +210,12 @@ def input_limits(params: StripDrawParameters) -> dict:
 
     def force_limit(force: float, label: str, instance: str) -> str | None:
         pressure = params.pressure(force)
-        if pressure <= params.hardness:
+        if within_bounds(pressure, None, params.hardness):
             return None
         return (f"{label} on the {params.tool_length * 1e3:g} x {params.tool_width * 1e3:g} mm pad of '{instance}' is "
-                f"a nominal pressure of {pressure:.4g} Pa, above the strip's hardness {params.hardness:g} Pa (the "
-                f"largest normal force is {params.normal_force(params.hardness):.6g} N): no strip-draw contact")
+                f"a nominal pressure of {outside_text(pressure, None, params.hardness)} Pa, above the strip's hardness "
+                f"{bound_text(params.hardness)} Pa "
+                f"(the largest normal force is {params.normal_force(params.hardness):.6g} N): no strip-draw contact")
 
     def velocity_limit(v: float, label: str, instance: str) -> str | None:
         if abs(v) < params.wave_speed:
@@ -245,9 +250,11 @@ COMPONENT = Component(
     input_limits=input_limits,
     observer=observer,
     native=Native(prefix="tc_stripdraw",
-                  sources=("core/tc_stripdraw.c", "core/tc_galpha.c", "core/tc_kernels.c", "core/tc_friction.c",
-                           "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c", "resource_io/tc_sha256.c",
-                           "resource_io/tc_arrays.c", "resource_io/tc_fields.c", "fmi/tc_stripdraw_fmu.c"),
+                  sources=("core/tc_stripdraw.c", "core/tc_stripdraw_state.c", "core/tc_galpha.c", "core/tc_explicit.c",
+                           "core/tc_kernels.c", "core/tc_debris.c", "core/tc_friction.c", "core/tc_table.c",
+                           "core/tc_table_lookup.c", "core/tc_pchip.c", "resource_io/tc_table_file.c",
+                           "resource_io/tc_sha256.c", "resource_io/tc_arrays.c", "resource_io/tc_fields.c",
+                           "fmi/tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
                   interpolates_inputs=True, convert_resource=convert_resource,

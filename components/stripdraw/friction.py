@@ -88,7 +88,7 @@ class FrictionLaw:
             vq, bq = np.ascontiguousarray(v[at]), np.ascontiguousarray(b[at])
             out, flags, work = np.empty(vq.size), np.zeros(vq.size, dtype=np.uint8), np.empty(vq.size)
             c.call(c.lib.tc_law_mu, ctypes.byref(self._struct), self.native_table, float(value), vq.size, ptr(vq),
-                   ptr(bq), ptr(out), ptr(flags, UBYTE_P), ptr(work), discard=TableDomainError)
+                   ptr(bq), ptr(out), ptr(flags, UBYTE_P), ptr(work), None, discard=TableDomainError)
             mu[at], clamped[at] = out, flags
         return (mu if mu.ndim else float(mu)), clamped.astype(bool)
 
@@ -100,7 +100,7 @@ class FrictionLaw:
     def beta_cap(self, pressure: float, velocity: float) -> float:
         """The cap of beta (Eq. 24) at (P, |v|)."""
         return float(self._core.lib.tc_law_beta_cap(ctypes.byref(self._struct), self.native_table, float(pressure),
-                                                     float(velocity)))
+                                                     float(velocity), None))
 
     def alpha(self, velocity):
         """alpha(v) of Eq. 23 (the closed form): b (1 - exp(-|v| / v_ref)), or b when v_ref is 0."""

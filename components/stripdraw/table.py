@@ -71,6 +71,7 @@ import functools
 
 import numpy as np
 
+from tribocosim.components.params import BOUND_RTOL
 from tribocosim.errors import ParameterError, TableDomainError, TableError
 
 FORMAT = "tribocosim-friction-table"
@@ -78,9 +79,10 @@ FORMAT_VERSION = 4  # written when the table carries the version 4 arrays; 1 to 
 VERSIONS = (1, 2, 3, 4)
 AXES = ("pressure", "velocity", "beta")
 #: a query within this of an axis end (relative to the end) is on the end, not outside the table: the round-off of
-#: the inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15 on either side);
-#: the native lookup (tc_table_lookup.c) uses the same
-AXIS_END_TOLERANCE = 1e-9
+#: the inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15 on either side;
+#: 12250 N on the 35 x 35 mm pad is 9999999.999999998 Pa); the bound tolerance of every declared range
+#: (components/params.py), and the native lookup's (TC_TABLE_AXIS_END_TOLERANCE of tc_table.h)
+AXIS_END_TOLERANCE = BOUND_RTOL
 AREAS = ("contact_area", "particle_area", "contact_area_std", "particle_area_std")
 #: the version 3 arrays (all of them, or none)
 EXTRAS = ("simulated", "contact_area_se", "particle_area_se", "particle_area_clusters", "particle_area_clusters_se")

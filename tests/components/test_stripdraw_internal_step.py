@@ -120,10 +120,18 @@ PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", m
                   zeta=0.2, particle_thickness=0.5e-6, beta_threshold=0.0, beta_initial=0.0)
 
 
+#: the pinned numbers below are held to this. Round-off (another compiler, a target that fuses multiply-adds) moves
+#: them: a relative change of 1e-15 to 1e-14 in the normal force moves them by as much (measured), and where round-off
+#: changes the iterations of a step's Newton solve its result moves within the solve's tolerance, 1e-10 of the force
+#: scale (NEWTON_RTOL of tc_stripdraw.c); a change of the physics moves them far more (1e-9, as the golden outputs of
+#: tests/components/test_golden_outputs.py)
+PINNED_RTOL = 1e-9
+
+
 def test_internal_step_zero_is_the_model_before_the_grid():
     """Regression numbers of the model before internal_step existed: 60 steps of 1, 0.37 and 2.3 ms, closed form
-    with slip-rate velocity, varying normal force, ramped grip, held to 1e-10. friction_force is the friction of
-    the state at the end of the step (the return-mapped tractions at the current debris and pressure, the nodes
+    with slip-rate velocity, varying normal force, ramped grip, held to PINNED_RTOL. friction_force is the friction
+    of the state at the end of the step (the return-mapped tractions at the current debris and pressure, the nodes
     that entered the pad in the step in contact), 0.55 %
     below the friction held over the last coupling interval (1712.5118 N; the normal force changes at every step
     here)."""
@@ -131,10 +139,10 @@ def test_internal_step_zero_is_the_model_before_the_grid():
     for k in range(60):
         dt = (1e-3, 3.7e-4, 2.3e-3)[k % 3]
         out = m.step(dt, {"normal_force": F_N * (1 + 0.2 * ((k % 7) / 7)), "grip_velocity": 0.08 * min(1, (k + 1) / 12)})
-    assert out["pull_force"] == pytest.approx(3424.2322477864595, rel=1e-10)
-    assert out["friction_force"] == pytest.approx(1703.142033775029, rel=1e-10)
-    assert out["beta_max"] == pytest.approx(0.014484737859703082, rel=1e-10)
-    assert float(m.beta.sum()) == pytest.approx(0.6333113201955827, rel=1e-10)
+    assert out["pull_force"] == pytest.approx(3424.2322477864595, rel=PINNED_RTOL)
+    assert out["friction_force"] == pytest.approx(1703.142033775029, rel=PINNED_RTOL)
+    assert out["beta_max"] == pytest.approx(0.014484737859703082, rel=PINNED_RTOL)
+    assert float(m.beta.sum()) == pytest.approx(0.6333113201955827, rel=PINNED_RTOL)
 
 
 def test_a_grid_never_crossed_is_no_grid():

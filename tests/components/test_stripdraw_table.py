@@ -210,3 +210,40 @@ def test_version_1_files_stay_readable_and_writable(tmp_path):
     assert back.version == 1 and back.content_hash() == digest and back.contact_area is None
     with pytest.raises(ParameterError, match="needs all of"):
         FrictionTable(t.pressure, t.velocity, t.beta, t.mu, t.metadata, contact_area=t.mu)
+
+
+def _from_10_mpa(path):
+    """The shipped table restricted to its pressure nodes from 10 MPa up (10, 20, 30 MPa), written to path."""
+    t = read_table(DEFAULT_TABLE)
+    keep = t.pressure >= 1e7
+    extras = {k: t.array(k)[keep] for k in ("simulated", "contact_area_se", "particle_area_se",
+                                            "particle_area_clusters", "particle_area_clusters_se", "mu_se")}
+    areas = {k: getattr(t, k)[keep] for k in ("contact_area", "particle_area", "contact_area_std", "particle_area_std")}
+    write_table(path, FrictionTable(t.pressure[keep], t.velocity, t.beta, t.mu[keep],
+                                    {"beta_threshold": t.beta_threshold}, extras=extras, **areas))
+    return path
+
+
+def test_a_force_on_an_axis_end_to_round_off_is_on_the_table(tmp_path):
+    """12250 N on the 35 x 35 mm pad is 9999999.999999998 Pa: a table whose pressure axis starts at 10 MPa takes it
+    in the scene checks (the component's input limits), in the model under table_policy = error and in its lookups
+    (not counted as clamped); 1e-6 below the axis is refused, the message printing enough digits to show why."""
+    from tribocosim.components import registry
+
+    path = _from_10_mpa(tmp_path / "from10.npz")
+    params = StripDrawParameters(table_policy="error")
+    force = 12250.0
+    assert params.pressure(force) < 1e7
+    comp = registry.components()["stripdraw"]
+    problems, limits = comp.check(params, comp.files(table_file=str(path)), tmp_path)
+    assert problems == []
+    assert limits["normal_force"](force, "the set-point, 12250 N", "strip") is None
+    below = params.normal_force(1e7 * (1 - 1e-6))
+    message = limits["normal_force"](below, "the set-point", "strip")
+    assert "a nominal pressure of 9.99999 MPa, outside the friction table's pressure axis [10, 30] MPa" in message
+    model = StripDrawModel(params, make_friction_law(params, read_table(path)))
+    out = model.step(1e-3, {"normal_force": force, "grip_velocity": 0.08})
+    assert out["table_clamp_count"] == 0
+    with pytest.raises(TableDomainError, match=r"pressure = 9.99999e\+06 Pa is outside the table's range "
+                                               r"\[1e\+07, 3e\+07\] Pa \(by more than 1e-09 of the end\)"):
+        model.step(1e-3, {"normal_force": below, "grip_velocity": 0.08})

@@ -149,6 +149,152 @@ def test_the_native_lookup_is_the_reference(mask):
     assert np.array_equal(many, one)
 
 
+# ---- a reference that computes every slope at the query, in the native arithmetic ------------------------------
+
+
+def _sgn(x: float) -> int:
+    return int(x > 0) - int(x < 0)
+
+
+def _kind_slope(x, y, u, k) -> float:
+    """The slope at node k of the line (x, y) from its neighbours of its kind u (every neighbour for a node alone of
+    its kind): the PCHIP formulas of tc_pchip.c, in its operation order."""
+    n = len(x)
+    if n < 2:
+        return 0.0
+    same = (lambda a: u is None or u[a] == u[k])
+    left, right = k > 0 and same(k - 1), k + 1 < n and same(k + 1)
+    if not left and not right:
+        return _kind_slope(x, y, None, k)
+    sec = (lambda a: (y[a + 1] - y[a]) / (x[a + 1] - x[a]))
+
+    def end(h0, h1, m0, m1):
+        d = ((2.0 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
+        if _sgn(d) != _sgn(m0):
+            return 0.0
+        return 3.0 * m0 if _sgn(m0) != _sgn(m1) and abs(d) > 3.0 * abs(m0) else d
+
+    if left and right:
+        m0, m1 = sec(k - 1), sec(k)
+        if _sgn(m0) != _sgn(m1) or m0 == 0.0 or m1 == 0.0:
+            return 0.0
+        h0, h1 = x[k] - x[k - 1], x[k + 1] - x[k]
+        w1, w2 = 2.0 * h1 + h0, h1 + 2.0 * h0
+        return (w1 + w2) / (w1 / m0 + w2 / m1)
+    if right:
+        if k + 2 < n and same(k + 2):
+            return end(x[k + 1] - x[k], x[k + 2] - x[k + 1], sec(k), sec(k + 1))
+        return sec(k)
+    if k >= 2 and same(k - 2):
+        return end(x[k] - x[k - 1], x[k - 1] - x[k - 2], sec(k - 1), sec(k - 2))
+    return sec(k - 1)
+
+
+def _limited(d, m) -> float:
+    if m == 0.0 or _sgn(d) != _sgn(m):
+        return 0.0
+    return 3.0 * m if abs(d) > 3.0 * abs(m) else d
+
+
+def _piece(x, y, u, k, t) -> float:
+    """The Hermite piece from node k to k + 1 of a line at t, its node slopes limited where the kinds differ."""
+    d0, d1 = _kind_slope(x, y, u, k), _kind_slope(x, y, u, k + 1)
+    if u[k] != u[k + 1]:
+        m = (y[k + 1] - y[k]) / (x[k + 1] - x[k])
+        d0, d1 = _limited(d0, m), _limited(d1, m)
+    return _hermite_at(y[k], y[k + 1], d0, d1, x[k + 1] - x[k], t)
+
+
+def _hermite_at(y0, y1, d0, d1, h, t) -> float:
+    s = 1.0 - t
+    return (1.0 + 2.0 * t) * s * s * y0 + t * t * (3.0 - 2.0 * t) * y1 + h * t * s * (s * d0 - t * d1)
+
+
+def direct_lookup(table: FrictionTable, values, p, v, b) -> float:
+    """A version 4 lookup with every slope taken at the query from the table's nodes (the rows' slopes along beta,
+    the columns' along ln P, the pieces' limits): what the native lookup computed at each call before its table kept
+    the slopes, written out in Python floats."""
+    u = 1.0 - table.array("simulated")
+    x, beta = np.log(table.pressure).tolist(), table.beta.tolist()
+    ip, tp, _ = _cell(np.log(table.pressure), float(np.log(min(max(p, table.pressure[0]), table.pressure[-1]))))
+    iv, tv, _ = _cell(table.velocity, abs(float(v)))
+    ib, tb, _ = _cell(table.beta, float(b))
+    tp, tv, tb = float(tp), float(tv), float(tb)
+    rows = []
+    for j in (iv, iv + 1) if tv != 0.0 else (iv,):
+        y, d = [], []
+        slopes = [[_kind_slope(beta, values[i, j].tolist(), u[i, j].tolist(), k) for k in range(len(beta))]
+                  for i in range(len(x))]
+        for k in range(len(beta)):
+            col, kinds = values[:, j, k].tolist(), u[:, j, k].tolist()
+            if len(x) == 1:
+                y.append(col[0])
+                d.append(slopes[0][k])
+                continue
+            y.append(_piece(x, col, kinds, ip, tp))
+            d.append(_piece(x, [s[k] for s in slopes], kinds, ip, tp))
+        if len(beta) == 1:
+            rows.append(y[0])
+            continue
+        m = (y[ib + 1] - y[ib]) / (beta[ib + 1] - beta[ib])
+        rows.append(_hermite_at(y[ib], y[ib + 1], _limited(d[ib], m), _limited(d[ib + 1], m), beta[ib + 1] - beta[ib],
+                                tb))
+    return rows[0] if tv == 0.0 else (1.0 - tv) * rows[0] + tv * rows[1]
+
+
+@pytest.mark.parametrize("mask", ["all", "staircase", "random"])
+def test_the_kept_slopes_give_the_lookup_of_slopes_taken_at_each_query(mask):
+    """The table keeps the slopes of its rows and columns (tc_table_cubic) and a lookup evaluates Hermite pieces only:
+    the values and mu of the strip-draw law are those of the slopes taken at each query from the nodes (direct_lookup),
+    to round-off (1e-14 of the largest value; a compiler that fuses multiply-adds rounds a few operations
+    differently), over random queries, the pressure nodes, 12250 N on the 35 x 35 mm pad (just below 10 MPa) and the
+    velocity nodes."""
+    rng = np.random.default_rng(17)
+    t = random_table(rng, mask=mask)
+    p = np.concatenate([np.exp(rng.uniform(np.log(0.8e6), np.log(3.2e7), 160)), t.pressure, [12250 / 0.035 ** 2] * 4])
+    v = np.concatenate([rng.uniform(0.0, 0.6, 160), rng.choice(t.velocity, 10)])
+    b = rng.uniform(0.0, 1.05, 170)
+    ours = np.array([t.interpolate_array(t.particle_area, *q)[0] for q in zip(p, v, b)])
+    ref = np.array([direct_lookup(t, t.particle_area, *q) for q in zip(p, v, b)])
+    assert_allclose(ours, ref, rtol=1e-14, atol=1e-14 * np.abs(t.particle_area).max())
+    # the law reads the share the table keeps the slopes of (A_c = 1 here: the share is A_p)
+    params = StripDrawParameters()
+    law = make_friction_law(params, t)
+    mu_ref = np.array([params.mu0 * max(0.0, 1.0 - params.particle_area_scale * direct_lookup(t, t.particle_area, *q))
+                       for q in zip(p, v, b)])
+    assert_allclose(law.mu(p, v, b)[0], mu_ref, rtol=1e-14, atol=1e-14 * params.mu0)
+
+
+def test_rows_kept_between_lookups_change_no_number():
+    """The strip-draw model keeps the interpolated rows of its last lookup (tc_table_rows) for the next at the same
+    pressure and velocity cell (the friction limits, the cap of beta and the state's limits of an interval): lookups
+    through one kept buffer, in an order that hits and misses it, give the numbers of lookups without it, bit for
+    bit."""
+    import ctypes
+
+    from tribocosim.components.native.toolchain.library import UBYTE_P, core, ptr
+
+    rng = np.random.default_rng(23)
+    t = random_table(rng, mask="random")
+    params = StripDrawParameters()
+    law = make_friction_law(params, t)
+    c = core()
+    struct = c.struct(params)
+    rows = ctypes.create_string_buffer(32768)  # zeroed, larger than tc_table_rows
+    for _ in range(300):
+        pk = float(rng.choice([*t.pressure, 3.3e6, 7.1e6]))
+        v = np.full(12, rng.choice([0.0, 0.08, 0.2])) if rng.uniform() < 0.7 else rng.uniform(0, 0.6, 12)
+        b = rng.uniform(0.0, 1.0, 12)
+        kept, flags = np.empty(12), np.zeros(12, dtype=np.uint8)
+        c.call(c.lib.tc_law_mu, ctypes.byref(struct), law.native_table, pk, 12, ptr(v), ptr(b), ptr(kept),
+               ptr(flags, UBYTE_P), ptr(np.empty(12)), ctypes.cast(rows, ctypes.c_void_p))
+        fresh, fresh_flags = law.mu(pk, v, b)
+        assert np.array_equal(kept, fresh) and np.array_equal(flags.astype(bool), fresh_flags)
+        vq = float(v[0])
+        assert c.lib.tc_law_beta_cap(ctypes.byref(struct), law.native_table, pk, vq,
+                                     ctypes.cast(rows, ctypes.c_void_p)) == law.beta_cap(pk, vq)
+
+
 def test_continuous_across_the_nodes_where_the_simulated_levels_change():
     """At a pressure node whose row simulated more levels than the row below (the shipped staircase), and at every
     beta node, the value just below and just above the node is the node's value to within the slope times the step:

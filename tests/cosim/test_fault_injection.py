@@ -119,31 +119,30 @@ def test_absurd_scene_values_are_scene_problems_before_anything_runs(tmp_path, t
     """Each ran to the end with one warning (1e30 N), failed late after 14 discard lines (NaN, inf), ran a step in
     seconds (1e6 m/s), or announced an ETA of 4e28 s (stop = 1e30): now each is exit 2 naming the key, the value
     and what is allowed, and nothing is written."""
-    start = time.perf_counter()
     proc = tribocosim("run", STRIPDRAW, "--out", tmp_path / "out", "--quiet", "--set", setting)
     assert proc.returncode == 2 and message in proc.stderr, proc.stderr[-3000:]
     assert "Traceback" not in proc.stderr and "[discard]" not in proc.stderr
-    assert time.perf_counter() - start < 60
     assert not (tmp_path / "out" / "stripdraw.csv").exists()
     assert not temp_folders(tmpdir_env)
 
 
 # ------------------------------------------------------------------------------------------- FMU steps in fmpy
 _SIMULATE = """
-    import sys, json, time
+    import sys, json
     import numpy as np
     from fmpy import simulate_fmu
-    start = time.perf_counter()
     values, stop = json.loads(sys.argv[2]), float(sys.argv[3])
     ramp = values.pop("ramp", None)  # the grip ramped to 0.08 m/s over this time, as the demo's drive does
     inputs = None if ramp is None else np.array(
         [(0.0, 0.0), (ramp, 0.08), (stop, 0.08)], dtype=[("time", float), ("grip_velocity", float)])
+    calls = []  # the doStep calls fmpy made (its FMI call log)
+    log = lambda line: calls.append(1) if line.startswith("fmi2DoStep") else None
     try:
         r = simulate_fmu(sys.argv[1], stop_time=stop, step_size=1e-3, start_values=values, input=inputs,
-                         output=["pull_force", "grip_position"])
-        print("ended", r["time"][-1], r["pull_force"][-1], time.perf_counter() - start)
+                         output=["pull_force", "grip_position"], fmi_call_logger=log)
+        print("ended", r["time"][-1], r["pull_force"][-1], len(calls))
     except Exception as exc:
-        print("failed", exc, time.perf_counter() - start)
+        print("failed", exc, len(calls))
 """
 
 
@@ -166,7 +165,7 @@ def test_fmpy_ends_every_simulation_of_the_fmu_within_seconds(strip_fmu, tmp_pat
     out = proc.stdout + proc.stderr
     last = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else ""
     assert proc.returncode == 0 and last.startswith(outcome), out[-3000:]
-    assert float(last.split()[-1]) < 20, "seconds, not minutes"
+    assert int(last.split()[-1]) <= round(stop / 1e-3) + 1, "ended after the steps of the run at most (and one repeat)"
     if message:
         assert message in out, out[-3000:]
 
@@ -181,10 +180,8 @@ def test_results_that_cannot_be_written_are_refused_before_the_run(tmp_path):
                          (tmp_path / "afile" / "sub", "cannot make the output folder"),
                          (Path("/proc/tribocosim-out"), "cannot make the output folder /proc/tribocosim-out"),
                          (tmp_path / "taken", "stripdraw.csv: a folder of that name is in the way")):
-        start = time.perf_counter()
         proc = tribocosim("run", STRIPDRAW, "--out", out, "--quiet")
         assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-2000:]
-        assert time.perf_counter() - start < 30, "refused before the run"
 
 
 def test_a_second_run_into_the_same_folder_is_refused_and_overrides_are_recorded(tmp_path):

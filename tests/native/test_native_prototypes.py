@@ -38,7 +38,7 @@ def test_the_loaded_functions_carry_the_headers_types():
         assert fn.restype is restype and list(fn.argtypes) == argtypes, name
     law = library.prototypes()["tc_law_mu"]
     assert law.params == ("const tc_stripdraw_params *", "const tc_table *", "double", "size_t", "const double *",
-                          "const double *", "double *", "unsigned char *", "double *", "tc_msg")
+                          "const double *", "double *", "unsigned char *", "double *", "tc_table_rows *", "tc_msg")
     assert ctypes_signature(library.prototypes()["tc_stripdraw_create"], library.Msg)[1][4] == \
         ctypes.POINTER(ctypes.c_void_p), "tc_stripdraw **out"
 

@@ -26,6 +26,9 @@ STANDARD = {"fmi2Functions.h", "fmi3Functions.h"}
 INTERFACES = {"tc_fmu.h"}
 #: which folders a folder's files may include from
 LAYERS = {"core": {"core"}, "resource_io": {"core", "resource_io"}, "fmi": {"core", "resource_io", "fmi"}}
+#: headers that hold a model's members (no functions): only the files of that model include them, so that the model's
+#: state is changed in its own files alone (the bar, its state image and backup, its debris transport)
+PRIVATE = {"tc_stripdraw_model.h": {"tc_stripdraw.c", "tc_stripdraw_state.c", "tc_debris.c"}}
 
 
 def generated_headers() -> set[str]:
@@ -127,6 +130,14 @@ def test_a_header_declares_only_what_its_own_source_defines():
     for fn in declared(files["tc_fmu.h"]) - {"tc_component_array"}:  # the interface: every glue defines it
         glue = sorted(f for f, d in definitions.items() if fn in d)
         assert glue == ["tc_linear_glue.h", "tc_stripdraw_fmu.c"], (fn, glue)
+
+
+def test_a_models_members_are_included_by_its_own_files_only():
+    files = source_files()
+    for header, allowed in PRIVATE.items():
+        assert header in files and declared(files[header]) == set(), f"{header} declares no function"
+        users = {name for name, path in files.items() if header in includes(path)}
+        assert users == allowed, f"{header} is included by {sorted(users)}; only {sorted(allowed)} may"
 
 
 @pytest.mark.parametrize("folder", sorted(LAYERS))

@@ -26,8 +26,8 @@ from tribocosim.components.stripdraw.friction import closed_form_table, make_fri
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import read_table, resource_entries, write_table, write_table_resource
 
-SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "resource_io/tc_table_file.c",
-           "resource_io/tc_sha256.c", "resource_io/tc_arrays.c")
+SOURCES = ("core/tc_common.c", "core/tc_table.c", "core/tc_table_lookup.c", "core/tc_pchip.c",
+           "resource_io/tc_table_file.c", "resource_io/tc_sha256.c", "resource_io/tc_arrays.c")
 
 
 def read_resource(path):
@@ -49,7 +49,7 @@ def law_mu(handle, params: StripDrawParameters, grid) -> np.ndarray:
         vq, bq = np.ascontiguousarray(v[at]), np.ascontiguousarray(b[at])
         o, work = np.empty(vq.size), np.empty(vq.size)
         c.call(c.lib.tc_law_mu, ctypes.byref(struct), handle, float(pk), vq.size, ptr(vq), ptr(bq), ptr(o), None,
-               ptr(work))
+               ptr(work), None)
         out[at] = o
     return out
 
@@ -267,7 +267,7 @@ def test_allocation_failures_leak_nothing(folder, checked):
     class Msg(ctypes.Structure):
         _fields_ = [("text", ctypes.c_void_p), ("size", ctypes.c_size_t)]
 
-    for n in range(40):
+    for n in range(60):
         checked.tc_count_fail_after(n)
         handle = VP()
         status = checked.tc_table_read(str(path).encode(), ctypes.byref(handle), Msg(ctypes.addressof(buf), 512))

@@ -37,25 +37,43 @@ def test_process_pool_yields_results_and_exceptions_per_item():
         ProcessPoolCaseExecutor(0)
 
 
-def _stop_after_first_result(executor, items):
-    """Send SIGINT to this process when the first result arrives; the keys received and the seconds from the
-    signal to CampaignInterrupted."""
-    got, sent = [], None
+def _wait_for(files: tuple[str, str]) -> str:
+    """An item that runs until the file files[0] exists (at once for a fast item), then writes files[1]: a slow
+    item that ends only when the test lets it (after 600 s at most, so that no worker outlives a failed test)."""
+    release, finished = files
+    deadline = time.monotonic() + 600
+    while not os.path.exists(release) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    Path(finished).write_text("finished")
+    return finished
+
+
+def _stop_after_first_result(executor, folder: Path):
+    """A fast and a slow item (_wait_for); SIGINT to this process when the first result arrives. The keys received,
+    and whether the slow item had finished when the executor raised CampaignInterrupted: it cannot have unless the
+    executor waited for it, since it runs until the test releases it (afterwards)."""
+    (folder / "go").write_text("")
+    items = [("fast", (str(folder / "go"), str(folder / "fast.done"))),
+             ("slow", (str(folder / "release"), str(folder / "slow.done")))]
+    got, sent = [], False
     with interrupt.stop_on_signals():
         with pytest.raises(CampaignInterrupted, match="stopped by SIGINT") as info:
-            for key, _ in executor.map_unordered(time.sleep, items):
+            for key, _ in executor.map_unordered(_wait_for, items):
                 got.append(key)
-                if sent is None:
-                    sent = time.monotonic()
+                if not sent:
+                    sent = True
                     os.kill(os.getpid(), signal.SIGINT)
+    slow_finished = (folder / "slow.done").exists()
+    (folder / "release").write_text("")  # a slow item still running (a Dask thread) ends now
     assert info.value.signum == signal.SIGINT
-    return got, time.monotonic() - sent
+    return got, slow_finished
 
 
-def test_process_pool_stops_on_a_signal_and_kills_the_slides_in_progress():
-    got, elapsed = _stop_after_first_result(ProcessPoolCaseExecutor(2), [("fast", 0.0), ("slow", 60.0)])
-    assert got == ["fast"] and elapsed < 2.0, elapsed
+def test_process_pool_stops_on_a_signal_and_kills_the_slides_in_progress(tmp_path):
+    got, slow_finished = _stop_after_first_result(ProcessPoolCaseExecutor(2), tmp_path)
+    assert got == ["fast"] and not slow_finished, "stopped without waiting for the slide in progress"
     assert multiprocessing.active_children() == [], "the worker of the slow item is gone"
+    assert not (tmp_path / "slow.done").exists(), "killed, not left to finish"
 
 
 def test_process_pool_replaces_a_worker_that_dies_and_names_how():
@@ -92,11 +110,11 @@ def test_dask_executor_yields_results_and_exceptions(cluster):
         ex.close()
 
 
-def test_dask_executor_stops_on_a_signal_and_cancels_what_runs(cluster):
+def test_dask_executor_stops_on_a_signal_and_cancels_what_runs(cluster, tmp_path):
     ex = DaskCaseExecutor(address=cluster.scheduler_address)
     try:
-        got, elapsed = _stop_after_first_result(ex, [("fast", 0.0), ("slow", 3.0)])
-        assert got == ["fast"] and elapsed < 2.0, elapsed
+        got, slow_finished = _stop_after_first_result(ex, tmp_path)
+        assert got == ["fast"] and not slow_finished, "stopped without waiting for the task in progress"
         assert dict(ex.map_unordered(math.sqrt, [("a", 4.0)])) == {"a": 2.0}, "the client works on"
     finally:
         ex.close()

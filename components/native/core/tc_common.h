@@ -8,6 +8,7 @@
 #ifndef TC_COMMON_H
 #define TC_COMMON_H
 
+#include <math.h>
 #include <stddef.h>
 
 /* TC_API marks the core functions; they are exported from the library only in test builds
@@ -41,6 +42,15 @@ int tc_fail(tc_msg msg, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* A value within this of a bound (relative to the bound) is on it, not beyond it: the ends of a friction table's axes
+ * and the declared ranges of parameters and inputs are compared so, because round-off moves a value that is meant to
+ * be on a bound to either side of it (12250 N on the 35 x 35 mm pad is 9999999.999999998 Pa, not 10 MPa);
+ * components/params.py (BOUND_RTOL, within_bounds) compares the same way. */
+#define TC_BOUND_RTOL 1e-9
+/* whether x is below the bound lo, or above the bound hi, by more than TC_BOUND_RTOL of the bound */
+static inline int tc_below(double x, double lo) { return x < lo - TC_BOUND_RTOL * fabs(lo); }
+static inline int tc_above(double x, double hi) { return x > hi + TC_BOUND_RTOL * fabs(hi); }
 
 /* The shortest "%g" text of x that reads back to the same double ("0.08", "12250", "1e-05", "nan", "-inf"), for
  * messages; returns buf. */

@@ -3,8 +3,6 @@
 
 #include <math.h>
 
-#include "tc_table_lookup.h"
-
 static const tc_msg NO_MSG = {NULL, 0}; /* lookups under the clamp policy cannot fail */
 
 static int with_areas(const tc_stripdraw_params *p, const tc_table *table) {
@@ -72,21 +70,23 @@ static void contact_area(const tc_stripdraw_params *p, const tc_table *table, do
 
 /* The cap of a version 4 table at (P, v): the first beta where s times the interpolated share reaches 1 (mesoscale)
  * or s times the interpolated A_p reaches A_c of Eq. 8, limited to 1; 1 when it never does. */
-static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
+static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity,
+                             tc_table_rows *rows) {
     const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
     const double level = eq8 ? eq8_area(p, pressure) : 1.0, s = p->particle_area_scale;
     if (!(s > 0)) return 1.0;
     double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX], at;
     (void)tc_table_beta_line(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, velocity, y,
-                             dl, dr, NO_MSG);
+                             dl, dr, rows, NO_MSG);
     if (!tc_table_first_crossing(table->n_beta, table->beta, y, dl, dr, level / s * (1.0 - TC_REACH_RTOL), &at))
         return 1.0;
     return fmin(1.0, at);
 }
 
 /* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */
-static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity) {
-    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) return crossing_cubic(p, table, pressure, velocity);
+static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity,
+                       tc_table_rows *rows) {
+    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) return crossing_cubic(p, table, pressure, velocity, rows);
     const double *b = table->beta;
     double d_prev = 0.0;
     for (size_t k = 0; k < table->n_beta; ++k) {
@@ -113,7 +113,7 @@ double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table
         for (size_t i = 0; i < table->n_pressure; ++i) {
             if (!(table->pressure[i] > 0)) continue;
             for (size_t j = 0; j < table->n_velocity; ++j) {
-                const double c = crossing(p, table, table->pressure[i], table->velocity[j]);
+                const double c = crossing(p, table, table->pressure[i], table->velocity[j], NULL);
                 top = first || c > top ? c : top;
                 first = 0;
             }
@@ -129,13 +129,15 @@ double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table
     }
 }
 
-double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed) {
-    if (with_areas(p, table) && pressure > 0) return crossing(p, table, pressure, fabs(speed));
+double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed,
+                       tc_table_rows *rows) {
+    if (with_areas(p, table) && pressure > 0) return crossing(p, table, pressure, fabs(speed), rows);
     return tc_law_beta_threshold(p, table);
 }
 
 int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n, const double *velocity,
-              const double *beta, double *mu, unsigned char *clamped, double *ac_work, tc_msg msg) {
+              const double *beta, double *mu, unsigned char *clamped, double *ac_work, tc_table_rows *rows,
+              tc_msg msg) {
     switch (p->friction_model) {
     case TC_STRIPDRAW_FRICTION_MODEL_CONSTANT:
         for (size_t k = 0; k < n; ++k) mu[k] = p->mu_const;
@@ -151,16 +153,20 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
         const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
         const double loss = shear_loss(p);
         if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) { /* the share (or A_p over Eq. 8's A_c) interpolated */
-            int rc = tc_table_lookup(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, n,
-                                     velocity, beta, p->table_policy, mu, clamped, msg);
+            int rc = tc_table_lookup2(table, eq8 ? particle_area(p, table) : particle_share(p, table), NULL, pressure,
+                                      n, velocity, beta, p->table_policy, mu, NULL, clamped, rows, msg);
             if (rc != TC_OK) return rc;
-            const double ac = eq8 ? eq8_area(p, pressure) : 1.0;
+            if (!eq8) { /* the share itself (A_c = 1: dividing by it is exact) */
+                for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * mu[k]);
+                return TC_OK;
+            }
+            const double ac = eq8_area(p, pressure);
             for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * (ac > 0 ? mu[k] / ac : 0.0));
             return TC_OK;
         }
         /* A_p (and the table's A_c) located once per query */
         int rc = tc_table_lookup2(table, particle_area(p, table), eq8 ? NULL : table->contact_area, pressure, n,
-                                  velocity, beta, p->table_policy, mu, ac_work, clamped, msg);
+                                  velocity, beta, p->table_policy, mu, ac_work, clamped, NULL, msg);
         if (rc != TC_OK) return rc;
         if (eq8) contact_area(p, table, pressure, n, velocity, beta, ac_work);
         for (size_t k = 0; k < n; ++k) {

@@ -29,6 +29,7 @@
 #include "tc_common.h"
 #include "tc_stripdraw_params.h"
 #include "tc_table.h"
+#include "tc_table_lookup.h"
 
 /* s A_p "reaches" A_c within this relative tolerance (a table tabulated to its cap) */
 #define TC_REACH_RTOL 1e-12
@@ -39,15 +40,17 @@ TC_API int tc_law_check(const tc_stripdraw_params *p, const tc_table *table, tc_
 
 /* mu at one pressure for n (velocity, beta) queries; clamped[k] (may be NULL) is 1 when query k was outside the
  * table (clamp policy); ac_work holds n doubles. Under table_policy = error an outside query is TC_DISCARD, with
- * nothing written. */
+ * nothing written. rows (may be NULL): the interpolated table rows a caller keeps (tc_table_rows), shared with
+ * tc_law_beta_cap at the same pressure and speed. */
 TC_API int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n,
                      const double *velocity, const double *beta, double *mu, unsigned char *clamped,
-                     double *ac_work, tc_msg msg);
+                     double *ac_work, tc_table_rows *rows, tc_msg msg);
 
 /* The largest cap of beta (Eq. 24) of the law, and its cap at (P, |v|) (the threshold when P = 0 or the law does
- * not depend on P and v). */
+ * not depend on P and v; rows as tc_law_mu's). */
 TC_API double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table);
-TC_API double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed);
+TC_API double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed,
+                              tc_table_rows *rows);
 
 /* alpha(v) of Eq. 23 (closed form). */
 TC_API double tc_law_alpha(const tc_stripdraw_params *p, double velocity);

@@ -1,7 +1,9 @@
-/* Array kernels shared by the strip's integrators (tc_stripdraw.c, tc_galpha.c) and its debris transport. */
+/* Array kernels shared by the strip's integrators (tc_explicit.c, tc_galpha.c), its debris transport (tc_debris.c)
+ * and its outputs (tc_stripdraw.c), and the interface law they evaluate. */
 #ifndef TC_KERNELS_H
 #define TC_KERNELS_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "tc_common.h"
@@ -12,5 +14,13 @@ TC_API int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t
 /* tridiagonal solve (Thomas algorithm); work holds 2 n doubles; x must not alias the inputs. */
 TC_API void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs,
                       double *x, double *work);
+
+/* The interface law (Eq. 4-5) on one node of elastic slip x: the traction k_s x limited to +-tmax; *slipping when the
+ * trial traction exceeds the limit. */
+static inline double tc_sd_traction(double x, double ks, double tmax, int *slipping) {
+    const double trial = ks * x;
+    *slipping = fabs(trial) > tmax;
+    return trial > tmax ? tmax : (trial < -tmax ? -tmax : trial);
+}
 
 #endif

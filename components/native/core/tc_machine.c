@@ -43,9 +43,13 @@ static double setpoint(const tc_machine *m, double t, int left) {
 
 void tc_machine_free(tc_machine *m) { free(m); }
 
+int tc_machine_check_params(const tc_machine_params *p, tc_msg msg) { return tc_machine_params_check(p, msg); }
+
 int tc_machine_create(const tc_machine_params *p, tc_machine **out, tc_msg msg) {
     if (out == NULL || p == NULL) return tc_fail(msg, TC_ERROR, "tc_machine_create: parameters or out is NULL");
     *out = NULL;
+    const int checked = tc_machine_params_check(p, msg);
+    if (checked != TC_OK) return checked;
     tc_machine *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the drawing machine");
     m->p = *p;

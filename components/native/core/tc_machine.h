@@ -25,7 +25,10 @@ enum tc_machine_output {
 
 typedef struct tc_machine tc_machine;
 
+/* Create a drawing machine; TC_ERROR for a parameter outside its declared range (tc_machine_check_params). */
 TC_API int tc_machine_create(const tc_machine_params *p, tc_machine **out, tc_msg msg);
+/* Every parameter against the range MachineParameters declares (tc_machine_params_check, generated from it). */
+TC_API int tc_machine_check_params(const tc_machine_params *p, tc_msg msg);
 TC_API void tc_machine_free(tc_machine *m);
 
 /* Advance by dt [s] with pull_force [N] held; TC_DISCARD with the state unchanged for a

@@ -190,9 +190,13 @@ void tc_press_free(tc_press *m) {
     free(m);
 }
 
+int tc_press_check_params(const tc_press_params *p, tc_msg msg) { return tc_press_params_check(p, msg); }
+
 int tc_press_create(const tc_press_params *p, tc_press **out, tc_msg msg) {
     if (out == NULL || p == NULL) return tc_fail(msg, TC_ERROR, "tc_press_create: parameters or out is NULL");
     *out = NULL;
+    const int checked = tc_press_params_check(p, msg);
+    if (checked != TC_OK) return checked;
     tc_press *m = calloc(1, sizeof *m);
     if (m == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the press");
     int rc = setpoints(p, m, msg);

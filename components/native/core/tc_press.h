@@ -22,10 +22,12 @@ enum tc_press_output {
 
 typedef struct tc_press tc_press;
 
-/* Create a press. The set-point table is read with the grammar of tc_press.c (PressParameters checks the
- * same): TC_ERROR when malformed; it is copied, and
+/* Create a press. TC_ERROR for a parameter outside its declared range (tc_press_check_params) and for a malformed
+ * set-point table, read with the grammar of tc_press.c (PressParameters checks the same); the table is copied, and
  * p->setpoint_table may be NULL (empty). */
 TC_API int tc_press_create(const tc_press_params *p, tc_press **out, tc_msg msg);
+/* Every parameter against the range PressParameters declares (tc_press_params_check, generated from it). */
+TC_API int tc_press_check_params(const tc_press_params *p, tc_msg msg);
 TC_API void tc_press_free(tc_press *m);
 
 /* Advance by dt [s]; TC_DISCARD with the state unchanged for a non-finite dt, dt <= 0,

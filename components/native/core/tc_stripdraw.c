@@ -18,16 +18,12 @@
  *   to 12 times;
  * - friction mu(P, v, beta) (Eq. 6-9, 23): tc_friction.h; v is the grip speed |V0| or each node's slip rate of
  *   the last interval (friction_velocity);
- * - debris (Eq. 12-14, 24, 37): Archard source K P |dU_i| w_i / (H h_p), then implicit upwind advection with
- *   the tool-carried flux -zeta u beta (u = face velocity) between nodes that are both under the pad (a
- *   tridiagonal M-matrix with unit column sums: beta >= 0 and sum(beta) conserved for any step), then the cap
- *   beta <= beta_thres (Eq. 24). With a debris sink (debris_sink_length lambda > 0: lateral ejection or
- *   compaction into a transfer layer), source and sink are one local equation per unit slide s under the pad,
- *   d beta / ds = q - beta / lambda (q = K P / (H h_p)), integrated exactly over the interval's slide
- *   s_i = w_i |dU_i|: beta_i e^(-s_i/lambda) + q lambda (1 - e^(-s_i/lambda)), before the advection. What the sink
- *   and the cap take is summed (beta_removed). Unless beta_threshold
- *   is set, the cap is the law's at the interval's pressure and grip speed. A later pass starts from
- *   debris_carry_over times the beta field the earlier one left (beta_field).
+ * - debris (Eq. 12-14, 24, 37): Archard source, sink, upwind transport under the pad and the cap of beta, per
+ *   coupling interval (tc_debris.c states them). A later pass starts from debris_carry_over times the beta field the
+ *   earlier one left (beta_field).
+ *
+ * The model's members are in tc_stripdraw_model.h; its state image and the backup that makes a refused step leave it
+ * unchanged are in tc_stripdraw_state.c.
  *
  * Coupling: a step is cut into pieces on the internal grid k * internal_step (grid_pieces; one piece, the step,
  * when internal_step = 0), and each piece of length d into n_int = max(1, ceil(d / h_max - 1e-9)) intervals with
@@ -53,86 +49,24 @@
 
 #include <float.h>
 #include <math.h>
-#include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "tc_debris.h"
+#include "tc_explicit.h"
 #include "tc_friction.h"
 #include "tc_galpha.h"
 #include "tc_kernels.h"
+#include "tc_stripdraw_model.h"
+#include "tc_stripdraw_state.h"
 
 #define LEAD_LENGTH 0.005 /* m of strip behind the material under the pad at the end of the draw */
 #define MAX_HALVINGS 12
-#define CHAIN_CACHE 4     /* step lengths whose elimination factors are kept */
 #ifndef TC_STRIPDRAW_NEWTON_MAX_ITER
 #define TC_STRIPDRAW_NEWTON_MAX_ITER 60 /* the tests build with fewer to exercise the halving */
 #endif
 #define NEWTON_RTOL 1e-10 /* residual relative to the friction capacity + grip pull */
 #define GRID_TOLERANCE 1e-6 /* a step's end this close to a grid point (in internal_step) is on it */
-#define STATE_MAGIC 0x44534354u /* "TCSD" in little-endian bytes */
-#define STATE_VERSION 2u
-#define STATE_HEADER 16
-#define N_STATE_ARRAYS 7
-#define N_STATE_DOUBLES 7
-#define N_STATE_INTS 2
-#define N_STEP_SCALARS 7 /* the doubles a step changes (step_scalars) */
-
-struct tc_stripdraw {
-    tc_stripdraw_params p;
-    const tc_table *table; /* borrowed; NULL unless the table law is used */
-    size_t n;              /* nodes; node n - 1 is the grip */
-    /* mesh and constants */
-    double le, half_le, a_lo, a_hi, ke, ks, wT, dt_explicit, pad_area;
-    double am, af, gamma, beta_nm; /* generalized-alpha */
-    double beta_cap;      /* params.beta_threshold if > 0, else the law's threshold */
-    long long reach;      /* ceil(window_courant) + 1 */
-    double *X, *mass, *minv;
-    /* state */
-    double *U, *V, *A, *Up, *beta, *slip_rate, *fprev;
-    signed char *contact;
-    double time, reaction, normal_force, grip_velocity, beta_removed, beta_produced;
-    long long n_steps, clamp_count;
-    /* derived from U: contact weights, and the first and last node where they are not 0 (w_first > w_last: none) */
-    double *w;
-    size_t w_first, w_last;
-    size_t w0_first, w0_last; /* the work array w0 is 0 outside [w0_first, w0_last] */
-    /* derived from the state: the friction limits mu P of the nodes that can reach the pad (tmax), at the
-     * state's pressure and velocity; the next interval reuses them when its pressure and speed are the same */
-    double *tmax;
-    double limit_pressure, limit_speed;
-    size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
-    int limit_clamped;         /* a lookup was outside the table */
-    /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
-    double slip_h;
-    /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */
-    double beta_hi;
-    int refusal; /* enum tc_stripdraw_refusal of the last refused step */
-    int u_finite; /* every U is finite after the last interval */
-    /* work arrays */
-    double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
-    double *fwork;          /* explicit: nodal forces */
-    double *gwork, *ov;     /* implicit: tc_sd_galpha work, and the overlaps of each halving level */
-    size_t ov_first, ov_last; /* the first level's overlaps are 0 outside [ov_first, ov_last] */
-    double *chain;          /* implicit: tc_sd_chain_factors of the last CHAIN_CACHE step lengths */
-    double chain_h[CHAIN_CACHE];
-    int chain_used, chain_next;
-    double cap_pressure, cap_speed, cap_value; /* tc_law_beta_cap of the last (P, |V0|), when cap_known */
-    int cap_known;
-    unsigned char *clamped; /* table lookups flagged as clamped */
-    signed char *giwork;
-    /* the state before the current step: U, V, A, fprev by exchanging the arrays (bar_in_backup: from the step's
-     * start to its first interval the bar's state is in bU, bV, bA, bfprev only, and U, V, A, fprev are free), the
-     * rest copied */
-    double *bU, *bV, *bA, *bfprev, *bUp, *bbeta, *bslip;
-    signed char *bcontact;
-    int bar_in_backup;
-    double b_scalars[N_STEP_SCALARS]; /* of step_scalars */
-    long long b_clamp_count;
-    size_t state_size;
-    double *pool;          /* every double array above, in one allocation */
-    unsigned char *bytes;  /* contact, clamped, giwork and bcontact, in one allocation */
-};
 
 /* ---------------------------------------------------------------------------------------------------
  * kernels
@@ -167,98 +101,6 @@ void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, d
     if (n == 0) return;
     overlap_interior(1, n - 1, X, U, half_le, a_lo, a_hi, ov);
     overlap_ends(n, X, U, half_le, a_lo, a_hi, ov);
-}
-
-/* The interface law (Eq. 4-5) on one node of elastic slip x: the traction limited to +-tmax; *slipping when
- * the trial traction exceeds it. */
-static double traction(double x, double ks, double tmax, int *slipping) {
-    const double trial = ks * x;
-    *slipping = fabs(trial) > tmax;
-    return trial > tmax ? tmax : (trial < -tmax ? -tmax : trial);
-}
-
-void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
-                    signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
-                    double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
-                    double *reaction, double *f) {
-    const size_t N = n - 1;
-    double fr = 0.0;
-    for (size_t i = 0; i < n; ++i) f[i] = 0.0;
-    for (long long s = 0; s < n_sub; ++s) {
-        /* predictor: U += dt V + dt^2/2 A, V += dt/2 A; the grip follows V0 */
-        for (size_t i = 0; i < N; ++i) {
-            U[i] += dt * V[i] + 0.5 * dt * dt * A[i];
-            V[i] += 0.5 * dt * A[i];
-        }
-        U[N] += dt * vg;
-        V[N] = vg;
-        A[N] = 0.0;
-        for (size_t i = 0; i < n; ++i) f[i] = 0.0;
-        for (size_t e = 0; e < N; ++e) {
-            const double s_e = ke * (U[e + 1] - U[e]);
-            f[e] += s_e;
-            f[e + 1] -= s_e;
-        }
-        /* interface law with return mapping on the nodes under the pad */
-        fr = 0.0;
-        for (size_t i = 0; i < n; ++i) {
-            const double x = X[i] + U[i];
-            const double lo = i == 0 ? x : x - half_le;
-            const double hi = i == N ? x : x + half_le;
-            const double ov = fmin(hi, a_hi) - fmax(lo, a_lo);
-            if (ov > 0.0) {
-                if (contact[i] == 0) {
-                    Up[i] = U[i];
-                    contact[i] = 1;
-                }
-                int slipping;
-                const double T = traction(U[i] - Up[i], ks, tmax[i], &slipping);
-                if (slipping) Up[i] = U[i] - T / ks;
-                const double F = T * wT * ov;
-                f[i] -= F;
-                fr += F;
-            } else {
-                contact[i] = 0;
-            }
-        }
-        /* corrector: A = f / m, V += dt/2 A */
-        for (size_t i = 0; i < N; ++i) {
-            A[i] = f[i] * minv[i];
-            V[i] += 0.5 * dt * A[i];
-        }
-    }
-    *fric = fr;
-    *reaction = -f[N];
-}
-
-/* implicit upwind advection of beta under the pad (Eq. 13-14); work holds 5 n doubles */
-void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const double *weight, double zeta,
-                  double element_length, double *out, double *work) {
-    memcpy(out, beta, n_all * sizeof *out);
-    size_t lo, last; /* the pad covers one contiguous run of nodes */
-    if (zeta == 0.0 || !tc_sd_positive_range(n_all, weight, &lo, &last) || last - lo < 1) return;
-    const size_t n = last + 1 - lo;
-    double *diag = work, *sub = work + n, *sup = work + 2 * n, *tw = work + 3 * n;
-    for (size_t k = 0; k < n; ++k) {
-        diag[k] = 1.0;
-        sub[k] = 0.0;
-        sup[k] = 0.0;
-    }
-    for (size_t k = 0; k + 1 < n; ++k) {
-        const size_t a = lo + k, b = a + 1;
-        if (weight[a] > 0.0 && weight[b] > 0.0) {
-            /* face Courant number; upwind: from node k+1 into k when c > 0, from k into k+1 otherwise */
-            const double c = zeta * 0.5 * (dU[a] + dU[b]) / element_length;
-            if (c > 0.0) {
-                diag[k + 1] += c;
-                sup[k] -= c;
-            } else {
-                diag[k] -= c;
-                sub[k + 1] += c;
-            }
-        }
-    }
-    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
 }
 
 /* ---------------------------------------------------------------------------------------------------
@@ -367,12 +209,17 @@ static int friction_limits(tc_stripdraw *m, double pressure, double speed, int p
     }
     tc_stripdraw_params p = m->p;
     p.table_policy = policy;
-    int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, msg);
+    int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, &m->rows, msg);
     if (rc != TC_OK) return rc;
+    const double *mu = m->mu;
+    const unsigned char *clamped = m->clamped;
+    double *tmax = m->tmax + l;
+    int any = 0;
     for (size_t k = 0; k < cnt; ++k) {
-        m->tmax[l + k] = m->mu[k] * pressure;
-        m->limit_clamped |= m->clamped[k];
+        tmax[k] = mu[k] * pressure;
+        any |= clamped[k];
     }
+    m->limit_clamped = any;
     m->limit_lo = l;
     m->limit_hi = l + cnt;
     return TC_OK;
@@ -384,17 +231,17 @@ static void state_limits(tc_stripdraw *m) {
     (void)friction_limits(m, m->normal_force / m->pad_area, fabs(m->grip_velocity), TC_TABLE_CLAMP, none);
 }
 
-/* the elimination factors of the free bar for the step length h, kept for the last CHAIN_CACHE step lengths */
+/* the elimination factors of the free bar for the step length h, kept for the last TC_SD_CHAIN_CACHE step lengths */
 static const double *chain_for(tc_stripdraw *m, double h) {
     const size_t size = TC_SD_CHAIN(m->n);
     for (int k = 0; k < m->chain_used; ++k)
         if (m->chain_h[k] == h) return m->chain + (size_t)k * size;
     int k;
-    if (m->chain_used < CHAIN_CACHE) {
+    if (m->chain_used < TC_SD_CHAIN_CACHE) {
         k = m->chain_used++;
     } else {
         k = m->chain_next;
-        m->chain_next = (k + 1) % CHAIN_CACHE;
+        m->chain_next = (k + 1) % TC_SD_CHAIN_CACHE;
     }
     m->chain_h[k] = h;
     const double cm = (1.0 - m->am) / (m->beta_nm * h * h);
@@ -438,36 +285,30 @@ static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const
     return implicit_step(m, 0.5 * h, &mid, ov_mid, 1, 0, vg, depth + 1, msg);
 }
 
-/* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */
-static double interval_cap(tc_stripdraw *m, double pressure, double speed) {
-    if (m->p.beta_threshold > 0) return m->beta_cap;
-    if (!(m->cap_known && pressure == m->cap_pressure && speed == m->cap_speed)) {
-        m->cap_value = tc_law_beta_cap(&m->p, m->table, pressure, speed);
-        m->cap_pressure = pressure;
-        m->cap_speed = speed;
-        m->cap_known = 1;
-    }
-    return fmin(m->beta_cap, m->cap_value);
-}
-
-/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d and
- * 0 a in four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers) */
-static int difference_finite(size_t n, const double *a, const double *b, double *d, int *a_finite) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0}, sa[4] = {0.0, 0.0, 0.0, 0.0};
+/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d in
+ * four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers). A finite
+ * difference has finite operands, so a is scanned only when a d is not finite. */
+static int difference_finite(size_t n, const double *restrict a, const double *restrict b, double *restrict d,
+                             int *a_finite) {
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
     size_t i = 0;
     for (; i + 4 <= n; i += 4)
         for (int k = 0; k < 4; ++k) {
             d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
             s[k] += 0.0 * d[i + (size_t)k];
-            sa[k] += 0.0 * a[i + (size_t)k];
         }
     for (; i < n; ++i) {
         d[i] = a[i] - b[i];
         s[0] += 0.0 * d[i];
-        sa[0] += 0.0 * a[i];
     }
-    *a_finite = isfinite(sa[0] + sa[1] + sa[2] + sa[3]);
-    return isfinite(s[0] + s[1] + s[2] + s[3]);
+    if (isfinite(s[0] + s[1] + s[2] + s[3])) {
+        *a_finite = 1;
+        return 1;
+    }
+    double sa = 0.0;
+    for (i = 0; i < n; ++i) sa += 0.0 * a[i];
+    *a_finite = isfinite(sa);
+    return 0;
 }
 
 /* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
@@ -479,72 +320,6 @@ static double largest(const double *a, size_t n) {
     for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
     const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
     return m23 > m01 ? m23 : m01;
-}
-
-/* beta_i = min(b_i, cap) for i in [a, e), what the cap takes added to *removed (in the order of i), *finite cleared
- * when a b_i is not finite */
-static void cap_range(const double *b, double *beta, size_t a, size_t e, double cap, double *removed, int *finite) {
-    double r = *removed;
-    int ok = *finite;
-    for (size_t i = a; i < e; ++i) {
-        const double bi = b[i];
-        if (bi > cap) r += bi - cap;
-        beta[i] = bi > cap ? cap : bi;
-        ok &= isfinite(bi);
-    }
-    *removed = r;
-    *finite = ok;
-}
-
-/* Debris production (Eq. 37), transport (Eq. 13-14) and cap (Eq. 24) of an interval from the increments dU
- * (du_finite: every one finite), with the weights averaged over the interval. Only nodes where the weights of the
- * start (w0, range [f0, l0]) or the end are not 0 change (the source and the flux are 0 elsewhere), unless the cap
- * falls below beta elsewhere. */
-static void transport(tc_stripdraw *m, double pressure, double speed, const double *w0, size_t f0, size_t l0,
-                      int du_finite) {
-    const tc_stripdraw_params *p = &m->p;
-    const size_t n = m->n;
-    const double kp = p->archard_k * pressure, hh = p->hardness * p->particle_thickness;
-    size_t t0 = f0 < m->w_first ? f0 : m->w_first, t1 = l0 > m->w_last ? l0 : m->w_last;
-    if (f0 > l0) t0 = m->w_first, t1 = m->w_last;
-    if (m->w_first > m->w_last) t0 = f0, t1 = l0;
-    const int windowed = isfinite(kp) && du_finite && m->beta_hi == m->beta_hi;
-    if (!windowed) t0 = 0, t1 = n - 1;
-    const double cap = interval_cap(m, pressure, speed);
-    if (t0 <= t1) {
-        double produced = 0.0, sunk = 0.0;
-        const double lambda = p->debris_sink_length;
-        for (size_t i = t0; i <= t1; ++i) {
-            m->weight[i] = 0.5 * (w0[i] + m->w[i]);
-            const double slide = m->weight[i] * fabs(m->dU[i]); /* s of the interval under the pad */
-            const double src = m->weight[i] == 0.0 ? 0.0 : kp * fabs(m->dU[i]) * m->weight[i] / hh;
-            m->bsrc[i] = m->beta[i] + src;
-            if (lambda > 0 && slide > 0) {
-                /* d beta / ds = q - beta / lambda (q = src / slide) integrated exactly over the slide */
-                const double decay = exp(-slide / lambda);
-                const double b = m->beta[i] * decay + (src == 0.0 ? 0.0 : src / slide * lambda * -expm1(-slide / lambda));
-                sunk += m->bsrc[i] - b;
-                m->bsrc[i] = b;
-            }
-            produced += src;
-        }
-        m->beta_produced += produced;
-        m->beta_removed += sunk;
-        tc_sd_advect(t1 + 1 - t0, m->bsrc + t0, m->dU + t0, m->weight + t0, p->zeta, m->le, m->bnew + t0, m->awork);
-    }
-    /* the cap: over every node unless it is >= every beta away from [t0, t1]; the new beta of [t0, t1] is bnew */
-    double removed = 0.0;
-    int finite = 1;
-    if (t0 > t1) {
-        if (!(windowed && cap >= m->beta_hi)) cap_range(m->beta, m->beta, 0, n, cap, &removed, &finite);
-    } else {
-        const int all = !(windowed && cap >= m->beta_hi);
-        if (all) cap_range(m->beta, m->beta, 0, t0, cap, &removed, &finite);
-        cap_range(m->bnew, m->beta, t0, t1 + 1, cap, &removed, &finite);
-        if (all) cap_range(m->beta, m->beta, t1 + 1, n, cap, &removed, &finite);
-    }
-    m->beta_hi = finite ? cap : NAN;
-    m->beta_removed += removed;
 }
 
 /* whether the bar is at rest as made: every U, V, A, fprev and Up 0 (scanned from the grip, whose node moves first,
@@ -571,16 +346,19 @@ static int bar_at_rest(const tc_stripdraw *m) {
  *   - a node that slid at the interval's limit (slipped, over [lo, hi)) is at the state's limit, with its sign.
  * The plastic slip Up = U - T / k_s carries the traction. */
 static void settle_interface(tc_stripdraw *m, const unsigned char *slipped, size_t lo, size_t hi) {
-    const double ks = m->ks;
+    const double ks = m->ks, le = m->le;
+    const double *w = m->w, *dU = m->dU, *tmax = m->tmax, *U = m->U;
+    double *Up = m->Up;
+    signed char *contact = m->contact;
     for (size_t i = m->w_first; i <= m->w_last && i < m->n; ++i) {
-        if (!(m->w[i] > 0.0)) continue;
-        if (!m->contact[i]) {
-            if (m->dU[i] == 0.0) continue;
-            const double t = fmin(m->tmax[i], ks * m->w[i] * m->le);
-            m->contact[i] = 1;
-            m->Up[i] = m->U[i] - copysign(t, m->dU[i]) / ks;
+        if (!(w[i] > 0.0)) continue;
+        if (!contact[i]) {
+            if (dU[i] == 0.0) continue;
+            const double t = fmin(tmax[i], ks * w[i] * le);
+            contact[i] = 1;
+            Up[i] = U[i] - copysign(t, dU[i]) / ks;
         } else if (i >= lo && i < hi && slipped[i]) {
-            m->Up[i] = m->U[i] - copysign(m->tmax[i], m->U[i] - m->Up[i]) / ks;
+            Up[i] = U[i] - copysign(tmax[i], U[i] - Up[i]) / ks;
         }
     }
 }
@@ -651,12 +429,13 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w0_first = f0;
     m->w0_last = l0;
     update_weights(m);
-    transport(m, pressure, speed, w0, f0, l0, du_finite);
+    tc_sd_debris_interval(m, pressure, speed, w0, f0, l0, du_finite);
     unsigned char *slipped = (unsigned char *)m->giwork + m->n; /* of the interval's limits, over [lo, hi) */
     const size_t lo = m->limit_lo, hi = m->limit_hi;
+    const double ks = m->ks, *U = m->U, *Up = m->Up, *tmax = m->tmax;
+    const signed char *contact = m->contact;
     for (size_t i = lo; i < hi; ++i) /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
-        slipped[i] = m->contact[i] && fabs(m->ks * (m->U[i] - m->Up[i])) >=
-                                          m->tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * m->ks * fabs(m->U[i]);
+        slipped[i] = contact[i] && fabs(ks * (U[i] - Up[i])) >= tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * ks * fabs(U[i]);
     state_limits(m);
     settle_interface(m, slipped, lo, hi);
     return TC_OK;
@@ -772,151 +551,20 @@ static int advance(tc_stripdraw *m, double dt, const double fn[3], const double 
 }
 
 /* ---------------------------------------------------------------------------------------------------
- * state image
+ * public API
  * ------------------------------------------------------------------------------------------------- */
-
-static size_t state_size(size_t n) {
-    return STATE_HEADER + sizeof(double) * (N_STATE_ARRAYS * n + N_STATE_DOUBLES) + sizeof(int64_t) * N_STATE_INTS +
-           n;
-}
-
-/* the state image; its slip rates from slip, as they stand (h = 0) or as |slip[i]| / h */
-static void write_image(const tc_stripdraw *m, unsigned char *b, const double *slip, double h) {
-    const size_t n = m->n, nb = n * sizeof(double);
-    const uint32_t head[2] = {STATE_MAGIC, STATE_VERSION};
-    const uint64_t nn = (uint64_t)n;
-    memcpy(b, head, sizeof head);
-    memcpy(b + 8, &nn, sizeof nn);
-    b += STATE_HEADER;
-    const double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, slip, m->fprev};
-    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) {
-        if (arrays[k] != slip || !(h > 0)) {
-            memcpy(b, arrays[k], nb);
-            continue;
-        }
-        for (size_t i = 0; i < n; ++i) {
-            const double rate = fabs(slip[i]) / h;
-            memcpy(b + i * sizeof rate, &rate, sizeof rate);
-        }
-    }
-    const double scalars[N_STATE_DOUBLES] = {m->time, m->reaction, m->normal_force, m->grip_velocity,
-                                             m->beta_removed, m->beta_produced, m->beta_hi};
-    memcpy(b, scalars, sizeof scalars);
-    b += sizeof scalars;
-    const int64_t counts[N_STATE_INTS] = {(int64_t)m->n_steps, (int64_t)m->clamp_count};
-    memcpy(b, counts, sizeof counts);
-    b += sizeof counts;
-    memcpy(b, m->contact, n);
-}
-
-static void read_state(tc_stripdraw *m, const unsigned char *b) {
-    const size_t n = m->n, nb = n * sizeof(double);
-    b += STATE_HEADER;
-    double *arrays[N_STATE_ARRAYS] = {m->U, m->V, m->A, m->Up, m->beta, m->slip_rate, m->fprev};
-    for (int k = 0; k < N_STATE_ARRAYS; ++k, b += nb) memcpy(arrays[k], b, nb);
-    double scalars[N_STATE_DOUBLES];
-    memcpy(scalars, b, sizeof scalars);
-    b += sizeof scalars;
-    m->time = scalars[0];
-    m->reaction = scalars[1];
-    m->normal_force = scalars[2];
-    m->grip_velocity = scalars[3];
-    m->beta_removed = scalars[4];
-    m->beta_produced = scalars[5];
-    m->beta_hi = scalars[6];
-    int64_t counts[N_STATE_INTS];
-    memcpy(counts, b, sizeof counts);
-    b += sizeof counts;
-    m->n_steps = (long long)counts[0];
-    m->clamp_count = (long long)counts[1];
-    memcpy(m->contact, b, n);
-    m->slip_h = 0.0;
-    update_weights(m);
-    state_limits(m);
-}
-
-/* exchange the bar's arrays U, V, A, fprev with the backup's */
-static void swap_bar(tc_stripdraw *m) {
-    double **cur[4] = {&m->U, &m->V, &m->A, &m->fprev}, **bak[4] = {&m->bU, &m->bV, &m->bA, &m->bfprev};
-    for (int k = 0; k < 4; ++k) {
-        double *t = *cur[k];
-        *cur[k] = *bak[k];
-        *bak[k] = t;
-    }
-    m->bar_in_backup = !m->bar_in_backup;
-}
-
-/* the doubles of the model a step changes besides its arrays (time changes only with a step that is taken) */
-static void step_scalars(tc_stripdraw *m, double *s[N_STEP_SCALARS]) {
-    double *all[N_STEP_SCALARS] = {&m->reaction,      &m->normal_force, &m->grip_velocity, &m->beta_removed,
-                                   &m->beta_produced, &m->beta_hi,      &m->slip_h};
-    memcpy(s, all, sizeof all);
-}
-
-/* the state before a step: the bar's arrays exchanged with the backup's (the step's first interval reads them there
- * and writes U, V, A, fprev), the rest copied */
-static void backup_state(tc_stripdraw *m) {
-    const size_t nb = m->n * sizeof(double);
-    swap_bar(m);
-    memcpy(m->bUp, m->Up, nb);
-    memcpy(m->bbeta, m->beta, nb);
-    memcpy(m->bslip, m->slip_h > 0 ? m->dU : m->slip_rate, nb);
-    memcpy(m->bcontact, m->contact, m->n);
-    double *s[N_STEP_SCALARS];
-    step_scalars(m, s);
-    for (int k = 0; k < N_STEP_SCALARS; ++k) m->b_scalars[k] = *s[k];
-    m->b_clamp_count = m->clamp_count;
-}
-
-/* back to the state of backup_state (time and n_steps change only with a step that is taken), with the weights and
- * limits derived from it */
-static void restore_state(tc_stripdraw *m) {
-    const size_t nb = m->n * sizeof(double);
-    swap_bar(m); /* the state of the step's start into U, V, A, fprev, whether an interval was taken or not */
-    m->bar_in_backup = 0;
-    memcpy(m->Up, m->bUp, nb);
-    memcpy(m->beta, m->bbeta, nb);
-    memcpy(m->contact, m->bcontact, m->n);
-    double *s[N_STEP_SCALARS];
-    step_scalars(m, s);
-    for (int k = 0; k < N_STEP_SCALARS; ++k) *s[k] = m->b_scalars[k];
-    m->clamp_count = m->b_clamp_count;
-    memcpy(m->slip_h > 0 ? m->dU : m->slip_rate, m->bslip, nb); /* the slip rates as backup_state found them */
-    update_weights(m);
-    state_limits(m);
-}
 
 size_t tc_stripdraw_state_size(const tc_stripdraw *m) { return m->state_size; }
 
-void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) {
-    write_image(m, buf, m->slip_h > 0 ? m->dU : m->slip_rate, m->slip_h);
-}
+void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf) { tc_sd_state_write(m, buf); }
 
 int tc_stripdraw_set_state(tc_stripdraw *m, const void *buf, size_t size, tc_msg msg) {
-    const unsigned char *b = buf;
-    if (b == NULL || size != m->state_size)
-        return tc_fail(msg, TC_ERROR, "strip-draw state image has %zu bytes; this model's has %zu",
-                       b == NULL ? (size_t)0 : size, m->state_size);
-    uint32_t head[2];
-    uint64_t nn;
-    memcpy(head, b, sizeof head);
-    memcpy(&nn, b + 8, sizeof nn);
-    if (head[0] != STATE_MAGIC || head[1] != STATE_VERSION)
-        return tc_fail(msg, TC_ERROR, "not a strip-draw state image (version %u of this format is read)",
-                       (unsigned)STATE_VERSION);
-    if (nn != (uint64_t)m->n)
-        return tc_fail(msg, TC_ERROR, "strip-draw state image has %llu nodes; this model has %zu",
-                       (unsigned long long)nn, m->n);
-    const unsigned char *contact = b + size - m->n;
-    for (size_t i = 0; i < m->n; ++i)
-        if (contact[i] > 1) return tc_fail(msg, TC_ERROR, "strip-draw state image has a contact flag that is not 0/1");
-    read_state(m, b);
+    const int rc = tc_sd_state_read(m, buf, size, msg);
+    if (rc != TC_OK) return rc;
+    update_weights(m); /* what the state image leaves out: the contact weights and friction limits it implies */
+    state_limits(m);
     return TC_OK;
 }
-
-/* ---------------------------------------------------------------------------------------------------
- * public API
- * ------------------------------------------------------------------------------------------------- */
 
 void tc_stripdraw_free(tc_stripdraw *m) {
     if (m == NULL) return;
@@ -925,29 +573,16 @@ void tc_stripdraw_free(tc_stripdraw *m) {
     free(m);
 }
 
+int tc_stripdraw_check_params(const tc_stripdraw_params *p, tc_msg msg) { return tc_stripdraw_params_check(p, msg); }
+
 int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
                         size_t n_beta, tc_stripdraw **out, tc_msg msg) {
     if (out == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no place for the model (out is NULL)");
     *out = NULL;
     if (p == NULL) return tc_fail(msg, TC_ERROR, "tc_stripdraw_create: no parameters (p is NULL)");
-    if (p->friction_model < 0 || p->friction_model > 2)
-        return tc_fail(msg, TC_ERROR, "friction_model = %d is not allowed; choose 0 (table), 1 (closed_form) or 2 "
-                       "(constant)", p->friction_model);
-    if (p->friction_velocity < 0 || p->friction_velocity > 1)
-        return tc_fail(msg, TC_ERROR, "friction_velocity = %d is not allowed; choose 0 (grip) or 1 (slip_rate)",
-                       p->friction_velocity);
-    if (p->table_policy < 0 || p->table_policy > 1)
-        return tc_fail(msg, TC_ERROR, "table_policy = %d is not allowed; choose 0 (clamp) or 1 (error)",
-                       p->table_policy);
-    if (p->contact_area < 0 || p->contact_area > 1)
-        return tc_fail(msg, TC_ERROR, "contact_area = %d is not allowed; choose 0 (mesoscale) or 1 (eq8)",
-                       p->contact_area);
-    if (p->integrator < 0 || p->integrator > 1)
-        return tc_fail(msg, TC_ERROR, "integrator = %d is not allowed; choose 0 (explicit) or 1 (implicit)",
-                       p->integrator);
-    if (p->n_elements < 1 || p->n_elements > 100000000)
-        return tc_fail(msg, TC_ERROR, "n_elements = %d is out of range; allowed: [1, 100000000]", p->n_elements);
-    int rc = tc_law_check(p, table, msg);
+    int rc = tc_stripdraw_params_check(p, msg);
+    if (rc != TC_OK) return rc;
+    rc = tc_law_check(p, table, msg);
     if (rc != TC_OK) return rc;
     const size_t n = (size_t)p->n_elements + 1;
     const double cap = p->beta_threshold > 0 ? p->beta_threshold : tc_law_beta_threshold(p, table);
@@ -973,9 +608,9 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
      * explicit forces (1) or the generalized-alpha work, the overlaps of each halving level and the cached
      * elimination factors */
     const size_t n_arrays = 3 + 7 + 1 + 1 + 10 + 7 + 5 +
-                            (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + CHAIN_CACHE * TC_SD_CHAIN(1)
+                            (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + TC_SD_CHAIN_CACHE * TC_SD_CHAIN(1)
                                       : 1);
-    m->state_size = state_size(n);
+    m->state_size = tc_sd_state_size(n);
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
     m->bytes = calloc(5 * n, 1); /* contact, clamped, generalized-alpha flags (2), bcontact */
     if (m->pool == NULL || m->bytes == NULL) {
@@ -1110,15 +745,17 @@ int tc_stripdraw_step_poly(tc_stripdraw *m, double dt, double normal_force, cons
                        "s, not below the strip's wave speed sqrt(E / rho) = %.6g m/s", tc_repr_double(vmax, r),
                        tc_repr_double(dt, r2), wave_speed);
     }
-    backup_state(m);
+    tc_sd_backup(m);
     int rc = advance(m, dt, fn, vg, msg);
-    if (rc == TC_OK && m->bar_in_backup) swap_bar(m); /* no interval was taken: the bar is as it was */
+    if (rc == TC_OK && m->bar_in_backup) tc_sd_swap_bar(m); /* no interval was taken: the bar is as it was */
     if (rc == TC_OK) {
         if (!(isfinite(m->reaction) && m->u_finite)) /* u_finite: of the last interval (a step has at least one) */
             rc = tc_fail(msg, refuse(m, TC_REFUSED_SOLVER), "non-finite bar state at t = %.9g s", m->time + dt);
     }
     if (rc != TC_OK) {
-        restore_state(m);
+        tc_sd_restore(m); /* with the weights and limits derived from the state restored */
+        update_weights(m);
+        state_limits(m);
         return rc;
     }
     m->time = m->time + dt;
@@ -1142,7 +779,7 @@ void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPU
         wb += w * m->beta[i];
         if (!(w > 0.0) || !m->contact[i]) continue;
         int slipping;
-        fs += traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (w * m->le);
+        fs += tc_sd_traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (w * m->le);
     }
     const double bmax = largest(m->beta, n);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;

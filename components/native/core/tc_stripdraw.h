@@ -1,4 +1,5 @@
-/* The strip-draw model (the equations are in tc_stripdraw.c; Python binding: components/stripdraw/model.py).
+/* The strip-draw model (the equations are in tc_stripdraw.c and the files it names; Python binding:
+ * components/stripdraw/model.py).
  *
  * One instance = one strip under one pad: a 1D bar with lumped masses, an elastic-perfectly-plastic
  * Coulomb interface, debris transport and a friction law (constant, closed form or a friction table).
@@ -34,11 +35,14 @@ typedef struct tc_stripdraw tc_stripdraw;
 
 /* Create a model. table is borrowed (it must outlive the model) and required when p->friction_model is
  * TC_STRIPDRAW_FRICTION_MODEL_TABLE; beta_field (n_beta values, copied) is the initial debris field, NULL for
- * p->beta_initial everywhere. TC_ERROR for a beta_field of the wrong length, not finite or < 0, an initial beta
- * above the cap, a law the table cannot give (tc_law_check), bad choice indices or n_elements < 1; the ranges of
- * the other parameters are the caller's to check (the field metadata of StripDrawParameters). */
+ * p->beta_initial everywhere. TC_ERROR for a parameter outside its declared range or choices
+ * (tc_stripdraw_check_params), a beta_field of the wrong length, not finite or < 0, an initial beta above the cap and
+ * a law the table cannot give (tc_law_check). */
 TC_API int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, const double *beta_field,
                                size_t n_beta, tc_stripdraw **out, tc_msg msg);
+/* Every parameter against the range and choices StripDrawParameters declares (tc_stripdraw_params_check, generated
+ * from it by components/native/toolchain/declarations.py): TC_ERROR naming the first that is not allowed. */
+TC_API int tc_stripdraw_check_params(const tc_stripdraw_params *p, tc_msg msg);
 
 TC_API void tc_stripdraw_free(tc_stripdraw *m);
 
@@ -72,11 +76,11 @@ TC_API void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_
  * (non-finite, a negative normal force). */
 TC_API int tc_stripdraw_set_inputs(tc_stripdraw *m, double normal_force, double grip_velocity, tc_msg msg);
 
-/* The state as a flat byte image (native byte order): a header (magic, version, node count), the arrays
- * U, V, A, Up, beta, slip_rate, fprev, the scalars time, reaction, normal_force, grip_velocity, beta_removed,
- * beta_produced, beta_hi, the counts n_steps, clamp_count, then the contact flags. Everything else is fixed by
- * the parameters or derived from the state (the contact weights from U, the friction limits from beta, the
- * normal force and the velocity). Setting a state and stepping replays bit-identically. */
+/* The state as a flat byte image (native byte order; tc_stripdraw_state.c states the format): a header (magic,
+ * version, node count), the arrays U, V, A, Up, beta, slip_rate, fprev, the scalars time, reaction, normal_force,
+ * grip_velocity, beta_removed, beta_produced, beta_hi, the counts n_steps, clamp_count, then the contact flags.
+ * Everything else is fixed by the parameters or derived from the state (the contact weights from U, the friction
+ * limits from beta, the normal force and the velocity). Setting a state and stepping replays bit-identically. */
 TC_API size_t tc_stripdraw_state_size(const tc_stripdraw *m);
 TC_API void tc_stripdraw_get_state(const tc_stripdraw *m, void *buf);
 /* TC_ERROR (state unchanged) when the image is not one of this model: size, magic, version, node count. */
@@ -125,15 +129,5 @@ TC_API double tc_stripdraw_info(const tc_stripdraw *m, int which);
 /* overlap of each node's tributary segment at X + U with [a_lo, a_hi]. */
 TC_API void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, double a_lo, double a_hi,
                           double *ov);
-
-/* central difference sub-cycled n_sub times; f_work holds n doubles. */
-void tc_sd_explicit(size_t n, long long n_sub, double dt, double *U, double *V, double *A, double *Up,
-                    signed char *contact, const double *X, const double *minv, double ke, double ks, double wT,
-                    double half_le, double a_lo, double a_hi, const double *tmax, double vg, double *fric,
-                    double *reaction, double *f_work);
-
-/* implicit upwind advection of beta under the pad; work holds 5 n doubles. */
-TC_API void tc_sd_advect(size_t n, const double *beta, const double *dU, const double *weight, double zeta,
-                         double element_length, double *out, double *work);
 
 #endif

@@ -1,10 +1,12 @@
 /* The friction table in memory: construction from arrays (checked: increasing finite axes, finite values >= 0), the
- * version 4 form (ln P, the shares A_p / A_c) and release. */
+ * version 4 form (ln P, the shares A_p / A_c, the monotone cubic forms of the arrays the law reads) and release. */
 #include "tc_table.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "tc_pchip.h"
 
 static int check_axis(const char *name, const double *a, size_t n, int nonnegative, tc_msg msg) {
     if (n < 1) return tc_fail(msg, TC_ERROR, "table axis %s must be a non-empty 1-D array", name);
@@ -24,8 +26,64 @@ static double *copy_array(const double *src, size_t n) {
     return dst;
 }
 
+void tc_table_cubic_free(tc_table_cubic *cubic) {
+    free(cubic->beta_slope); /* the block of every array of the form */
+    memset(cubic, 0, sizeof *cubic);
+}
+
+/* The monotone cubic form of values on a table's axes with ln P = logp and the kinds of the table's nodes (a
+ * node is unsimulated where table->unsimulated is not 0; every node one kind without it): tc_table_cubic. */
+static int cubic_form(const tc_table *t, const double *logp, const double *values, tc_table_cubic *c, tc_msg msg) {
+    const size_t nP = t->n_pressure, nv = t->n_velocity, nb = t->n_beta, plane = nv * nb, n = nP * plane;
+    const size_t pieces = (nP - 1) * plane;
+    const double *u = t->unsimulated;
+    double *block = malloc((n + 4 * pieces) * sizeof *block);
+    if (block == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the friction table's monotone cubic form");
+    memset(c, 0, sizeof *c);
+    c->values = values;
+    c->beta_slope = block;
+    if (pieces > 0) {
+        c->value_piece[0] = block + n;
+        c->value_piece[1] = block + n + pieces;
+        c->slope_piece[0] = block + n + 2 * pieces;
+        c->slope_piece[1] = block + n + 3 * pieces;
+    }
+    for (size_t at = 0; at < n; at += nb) { /* each table row along beta */
+        const tc_pchip_line row = {t->beta, values + at, u != NULL ? u + at : NULL, 1, 1, nb};
+        for (size_t k = 0; k < nb; ++k) c->beta_slope[at + k] = tc_pchip_slope(&row, k);
+    }
+    for (size_t at = 0; at < plane && pieces > 0; ++at) { /* each column along ln P, of values and of row slopes */
+        const tc_pchip_line cols[2] = {{logp, values + at, u != NULL ? u + at : NULL, plane, plane, nP},
+                                       {logp, c->beta_slope + at, u != NULL ? u + at : NULL, plane, plane, nP}};
+        double *const left[2] = {c->value_piece[0], c->slope_piece[0]}, *const right[2] = {c->value_piece[1],
+                                                                                            c->slope_piece[1]};
+        for (int which = 0; which < 2; ++which)
+            for (size_t ip = 0; ip + 1 < nP; ++ip) {
+                double d0 = tc_pchip_slope(&cols[which], ip), d1 = tc_pchip_slope(&cols[which], ip + 1);
+                tc_pchip_piece_slopes(&cols[which], ip, &d0, &d1);
+                left[which][ip * plane + at] = d0;
+                right[which][ip * plane + at] = d1;
+            }
+    }
+    return TC_OK;
+}
+
+int tc_table_cubic_make(const tc_table *table, const double *values, tc_table_cubic *cubic, tc_msg msg) {
+    if (table->log_pressure == NULL)
+        return tc_fail(msg, TC_ERROR, "the monotone cubic form is that of a version 4 table; this table is version %d",
+                       table->format_version);
+    return cubic_form(table, table->log_pressure, values, cubic, msg);
+}
+
+const tc_table_cubic *tc_table_cubic_of(const tc_table *table, const double *values) {
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k)
+        if (table->cubic[k].values == values && values != NULL) return &table->cubic[k];
+    return NULL;
+}
+
 void tc_table_free(tc_table *table) {
     if (table == NULL) return;
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) tc_table_cubic_free(&table->cubic[k]);
     free(table->pressure);
     free(table->velocity);
     free(table->beta);
@@ -67,6 +125,12 @@ int tc_table_from_arrays(size_t n_pressure, size_t n_velocity, size_t n_beta, co
     t->mu = copy_array(mu, n);
     t->beta_threshold = beta_threshold;
     t->format_version = 1;
+    t->pressure_lo = pressure[0] - TC_TABLE_AXIS_END_TOLERANCE * fabs(pressure[0]);
+    t->pressure_hi = pressure[n_pressure - 1] + TC_TABLE_AXIS_END_TOLERANCE * fabs(pressure[n_pressure - 1]);
+    t->velocity_lo = velocity[0] - TC_TABLE_AXIS_END_TOLERANCE * fabs(velocity[0]);
+    t->velocity_hi = velocity[n_velocity - 1] + TC_TABLE_AXIS_END_TOLERANCE * fabs(velocity[n_velocity - 1]);
+    t->beta_lo = beta[0] - TC_TABLE_AXIS_END_TOLERANCE * fabs(beta[0]);
+    t->beta_hi = beta[n_beta - 1] + TC_TABLE_AXIS_END_TOLERANCE * fabs(beta[n_beta - 1]);
     if (!t->pressure || !t->velocity || !t->beta || !t->mu) {
         tc_table_free(t);
         return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
@@ -85,6 +149,7 @@ int tc_table_set_areas(tc_table *table, const double *contact_area, const double
         for (size_t i = 0; i < n; ++i)
             if (!isfinite(src[a][i]) || src[a][i] < 0)
                 return tc_fail(msg, TC_ERROR, "table %s must be finite and >= 0 everywhere", names[a]);
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) tc_table_cubic_free(&table->cubic[k]); /* of the arrays replaced */
     for (int a = 0; a < 4; ++a) {
         double *copy = copy_array(src[a], n);
         if (copy == NULL) return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
@@ -113,6 +178,7 @@ int tc_table_set_extras(tc_table *table, const double *simulated, const double *
         return tc_fail(msg, TC_NOMEM, "out of memory for the friction table");
     }
     for (size_t i = 0; i < n; ++i) unsim[i] = 1.0 - simulated[i];
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) tc_table_cubic_free(&table->cubic[k]); /* of the kinds replaced */
     free(table->unsimulated);
     free(table->particle_area_clusters);
     table->unsimulated = unsim;
@@ -146,6 +212,22 @@ int tc_table_set_cubic(tc_table *table, tc_msg msg) {
         const double ac = table->contact_area[i];
         share[i] = ac > 0 ? table->particle_area[i] / ac : 0.0;
         clusters[i] = ac > 0 ? table->particle_area_clusters[i] / ac : 0.0;
+    }
+    const double *arrays[TC_TABLE_N_CUBIC] = {share, clusters, table->particle_area, table->particle_area_clusters};
+    tc_table_cubic forms[TC_TABLE_N_CUBIC] = {{0}};
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) {
+        const int rc = cubic_form(table, logp, arrays[k], &forms[k], msg);
+        if (rc != TC_OK) {
+            for (int j = 0; j < k; ++j) tc_table_cubic_free(&forms[j]);
+            free(logp);
+            free(share);
+            free(clusters);
+            return rc;
+        }
+    }
+    for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) {
+        tc_table_cubic_free(&table->cubic[k]);
+        table->cubic[k] = forms[k];
     }
     free(table->log_pressure);
     free(table->share);

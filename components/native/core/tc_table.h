@@ -8,8 +8,11 @@
  * its value and the table's range).
  *
  * Interpolation: multilinear in (P, v, beta) for format versions 1-3; format version 4 interpolates monotone
- * cubic (Fritsch-Butland PCHIP) in log P and in beta and linearly in v (tc_table_lookup.c), and the strip-draw law
- * reads the share A_p / A_c of each observable, which the table computes from its areas (tc_table_set_cubic).
+ * cubic (Fritsch-Butland PCHIP, tc_pchip.h) in log P and in beta and linearly in v (tc_table_lookup.c), and the
+ * strip-draw law reads the share A_p / A_c of each observable, which the table computes from its areas
+ * (tc_table_set_cubic). Making a table version 4 also computes what the lookups of the arrays the law reads reuse
+ * (tc_table_cubic): the slopes of every table row along beta, and the slopes of each piece along ln P of every column
+ * of values and of row slopes; a lookup then evaluates Hermite pieces only.
  */
 #ifndef TC_TABLE_H
 #define TC_TABLE_H
@@ -23,6 +26,27 @@ enum tc_table_interpolation { TC_TABLE_MULTILINEAR = 0, TC_TABLE_MONOTONE_CUBIC 
 
 /* the longest beta axis the monotone cubic interpolation takes (its lines are kept on the stack) */
 #define TC_TABLE_BETA_MAX 64
+/* a query within this of an axis end (relative to the end) is on the end, not outside: the round-off of the inputs
+ * (12250 N on the 35 x 35 mm pad is 9999999.999999998 Pa; a press holding a set-point equal to the last pressure
+ * delivers it to within 1e-15, on either side); components/stripdraw/table.py reads the same */
+#define TC_TABLE_AXIS_END_TOLERANCE TC_BOUND_RTOL
+/* the arrays of a version 4 table whose monotone cubic form is kept (tc_table_cubic): the shares A_p / A_c of every
+ * load-bearing flake and of the cluster rule alone, and A_p / A0 of both (contact_area = eq8) */
+#define TC_TABLE_N_CUBIC 4
+
+/* The monotone cubic form of one array of a version 4 table (tc_table_lookup.c states the equations): with
+ * plane = n_velocity * n_beta and the layout of mu,
+ *   beta_slope[ip * plane + iv * n_beta + ib]   the PCHIP slope along beta of table row (ip, iv) at node ib;
+ *   value_piece[0][...], value_piece[1][...]    the slopes along ln P at the left and right end of the piece from
+ *                                               pressure node ip to ip + 1 of column (iv, ib) of values (limited
+ *                                               where the two nodes differ in kind), for ip < n_pressure - 1;
+ *   slope_piece[0][...], slope_piece[1][...]    the same for the columns of beta_slope.
+ * The piece arrays are NULL on a one-point pressure axis. */
+typedef struct tc_table_cubic {
+    const double *values; /* the array (one of the table's) */
+    double *beta_slope;
+    double *value_piece[2], *slope_piece[2];
+} tc_table_cubic;
 
 typedef struct tc_table {
     size_t n_pressure, n_velocity, n_beta;
@@ -39,6 +63,10 @@ typedef struct tc_table {
     /* format version 4 (NULL before): ln P of the pressure axis, and the shares A_p / A_c of every load-bearing
      * flake and of the cluster rule alone (0 where A_c = 0), same layout as mu */
     double *log_pressure, *share, *share_clusters;
+    /* version 4: the monotone cubic forms of share, share_clusters, particle_area and particle_area_clusters */
+    tc_table_cubic cubic[TC_TABLE_N_CUBIC];
+    /* each axis's ends widened by TC_TABLE_AXIS_END_TOLERANCE: a query below lo or above hi is outside it */
+    double pressure_lo, pressure_hi, velocity_lo, velocity_hi, beta_lo, beta_hi;
     int interpolation;      /* TC_TABLE_MONOTONE_CUBIC in version 4, else TC_TABLE_MULTILINEAR */
     double beta_threshold;  /* metadata "beta_threshold": the cap of beta (Eq. 24), in (0, 1] */
     int format_version;     /* 4 with the monotone cubic interpolation, 3 with the version 3 arrays, 2 with the
@@ -63,9 +91,18 @@ TC_API int tc_table_set_extras(tc_table *table, const double *simulated, const d
                                tc_msg msg);
 
 /* Make a version 3 table version 4: interpolated monotone cubic in log P and beta (tc_table_lookup.h), its shares
- * A_p / A_c computed. TC_ERROR (the table unchanged) unless the pressure axis is > 0 and the beta axis has at most
- * TC_TABLE_BETA_MAX nodes. */
+ * A_p / A_c and the monotone cubic forms (tc_table_cubic) computed. TC_ERROR (the table unchanged) unless the
+ * pressure axis is > 0 and the beta axis has at most TC_TABLE_BETA_MAX nodes. */
 TC_API int tc_table_set_cubic(tc_table *table, tc_msg msg);
+
+/* The monotone cubic form of values (computed by tc_table_set_cubic) when it is one of the arrays whose form the
+ * table keeps, else NULL. */
+const tc_table_cubic *tc_table_cubic_of(const tc_table *table, const double *values);
+
+/* The monotone cubic form of any array with the table's layout into *cubic (allocated: free it with
+ * tc_table_cubic_free), for a table with a positive pressure axis. TC_NOMEM when an allocation fails. */
+int tc_table_cubic_make(const tc_table *table, const double *values, tc_table_cubic *cubic, tc_msg msg);
+void tc_table_cubic_free(tc_table_cubic *cubic);
 
 TC_API void tc_table_free(tc_table *table);
 

@@ -3,8 +3,7 @@
  * Each axis is located so: the query is clamped to [axis_0, axis_last], the cell index is
  * i = min(searchsorted(axis, q, "right") - 1, n - 2) and the local coordinate t = (q - axis_i) / (axis_{i+1} - axis_i)
  * (i = 0, t = 0 on a one-point axis); a version 4 table locates the pressure in ln P. A query within
- * AXIS_END_TOLERANCE of an axis end (relative to the end) is on the end, not outside: that is the round-off of the
- * inputs (a press holding a set-point equal to the last pressure delivers it to within 1e-15, on either side).
+ * TC_TABLE_AXIS_END_TOLERANCE of an axis end (relative to the end) is on the end, not outside (tc_table.h).
  *
  * Multilinear (format versions 1-3). The table is interpolated linearly in P to a (v, beta) plane,
  *
@@ -16,25 +15,12 @@
  *
  * with sv, sb = 1 (0 on a one-point axis).
  *
- * Monotone cubic (format version 4). Along one axis the values y_k at the nodes x_k are joined by the cubic Hermite
- * pieces of Fritsch and Butland's monotone interpolation (PCHIP, as scipy.interpolate.PchipInterpolator): with
- * h_k = x_{k+1} - x_k and the secants m_k = (y_{k+1} - y_k) / h_k, the slope at an interior node is 0 where m_{k-1}
- * and m_k differ in sign or one is 0, else the weighted harmonic mean
- *
- *     d_k = (w1 + w2) / (w1 / m_{k-1} + w2 / m_k),   w1 = 2 h_k + h_{k-1},  w2 = h_k + 2 h_{k-1},
- *
- * and at an end the one-sided three-point value d_0 = ((2 h_0 + h_1) m_0 - h_0 m_1) / (h_0 + h_1), set to 0 when its
- * sign differs from m_0's and to 3 m_0 when m_0 and m_1 differ in sign and |d_0| > 3 |m_0| (two nodes: the secant).
- * On [x_k, x_{k+1}], t = (x - x_k) / h_k, s = 1 - t:
- *
- *     y(x) = (1 + 2 t) s^2 y_k + t^2 (3 - 2 t) y_{k+1} + h_k t s (s d_k - t d_{k+1}).
- *
- * Each piece is monotone between its end values (no overshoot), a piece between equal values is flat, y is C1, and
- * the nodes are reproduced exactly. The slopes of a node are taken from its neighbours of the same kind (simulated
- * or not; a node alone of its kind takes every neighbour): the value in a cell whose nodes were all simulated depends
- * on simulated nodes only. On a piece between nodes of different kinds (whose lookups read an unsimulated node and
- * are counted) the two slopes are limited to the square 0 <= d / m <= 3 of the piece's secant m, where a cubic
- * Hermite piece is monotone (Fritsch and Carlson), so that it too stays between its end values.
+ * Monotone cubic (format version 4). Along one axis the values are joined by the cubic Hermite pieces of Fritsch and
+ * Butland's monotone interpolation (PCHIP, tc_pchip.c states it), the slopes of a node taken from its neighbours of
+ * the same kind (simulated or not; a node alone of its kind takes every neighbour): the value in a cell whose nodes
+ * were all simulated depends on simulated nodes only. On a piece between nodes of different kinds (whose lookups read
+ * an unsimulated node and are counted) the two slopes are limited to the square 0 <= d / m <= 3 of the piece's secant
+ * m, so that it too stays between its end values.
  *
  * The table is interpolated so in x = ln P, node by node, to the two (v, beta) rows of the query's velocity cell: their
  * values at the beta nodes, and their slopes along beta (each table row's slopes, taken along it, interpolated in ln P
@@ -47,21 +33,26 @@
  * The result is continuous in (P, v, beta), C1 in ln P and in beta where no limit acts, exact at the nodes, and no
  * piece leaves the values at its ends: monotone in beta wherever the rows' values at the beta nodes are (at every
  * node pressure where the data are; between pressure nodes where the columns keep the order of the rows).
+ *
+ * What a lookup computes in stages, each reused by the next: the slopes of the table's rows along beta and of each
+ * piece of its columns along ln P are the table's (tc_table_cubic, made with the table); the two rows of a velocity cell
+ * at a pressure, with the limited end slopes of their pieces, are made once for every query in that cell
+ * (tc_table_rows, which a caller may keep); a query evaluates one Hermite piece per row.
  */
 #include "tc_table_lookup.h"
 
 #include <math.h>
-#include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "tc_pchip.h"
 
-#define AXIS_END_TOLERANCE 1e-9 /* relative; components/stripdraw/table.py reads the same */
+/* whether q is outside the axis whose ends, widened by the tolerance, are lo and hi (tc_table.h) */
+static int outside(double lo, double hi, double q) { return q < lo || q > hi; }
 
-static int outside(const double *axis, size_t n, double q) {
-    return q < axis[0] - AXIS_END_TOLERANCE * fabs(axis[0]) || q > axis[n - 1] + AXIS_END_TOLERANCE * fabs(axis[n - 1]);
-}
+static int outside_pressure(const tc_table *t, double q) { return outside(t->pressure_lo, t->pressure_hi, q); }
+static int outside_velocity(const tc_table *t, double q) { return outside(t->velocity_lo, t->velocity_hi, q); }
+static int outside_beta(const tc_table *t, double q) { return outside(t->beta_lo, t->beta_hi, q); }
 
 /* the cell and the local coordinate of one query */
 static void locate(const double *axis, size_t n, double q, size_t *i, double *t) {
@@ -88,9 +79,8 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
 
 /* locate() of a query that is likely in cell h (the cell of the query before): on an increasing axis of n >= 2 points
  * the cell of the clamped query qc is the one k <= n - 2 with axis_k <= qc < axis_k+1 (or k = n - 2), which the
- * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate();
- * returns whether q is outside the axis (as outside()). */
-static int locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
+ * bisection finds; a query in cell h is given that cell without it. The same cell and coordinate as locate(). */
+static void locate_near(const double *axis, size_t n, double q, size_t h, size_t *i, double *t) {
     double qc = q < axis[0] ? axis[0] : q;
     qc = qc > axis[n - 1] ? axis[n - 1] : qc;
     if (n > 1 && h <= n - 2 && axis[h] <= qc && (h == n - 2 || qc < axis[h + 1])) {
@@ -99,7 +89,6 @@ static int locate_near(const double *axis, size_t n, double q, size_t h, size_t 
     } else {
         locate(axis, n, q, i, t);
     }
-    return outside(axis, n, q);
 }
 
 /* the pressure's cell: in P (multilinear) or in ln P (monotone cubic) */
@@ -115,9 +104,10 @@ static void locate_pressure(const tc_table *t, double q, size_t *i, double *tp) 
 }
 
 static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
-    char r[TC_REPR_SIZE];
-    return tc_fail(msg, TC_DISCARD, "friction table lookup %s = %s %s is outside the table's range [%g, %g] %s", name,
-                   tc_repr_double(bad, r), unit, axis[0], axis[n - 1], unit);
+    char r[TC_REPR_SIZE], a[TC_REPR_SIZE], b[TC_REPR_SIZE];
+    return tc_fail(msg, TC_DISCARD, "friction table lookup %s = %s %s is outside the table's range [%s, %s] %s (by "
+                   "more than %g of the end)", name, tc_repr_double(bad, r), unit, tc_repr_double(axis[0], a),
+                   tc_repr_double(axis[n - 1], b), unit, TC_TABLE_AXIS_END_TOLERANCE);
 }
 
 /* whether a lookup in the cell (ip, iv, ib) at the local coordinates (tp, tv, tb) reads an unsimulated node */
@@ -134,174 +124,123 @@ static int reads_unsimulated(const tc_table *t, size_t ip, double tp, size_t iv,
     return 0;
 }
 
-/* ---- monotone cubic Hermite (PCHIP) along one line of the table --------------------------------------------- */
+/* ---- monotone cubic: the rows of a velocity cell at a pressure ------------------------------------------------ */
 
-/* one line: node positions x[k], values y[k * ys], kinds u[k * us] (1: unsimulated; u NULL: all of one kind) */
-typedef struct {
-    const double *x, *y, *u;
-    size_t ys, us, n;
-} line;
-
-static double sgn(double v) { return (double)((v > 0) - (v < 0)); }
-
-static double secant(const line *L, size_t k) {
-    return (L->y[(k + 1) * L->ys] - L->y[k * L->ys]) / (L->x[k + 1] - L->x[k]);
-}
-
-static int same_kind(const line *L, size_t a, size_t b) { return L->u == NULL || L->u[a * L->us] == L->u[b * L->us]; }
-
-/* the one-sided three-point slope at an end (h0, m0: the end's piece; h1, m1: the next), shape-preserving */
-static double end_slope(double h0, double h1, double m0, double m1) {
-    const double d = ((2.0 * h0 + h1) * m0 - h0 * m1) / (h0 + h1);
-    if (sgn(d) != sgn(m0)) return 0.0;
-    if (sgn(m0) != sgn(m1) && fabs(d) > 3.0 * fabs(m0)) return 3.0 * m0;
-    return d;
-}
-
-/* the slope at node k from its neighbours of its kind (every neighbour for a node alone of its kind) */
-static double slope_at(const line *L, size_t k) {
-    const size_t n = L->n;
-    if (n < 2) return 0.0;
-    const int left = k > 0 && same_kind(L, k - 1, k), right = k + 1 < n && same_kind(L, k + 1, k);
-    if (!left && !right) {
-        const line all = {L->x, L->y, NULL, L->ys, 0, L->n};
-        return slope_at(&all, k);
-    }
-    const double *x = L->x;
-    if (left && right) {
-        const double m0 = secant(L, k - 1), m1 = secant(L, k);
-        if (sgn(m0) != sgn(m1) || m0 == 0.0 || m1 == 0.0) return 0.0;
-        const double h0 = x[k] - x[k - 1], h1 = x[k + 1] - x[k];
-        const double w1 = 2.0 * h1 + h0, w2 = h1 + 2.0 * h0;
-        return (w1 + w2) / (w1 / m0 + w2 / m1);
-    }
-    if (right) {
-        if (k + 2 < n && same_kind(L, k + 2, k))
-            return end_slope(x[k + 1] - x[k], x[k + 2] - x[k + 1], secant(L, k), secant(L, k + 1));
-        return secant(L, k);
-    }
-    if (k >= 2 && same_kind(L, k - 2, k))
-        return end_slope(x[k] - x[k - 1], x[k - 1] - x[k - 2], secant(L, k - 1), secant(L, k - 2));
-    return secant(L, k - 1);
-}
-
-/* the cubic Hermite piece from (0, y0) with slope d0 to (h, y1) with slope d1 at t = x / h */
-static double hermite(double y0, double y1, double d0, double d1, double h, double t) {
-    const double s = 1.0 - t;
-    return (1.0 + 2.0 * t) * s * s * y0 + t * t * (3.0 - 2.0 * t) * y1 + h * t * s * (s * d0 - t * d1);
-}
-
-/* A node slope on a piece whose end nodes are of different kinds (each slope taken on its own side), limited to the
- * square 0 <= d / m <= 3 of the piece's secant m, where a cubic Hermite piece is monotone (Fritsch and Carlson). */
-static double limited(double d, double m) {
-    if (m == 0.0 || sgn(d) != sgn(m)) return 0.0;
-    return fabs(d) > 3.0 * fabs(m) ? 3.0 * m : d;
-}
-
-/* the slopes of the piece from node k to k + 1 of a line from its nodes' slopes d0, d1: limited where the nodes are of
- * different kinds */
-static void piece_slopes(const line *L, size_t k, double *d0, double *d1) {
-    if (same_kind(L, k, k + 1)) return;
-    const double m = secant(L, k);
-    *d0 = limited(*d0, m);
-    *d1 = limited(*d1, m);
-}
-
-/* the piece from node k to k + 1 of a line with the node slopes d0, d1 at t */
-static double piece(const line *L, size_t k, double d0, double d1, double t) {
-    piece_slopes(L, k, &d0, &d1);
-    return hermite(L->y[k * L->ys], L->y[(k + 1) * L->ys], d0, d1, L->x[k + 1] - L->x[k], t);
-}
-
-
-/* The two (v, beta) rows of the velocity cell (iv, iv + sv) of one array at the pressure (ip, tp): their values at the
- * beta nodes and their slopes along beta, both interpolated monotone cubic in ln P from the table's rows (the slopes
- * of a table row taken along it, from each node's neighbours of its kind). */
-typedef struct {
-    double y[2][TC_TABLE_BETA_MAX], d[2][TC_TABLE_BETA_MAX];
-} cubic_rows;
-
-#define P_WINDOW 6 /* the pressure rows the slopes at ip and ip + 1 of a column read: ip - 2 to ip + 3 */
-
-static void cubic_rows_at(const tc_table *t, const double *values, size_t ip, double tp, size_t iv, size_t sv,
-                          cubic_rows *r) {
-    const size_t nP = t->n_pressure, nv = t->n_velocity, nb = t->n_beta, plane = nv * nb;
-    const double *u = t->unsimulated;
-    const size_t lo = ip >= 2 ? ip - 2 : 0, hi = ip + 3 < nP ? ip + 3 : nP - 1;
-    double rs[P_WINDOW][TC_TABLE_BETA_MAX]; /* the slopes along beta of the table rows lo..hi */
-    for (size_t row = 0; row < 2; ++row) {
-        const size_t j = iv + row * sv;
-        for (size_t i = lo; i <= hi; ++i) {
-            const size_t at = i * plane + j * nb;
-            const line b = {t->beta, values + at, u != NULL ? u + at : NULL, 1, 1, nb};
-            for (size_t k = 0; k < nb; ++k) rs[i - lo][k] = slope_at(&b, k);
-        }
+/* Row `row` (table velocity iv + row) of rows r at the pressure cell (ip, tp) from the monotone cubic form c: its
+ * values and slopes along beta, each the Hermite piece along ln P of its column between the pressure nodes ip and
+ * ip + 1 (with the piece's slopes of the form), then the limited end slopes of each piece along beta; and at each beta
+ * node the largest weight in P, 1 - tp or tp, of an unsimulated node of the row's two pressure nodes (0: none). */
+static void fill_row(const tc_table *t, const tc_table_cubic *c, int row, tc_table_rows *r) {
+    const size_t nP = t->n_pressure, nb = t->n_beta, plane = t->n_velocity * nb, ip = r->ip;
+    const size_t j = r->iv + (t->n_velocity > 1 ? (size_t)row : 0);
+    const double tp = r->tp, *values = c->values, *u = t->unsimulated;
+    double d[TC_TABLE_BETA_MAX], *y = r->y[row];
+    const size_t at = ip * plane + j * nb;
+    if (nP == 1) {
         for (size_t k = 0; k < nb; ++k) {
-            const size_t at = j * nb + k;
-            if (nP == 1) {
-                r->y[row][k] = values[at];
-                r->d[row][k] = rs[0][k];
-                continue;
-            }
-            const line col = {t->log_pressure, values + at, u != NULL ? u + at : NULL, plane, plane, nP};
-            r->y[row][k] = piece(&col, ip, slope_at(&col, ip), slope_at(&col, ip + 1), tp);
-            const line dcol = {t->log_pressure + lo, &rs[0][k], u != NULL ? u + lo * plane + at : NULL,
-                               TC_TABLE_BETA_MAX, plane, hi - lo + 1};
-            r->d[row][k] = piece(&dcol, ip - lo, slope_at(&dcol, ip - lo), slope_at(&dcol, ip - lo + 1), tp);
+            y[k] = values[at + k];
+            d[k] = c->beta_slope[at + k];
+        }
+    } else {
+        const double h = t->log_pressure[ip + 1] - t->log_pressure[ip];
+        const double *y0 = values + at, *y1 = values + at + plane, *s0 = c->beta_slope + at,
+                     *s1 = c->beta_slope + at + plane;
+        const double *vl = c->value_piece[0] + at, *vr = c->value_piece[1] + at, *sl = c->slope_piece[0] + at,
+                     *sr = c->slope_piece[1] + at;
+        for (size_t k = 0; k < nb; ++k) {
+            y[k] = tc_pchip_hermite(y0[k], y1[k], vl[k], vr[k], h, tp);
+            d[k] = tc_pchip_hermite(s0[k], s1[k], sl[k], sr[k], h, tp);
         }
     }
-}
-
-/* the slopes of the piece from beta node k to k + 1 of a row, limited to the square 0 <= d / m <= 3 of its secant m
- * (where a cubic Hermite piece is monotone: at a table row the slopes are in it already) */
-static void row_piece_slopes(const tc_table *t, const cubic_rows *r, int row, size_t k, double *d0, double *d1) {
-    const double m = (r->y[row][k + 1] - r->y[row][k]) / (t->beta[k + 1] - t->beta[k]);
-    *d0 = limited(r->d[row][k], m);
-    *d1 = limited(r->d[row][k + 1], m);
-}
-
-/* the rows' value at the beta cell (ib, tb), linear in v between them */
-static double cubic_value(const tc_table *t, const cubic_rows *r, double tv, size_t ib, double tb) {
-    double at[2];
-    for (int row = 0; row < 2; ++row) {
-        if (t->n_beta == 1) {
-            at[row] = r->y[row][0];
-            continue;
-        }
-        double d0, d1;
-        row_piece_slopes(t, r, row, ib, &d0, &d1);
-        at[row] = hermite(r->y[row][ib], r->y[row][ib + 1], d0, d1, t->beta[ib + 1] - t->beta[ib], tb);
+    for (size_t k = 0; k + 1 < nb; ++k) {
+        const double m = (y[k + 1] - y[k]) / (t->beta[k + 1] - t->beta[k]);
+        r->dl[row][k] = tc_pchip_limited(d[k], m);
+        r->dr[row][k] = tc_pchip_limited(d[k + 1], m);
     }
-    return tv == 0.0 ? at[0] : (1.0 - tv) * at[0] + tv * at[1];
+    double *w = r->unsimulated[row];
+    const double wp[2] = {1.0 - tp, tp};
+    int reads = 0;
+    for (size_t k = 0; k < nb; ++k) {
+        double top = 0.0;
+        for (size_t a = 0; a < 2; ++a)
+            if (wp[a] > 0.0 && u != NULL && u[at + a * plane + k] != 0) top = wp[a] > top ? wp[a] : top;
+        w[k] = top;
+        reads |= top > TC_TABLE_READ_WEIGHT;
+    }
+    if (nb < TC_TABLE_BETA_MAX) w[nb] = 0.0; /* the second node of a one-point axis's cell (weight tb = 0) */
+    for (size_t k = 0; k + 1 < nb || k == 0; ++k) r->unsimulated_cell[row][k] = w[k] != 0.0 || w[k + 1] != 0.0;
+    r->reads_unsimulated |= reads;
 }
 
-static void cubic_lookup(const tc_table *t, const double *values, const double *values_b, size_t ip, double tp,
-                         int outp, size_t n, const double *velocity, const double *beta, double *out, double *out_b,
-                         unsigned char *clamped) {
-    const size_t nv = t->n_velocity, nb = t->n_beta, sv = nv > 1 ? 1 : 0;
-    cubic_rows ra, rb;
-    size_t iv = 0, ib = 0, cell = SIZE_MAX;
-    double tv = 0.0, tb;
+/* The rows of the velocity cell iv at the pressure (ip, tp) (pressure: their key), the first `need` of them (1, or 2
+ * when a query lies inside the cell): kept as they are when r holds them already. */
+static void rows_at(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, size_t iv,
+                    int need, tc_table_rows *r) {
+    if (!(r->filled > 0 && r->table == t && r->values == c->values && r->pressure == pressure && r->iv == iv)) {
+        r->table = t;
+        r->values = c->values;
+        r->pressure = pressure;
+        r->iv = iv;
+        r->ip = ip;
+        r->tp = tp;
+        r->filled = 0;
+        r->reads_unsimulated = 0;
+    }
+    for (int row = r->filled; row < need; ++row) fill_row(t, c, row, r);
+    if (need > r->filled) r->filled = need;
+}
+
+/* The value at the beta cell (ib, tb) of the rows, linear in v between them (tv = 0: the first row alone). */
+static double rows_value(const tc_table *t, const tc_table_rows *r, double tv, size_t ib, double tb) {
+    if (t->n_beta == 1) return tv == 0.0 ? r->y[0][0] : (1.0 - tv) * r->y[0][0] + tv * r->y[1][0];
+    const double h = t->beta[ib + 1] - t->beta[ib];
+    const double a = tc_pchip_hermite(r->y[0][ib], r->y[0][ib + 1], r->dl[0][ib], r->dr[0][ib], h, tb);
+    if (tv == 0.0) return a;
+    const double b = tc_pchip_hermite(r->y[1][ib], r->y[1][ib + 1], r->dl[1][ib], r->dr[1][ib], h, tb);
+    return (1.0 - tv) * a + tv * b;
+}
+
+/* Whether the query at (tv, ib, tb) in the rows' cell reads an unsimulated node, as reads_unsimulated() decides it: a
+ * corner's weight is wp wv wb, and the largest wp of an unsimulated node at a beta node times wv wb exceeds the read
+ * weight exactly when one of them does (rounding keeps the order of products). */
+static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, double tv, size_t ib, double tb) {
+    if (!r->reads_unsimulated) return 0;
+    if (!r->unsimulated_cell[0][ib] && (tv == 0.0 || !r->unsimulated_cell[1][ib]))
+        return 0; /* the cell's nodes were all simulated */
+    const double wv[2] = {1.0 - tv, tv}, wb[2] = {1.0 - tb, tb};
+    for (int b = 0; b < 2; ++b) {
+        if (!(wv[b] > 0.0)) continue;
+        for (size_t c = 0; c < 2; ++c)
+            if (wb[c] > 0.0 && ib + c < t->n_beta && r->unsimulated[b][ib + c] * wv[b] * wb[c] > TC_TABLE_READ_WEIGHT)
+                return 1;
+    }
+    return 0;
+}
+
+/* Every query in the monotone cubic form c at the pressure (ip, tp): the rows of a velocity cell made (or found in
+ * r) when the cell changes, then each query evaluated on them. */
+static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, int outp,
+                         size_t n, const double *velocity, const double *beta, double *out, unsigned char *clamped,
+                         tc_table_rows *r) {
+    const size_t nv = t->n_velocity, nb = t->n_beta;
+    size_t iv = 0, ib = 0;
+    double tv = 0.0, tb, vprev = 0.0;
     int outv = 0;
     for (size_t k = 0; k < n; ++k) {
         const double v = fabs(velocity[k]);
-        if (k == 0 || !(v == fabs(velocity[k - 1]))) {
+        if (k == 0 || !(v == vprev)) {
             locate(t->velocity, nv, v, &iv, &tv);
-            outv = outside(t->velocity, nv, v);
-            if (iv != cell) {
-                cubic_rows_at(t, values, ip, tp, iv, sv, &ra);
-                if (values_b != NULL) cubic_rows_at(t, values_b, ip, tp, iv, sv, &rb);
-                cell = iv;
-            }
+            outv = outside_velocity(t, v);
+            rows_at(t, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
+            vprev = v;
         }
-        const int outb = locate_near(t->beta, nb, beta[k], ib, &ib, &tb);
-        out[k] = cubic_value(t, &ra, tv, ib, tb);
-        if (values_b != NULL) out_b[k] = cubic_value(t, &rb, tv, ib, tb);
+        const double b = beta[k];
+        locate_near(t->beta, nb, b, ib, &ib, &tb);
+        out[k] = rows_value(t, r, tv, ib, tb);
         if (clamped != NULL)
-            clamped[k] = (unsigned char)(outp || outv || outb || reads_unsimulated(t, ip, tp, iv, tv, ib, tb));
+            clamped[k] = (unsigned char)(outp || outv || outside_beta(t, b) || rows_read_unsimulated(t, r, tv, ib, tb));
     }
 }
-
 /* ---- multilinear --------------------------------------------------------------------------------------------- */
 
 #define ROWS_MAX 64 /* beta axes up to this length get the rows of one velocity cell interpolated in P once */
@@ -350,7 +289,8 @@ static void lookup_rows(const tc_table *table, const double *m0, const double *m
         }
     }
     for (size_t k = 0; k < n; ++k) {
-        const int outb = locate_near(table->beta, nb, beta[k], ib, &ib, &tb); /* neighbours: mostly the same cell */
+        locate_near(table->beta, nb, beta[k], ib, &ib, &tb); /* neighbours: mostly the same cell */
+        const int outb = outside_beta(table, beta[k]);
         out[k] = bilinear(rows[0][ib], rows[0][ib + sb], rows[1][ib], rows[1][ib + sb], tv, tb);
         if (b0 != NULL) out_b[k] = bilinear(rows[2][ib], rows[2][ib + sb], rows[3][ib], rows[3][ib + sb], tv, tb);
         if (clamped != NULL)
@@ -373,8 +313,7 @@ static void multilinear_lookup(const tc_table *table, const double *values, cons
     }
     if (one_velocity) {
         const double v = fabs(velocity[0]);
-        lookup_rows(table, m0, m1, b0, b1, ip, tp, v, n, beta, outp || outside(table->velocity, nv, v), out, out_b,
-                    clamped);
+        lookup_rows(table, m0, m1, b0, b1, ip, tp, v, n, beta, outp || outside_velocity(table, v), out, out_b, clamped);
         return;
     }
     size_t iv = 0, ib = 0;
@@ -385,9 +324,10 @@ static void multilinear_lookup(const tc_table *table, const double *values, cons
         /* the same velocity as the query before (every node's, under friction_velocity = grip): same cell */
         if (k == 0 || !(v == fabs(velocity[k - 1]))) {
             locate(table->velocity, nv, v, &iv, &tv);
-            outv = outside(table->velocity, nv, v);
+            outv = outside_velocity(table, v);
         }
-        const int outb = locate_near(table->beta, nb, b, ib, &ib, &tb);
+        locate_near(table->beta, nb, b, ib, &ib, &tb);
+        const int outb = outside_beta(table, b);
         const size_t c00 = iv * nb + ib, c01 = iv * nb + ib + sb, c10 = (iv + sv) * nb + ib,
                      c11 = (iv + sv) * nb + ib + sb;
         out[k] = interpolate(m0, m1, tp, c00, c01, c10, c11, tv, tb);
@@ -399,36 +339,58 @@ static void multilinear_lookup(const tc_table *table, const double *values, cons
 
 /* ---- the lookups --------------------------------------------------------------------------------------------- */
 
+/* The monotone cubic form of values: the table's (*temp untouched) or one made into *temp (free it with
+ * tc_table_cubic_free); NULL when it cannot be made (msg says why). */
+static const tc_table_cubic *cubic_form(const tc_table *table, const double *values, tc_table_cubic *temp, int *rc,
+                                        tc_msg msg) {
+    const tc_table_cubic *c = tc_table_cubic_of(table, values);
+    if (c != NULL) return c;
+    *rc = tc_table_cubic_make(table, values, temp, msg);
+    return *rc == TC_OK ? temp : NULL;
+}
+
 int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure, size_t n,
                      const double *velocity, const double *beta, int policy, double *out, double *out_b,
-                     unsigned char *clamped, tc_msg msg) {
+                     unsigned char *clamped, tc_table_rows *rows, tc_msg msg) {
     if (policy != TC_TABLE_CLAMP && policy != TC_TABLE_ERROR)
         return tc_fail(msg, TC_ERROR, "table policy = %d is not allowed; choose clamp (%d) or error (%d)", policy,
                        TC_TABLE_CLAMP, TC_TABLE_ERROR);
     const size_t nP = table->n_pressure, nv = table->n_velocity, nb = table->n_beta;
-    const int outp = outside(table->pressure, nP, pressure);
+    const int outp = outside_pressure(table, pressure);
     if (policy == TC_TABLE_ERROR) {
         if (outp) return domain_error("pressure", "Pa", pressure, table->pressure, nP, msg);
         for (size_t k = 0; k < n; ++k)
-            if (outside(table->velocity, nv, fabs(velocity[k])))
+            if (outside_velocity(table, fabs(velocity[k])))
                 return domain_error("velocity", "m/s", fabs(velocity[k]), table->velocity, nv, msg);
         for (size_t k = 0; k < n; ++k)
-            if (outside(table->beta, nb, beta[k]))
-                return domain_error("beta", "1", beta[k], table->beta, nb, msg);
+            if (outside_beta(table, beta[k])) return domain_error("beta", "1", beta[k], table->beta, nb, msg);
     }
     size_t ip;
     double tp;
     locate_pressure(table, pressure, &ip, &tp);
-    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC)
-        cubic_lookup(table, values, values_b, ip, tp, outp, n, velocity, beta, out, out_b, clamped);
-    else
+    if (table->interpolation != TC_TABLE_MONOTONE_CUBIC) {
         multilinear_lookup(table, values, values_b, ip, tp, outp, n, velocity, beta, out, out_b, clamped);
+        return TC_OK;
+    }
+    const double *arrays[2] = {values, values_b};
+    double *outs[2] = {out, out_b};
+    for (int a = 0; a < 2 && arrays[a] != NULL; ++a) {
+        tc_table_cubic temp = {0};
+        tc_table_rows local;
+        int rc = TC_OK;
+        const tc_table_cubic *c = cubic_form(table, arrays[a], &temp, &rc, msg);
+        if (c == NULL) return rc;
+        tc_table_rows *r = a == 0 && rows != NULL && c != &temp ? rows : &local; /* a made form's rows are not kept */
+        if (r == &local) local.filled = 0;
+        cubic_lookup(table, c, pressure, ip, tp, outp, n, velocity, beta, outs[a], a == 0 ? clamped : NULL, r);
+        tc_table_cubic_free(&temp);
+    }
     return TC_OK;
 }
 
 int tc_table_lookup(const tc_table *table, const double *values, double pressure, size_t n, const double *velocity,
                     const double *beta, int policy, double *out, unsigned char *clamped, tc_msg msg) {
-    return tc_table_lookup2(table, values, NULL, pressure, n, velocity, beta, policy, out, NULL, clamped, msg);
+    return tc_table_lookup2(table, values, NULL, pressure, n, velocity, beta, policy, out, NULL, clamped, NULL, msg);
 }
 
 int tc_table_mu(const tc_table *table, double pressure, size_t n, const double *velocity, const double *beta,
@@ -446,8 +408,7 @@ size_t tc_table_read_nodes(const tc_table *table, double pressure, double veloci
     locate(table->velocity, nv, v, &iv, &tv);
     locate(table->beta, nb, beta, &ib, &tb);
     if (out != NULL)
-        *out = outside(table->pressure, table->n_pressure, pressure) || outside(table->velocity, nv, v) ||
-               outside(table->beta, nb, beta);
+        *out = outside_pressure(table, pressure) || outside_velocity(table, v) || outside_beta(table, beta);
     const double wp[2] = {1.0 - tp, tp}, wv[2] = {1.0 - tv, tv}, wb[2] = {1.0 - tb, tb};
     for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
@@ -461,28 +422,42 @@ size_t tc_table_read_nodes(const tc_table *table, double pressure, double veloci
 }
 
 int tc_table_beta_line(const tc_table *table, const double *values, double pressure, double velocity, double *y,
-                       double *dl, double *dr, tc_msg msg) {
+                       double *dl, double *dr, tc_table_rows *rows, tc_msg msg) {
     if (table->interpolation != TC_TABLE_MONOTONE_CUBIC)
         return tc_fail(msg, TC_ERROR, "the beta line is that of a version 4 table; this table is version %d",
                        table->format_version);
-    const size_t nv = table->n_velocity, nb = table->n_beta, sv = nv > 1 ? 1 : 0;
+    const size_t nv = table->n_velocity, nb = table->n_beta;
     size_t ip, iv;
     double tp, tv;
-    cubic_rows r;
+    tc_table_cubic temp = {0};
+    int rc = TC_OK;
+    const tc_table_cubic *c = cubic_form(table, values, &temp, &rc, msg);
+    if (c == NULL) return rc;
+    tc_table_rows local;
+    tc_table_rows *r = rows != NULL && c != &temp ? rows : &local;
+    if (r == &local) local.filled = 0;
     locate_pressure(table, pressure, &ip, &tp);
     locate(table->velocity, nv, fabs(velocity), &iv, &tv);
-    cubic_rows_at(table, values, ip, tp, iv, sv, &r);
+    rows_at(table, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
     /* a Hermite piece is linear in its data: the blend of the rows' pieces is the piece of the blended data */
-    const double wa = tv == 0.0 ? 1.0 : 1.0 - tv, wb = tv;
-    for (size_t k = 0; k < nb; ++k) y[k] = wa * r.y[0][k] + wb * r.y[1][k];
-    for (size_t k = 0; k + 1 < nb; ++k) {
-        double ends[2][2];
-        for (int row = 0; row < 2; ++row) row_piece_slopes(table, &r, row, k, &ends[row][0], &ends[row][1]);
-        dl[k] = wa * ends[0][0] + wb * ends[1][0];
-        dr[k] = wa * ends[0][1] + wb * ends[1][1];
+    if (tv == 0.0) {
+        memcpy(y, r->y[0], nb * sizeof *y);
+        if (nb > 1) {
+            memcpy(dl, r->dl[0], (nb - 1) * sizeof *dl);
+            memcpy(dr, r->dr[0], (nb - 1) * sizeof *dr);
+        }
+    } else {
+        const double wa = 1.0 - tv, wb = tv;
+        for (size_t k = 0; k < nb; ++k) y[k] = wa * r->y[0][k] + wb * r->y[1][k];
+        for (size_t k = 0; k + 1 < nb; ++k) {
+            dl[k] = wa * r->dl[0][k] + wb * r->dl[1][k];
+            dr[k] = wa * r->dr[0][k] + wb * r->dr[1][k];
+        }
     }
+    tc_table_cubic_free(&temp);
     return TC_OK;
 }
+
 
 /* the cubic c0 + c1 t + c2 t^2 + c3 t^3 */
 static double cubic(const double c[4], double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }

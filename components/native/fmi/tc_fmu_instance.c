@@ -138,6 +138,15 @@ int tc_inst_fail(tc_instance *c, const char *what) {
     return TC_LOG_ERROR;
 }
 
+/* A bound for a message: "%g", with more digits when that does not read back as the bound (components/params.py's
+ * bound_text prints the same). */
+static void bound_text(double x, char *buf, size_t size) {
+    for (int digits = 6; digits <= 17; ++digits) {
+        snprintf(buf, size, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x) return;
+    }
+}
+
 /* The check of one parameter (ranges as components/params.py's validate_fields); 0 if it is bad. */
 static int check_parameter(tc_instance *c, const tc_variable *v, tc_param_value *p) {
     char a[TC_REPR_SIZE], lo[40], hi[40];
@@ -165,11 +174,14 @@ static int check_parameter(tc_instance *c, const tc_variable *v, tc_param_value 
                  tc_repr_double(p->number, a));
         return 0;
     }
-    int ok_lo = !v->has_low || p->number >= v->low; /* min and max inclusive, as the model description says */
-    int ok_hi = !v->has_high || p->number <= v->high;
+    /* min and max inclusive, as the model description says, a value within TC_BOUND_RTOL of one on it (as the
+     * declaration's checks, components/params.py); an integer's bounds are exact */
+    const int integer = v->kind == TC_KIND_INTEGER;
+    int ok_lo = !v->has_low || (integer ? p->number >= v->low : !tc_below(p->number, v->low));
+    int ok_hi = !v->has_high || (integer ? p->number <= v->high : !tc_above(p->number, v->high));
     if (ok_lo && ok_hi) return 1;
-    snprintf(lo, sizeof lo, "%g", v->low);
-    snprintf(hi, sizeof hi, "%g", v->high);
+    bound_text(v->low, lo, sizeof lo);
+    bound_text(v->high, hi, sizeof hi);
     if (v->kind == TC_KIND_INTEGER) snprintf(a, sizeof a, "%.0f", p->number);
     else tc_repr_double(p->number, a);
     snprintf(c->message, sizeof c->message, "%s = %s%s%s is out of range; allowed: %s%s, %s%s%s%s", v->name, a, sp,
@@ -256,13 +268,12 @@ static double bound_value(const tc_instance *c, const tc_bound *b) {
     return b->parameter >= 0 ? c->values[b->parameter].number : b->value;
 }
 
-/* Whether output or input k of TC_BOUNDS is outside its bound by more than 1e-9 of the bound (a draw of exactly
- * draw_length ends 2.2e-15 m beyond it after 1750 steps: round-off, not a longer draw). */
+/* Whether output or input k of TC_BOUNDS is outside its bound by more than TC_BOUND_RTOL of the bound (a draw of
+ * exactly draw_length ends 2.2e-15 m beyond it after 1750 steps: round-off, not a longer draw). */
 static int is_outside(const tc_instance *c, int k) {
     const tc_bound *b = &TC_BOUNDS[k];
     const double y = b->input ? c->inputs[b->output] : c->outputs[b->output], limit = bound_value(c, b);
-    const double slack = 1e-9 * fabs(limit);
-    return b->side < 0 ? y < limit - slack : y > limit + slack;
+    return b->side < 0 ? tc_below(y, limit) : tc_above(y, limit);
 }
 
 /* Which outputs are outside their bounds now (after a restored state: no warning for what it already held). */

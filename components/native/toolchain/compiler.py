@@ -101,7 +101,7 @@ def zig_version() -> str:
 
 
 def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64", *, include_dirs=(),
-                   defines=(), extra_flags=()) -> Path:
+                   defines=(), extra_flags=(), symbols: bool = False) -> Path:
     """Compile C ``sources`` into the shared library ``output`` for a platform of :data:`PLATFORMS`.
 
     Parameters
@@ -115,6 +115,9 @@ def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64"
         ``aarch64-linux``, ``aarch64-darwin``).
     include_dirs, defines, extra_flags : iterables of str
         ``-I``, ``-D`` and further flags.
+    symbols : bool
+        Keep the symbol table of an ELF library (no ``-s``): the same code, with every function named for a profiler
+        (``benchmarks/callgrind_fmu.py``); a shipped library has none.
 
     Raises
     ------
@@ -131,13 +134,13 @@ def compile_shared(sources, output: str | os.PathLike, platform: str = "linux64"
         slices = [out.with_name(f".{out.name}.{t}") for t in target]
         try:
             for t, part in zip(target, slices):
-                _compile(sources, part, t, platform, include_dirs, defines, extra_flags, out.name)
+                _compile(sources, part, t, platform, include_dirs, defines, extra_flags, out.name, symbols)
             write_universal(slices, out)
         finally:
             for part in slices:
                 part.unlink(missing_ok=True)
         return out
-    return _compile(sources, out, target, platform, include_dirs, defines, extra_flags, out.name)
+    return _compile(sources, out, target, platform, include_dirs, defines, extra_flags, out.name, symbols)
 
 
 def _command(target: str, include_dirs, defines, extra_flags) -> list[str]:
@@ -155,19 +158,21 @@ def _run(cmd: list[str], out: Path, what: str) -> Path:
     return out
 
 
-def _link_flags(target: str, name: str) -> list[str]:
+def _link_flags(target: str, name: str, symbols: bool = False) -> list[str]:
     """The flags of a shared library for a target: position-independent code off Windows, the install name
-    ``@rpath/<name>`` of a Mach-O library, no symbol table beyond the exported one in an ELF library."""
+    ``@rpath/<name>`` of a Mach-O library, no symbol table beyond the exported one in an ELF library (unless
+    ``symbols``)."""
     if "windows" in target:
         return []
     if "macos" in target:
         return ["-fPIC", f"-Wl,-install_name,@rpath/{name}"]
-    return ["-fPIC", "-s"]
+    return ["-fPIC"] if symbols else ["-fPIC", "-s"]
 
 
-def _compile(sources, out: Path, target: str, platform: str, include_dirs, defines, extra_flags, name: str) -> Path:
+def _compile(sources, out: Path, target: str, platform: str, include_dirs, defines, extra_flags, name: str,
+             symbols: bool = False) -> Path:
     posix = "windows" not in target
-    cmd = [*_command(target, include_dirs, defines, extra_flags), "-shared", *_link_flags(target, name),
+    cmd = [*_command(target, include_dirs, defines, extra_flags), "-shared", *_link_flags(target, name, symbols),
            "-o", str(out), *(str(s) for s in sources), *(["-lm"] if posix else [])]
     _run(cmd, out, f"{out.name} for {platform} ({target})")
     return out if posix else reproducible_pe(out)

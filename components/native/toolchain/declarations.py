@@ -6,7 +6,13 @@ Two headers, written into a build folder next to the sources:
     ``typedef struct <prefix>_params {...}``: one member per field of the component's parameter
     dataclass, same names, same order; float fields are ``double``, integer fields ``int``, fields
     with choices ``int`` (the index into the choices tuple, named ``<PREFIX>_<FIELD>_<CHOICE>``),
-    text fields ``const char *``. The native model is written against it.
+    text fields ``const char *``. The native model is written against it. And
+    ``<prefix>_params_check(p, msg)``: every float field finite and within its declared range (both bounds
+    inclusive, a value within ``TC_BOUND_RTOL`` of a bound on it, as
+    :func:`tribocosim.components.params.within_bounds`),
+    every integer field within its range, every choice an index of its choices; ``TC_ERROR`` naming the first field
+    that is not, its value and what is allowed. The model's create function calls it, so the ranges the C side
+    checks are the declared ones.
 ``tc_fmu_model.h`` (one per FMU)
     the model identifier and GUID, the table of FMU variables (:data:`tc_variable` of ``tc_fmu.h``:
     the parameters, then the inputs, then the outputs, in the order and with the names, units,
@@ -28,6 +34,7 @@ import math
 from pathlib import Path
 
 from tribocosim.components.description import Component
+from tribocosim.components.params import bound_text
 from tribocosim.errors import TribocosimError
 
 
@@ -52,6 +59,46 @@ def _kind(f: dataclasses.Field) -> str:
     return "integer" if meta.get("integer") else "real"
 
 
+def _check_lines(comp: Component) -> list[str]:
+    """The statements of ``<prefix>_params_check`` (see the module docstring), one check per field."""
+    lines = []
+    for f in dataclasses.fields(comp.parameters):
+        meta, name = f.metadata, f.name
+        unit = meta.get("unit") if meta.get("unit") not in (None, "", "1") else ""
+        sp = " " if unit else ""
+        if "choices" in meta:
+            choices = meta["choices"]
+            allowed = ", ".join(f"{k} ({c})" for k, c in enumerate(choices))
+            lines += [f"    if (p->{name} < 0 || p->{name} > {len(choices) - 1})",
+                      f"        return tc_fail(msg, TC_ERROR, \"{name} = %d is not allowed; choose one of {allowed}\", "
+                      f"p->{name});"]
+        elif meta.get("text"):
+            continue
+        elif meta.get("integer"):
+            low, high = meta.get("low"), meta.get("high")
+            tests = ([f"p->{name} < {int(low)}"] if low is not None else []) + \
+                    ([f"p->{name} > {int(high)}"] if high is not None else [])
+            if tests:
+                lo = str(int(low)) if low is not None else "-inf"
+                hi = str(int(high)) if high is not None else "inf"
+                lines += [f"    if ({' || '.join(tests)})",
+                          f"        return tc_fail(msg, TC_ERROR, \"{name} = %d is out of range; allowed: "
+                          f"{'[' if low is not None else '('}{lo}, {hi}{']' if high is not None else ')'}\", "
+                          f"p->{name});"]
+        else:
+            low, high = meta.get("low"), meta.get("high")
+            tests = [f"!isfinite(p->{name})"]
+            tests += [f"tc_below(p->{name}, {_c_double(low)})"] if low is not None else []
+            tests += [f"tc_above(p->{name}, {_c_double(high)})"] if high is not None else []
+            lo = bound_text(low) if low is not None else "-inf"
+            hi = bound_text(high) if high is not None else "inf"
+            lines += [f"    if ({' || '.join(tests)})",
+                      f"        return tc_fail(msg, TC_ERROR, \"{name} = %s{sp}{unit} is out of range; allowed: "
+                      f"{'[' if low is not None else '('}{lo}, {hi}{']' if high is not None else ')'}{sp}{unit}\", "
+                      f"tc_repr_double(p->{name}, r));"]
+    return lines
+
+
 def params_header(comp: Component) -> str:
     """The ``<prefix>_params.h`` of a component (see the module docstring)."""
     prefix = comp.native.prefix
@@ -63,6 +110,10 @@ def params_header(comp: Component) -> str:
         f" * among its choices, named {prefix.upper()}_<FIELD>_<CHOICE>), text fields const char *. SI units. */",
         f"#ifndef {guard}",
         f"#define {guard}",
+        "",
+        "#include <math.h>",
+        "",
+        '#include "tc_common.h"',
         "",
     ]
     for f in dataclasses.fields(comp.parameters):
@@ -76,7 +127,16 @@ def params_header(comp: Component) -> str:
         ctype = {"real": "double", "integer": "int"}.get(_kind(f), "int" if "choices" in meta else "const char *")
         unit = f" [{meta['unit']}]" if meta.get("unit") else ""
         lines.append(f"    {ctype} {f.name}; /* {meta['description'].replace('*/', '* /')}{unit} */")
-    lines += [f"}} {prefix}_params;", "", "#endif", ""]
+    lines += [f"}} {prefix}_params;", ""]
+    lines += ["/* Every field of p against its declaration: a float finite and within its range (both bounds inclusive, "
+              "a value",
+              " * within TC_BOUND_RTOL of a bound on it), an integer within its range, a choice an index of its choices. "
+              "TC_ERROR",
+              " * naming the first field that is not, its value and what is allowed. */",
+              f"static inline int {prefix}_params_check(const {prefix}_params *p, tc_msg msg) {{",
+              "    char r[TC_REPR_SIZE];", "    (void)r;"]
+    lines += _check_lines(comp)
+    lines += ["    return TC_OK;", "}", "", "#endif", ""]
     return "\n".join(lines)
 
 

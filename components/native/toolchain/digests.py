@@ -7,7 +7,9 @@ again and again. :func:`memo` keeps each digest (or any value JSON can hold) in 
 together with the signature of the files it was computed from, each file's (path, size, modification time in ns, inode): while every file still has
 its signature the stored digest is returned, otherwise it is computed again and stored. An edit changes a file's
 modification time (and usually its size), a replaced file its inode. The store is written atomically (a temporary
-file renamed into place): concurrent processes never read half a record, and a lost race only recomputes.
+file renamed into place): concurrent processes never read half a record, and a lost race only recomputes. Each
+installation of the package has records of its own (the record's name carries the package's folder): two checkouts
+that share one cache folder never take each other's digests (:func:`remembered` trusts the files a record names).
 """
 
 from __future__ import annotations
@@ -33,13 +35,12 @@ def signature(files: Iterable[Path]) -> list[list]:
     return out
 
 
-#: the installation whose files the records describe: two checkouts that share a cache keep their records apart (a
-#: record names its files, so :func:`remembered` would otherwise hand one checkout the digest of the other's files)
-_INSTALLATION = str(Path(__file__).resolve().parents[3])
+#: the folder of this installation's components package: part of every record's name
+INSTALLATION = str(Path(__file__).resolve().parents[2])
 
 
 def _record(key: str) -> Path:
-    name = hashlib.sha256(f"{_INSTALLATION}\n{key}".encode()).hexdigest()[:32]
+    name = hashlib.sha256(f"{INSTALLATION}\n{key}".encode()).hexdigest()[:32]
     return cache_dir() / "digests" / f"{name}.json"
 
 
