@@ -27,6 +27,16 @@ distributed = pytest.importorskip("distributed")
 TINY = (Path(__file__).parent / "data" / "tiny_sweep.toml").read_text().replace('"tiny"', '"tiny-dask"')
 
 
+@pytest.fixture(scope="module", autouse=True)
+def workers_import_this_module():
+    """The items of the stop tests (_wait_for) are functions of this module, which pytest imports by its path as
+    tests.surrogate.test_executors: a spawned worker (the pool's, a Dask worker's) unpickles them by that name, so
+    the checkout's root is on the sys.path the workers inherit (set before the cluster fixture starts them)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.syspath_prepend(str(Path(__file__).resolve().parents[2]))
+        yield
+
+
 def test_process_pool_yields_results_and_exceptions_per_item():
     ex = ProcessPoolCaseExecutor(2)
     out = dict(ex.map_unordered(math.sqrt, [("a", 4.0), ("b", -1.0), ("c", 9.0)]))
@@ -89,7 +99,7 @@ def test_bad_scheduler_address_is_refused_with_the_expected_form():
 
 
 @pytest.fixture(scope="module")
-def cluster():
+def cluster(workers_import_this_module):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=":0", silence_logs=40) as c:
         yield c
