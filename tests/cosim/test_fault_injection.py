@@ -186,10 +186,13 @@ def test_results_that_cannot_be_written_are_refused_before_the_run(tmp_path):
 
 def test_a_second_run_into_the_same_folder_is_refused_and_overrides_are_recorded(tmp_path):
     """Two runs into one --out overwrote each other silently; the second is refused while the first runs, naming
-    its process; the first's JSON records its --set overrides, and the lock is gone when it ends."""
+    its process; the first's JSON records its --set overrides, and the lock is gone when it ends. The first run is
+    the Python loop at 20 us steps (1.5 million steps, minutes unless stopped): it is still running when the second
+    one starts."""
     out = tmp_path / "out"
     first = subprocess.Popen([sys.executable, "-m", "tribocosim.cli", "run", "demo", "--out", str(out), "--quiet",
-                              "--set", "experiment.stop=30", "--set", "master.extrapolation=1"],
+                              "--set", "experiment.stop=30", "--set", "experiment.step=2e-5",
+                              "--set", "master.extrapolation=1"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.time() + 120
@@ -233,16 +236,18 @@ def test_a_truncated_fmu_binary_is_a_scene_problem_not_a_bus_error(strip_fmu, tm
 def test_sigterm_ends_a_run_and_leaves_no_temporary_folder(tmp_path, tmpdir_env):
     """SIGTERM killed the process before Python's clean-up: the output folder's lock stayed. It ends the run as an
     exception does (exit 143): the lock is released, and no temporary folder stays (the FMUs are extracted into the
-    FMU cache)."""
-    lock = tmp_path / "out" / ".tribocosim-run.lock"
+    FMU cache). The run is the demo at a millionth of a second (2.06 million steps, tens of seconds unless stopped),
+    signalled once its progress bar shows the loop is under way."""
     proc = subprocess.Popen([sys.executable, "-m", "tribocosim.cli", "run", "demo", "--out", str(tmp_path / "out"),
-                             "--quiet", "--set", "experiment.stop=60"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 120
-    while not lock.exists() and time.time() < deadline:  # the scene is valid: the run is under way
-        time.sleep(0.05)
-    assert lock.exists(), "the run took its output folder"
-    time.sleep(1.0)
+                             "--set", "experiment.step=1e-6", "--set", 'output.variables=["strip.pull_force"]'],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = b""
+    while b"\r[" not in seen:
+        chunk = proc.stderr.read1(65536)
+        if not chunk:
+            proc.wait(timeout=60)
+            pytest.fail(f"the run ended before its progress showed (exit {proc.returncode}): {seen[-2000:]!r}")
+        seen += chunk
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=120)
     assert proc.returncode == 128 + signal.SIGTERM
