@@ -39,7 +39,7 @@ from xml.etree.ElementTree import Element, SubElement, indent, tostring
 
 from tribocosim.components import registry
 from tribocosim.components.description import Component
-from tribocosim.components.fmus import modeldescription3
+from tribocosim.components.fmus import cache_key, modeldescription3
 from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, OUTPUT_DEPENDENCIES, describe,
                                                          unit_definitions)
 from tribocosim.components.native.toolchain import compiler, declarations, digests
@@ -158,9 +158,10 @@ def source_digest(name: str, fmi_version: int = 2) -> str:
 
 
 def digest_key(name: str, fmi_version: int = 2) -> str:
-    """The key :func:`source_digest` is remembered under (:func:`tribocosim.components.native.toolchain.digests.
-    remembered` finds it without this module's imports)."""
-    return f"fmu {name} {fmi_version}"
+    """The key :func:`source_digest` is remembered under (:mod:`tribocosim.components.fmus.cache_key`: with the
+    sources' folder, found by :func:`tribocosim.components.native.toolchain.digests.remembered` without this module's
+    imports)."""
+    return cache_key.digest_key(name, fmi_version)
 
 
 def _source_digest(comp: Component, fmi_version: int) -> str:

@@ -39,6 +39,7 @@ def component_fmu(component: str, cache: Path | None = None) -> Path:
         If the component is unknown or the build fails (with the builder's message).
     """
     from tribocosim.components import registry
+    from tribocosim.components.fmus.cache_key import digest_key
     from tribocosim.components.native.toolchain.digests import remembered
 
     comp = registry.find(component)
@@ -51,7 +52,7 @@ def component_fmu(component: str, cache: Path | None = None) -> Path:
                          "a component written in Python is a pythonfmu FMU of its own, named by path = ... "
                          "(docs/user-guide.md)")
     root = Path(cache) if cache is not None else cache_dir()
-    digest = remembered(f"fmu {name} 2")  # native_build.digest_key: found without importing the builder
+    digest = remembered(digest_key(name))  # native_build.digest_key: found without importing the builder
     if digest is None:
         from tribocosim.components.fmus import native_build
 

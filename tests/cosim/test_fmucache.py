@@ -84,3 +84,21 @@ def test_stripdraw_run_exits_cleanly(strip_run):
     """Regression: an earlier StripDraw build crashed the host at exit (heap corruption)."""
     _, proc = strip_run
     assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_the_remembered_digest_is_keyed_by_the_checkouts_sources(tmp_path, monkeypatch):
+    """Two checkouts may share one cache: the digest remembered for the other checkout's files (its record still
+    valid, those files unchanged) is not this checkout's. The key holds the components folder, and the cache looks a
+    digest up under the builder's own key."""
+    from tribocosim.components.fmus import cache_key, native_build
+    from tribocosim.components.native.toolchain import digests
+
+    monkeypatch.setenv("TRIBOCOSIM_CACHE", str(tmp_path / "cache"))
+    here = native_build.digest_key("Press")
+    assert str(cache_key.SOURCES) in here and cache_key.SOURCES == (ROOT / "components").resolve()
+    other = here.replace(str(cache_key.SOURCES), "/elsewhere/components")
+    stale = tmp_path / "other_checkout_file"
+    stale.write_text("x")
+    digests.memo(other, [stale], lambda: "f" * 64)  # a digest another checkout remembered
+    fmu = fmucache.component_fmu("press", cache=tmp_path / "fmus")
+    assert fmu.parent.name == f"Press-native-{native_build.source_digest('Press')[:16]}" != f"Press-native-{'f' * 16}"
