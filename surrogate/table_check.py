@@ -126,7 +126,8 @@ def run_check(table, executor, points=POINTS, seeds=SEEDS) -> list[CheckResult]:
             mu_se = math.inf
         t_ap = float(table.interpolate_array(table.particle_area, p, v, beta, "error")[0])
         t_se = float(table.interpolate_array(table.array("particle_area_se"), p, v, beta, "error")[0])
-        t_mu = float(make_friction_law(StripDrawParameters(mu0=mu0), table).mu(p, v, beta)[0])
+        # the slides' mu is that of frictionless flakes, the table's mu (flake-borne shear is the strip's option)
+        t_mu = float(make_friction_law(StripDrawParameters(mu0=mu0, flake_shear_ratio=0.0), table).mu(p, v, beta)[0])
         t_mu_se = (float(table.interpolate_array(table.array("mu_se"), p, v, beta, "error")[0])
                    if "mu_se" in table.arrays() else math.nan)
         results.append(CheckResult(p, v, beta, n, float(ap.mean()),

@@ -133,7 +133,8 @@ def closed_form_table(
     says ``"provenance": "closed_form"`` so that nobody mistakes it for mesoscale results. Default
     axes: P 0.1-100 MPa, v 0-50 m/s (log-spaced above 1 mm/s), beta 0 to the cap.
     """
-    params = (params or StripDrawParameters()).replace(particle_area_scale=1.0)  # a table holds the measured A_p
+    # a table holds the measured A_p and the mu of frictionless flakes, mu0 (1 - A_p / A_c); the law applies s and r
+    params = (params or StripDrawParameters()).replace(particle_area_scale=1.0, flake_shear_ratio=0.0)
     law = closed_form_law(params)
     pressure = np.geomspace(1e5, 1e8, 13) if pressure is None else pressure
     velocity = np.concatenate(([0.0], np.geomspace(1e-3, 50.0, 40))) if velocity is None else velocity

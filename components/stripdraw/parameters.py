@@ -1,9 +1,10 @@
 """Parameters of the strip-draw model (one frozen dataclass, SI units, validated on creation).
 
 Defaults are the paper's strip-draw test (AA5182-O, 1.5 mm sheet, 35 x 35 mm pad, 140 mm draw at
-0.08 m/s; docs/model.md section 6). The field metadata (unit, description, allowed range)
-is the single source for validation messages and for the FMU's variable declarations, so the
-two cannot drift.
+0.08 m/s; docs/model.md section 6); the flake-borne shear ratio is the documented floor's
+(:mod:`tribocosim.components.stripdraw.friction_floor`), the paper's model one setting away
+(flake_shear_ratio = 0). The field metadata (unit, description, allowed range) is the single source
+for validation messages and for the FMU's variable declarations, so the two cannot drift.
 
 Half model: one pad and one face are modelled (paper Fig. 1b). The bar carries half the sheet:
 thickness h_B = sheet_thickness / 2 and width sheet_width; the pull force reported for the whole
@@ -17,6 +18,7 @@ import dataclasses
 import math
 
 from tribocosim.components.params import param, parameters, validate_fields
+from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_DEFAULT
 
 FRICTION_MODELS = ("table", "closed_form", "constant")
 INTEGRATORS = ("explicit", "implicit")
@@ -105,8 +107,10 @@ class StripDrawParameters:
         "alone, Fig. 8)", choices=PARTICLE_AREA_RULES
     )
     flake_shear_ratio: float = _p(
-        0.0, "1", "shear strength of the flake-borne contact over tau0, r in mu = mu0 [(1 - s A_p/A_c) + r s A_p/A_c] "
-        "(0: frictionless flakes, the paper's model)", 0.0, 1.0
+        FLAKE_SHEAR_RATIO_DEFAULT, "1", "shear strength of a flake-borne junction over the metal junction's tau0, r in "
+        "mu = mu0 (1 - (1 - r) s A_p/A_c), so that mu = r mu0 where flakes carry the whole contact; default: the "
+        "documented friction floor 0.03 over mu0 0.15 (sourced range 0.2-0.6, docs/model.md); 0: frictionless flakes, "
+        "the paper's model", 0.0, 1.0
     )
     friction_velocity: str = _p(
         "grip", "", "velocity in mu(P, v, beta): grip (the pulling speed, as the paper) | slip_rate (each node's)",

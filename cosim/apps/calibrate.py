@@ -11,12 +11,15 @@ friction coefficient), ``debris_g_m2`` (the debris left on the strip after that 
 weighted by 1 / std; data that mix observables need every std).
 
 What the mesoscale campaign does not pin down is the load share of blocked flakes at the test's 0.08 m/s (the scale
-s of the table's A_p, ``particle_area_scale``: mu = mu0 (1 - s A_p / A_c)), and the debris balance that sets how
-much debris there is: the production K / H (``archard_k``, H fixed), the share of debris the tool carries
+s of the table's A_p, ``particle_area_scale``: mu = mu0 (1 - (1 - r) s A_p / A_c)), the flake-borne shear ratio r
+(``flake_shear_ratio``, the floor mu = r mu0 where flakes carry the whole contact), and the debris balance that sets
+how much debris there is: the production K / H (``archard_k``, H fixed), the share of debris the tool carries
 (``zeta``), the share kept between passes (``debris_carry_over``) or a sink (``debris_sink_length``). ``--fit`` names
 the parameters to fit (default: particle_area_scale); the fit (:mod:`tribocosim.cosim.apps.calibrate_fit`) is
 Gauss-Newton least squares within the parameters' bounds on the pure strip-draw model, with standard errors from the
-Jacobian.
+Jacobian. Below the cap mu depends on s and r only through (1 - r) s: fitted together, they are separated only by
+tests whose debris reaches the cap (several passes, high pressure, long pads); otherwise the command says in one line
+that the data determine only (1 - r) s, with its value and standard error.
 
 It succeeds when it has converged (every change within 1e-6 of the value or 1 % of the standard error), no parameter
 is held at a bound the data push it against, and the data separate the parameters (the Jacobian's singular values,
@@ -171,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
         "status": f.status(), "converged": f.converged, "at_bound": f.at_bound, "separable": f.separable,
         "inseparable": f.inseparable, "correlation": f.correlation.tolist(),
         "singular_values_in_scale_units": f.singular_values.tolist(),
-        "chi2": f.chi2, "dof": f.dof,
+        "chi2": f.chi2, "dof": f.dof, "shear_scale_product": f.shear_scale,
         "contact_area": args.contact_area, "particle_area_rule": rule,
         "parameters": {k: v for k, v in parameters.items() if k != "table_file"},
         "source_table": {"path": str(table_path), "content_hash": table.metadata.get("content_hash")},
@@ -194,6 +197,9 @@ def main(argv: list[str] | None = None) -> int:
     for name, v, e in zip(f.names, f.values, f.stderr):
         error = f"+- {e:.2g} (standard error)" if np.isfinite(e) else f"(at its {f.at_bound.get(name)} bound)"
         print(f"{name} = {v:.6g} {error}{'' if f.succeeded else ', ' + f.status().upper()}")
+    if f.shear_scale is not None:
+        print(f"(1 - flake_shear_ratio) particle_area_scale = {f.shear_scale['value']:.6g} +- "
+              f"{f.shear_scale['stderr']:.2g} (the combination mu depends on below the cap)")
     if len(f.names) > 1:
         print("correlations: " + ", ".join(f"{a}/{b} {f.correlation[i, j]:+.3f}" for i, a in enumerate(f.names)
                                            for j, b in enumerate(f.names) if j > i))

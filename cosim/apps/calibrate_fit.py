@@ -8,7 +8,8 @@ coefficient), ``debris_g_m2`` (the debris left on the strip that passed under th
 [g/m^2]), ``beta`` (its coverage, the area fraction of flakes). Every row is simulated with the pure strip-draw model
 (:func:`tribocosim.cosim.studies.stripdraw_experiment.draw`, one draw per pressure and pad gives all its passes).
 
-Parameters (:data:`FITTABLE`): the scale s of the table's A_p (``particle_area_scale``), and the debris balance: the
+Parameters (:data:`FITTABLE`): the scale s of the table's A_p (``particle_area_scale``), the flake-borne shear ratio
+r (``flake_shear_ratio``: mu = mu0 (1 - (1 - r) s A_p / A_c), docs/model.md section 4), and the debris balance: the
 production K / H (``archard_k``, the hardness fixed: only K / H enters, Eq. 33-37), the share of the debris the tool
 carries (``zeta``), the share kept between passes (``debris_carry_over``) or a sink (``debris_sink_length``), each
 within its bounds (the strip-draw parameter's declared range; a sink length above 0). Residuals
@@ -30,7 +31,10 @@ The outcome (:class:`Fit`) says what the data determine:
   see: fewer independent data than parameters, or a parameter the data do not touch), when two parameters'
   correlation C_ij / sqrt(C_ii C_jj) exceeds 0.99 in magnitude (only a combination of them is determined), or when a
   bounded parameter's standard error exceeds the width of its range (the data barely touch it: the debris left on
-  the strip hardly depends on zeta, which moves the debris under the pad).
+  the strip hardly depends on zeta, which moves the debris under the pad). s and r fitted together: below the cap
+  mu depends on them only through (1 - r) s, and r acts alone where flakes carry the whole contact (mu = r mu0); when
+  their correlation exceeds 0.99 the outcome says in one line that the data determine only (1 - r) s, with its value
+  and standard error (:func:`shear_scale_product`), in place of the general messages for that pair.
 """
 
 from __future__ import annotations
@@ -54,6 +58,7 @@ OBSERVABLES = {
 #: fittable parameter -> (lower bound, upper bound, scale: the size of a change that matters)
 FITTABLE = {
     "particle_area_scale": (0.0, 1e6, 1.0),
+    "flake_shear_ratio": (0.0, 1.0, 0.1),
     "archard_k": (0.0, 1.0, 1e-4),
     "zeta": (0.0, 1.0, 0.1),
     "debris_carry_over": (0.0, 1.0, 0.1),
@@ -164,6 +169,7 @@ class Fit:
     inseparable: list[str]  # what the data cannot separate, in words
     chi2: float
     dof: int
+    shear_scale: dict | None = None  # (1 - r) s with its standard error when s and r are fitted together
 
     @property
     def succeeded(self) -> bool:
@@ -278,10 +284,55 @@ def fit(data: list[Measurement], parameters: dict, names: tuple[str, ...], model
     singular, correlation, inseparable = separability(J / sigma[:, None], names, scale)
     inseparable += [f"the data do not determine {n}: its standard error {e:.3g} exceeds its range [{a:g}, {b:g}]"
                     for n, e, a, b in zip(names, stderr, lo, hi) if np.isfinite(b - a) and e > b - a]
+    product = shear_scale_product(names, theta, J / sigma[:, None], r, weighted)
+    if product is not None and abs(product["correlation"]) > CORRELATION_MAX:
+        others = [n for n in names if n not in SHEAR_SCALE]
+        inseparable = [product_line(product)] + [m for m in inseparable if not any(n in m for n in SHEAR_SCALE)
+                                                 or any(n in m for n in others)]
     rows = [{"row": k[0], "observable": k[1], "measured": float(m), "model": float(v), "residual": float(v - m),
              "std": float(s) if weighted else None} for k, m, v, s in zip(keys, measured, current, sigma)]
     return Fit(tuple(names), theta, stderr, rows, it, evaluations, converged, change, at_bound, singular,
-               correlation, not inseparable, inseparable, float(np.sum(r**2)), len(keys) - len(names))
+               correlation, not inseparable, inseparable, float(np.sum(r**2)), len(keys) - len(names), product)
+
+
+#: the parameters that enter mu below the cap only through (1 - r) s
+SHEAR_SCALE = ("particle_area_scale", "flake_shear_ratio")
+
+
+def shear_scale_product(names, theta, Jw: np.ndarray, residuals, weighted: bool) -> dict | None:
+    """With s and r both fitted: the combination q = (1 - r) s the data determine below the cap (mu = mu0 (1 - q A_p /
+    A_c)), its standard error and the correlation of s and r; None when they are not both fitted.
+
+    The correlation is that of the covariance C = (J^T J)^-1. When it exceeds :data:`CORRELATION_MAX` the data see q
+    alone (J_s = (1 - r) dmu/dq, J_r = -s dmu/dq), and q's standard error is that of a fit of q in place of the pair:
+    its column ((1 - r) J_s - s J_r) / ((1 - r)^2 + s^2) beside the other fitted parameters'; otherwise it is
+    sqrt(g C g) with the gradient g = (1 - r, -s)."""
+    if not all(n in names for n in SHEAR_SCALE):
+        return None
+    i, j = (list(names).index(n) for n in SHEAR_SCALE)
+    dof_scale = 1.0 if weighted else float(np.sum(np.asarray(residuals) ** 2)) / max(1, Jw.shape[0] - Jw.shape[1])
+    cov = np.linalg.pinv(Jw.T @ Jw) * dof_scale
+    s, r = float(theta[i]), float(theta[j])
+    pair = cov[np.ix_([i, j], [i, j])]
+    d = np.sqrt(np.maximum(np.diag(pair), 1e-300))
+    correlation = float(pair[0, 1] / (d[0] * d[1]))
+    if abs(correlation) > CORRELATION_MAX:
+        q_column = ((1.0 - r) * Jw[:, i] - s * Jw[:, j]) / ((1.0 - r) ** 2 + s**2)
+        reduced = np.column_stack([q_column] + [Jw[:, k] for k in range(Jw.shape[1]) if k not in (i, j)])
+        variance = float(np.linalg.pinv(reduced.T @ reduced)[0, 0]) * dof_scale
+    else:
+        grad = np.array([1.0 - r, -s])
+        variance = float(grad @ pair @ grad)
+    return {"value": (1.0 - r) * s, "stderr": float(np.sqrt(max(variance, 0.0))), "correlation": correlation}
+
+
+def product_line(product: dict) -> str:
+    """The one line that says the data cannot separate r from s (:func:`shear_scale_product`)."""
+    return (f"the data determine only (1 - flake_shear_ratio) particle_area_scale = {product['value']:.4g} +- "
+            f"{product['stderr']:.2g} (correlation of the two {product['correlation']:+.4f}): below the cap mu = mu0 "
+            "(1 - (1 - r) s A_p / A_c) depends on them only through that product, so they cannot be separated; fix one "
+            "(--set) or add tests whose debris reaches the cap, where mu = r mu0 (more passes, higher pressure, a "
+            "longer pad)")
 
 
 def _stderr(J, sigma, r, weighted: bool) -> np.ndarray:

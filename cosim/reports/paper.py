@@ -5,7 +5,8 @@ budget, the drawing-speed prediction and the friction table's checks.
 
 Every figure is a set of strip-draw tests (:mod:`tribocosim.cosim.studies.stripdraw_experiment`: V0 = 0.08 m/s,
 140 mm draw, mu_bar the mean of mu = pull_force / (2 F_N) (Eq. 1) over the last 20 %) with the pure
-model and the friction law mu = mu0 (1 - s A_p / A_c) (Eq. 7 with Eq. 6; docs/model.md section 4):
+model and the friction law mu = mu0 (1 - (1 - r) s A_p / A_c) (Eq. 7 with Eq. 6 and flake-borne shear r;
+docs/model.md section 4 and "The floor under debris"):
 
 - Fig. 19b: mu_bar against P_N for the 35, 70 and 140 mm pads (zeta 0.2, K 1e-4);
 - Fig. 2b: 1, 2 and 3 passes over the same strip on the 35 mm pad;
@@ -19,7 +20,8 @@ Calibration on one number of the paper's text (Sec. 2.1): after one pass on the 
 drop(s) = 0.35 (drop rises with s: blocked flakes carry more of the contact), by bracketing and false
 position (Illinois) to |drop - 0.35| < 1e-4. The columns:
 
-- A_c from the table (``mesoscale``, the default), s fitted;
+- A_c from the table (``mesoscale``, the default), s fitted: the default model (r at the documented floor);
+- the paper's model (frictionless flakes, r = 0), A_c from the table, s fitted;
 - A_c from Eq. 8 (``eq8``), s fitted: the same model up to a constant factor on A_p / A_c (Eq. 8's area over the
   table's), so its s is the other's times that factor and its predictions nearly the same: it confirms nothing
   the first column does not;
@@ -28,8 +30,9 @@ position (Illinois) to |drop - 0.35| < 1e-4. The columns:
 
 The standard error of s reported beside it combines the quote ("35 %" rounded to a whole percent: a uniform error
 of +-0.5 points, carried to s by d drop / d s) and the table's ensemble noise; the uncertainty budget
-(:mod:`tribocosim.cosim.reports.paper_physics`) adds every other chosen input. Nothing else is fitted: the
-3-pass drop, the pad ordering and the zeta and K trends are predictions.
+(:mod:`tribocosim.cosim.reports.paper_physics`) adds every other chosen input, r among them. Nothing else is fitted:
+the 3-pass drop, the pad ordering and the zeta and K trends are predictions. The falsifiable prediction of the
+floor (five passes, a seeded strip: :mod:`tribocosim.cosim.reports.paper_floor`) closes the report.
 """
 
 from __future__ import annotations
@@ -43,7 +46,10 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import TribocosimError
+from tribocosim.components.stripdraw.friction_floor import (FLAKE_SHEAR_RATIO_DEFAULT, FLAKE_SHEAR_RATIO_RANGE,
+                                                           MU_FLOOR, PAPER_MODEL)
 from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, run_points
+from tribocosim.cosim.reports import paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports import paper_text
 from tribocosim.cosim.reports.paper_physics import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
@@ -74,17 +80,26 @@ QUICK = Grid(pressures=(1, 10, 25), zetas=(0.0, 1.0), ks=(1e-5, 1e-3, 1e-2), tre
 
 @dataclasses.dataclass(frozen=True)
 class Config:
-    """One column of the report: a contact-area convention, calibrated or with s = 1."""
+    """One column of the report: a contact-area convention, calibrated or with s = 1, the default model or the
+    paper's (frictionless flakes)."""
 
     contact_area: str
     calibrated: bool
+    paper_model: bool = False
 
     @property
     def label(self) -> str:
-        return f"A_c {self.contact_area}, {'s fitted' if self.calibrated else 's = 1'}"
+        model = "paper's model (r = 0), " if self.paper_model else ""
+        return f"{model}A_c {self.contact_area}, {'s fitted' if self.calibrated else 's = 1'}"
+
+    @property
+    def key(self) -> str:
+        """The name of its calibration: the convention, and the paper's model apart."""
+        return f"{self.contact_area}, r = 0" if self.paper_model else self.contact_area
 
 
-CONFIGS = (Config("mesoscale", True), Config("eq8", True), Config("mesoscale", False))
+CONFIGS = (Config("mesoscale", True), Config("mesoscale", True, paper_model=True), Config("eq8", True),
+           Config("mesoscale", False))
 
 
 @dataclasses.dataclass
@@ -145,9 +160,15 @@ def _params(base: dict, config: Config, scale: float, **extra) -> dict:
 
 
 def config_params(base: dict, config: Config) -> dict:
-    """The parameters of a configuration but its scale: the paper's zeta and K (Fig. 19) and the table law."""
+    """The parameters of a configuration but its scale: the paper's zeta and K (Fig. 19), the table law, and
+    frictionless flakes for the paper's model."""
     return {"zeta": PAPER_ZETA, "archard_k": PAPER_K, **base, "friction_model": "table",
-            "contact_area": config.contact_area}
+            "contact_area": config.contact_area, **(PAPER_MODEL if config.paper_model else {})}
+
+
+def shear_ratio(base: dict, config: Config) -> float:
+    """The flake-borne shear ratio r of a configuration (the default's unless set)."""
+    return float(config_params(base, config).get("flake_shear_ratio", FLAKE_SHEAR_RATIO_DEFAULT))
 
 
 def _drop_points(params: dict, scale: float) -> tuple[Point, Point]:
@@ -418,11 +439,11 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     t0 = time.perf_counter()
     cals = {}
     for config in CONFIGS:
-        if config.calibrated and config.contact_area not in cals:
+        if config.calibrated and config.key not in cals:
             if log:
-                log(f"calibrating s for {config.contact_area} on the 35 % one-pass drop at 25 MPa ...")
-            cals[config.contact_area] = calibrate_drop(runs, base, config, table, log=log)
-    figs = {c: figure_points(base, c, cals[c.contact_area].scale if c.calibrated else 1.0, grid) for c in CONFIGS}
+                log(f"calibrating s for {config.key} on the 35 % one-pass drop at 25 MPa ...")
+            cals[config.key] = calibrate_drop(runs, base, config, table, log=log)
+    figs = {c: figure_points(base, c, cals[c.key].scale if c.calibrated else 1.0, grid) for c in CONFIGS}
     if log:
         log("figures ...")
     runs.run([p for f in figs.values() for pairs in f.values() for _, p in pairs])
@@ -441,7 +462,7 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
                     tool = r.get("tool_length", 0.07 if name == "fig18b" else CAL_PAD)
                     w.writerow([c.label, name, tool, r.get("pass", 1), r.get("zeta", 0.0 if name == "fig18b" else
                                 PAPER_ZETA), r.get("archard_k", PAPER_K), r["pressure_mpa"], repr(r["mu_bar"])])
-    files = plot(results, out)
+    files = plot(results, out) + [paper_floor.plot(extra["prediction"], MU_FLOOR, out)]
     header = (f"# The paper's macro results ({'quick' if quick else 'full'} report)\n\nGenerated by `tribocosim report "
               f"paper{' --quick' if quick else ''}` in {wall:.0f} s ({runs.evaluations} strip-draw passes).")
     text = paper_text.markdown(results, cals, grid, table, table_path, header, files)
@@ -454,7 +475,10 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
         "paper": {"drop_1pass_25mpa": PAPER_DROP_1PASS, "drop_3pass_25mpa": PAPER_DROP_3PASS},
         "calibrations": {k: {**dataclasses.asdict(v), "stderr": v.stderr} for k, v in cals.items()},
         "configurations": {c.label: {"contact_area": c.contact_area, "calibrated": c.calibrated,
+                                     "flake_shear_ratio": shear_ratio(base, c),
                                      "metrics": _jsonable(r["metrics"])} for c, r in results.items()},
+        "floor": {"mu_floor": MU_FLOOR, "flake_shear_ratio_range": list(FLAKE_SHEAR_RATIO_RANGE)},
+        "prediction": _jsonable(extra["prediction"]),
         "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
                               for k, v in extra["options"].items()}),
         "budget": _jsonable(extra["budget"]), "budget_total": _jsonable(extra["budget_total"]),
@@ -496,12 +520,15 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
                 needs = "version 4" if v.table == pp.FORM_VARIANT else "version 3 or 4"
                 varied[v.name] = {"error": f"needs a {needs} table that records its campaign"}
                 continue
+            if v.name == pp.SHEAR_VARIATION:
+                varied[v.name] = pp.shear_upper_end(runs, params, table, calibrate)
+                continue
             p = {**params, **({"table_file": tables[v.table]} if v.table else {}), **v.parameters}
             varied[v.name] = pp.calibrated_predictions(runs, p, table, calibrate)
-    rows = pp.budget(options["paper"], varied)
+    nominal = options["default"]
+    rows = pp.budget(nominal, varied)
     total = {key: pp.budget_total(rows, key, cal.stderr_quote if key == "scale" else 0.0)
              for key in ("scale", "drop3", "drop140")}
-    nominal = options["paper"]
     intervals = {"scale": pp.band(cal.scale, total["scale"], 0.0, math.inf),
                  "drop3": pp.band(nominal["drops"][2], total["drop3"]),
                  "drop140": pp.band(nominal["drop_140"], total["drop140"])}
@@ -515,8 +542,13 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study(),
              "sizes": pp.cluster_rule_sizes()}
+    if log:
+        log("the floor's prediction: five passes and a seeded strip ...")
+    prediction = {"five_passes": paper_floor.five_passes(runs, options, params),
+                  "seeded": paper_floor.seeded_strip(runs, options, params)}
     checks = pp.direct_slide_check(table, workers, quick, log)
     return {"options": options, "budget": rows, "budget_total": total, "budget_intervals": intervals,
+            "prediction": prediction,
             "budget_not_varied": pp.inputs_not_varied(table, tables), "observable": observable,
             "speed": speed, "alpha": alpha, "direct_slides": checks,
             "simulated_velocities": pp.simulated_velocities(table)}

@@ -1,14 +1,16 @@
 """The text of the paper report (``paper.md``): the paper-vs-model table and the sections of
 :mod:`tribocosim.cosim.reports.paper_physics` (options, the uncertainty budget and the observable chosen beside it,
-the drawing speed, alpha of both observables, the table's checks), from the numbers
-:func:`tribocosim.cosim.reports.paper.run_report` computed."""
+the drawing speed, alpha of both observables, the table's checks) and of :mod:`tribocosim.cosim.reports.paper_floor`
+(the floor's falsifiable prediction), from the numbers :func:`tribocosim.cosim.reports.paper.run_report` computed."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
 
+from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_DEFAULT, MU_FLOOR
 from tribocosim.cosim.studies.stripdraw_experiment import V0
+from tribocosim.cosim.reports import paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports.paper_physics import CAL_PRESSURE
 
@@ -17,9 +19,10 @@ def _pct(x: float) -> str:
     return f"{100 * x:.1f} %"
 
 
-def _row_values(m: dict, cal, grid) -> dict[str, str]:
+def _row_values(m: dict, cal, grid, shear: float) -> dict[str, str]:
     at = m["drop_at_mpa"]
     return {
+        "shear": f"{shear:g}",
         "scale": (f"{cal.scale:.4g} +- {cal.stderr:.2g}" if cal else "1"),
         "drop1": _pct(m["drop_1pass"]) + (" (calibrated)" if cal else ""),
         "drop3": _pct(m["drop_by_pass"][grid.passes]),
@@ -50,11 +53,12 @@ def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_st
 def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
     """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
     configs = list(results)
-    values = {c: _row_values(results[c]["metrics"], cals.get(c.contact_area) if c.calibrated else None, grid)
-              for c in configs}
+    values = {c: _row_values(results[c]["metrics"], cals.get(c.key) if c.calibrated else None, grid,
+                             0.0 if c.paper_model else FLAKE_SHEAR_RATIO_DEFAULT) for c in configs}
     at = grid.pressures[-2] if 25 not in grid.pressures else 25
     pads = " / ".join(f"{1000 * p:g}" for p in grid.pads)
     rows = [
+        ("flake-borne shear ratio r", "0 (frictionless flakes)", "shear"),
         ("A_p scale s (+- standard error)", "-", "scale"),
         (f"mu_bar drop at {at} MPa, 1 pass, 35 mm pad", "35 %", "drop1"),
         (f"mu_bar drop at {at} MPa after {grid.passes} passes, 35 mm pad", "up to 72 %", "drop3"),
@@ -74,7 +78,9 @@ def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: s
         lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
     ratio = table_contact_ratio(table)
     lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
-              "one-pass drop at 25 MPa is fitted (by s, per convention); every other entry is a prediction. "
+              "one-pass drop at 25 MPa is fitted (by s, per column); every other entry is a prediction. The columns "
+              f"without the paper's model use the default r = {FLAKE_SHEAR_RATIO_DEFAULT:g}, flake-borne shear at "
+              f"the documented floor mu = {MU_FLOOR:g} (docs/model.md, the floor under debris). "
               f"The table's beta axis ends at {table.beta[-1]:.4g}."
               + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
                  f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
@@ -99,9 +105,11 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
 
     lines = ["", "## Multi-pass options", "",
              "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
-             "to 72 % after three. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
-             "drop, and the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
-             "pad).", "",
+             "to 72 % after three. The default model has flake-borne shear at the documented floor; the sink and the "
+             "partial carry-over are shown on the paper's model (r = 0), as other ways than a floor to limit the "
+             "multi-pass drop. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
+             "drop, the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
+             "pad), and the falsifiable prediction at the end of this report (five passes, a seeded strip).", "",
              "| option | why these values | s | drop 1 / 2 / 3 passes at 25 MPa | 3-pass minus 2-pass | 140 mm pad, 1 pass "
              "| debris after pass 1 / 2 / 3 [g/m^2] | clamped lookups |", "|---|---|---|---|---|---|---|---|"]
     for opt in pp.OPTIONS:
@@ -113,9 +121,10 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
                      + f" | {100 * r['spacing_3_2']:.1f} points | {_pct(r['drop_140'])} | "
                      + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
     rows = extra["budget"]
-    nominal = extra["options"]["paper"]
+    nominal = extra["options"]["default"]
     cal = cals["mesoscale"]
-    lines += ["", "## Uncertainty budget (the paper's model, A_c from the table)", "",
+    lines += ["", f"## Uncertainty budget (the default model, r = {FLAKE_SHEAR_RATIO_DEFAULT:g}, A_c from the table)",
+              "",
               "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
               "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
               "(a two-sided range: half the difference of its ends, or the larger change when both ends move the "
@@ -143,6 +152,8 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
               "[0, 100 %]"
               + (f"; the {', '.join(m_['quantity'] for m_ in missing)} is not varied, so these intervals leave "
                  f"{'it' if len(missing) == 1 else 'them'} out." if missing else "."), ""]
+    lines += paper_model_beside(extra["options"].get("paper", {}), nominal)
+    lines += prediction_markdown(extra["prediction"]) + [""]
     lines += observable_markdown(extra["observable"], nominal)
     lines += ["## Drawing speed", "",
               f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g}, over its interval {band['scale'][0]:.3g} to "
@@ -219,6 +230,55 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
               "|---|" + "---|" * len(grid.pads)]
     for P in grid.pressures:
         lines.append(f"| {P:g} | " + " | ".join(f"{m['mu_by_pad'][pad][P]:.4f}" for pad in grid.pads) + " |")
+    return lines
+
+
+def paper_model_beside(paper: dict, nominal: dict) -> list[str]:
+    """The paper's model (r = 0) beside the budget's default model."""
+    if "error" in paper:
+        return [f"The paper's model (r = 0) cannot be calibrated on the 35 %: {paper['error']}", ""]
+    return [f"The paper's model (frictionless flakes, r = 0, below r's sourced range and so not an end of its row), "
+            f"calibrated the same way: s = {paper['scale']:.3g}, the 3-pass drop {_pct(paper['drops'][2])} and the "
+            f"140 mm pad's one-pass drop {_pct(paper['drop_140'])}, against {_pct(nominal['drops'][2])} and "
+            f"{_pct(nominal['drop_140'])} of the default model (the budget's other inputs are not varied for it).", ""]
+
+
+def prediction_markdown(prediction: dict) -> list[str]:
+    """The floor's falsifiable prediction (paper_floor): five passes at 25 MPa and a seeded strip, per option."""
+    five, seeded = prediction["five_passes"], prediction["seeded"]
+    labels = {o.name: o.label for o in pp.OPTIONS}
+    passes = range(1, paper_floor.PASSES + 1)
+    lines = ["", "## The falsifiable prediction: five passes and a seeded strip", "",
+             f"Each option at its s calibrated on the 35 % (the table above), 35 mm pad, 25 MPa ([floor.png](floor.png);"
+             f" the documented floor mu = {MU_FLOOR:g}, docs/model.md). Five passes over one strip without cleaning: "
+             "mu_bar and the debris weighed after each pass (the drop against 1 MPa in brackets). With flake-borne "
+             "shear (r > 0) mu_bar levels off near r mu0 once flakes carry the contact; the paper's model with every "
+             "flake carried over keeps falling; a sink or a partial carry-over levels off where the debris made "
+             "balances the debris lost.", "",
+             "| option | " + " | ".join(f"mu_bar, pass {k}" for k in passes)
+             + " | debris after pass " + " / ".join(str(k) for k in passes) + " [g/m^2] | clamped lookups |",
+             "|---|" + "---|" * (paper_floor.PASSES + 2)]
+    for name, r in five.items():
+        lines.append(f"| {labels[name]} | " + " | ".join(f"{mu:.4f} ({_pct(d)})" for mu, d in zip(r["mu_bar"],
+                                                                                               r["drop"]))
+                     + " | " + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
+    levels = [paper_floor.seeded_g_m2(b) for b in paper_floor.SEEDED_BETAS]
+    lines += ["", "One pass over a clean strip, re-oiled, seeded with a known debris (weighed: beta0 h_p rho): mu_bar "
+              "against the debris seeded. The seeding fixes the debris whatever the options' balances: the carry-over "
+              "option is the paper's model here, and a sink takes part of the seeded debris during the pass. An "
+              "option's seeding stops at its largest cap of beta (the model refuses more; a cell above it holds the "
+              "cap's, in brackets the debris seeded), and the cap at 25 MPa takes what exceeds it there.", "",
+              "| option | " + " | ".join(f"{g:.3g} g/m^2" for g in levels) + " | clamped lookups |",
+              "|---|" + "---|" * (len(levels) + 1)]
+    for name, r in seeded.items():
+        cells = [f"{mu:.4f}" + ("" if abs(g - want) < 1e-12 else f" ({g:.3g})")
+                 for mu, g, want in zip(r["mu_bar"], r["seeded_g_m2"], levels)]
+        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {r['clamps']} |")
+    lines += ["", "The measurement that decides: mu_bar of a seeded strip at the largest seeding (r mu0 if flakes "
+              "shear at r tau0, about 0 if they are frictionless) and the debris weighed after each of five passes "
+              "(growing without bound with full carry-over, levelling off with a sink or a partial carry-over); the "
+              "same test on a strip cleaned and re-oiled without seeding is the reference (the paper: little "
+              "difference from one pass)."]
     return lines
 
 

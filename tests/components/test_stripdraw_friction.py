@@ -15,14 +15,17 @@ def test_closed_form_limits():
     # no debris: the particle-free coefficient mu0 (Eq. 6); no sliding: alpha = 0 -> mu0
     assert_allclose(law.mu(1e7, 0.08, 0.0)[0], 0.15)
     assert_allclose(law.mu(1e7, 0.0, 0.2)[0], 0.15)
-    # Eq. 24 with the saturated alpha = b: beta_thres = kappa / (b h'), and mu -> 0 there at v >> v_ref
+    # Eq. 24 with the saturated alpha = b: beta_thres = kappa / (b h'); there flakes carry the whole contact at
+    # v >> v_ref and mu -> r mu0 (0 with the paper's frictionless flakes)
     assert_allclose(law.beta_threshold, 2.0 / (20 * 0.34))
-    assert_allclose(law.mu(1e7, 1e3, law.beta_threshold)[0], 0.0, atol=1e-15)
-    # Eq. 9: linear in beta with slope -mu0 alpha(v) h'/kappa
+    assert_allclose(law.mu(1e7, 1e3, law.beta_threshold)[0], p.flake_shear_ratio * 0.15, atol=1e-15)
+    paper = make_friction_law(p.replace(flake_shear_ratio=0.0))
+    assert_allclose(paper.mu(1e7, 1e3, law.beta_threshold)[0], 0.0, atol=1e-15)
+    # Eq. 9 with flake-borne shear: linear in beta with slope -(1 - r) mu0 alpha(v) h'/kappa
     v = 0.08
     alpha = 20 * (1 - np.exp(-v / 0.05))
     mu = law.mu(1e7, v, np.array([0.0, 0.1]))[0]
-    assert_allclose(mu[1] - mu[0], -0.15 * alpha * 0.34 / 2.0 * 0.1, rtol=1e-12)
+    assert_allclose(mu[1] - mu[0], -(1 - p.flake_shear_ratio) * 0.15 * alpha * 0.34 / 2.0 * 0.1, rtol=1e-12)
 
 
 def test_table_law_matches_closed_form_on_its_nodes():
@@ -81,10 +84,13 @@ def test_a_version_1_table_gives_its_mu_and_refuses_what_needs_the_areas():
     _, t2 = _eq23_table()
     t1 = FrictionTable(t2.pressure, t2.velocity, t2.beta, 0.5 * t2.mu, t2.metadata)  # mu only
     assert t1.version == 1 and t2.version == 2
-    law = make_friction_law(StripDrawParameters(friction_model="table"), t1)
+    # a version 1 table holds mu of the paper's frictionless flakes: it serves flake_shear_ratio = 0 ...
+    law = make_friction_law(StripDrawParameters(friction_model="table", flake_shear_ratio=0.0), t1)
     assert_allclose(law.mu(1e7, 1.0, 0.01)[0], t1.interpolate(1e7, 1.0, 0.01)[0])
     assert law.beta_cap(1e7, 1.0) == t1.beta_threshold
-    for bad in ({"contact_area": "eq8"}, {"particle_area_scale": 2.0}):
+    # ... and refuses what needs the areas: another A_c, a scale of A_p, flake-borne shear (the default r)
+    for bad in ({"contact_area": "eq8", "flake_shear_ratio": 0.0},
+                {"particle_area_scale": 2.0, "flake_shear_ratio": 0.0}, {}):
         with pytest.raises(ParameterError, match="needs a friction table of format version 2"):
             make_friction_law(StripDrawParameters(friction_model="table", **bad), t1)
 
@@ -95,8 +101,8 @@ def test_closed_form_without_a_velocity_law_uses_alpha_b_and_its_cap():
     a = p.alpha_b
     assert p.alpha_v_ref == 0 and law.alpha(0.08) == law.alpha(50.0) == a
     assert law.beta_threshold == pytest.approx(2.0 / (a * 0.34))
-    beta = 0.5 * law.beta_threshold  # below the cap: Eq. 9 itself
-    assert_allclose(law.mu(1e7, 0.08, beta)[0], 0.15 * (1 - a * beta * 0.34 / 2.0))
+    beta = 0.5 * law.beta_threshold  # below the cap: Eq. 9 itself, the debris effect times 1 - r
+    assert_allclose(law.mu(1e7, 0.08, beta)[0], 0.15 * (1 - (1 - p.flake_shear_ratio) * a * beta * 0.34 / 2.0))
 
 
 def test_closed_form_default_alpha_is_the_shipped_campaigns_at_its_slowest_velocity():
@@ -123,4 +129,5 @@ def test_the_strip_caps_beta_where_the_particle_area_reaches_the_contact_area():
         out = model.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 10)})
     assert out["beta_max"] == pytest.approx(cap, rel=1e-12), "saturated at the cap"
     assert model.beta_removed > 0
-    assert out["mu_mean"] < 0.01, "where A_p = A_c the particles carry all the contact: mu -> 0"
+    floor = p.flake_shear_ratio * p.mu0  # where A_p = A_c the flakes carry the whole contact: mu = r mu0
+    assert floor <= out["mu_mean"] < floor + 0.01, (out["mu_mean"], floor)

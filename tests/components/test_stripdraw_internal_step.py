@@ -117,7 +117,7 @@ def test_a_run_on_the_grid_does_not_depend_on_the_communication_step():
 #: the closed-form law with every parameter it reads spelled out (the regression numbers must not move with defaults)
 PINNED_LAW = dict(friction_model="closed_form", friction_velocity="slip_rate", mu0=0.15, alpha_b=63.37, alpha_v_ref=0.0,
                   kappa=2.0, rms_slope=0.34, e_star=55e9, particle_area_scale=1.0, archard_k=1e-4, hardness=0.8e9,
-                  zeta=0.2, particle_thickness=0.5e-6, beta_threshold=0.0, beta_initial=0.0)
+                  zeta=0.2, particle_thickness=0.5e-6, beta_threshold=0.0, beta_initial=0.0, flake_shear_ratio=0.0)
 
 
 #: the pinned numbers below are held to this. Round-off (another compiler, a target that fuses multiply-adds) moves

@@ -47,12 +47,12 @@ def _version3(simulated_top: float = 1.0) -> FrictionTable:
 def test_flake_borne_shear_scales_the_debris_effect_by_one_minus_r(r):
     table = read_table(DEFAULT_TABLE)
     pressure, v, beta = 2e7, 0.08, np.array([0.0, 0.05, 0.1, 0.2])
-    base = make_friction_law(StripDrawParameters(), table).mu(pressure, v, beta)[0]
+    base = make_friction_law(StripDrawParameters(flake_shear_ratio=0.0), table).mu(pressure, v, beta)[0]
     with_r = make_friction_law(StripDrawParameters(flake_shear_ratio=r), table).mu(pressure, v, beta)[0]
     assert base[0] == with_r[0] == 0.15
     np.testing.assert_allclose(0.15 - with_r, (1 - r) * (0.15 - base), rtol=1e-12, atol=1e-17)
     law = make_friction_law(StripDrawParameters(friction_model="closed_form", flake_shear_ratio=r))
-    closed = make_friction_law(StripDrawParameters(friction_model="closed_form"))
+    closed = make_friction_law(StripDrawParameters(friction_model="closed_form", flake_shear_ratio=0.0))
     np.testing.assert_allclose(0.15 - law.mu(pressure, v, beta)[0], (1 - r) * (0.15 - closed.mu(pressure, v, beta)[0]),
                                rtol=1e-12, atol=1e-17)
 
@@ -99,8 +99,9 @@ def test_the_cluster_rule_reads_its_own_area_and_needs_a_version_3_table():
     beta = np.array([0.0, 0.25, 0.5])
     every = make_friction_law(StripDrawParameters(), t).mu(2e7, 0.5, beta)[0]
     rule = make_friction_law(StripDrawParameters(particle_area_rule="clusters"), t).mu(2e7, 0.5, beta)[0]
-    np.testing.assert_allclose(every, 0.15 * (1 - 0.8 * beta / 0.5), rtol=1e-12)
-    np.testing.assert_allclose(rule, 0.15 * (1 - 0.25 * 0.8 * beta / 0.5), rtol=1e-12)
+    lost = 1 - StripDrawParameters().flake_shear_ratio  # the debris effect times 1 - r
+    np.testing.assert_allclose(every, 0.15 * (1 - lost * 0.8 * beta / 0.5), rtol=1e-12)
+    np.testing.assert_allclose(rule, 0.15 * (1 - lost * 0.25 * 0.8 * beta / 0.5), rtol=1e-12)
     v2 = FrictionTable(t.pressure, t.velocity, t.beta, t.mu, t.metadata, contact_area=t.contact_area,
                        particle_area=t.particle_area, contact_area_std=t.contact_area_std,
                        particle_area_std=t.particle_area_std)

@@ -72,3 +72,26 @@ def test_demo_says_why_when_the_fmus_cannot_be_built(tmp_path, monkeypatch, caps
     err = capsys.readouterr().err
     assert "the FMUs could not be built" in err and "no C compiler found" in err and "Press.fmu" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_readme_states_the_demo_mu_bar_of_the_default_model_and_of_the_papers():
+    """The README's mu_bar of the demo (the default model, and the paper's frictionless flakes) is the strip-draw model's
+    at the demo's force and velocity ramp, to the 2e-3 the co-simulation keeps to it (above) and the four digits
+    printed; its Python example's mu_bar is that example's own (the grip ramped over 10 ms), to the digits printed."""
+    readme = (ROOT / "README.md").read_text()
+    text = " ".join(readme.split())
+    default = float(re.search(r"last 20 % of the draw: ([0-9.]+) with the shipped friction table and the default", text)
+                     .group(1))
+    papers = float(re.search(r"\(([0-9.]+) with the paper's frictionless flakes", text).group(1))
+    for stated, r in ((default, None), (papers, 0.0)):
+        _, outs, _ = run_strip_draw(10e6, 0.035, ramp_time=0.02, **({} if r is None else {"flake_shear_ratio": r}))
+        assert stated == pytest.approx(steady_mean(outs), rel=2e-3, abs=5e-5), (stated, r)
+    example = float(re.search(r"over the last 20 % of the draw: ([0-9.]+), as the demo", readme).group(1))
+    assert example == default
+    from tribocosim import DEFAULT_TABLE, StripDrawModel, StripDrawParameters, make_friction_law, read_table
+
+    p = StripDrawParameters()
+    model = StripDrawModel(p, make_friction_law(p, read_table(DEFAULT_TABLE)))
+    mu = [model.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08 * min(1.0, (k + 1) / 10)})["pull_force"]
+          / (2 * 12250.0) for k in range(1750)]
+    assert example == pytest.approx(np.mean(mu[-350:]), abs=5e-5)

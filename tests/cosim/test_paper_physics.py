@@ -53,6 +53,21 @@ def test_a_two_sided_range_with_both_ends_on_one_side_counts_the_larger_change_a
     assert failed["error"] == "cannot be calibrated" and "scale" not in failed
 
 
+def test_the_shear_row_counts_its_upper_end_whole_and_names_the_r_that_cannot_give_the_35_percent():
+    """r's row is one-sided (the default is the range's lower end): the change at the upper end taken counts whole, and
+    the row says which r of the range no s can calibrate on the paper's 35 %."""
+    nominal = _result(1.6, 0.735, 0.633)
+    upper = {**_result(3.1, 0.40, 0.38), "value": 0.5, "refused": [0.6]}
+    row = next(r for r in pp.budget(nominal, {"shear": upper}) if r["quantity"].startswith("flake-borne shear"))
+    assert (row["scale"], row["drop3"], row["drop140"]) == pytest.approx((1.5, 0.335, 0.253))
+    assert row["range"].startswith("0.5 (the default 0.2 is the range's lower end; 0.6 cannot give the paper's 35 %")
+    plain = next(r for r in pp.budget(nominal, {"shear": {**_result(2.0, 0.6, 0.5), "value": 0.6, "refused": []}})
+                 if r["quantity"].startswith("flake-borne shear"))
+    assert plain["range"] == "0.6 (the default 0.2 is the range's lower end)"
+    failed = pp.budget(nominal, {"shear": {"error": "no r", "refused": [0.6, 0.5, 0.4, 0.3]}})[0]
+    assert failed["error"] == "no r" and failed["range"].startswith("none (")
+
+
 def test_the_observable_is_not_a_row_of_the_budget_and_the_table_form_is():
     assert "particle_area_rule" not in {k for v in pp.VARIATIONS for k in v.parameters}
     assert pp.OBSERVABLE_CHOICE == {"particle_area_rule": "clusters"}
@@ -232,7 +247,8 @@ def test_observable_evidence_gives_the_alpha_the_macro_model_needs_and_each_shar
     runs = paper.Runs(workers=1)
     params = paper.config_params({"table_file": str(tmp_path / "t.npz")}, paper.Config("mesoscale", True))
     ev = pp.observable_evidence(runs, params, t, paper.calibrate)
-    closed = {**params, "friction_model": "closed_form", "alpha_b": ev["alpha_needed"], "particle_area_scale": 1.0}
+    closed = {**params, "friction_model": "closed_form", "alpha_b": ev["alpha_needed"], "particle_area_scale": 1.0,
+              "flake_shear_ratio": 0.0}  # the paper's own macro model: frictionless flakes
     assert paper._drops(runs, closed, [1.0])[0] == pytest.approx(0.35, abs=2e-4)
     i = int(np.flatnonzero(t.pressure == 30e6)[0])
     share = t.particle_area[i, 1, 1] / t.contact_area[i, 1, 1]

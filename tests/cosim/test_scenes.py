@@ -306,7 +306,8 @@ def test_stiff_drive_needs_a_small_step_or_the_iterative_scheme():
 
 def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(tmp_path):
     """The case key covers the bytes of the files the scene's parameters name (here a friction
-    table) and of the FMUs: a changed table runs the case again."""
+    table) and of the FMUs: a changed table runs the case again. The changed table holds mu alone (format version 1,
+    mu of frictionless flakes), so the sweep runs the paper's model (flake_shear_ratio = 0)."""
     from tribocosim.paths import DEFAULT_TABLE
     from tribocosim.components.stripdraw.table import read_table, write_table
 
@@ -318,6 +319,7 @@ def test_a_finished_case_is_reused_only_while_its_table_and_fmus_are_unchanged(t
         pressure_mpa = [10]
         [sweep.set]
         "fmus.strip.parameters.table_file" = "{table}"
+        "fmus.strip.parameters.flake_shear_ratio" = 0.0
         [sweep.summary]
         mu_bar = {{ mean = "strip.pull_force / (2 * press.normal_force)", last = 0.2 }}
         """)

@@ -93,14 +93,18 @@ def test_the_resource_reads_back_as_the_table(folder, which):
         n = 400
         grid = (np.repeat(rng.choice(table.pressure, 4), n // 4) * rng.uniform(0.8, 1.3),
                 rng.uniform(0, 1.2 * table.velocity[-1], n), rng.uniform(0, 1.1 * table.beta[-1], n))
-        params = StripDrawParameters()
+        # flake-borne shear where the table has the areas (the default r); a version 1 table holds mu of the paper's
+        # frictionless flakes and serves r = 0 alone
+        params = StripDrawParameters(**({} if table.version >= 2 else {"flake_shear_ratio": 0.0}))
+        lost = 1.0 - params.flake_shear_ratio  # mu = mu0 (1 - (1 - r) A_p / A_c)
         law = make_friction_law(params, table)
         ours = law_mu(handle, params, grid)
         assert np.array_equal(ours, law_mu(law.native_table, params, grid)), "the resource is the .npz's table"
         if table.version >= 4:  # the law interpolates the share A_p / A_c
             share = np.where(table.contact_area > 0, table.particle_area / np.where(table.contact_area > 0,
                                                                                    table.contact_area, 1.0), 0.0)
-            ref = np.array([params.mu0 * max(0.0, 1.0 - table.interpolate_array(share, *q)[0]) for q in zip(*grid)])
+            ref = np.array([params.mu0 * max(0.0, 1.0 - lost * table.interpolate_array(share, *q)[0])
+                            for q in zip(*grid)])
         elif table.version >= 2:  # an oracle in NumPy: mu0 (1 - A_p / A_c) of FrictionTable.interpolate_array
             ap = np.concatenate([table.interpolate_array(table.particle_area, pk, grid[1][grid[0] == pk],
                                                          grid[2][grid[0] == pk])[0] for pk in np.unique(grid[0])])
@@ -108,7 +112,7 @@ def test_the_resource_reads_back_as_the_table(folder, which):
                                                          grid[2][grid[0] == pk])[0] for pk in np.unique(grid[0])])
             order = np.concatenate([np.flatnonzero(grid[0] == pk) for pk in np.unique(grid[0])])
             ref = np.empty(ours.size)
-            ref[order] = params.mu0 * np.maximum(0.0, 1.0 - ap / ac)
+            ref[order] = params.mu0 * np.maximum(0.0, 1.0 - lost * ap / ac)
         else:
             ref, _ = table.interpolate(grid[0], grid[1], grid[2])
         np.testing.assert_allclose(ours, ref, rtol=1e-12, atol=1e-15, err_msg="against NumPy's lookup")

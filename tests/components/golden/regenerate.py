@@ -5,8 +5,9 @@ has been checked against the verification tests; commit the files with the reaso
 
 Writes, beside this script, one CSV per case of :data:`CASES` (tests/components/test_golden_outputs.py reads them):
 the default strip draw (the shipped table, implicit, 150 elements) at 10 MPa and 0.08 m/s, the same draw with the
-explicit integrator over 20 mm, the press and the drawing machine with their default parameters. Every
-``EVERY``-th step is kept, with 17 significant digits.
+paper's frictionless flakes (flake_shear_ratio = 0), the default draw with the explicit integrator over 20 mm, the
+press and the drawing machine with their default parameters. Every ``EVERY``-th step is kept, with 17 significant
+digits.
 """
 
 from __future__ import annotations
@@ -36,6 +37,13 @@ def stripdraw_default():
         yield k + 1, m.step(1e-3, {"normal_force": F_N, "grip_velocity": V0 * min(1.0, (k + 0.5) / 10)})
 
 
+def stripdraw_paper():
+    """The default draw with the paper's frictionless flakes (flake_shear_ratio = 0)."""
+    m = _strip(flake_shear_ratio=0.0)
+    for k in range(1750):
+        yield k + 1, m.step(1e-3, {"normal_force": F_N, "grip_velocity": V0 * min(1.0, (k + 0.5) / 10)})
+
+
 def stripdraw_explicit():
     m = _strip(integrator="explicit", draw_length=0.02)
     for k in range(250):
@@ -58,7 +66,8 @@ def machine_default():
         yield k + 1, m.step(1e-3, {"pull_force": 3000.0 * min(1.0, k / 50)})
 
 
-CASES = {"stripdraw_default": stripdraw_default, "stripdraw_explicit": stripdraw_explicit,
+CASES = {"stripdraw_default": stripdraw_default, "stripdraw_paper": stripdraw_paper,
+         "stripdraw_explicit": stripdraw_explicit,
          "press_default": press_default, "machine_default": machine_default}
 
 

@@ -1,0 +1,62 @@
+"""The floor under debris: the lowest friction coefficient the evidence supports in the strip-draw contact, and the
+flake-borne shear ratio r it sets (docs/model.md, "The floor under debris").
+
+The friction law with flake-borne shear (docs/model.md section 4):
+
+    mu = mu0 [(1 - s A_p / A_c) + r s A_p / A_c] = mu0 (1 - (1 - r) s A_p / A_c)
+
+r = tau_flake / tau0 is the shear strength of a junction carried by a flake over that of the lubricated metal
+junction (tau0, fixed by mu0 = tau0 A_c / (P A0), Eq. 6). Debris is capped where flakes carry the whole real contact
+(s A_p = A_c, Eq. 24): there mu = r mu0, the lowest value the law gives.
+
+:data:`MU_FLOOR` is the documented floor: no friction coefficient below it is supported for this oil-starved contact
+(1.12 g/m^2 of mineral oil, at most a 1.30 um film against 1.52 um of combined RMS roughness: lambda <= 0.86, no
+full film) with debris of aluminium and its oxide (the paper's EDS, Table 2). Its sources: a hydrodynamic film gives
+mu < 0.01 and boundary lubrication of aluminium with a boundary additive 0.09 (Tabary et al., J. Tribol. 118 (1996)
+629, doi:10.1115/1.2831584); a purpose-made lamellar solid lubricant (PVD MoS2) keeps 0.06 in long runs and reaches
+0.02 only at 77 K in high vacuum (Coatings 15 (2025) 500, introduction, citing Gradt et al.). The floor is half the
+solid lubricant's long-run value: mu below it would need a film the oil supply excludes or a lubricant better than
+MoS2, which flakes of aluminium and alumina are not.
+
+:data:`FLAKE_SHEAR_RATIO_RANGE` is the sourced range of r with mu0 = 0.15: from the floor (0.03 / 0.15) to a flake
+junction that shears like boundary-lubricated aluminium with an additive (0.09 / 0.15). The default r is its lower
+end: the paper's premise (flakes shear more easily than metal) kept down to the floor and no further.
+:data:`PAPER_MODEL` is the paper's model, frictionless flakes.
+
+This module does no I/O and imports nothing of the model, so that the FMU glue and the friction exports can read it.
+"""
+
+from __future__ import annotations
+
+#: the documented floor of the friction coefficient in the strip-draw contact (module docstring)
+MU_FLOOR = 0.03
+#: the sourced range of the flake-borne shear ratio r = tau_flake / tau0 at mu0 = 0.15 (module docstring)
+FLAKE_SHEAR_RATIO_RANGE = (0.2, 0.6)
+#: the default r: the lower end of the range, MU_FLOOR / mu0 at the default mu0 = 0.15
+FLAKE_SHEAR_RATIO_DEFAULT = 0.2
+#: the parameters that make the paper's model of the default one: frictionless flakes (r = 0)
+PAPER_MODEL = {"flake_shear_ratio": 0.0}
+
+
+def mu_at_full_coverage(mu0: float, flake_shear_ratio: float) -> float:
+    """mu = r mu0 where flakes carry the whole real contact (the cap, Eq. 24): the lowest mu of the table and
+    closed-form laws."""
+    return flake_shear_ratio * mu0
+
+
+def below_floor(mu: float) -> bool:
+    """Whether a friction coefficient lies below :data:`MU_FLOOR`."""
+    return mu < MU_FLOOR
+
+
+def floor_note(mu: float, mu0: float, flake_shear_ratio: float) -> str | None:
+    """A one-line note when ``mu`` lies below :data:`MU_FLOOR`, naming the settings that allow it (None otherwise)."""
+    if not below_floor(mu):
+        return None
+    lowest = mu_at_full_coverage(mu0, flake_shear_ratio)
+    why = (f"flake_shear_ratio = {flake_shear_ratio:g} with mu0 = {mu0:g} lets mu fall to {lowest:.4g} where flakes "
+           "carry the whole contact" if below_floor(lowest) else
+           f"the settings give at least {lowest:.4g} at full flake coverage (r mu0); a lower value comes from "
+           "another setting (e.g. beta_threshold above the law's cap, or mu_const)")
+    return (f"mu = {mu:.4g} is below the documented floor {MU_FLOOR:g} of the strip-draw contact (docs/model.md, "
+            f"the floor under debris): {why}")
