@@ -6,8 +6,9 @@ The law (docs/model.md section 4; :class:`~tribocosim.components.stripdraw.frict
 = mesoscale``) or A_p over Eq. 8's A_c (``eq8``), r = ``flake_shear_ratio``, s = ``particle_area_scale``; every value
 an export writes comes from it, with the parameters the export was given (the table's calibration, then ``--set``).
 
-The band (``--band K``): mu_upper = min(mu0, mu + K se(mu)) and mu_lower = max(0, mu - K se(mu)), with the standard
-error propagated to first order, se(mu) = mu0 (1 - r) s se(q) (mu > 0; 0 where the law clamps mu at 0), and
+The band (``--band K``): mu_upper = min(mu0, mu + K se(mu)) and mu_lower = max(r mu0, mu - K se(mu)), with the standard
+error propagated to first order, se(mu) = mu0 (1 - r) s se(q) below the cap (0 where flakes carry the whole real
+contact, s q >= 1, and the law gives its least value r mu0, which also bounds mu_lower), and
 se(q) the table's ensemble standard error of q interpolated as the table interpolates (the same native lookup):
 
 - ``mesoscale`` with every load-bearing flake (format version 4): se(A_p / A_c) = se(mu_table) / mu0_table, the
@@ -30,11 +31,14 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import ParameterError
+from tribocosim.components.stripdraw.friction_floor import mu_at_full_coverage
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable, read_table
 
 #: the metadata key of a calibration file's record (cosim/apps/calibrate.py)
 CALIBRATION_KEY = "strip_draw_calibration"
+#: mu within this relative distance of the law's least value r mu0 is at the cap (round-off of the lookup's sums)
+CAP_RTOL = 1e-12
 #: mu0 of a table's mu column is recovered where the share A_p / A_c is below this (far from the cap)
 MU0_SHARE_MAX = 0.5
 
@@ -158,13 +162,19 @@ class ExportedLaw:
             se_q = se_q / (prm.kappa * p / (prm.rms_slope * prm.e_star))
         mu, _ = self.mu(p, v, b)
         loss = (1.0 - prm.flake_shear_ratio) * prm.particle_area_scale
-        return np.where(mu > 0, prm.mu0 * loss * se_q, 0.0)
+        below_cap = mu > self.least_mu * (1.0 + CAP_RTOL)
+        return np.where(below_cap, prm.mu0 * loss * se_q, 0.0)
+
+    @property
+    def least_mu(self) -> float:
+        """r mu0: mu where flakes carry the whole real contact (the cap, Eq. 24), the least value the law gives."""
+        return mu_at_full_coverage(self.params.mu0, self.params.flake_shear_ratio)
 
     def band(self, pressure, velocity, beta, k: float) -> tuple[np.ndarray, np.ndarray]:
-        """``(mu_upper, mu_lower)`` at K standard errors, clipped to [0, mu0] (module docstring)."""
+        """``(mu_upper, mu_lower)`` at K standard errors, clipped to [r mu0, mu0] (module docstring)."""
         mu, _ = self.mu(pressure, velocity, beta)
         se = self.standard_error(pressure, velocity, beta)
-        return np.minimum(self.params.mu0, mu + k * se), np.maximum(0.0, mu - k * se)
+        return np.minimum(self.params.mu0, mu + k * se), np.maximum(self.least_mu, mu - k * se)
 
     def check_band(self) -> None:
         """ParameterError naming ``--band`` when the table holds no standard errors."""

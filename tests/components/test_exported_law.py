@@ -22,6 +22,11 @@ def law():
     return load_law()
 
 
+def _below_cap(law, mu):
+    """Where the law is below its cap (mu > r mu0, the value where flakes carry the whole real contact)."""
+    return mu > law.params.flake_shear_ratio * law.params.mu0 * (1 + 1e-12)
+
+
 def _simulated_nodes(table):
     i, j, k = np.nonzero(table.array("simulated") == 1.0)
     return table.pressure[i], table.velocity[j], table.beta[k], (i, j, k)
@@ -39,20 +44,24 @@ def test_the_table_mu0_is_the_one_its_mu_column_was_made_with(law):
     assert table_mu0(law.table) == pytest.approx(law.table.metadata["calibration"]["mu0"], rel=1e-12)
 
 
-@pytest.mark.parametrize("changes, factor", [({}, 1.0), ({"mu0": 0.3}, 2.0), ({"flake_shear_ratio": 0.5}, 0.5),
-                                             ({"particle_area_scale": 1.5}, 1.5)])
-def test_at_a_simulated_node_the_standard_error_is_the_tables_propagated_to_the_parameters(changes, factor):
-    """se(mu) = mu0 (1 - r) s se(A_p / A_c), and the table's mu_se is 0.15 se(A_p / A_c): at a node, the table's
-    mu_se times mu0 (1 - r) s / 0.15."""
+@pytest.mark.parametrize("changes", [{}, {"mu0": 0.3}, {"flake_shear_ratio": 0.5}, {"flake_shear_ratio": 0.0},
+                                     {"particle_area_scale": 1.5}])
+def test_at_a_simulated_node_the_standard_error_is_the_tables_propagated_to_the_parameters(changes):
+    """se(mu) = mu0 (1 - r) s se(A_p / A_c), and the table's mu_se is 0.15 se(A_p / A_c) (its mu column: mu0 = 0.15,
+    r = 0, s = 1): at a node below the cap, the table's mu_se times mu0 (1 - r) s / 0.15."""
     law = load_law(settings=changes)
+    prm = law.params
+    factor = prm.mu0 * (1.0 - prm.flake_shear_ratio) * prm.particle_area_scale / 0.15
     p, v, b, at = _simulated_nodes(law.table)
     mu, _ = law.mu(p, v, b)
-    live = mu > 0
+    live = _below_cap(law, mu)
+    assert live.sum() > 10
     se = law.standard_error(p, v, b)
     np.testing.assert_allclose(se[live], factor * law.table.array("mu_se")[at][live], rtol=1e-9, atol=1e-15)
 
 
-def test_the_band_is_mu_plus_minus_k_standard_errors_clipped_to_zero_and_mu0(law):
+def test_the_band_is_mu_plus_minus_k_standard_errors_clipped_to_the_laws_least_value_and_mu0(law):
+    """The band never leaves the values the law can give: r mu0 (flakes carry the whole contact) to mu0."""
     rng = np.random.default_rng(4)
     p, v, b = rng.uniform(1e6, 3e7, 400), rng.uniform(0, 0.5, 400), rng.uniform(0, 0.3, 400)
     mu, _ = law.mu(p, v, b)
@@ -60,9 +69,10 @@ def test_the_band_is_mu_plus_minus_k_standard_errors_clipped_to_zero_and_mu0(law
     assert np.all(se >= 0) and np.all(se[b > 0.03] > 0)
     upper, lower = law.band(p, v, b, 2.0)
     np.testing.assert_allclose(upper, np.minimum(0.15, mu + 2 * se), rtol=1e-14)
-    np.testing.assert_allclose(lower, np.maximum(0.0, mu - 2 * se), rtol=1e-14)
+    least = law.params.flake_shear_ratio * 0.15
+    np.testing.assert_allclose(lower, np.maximum(least, mu - 2 * se), rtol=1e-14)
     big_upper, big_lower = law.band(p, v, b, 1e4)
-    assert big_upper.max() == 0.15 and big_lower.min() == 0.0
+    assert big_upper.max() == 0.15 and big_lower.min() == least
 
 
 def test_a_table_without_standard_errors_has_no_band(tmp_path):
@@ -124,15 +134,16 @@ def test_a_calibration_file_is_its_table_with_the_parameters_its_record_names(tm
 
 
 def test_the_calibrations_scale_interval_widens_the_band_in_quadrature(tmp_path):
-    """se_total(q)^2 = se(q)^2 + (q se(s) / s)^2 at a node, q the calibrated share A_p / A_c."""
+    """se_total(q)^2 = se(q)^2 + (q se(s) / s)^2 at a node, q the calibrated share A_p / A_c (its A_p times s, so the
+    law has s = 1); se(mu) = mu0 (1 - r) se_total(q)."""
     law = load_law(calibration_path=_calibration_file(tmp_path, 2.0, 0.1))
     assert law.scale_interval == (2.0, 0.1)
     p, v, b, at = _simulated_nodes(law.table)
     mu, _ = law.mu(p, v, b)
-    live = mu > 0
+    live = _below_cap(law, mu)
     q = law.table.particle_area[at] / law.table.contact_area[at]
     se_q = law.table.array("mu_se")[at] / 0.15
-    expected = 0.15 * np.hypot(se_q, q * 0.05)
+    expected = 0.15 * (1 - law.params.flake_shear_ratio) * np.hypot(se_q, q * 0.05)  # s = 1: q holds the scale
     np.testing.assert_allclose(law.standard_error(p, v, b)[live], expected[live], rtol=1e-9, atol=1e-15)
 
 
@@ -153,19 +164,20 @@ def test_only_the_table_law_is_exported_and_settings_are_checked():
 
 
 def test_the_standard_error_under_eq8_and_the_cluster_rule():
-    """eq8: se(mu) = mu0 s se(A_p) / A_c(Eq. 8); the cluster rule: se(A_p/A_c) from the standard errors of its A_p
-    and of A_c, their covariance left out. At nodes, where the interpolation reproduces the node values."""
+    """eq8: se(mu) = mu0 (1 - r) s se(A_p) / A_c(Eq. 8); the cluster rule: se(A_p/A_c) from the standard errors of
+    its A_p and of A_c, their covariance left out. At nodes, where the interpolation reproduces the node values."""
     t = read_table(DEFAULT_TABLE)
     p, v, b, at = _simulated_nodes(t)
     eq8 = load_law(settings={"contact_area": "eq8", "particle_area_scale": 0.05})
     mu, _ = eq8.mu(p, v, b)
-    live = mu > 0
+    live = _below_cap(eq8, mu)
     ac8 = 2.0 * p / (0.34 * 55e9)
-    expected = 0.15 * 0.05 * t.array("particle_area_se")[at] / ac8
+    expected = 0.15 * (1 - eq8.params.flake_shear_ratio) * 0.05 * t.array("particle_area_se")[at] / ac8
     np.testing.assert_allclose(eq8.standard_error(p, v, b)[live], expected[live], rtol=1e-9)
     clusters = load_law(settings={"particle_area_rule": "clusters"})
     mu, _ = clusters.mu(p, v, b)
     ap, ap_se = t.array("particle_area_clusters")[at], t.array("particle_area_clusters_se")[at]
     ac, ac_se = t.contact_area[at], t.array("contact_area_se")[at]
-    expected = 0.15 * np.hypot(ap_se / ac, ap * ac_se / ac**2)
-    np.testing.assert_allclose(clusters.standard_error(p, v, b)[mu > 0], expected[mu > 0], rtol=1e-9)
+    expected = 0.15 * (1 - clusters.params.flake_shear_ratio) * np.hypot(ap_se / ac, ap * ac_se / ac**2)
+    live = _below_cap(clusters, mu)
+    np.testing.assert_allclose(clusters.standard_error(p, v, b)[live], expected[live], rtol=1e-9)
