@@ -70,7 +70,11 @@ class Result:
     def __getitem__(self, name: str):
         if name == "time":
             return self.time
-        return self.columns[name]
+        columns = self.columns
+        if name not in columns:
+            raise KeyError(f"{name!r} is not recorded; the recorded columns: {', '.join(columns) or 'none'} (the "
+                           "scene's output.variables says which are)")
+        return columns[name]
 
 
 class Build:

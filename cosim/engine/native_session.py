@@ -423,7 +423,7 @@ class NativeSession:
         loop_time = time.perf_counter() - t0
         end_values = [fmus[i].get_value(kind, vr) for i, vr, kind in self.end_checks]
         st = self.state
-        cols = max(1, len(self.recorded))
+        cols = len(self.recorded)  # the buffer holds one column at least; a run that records none has no values
         return SessionResult(self.times[:st.n_rows], self.rows[:st.n_rows * cols], int(st.steps), st.min_step,
                              st.max_step, feedthrough, loops, order,
                              [f.wall_time + c.wall_time for f, c in zip(fmus, self.c_slaves)],

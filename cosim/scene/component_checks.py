@@ -39,6 +39,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+from tribocosim.components.params import bound_text, within_bounds
 from tribocosim.errors import ParameterError, Problem
 from tribocosim.cosim.scene.problems import Problems, known
 
@@ -135,7 +136,7 @@ def check_components(scene) -> Checked:
         for pname, port in inputs.items():
             value = given.get(pname)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
-                label = f"{pname} = {value:g}{_unit(port)}"
+                label = f"{pname} = {bound_text(float(value))}{_unit(port)}"
                 limit = physical.get(name, {}).get(pname)
                 message = _outside_port(comp, given, port, float(value), label, f"{name}.{pname}") or (
                     limit(float(value), label, name) if limit else None)
@@ -233,13 +234,13 @@ def _outside_port(comp, values: dict, port, value: float, label: str, where: str
     except (ParameterError, TypeError, ValueError):  # a bad bound parameter is reported as that parameter
         return None
     instance = where.split(".")[0]
-    for bound, named, side, least, outside in ((low, port.low, "below", "least", low is not None and value < low),
+    for bound, named, side, least, outside in ((low, port.low, "below", "least", not within_bounds(value, low=low)),
                                                (high, port.high, "above", "largest",
-                                                high is not None and value > high)):
-        if outside:
+                                                not within_bounds(value, high=high))):
+        if outside:  # beyond the bound by more than BOUND_RTOL of it, as the FMU's own check (tc_below, tc_above)
             of = f" ({named} of '{instance}')" if isinstance(named, str) else ""
-            return (f"{label} is {side} {bound:g}{_unit(port)}{of}, the {least} {where} the model is built for"
-                    + (f" ({port.why})" if port.why else ""))
+            return (f"{label} is {side} {bound_text(bound)}{_unit(port)}{of}, the {least} {where} the model is built "
+                    "for" + (f" ({port.why})" if port.why else ""))
     return None
 
 

@@ -28,6 +28,7 @@ import math
 import re
 from pathlib import Path
 
+from tribocosim.components.params import within_bounds
 from tribocosim.errors import SceneError
 from tribocosim.cosim.engine.schemes import ALGORITHMS, ESTIMATORS, VariableRef
 from tribocosim.cosim.scene.component_checks import check_components, component_of, end_warnings
@@ -331,9 +332,13 @@ def _check_parameter(add, key: str, model: FmuModel, pname: str, value) -> bool:
         add(key, f"{pname} = {value!r} is not finite; a finite number is required")
         return False
     if t in ("Real", "Integer"):
-        lo, hi = var.min, var.max
-        if (lo is not None and value < float(lo)) or (hi is not None and value > float(hi)):
-            add(key, f"{pname} = {value!r} is outside the declared range [{lo}, {hi}]")
+        lo, hi = (None if x is None else float(x) for x in (var.min, var.max))
+        if t == "Real" and model.summary.generation_tool.startswith("tribocosim"):
+            inside = within_bounds(value, lo, hi)  # as the FMU's own check: on a bound to BOUND_RTOL of it
+        else:  # FMI's inclusive min and max, as another tool's FMU may check them
+            inside = (lo is None or value >= lo) and (hi is None or value <= hi)
+        if not inside:
+            add(key, f"{pname} = {value!r} is outside the declared range [{var.min}, {var.max}]")
             return False
     return True
 

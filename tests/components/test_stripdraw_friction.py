@@ -93,6 +93,9 @@ def test_a_version_1_table_gives_its_mu_and_refuses_what_needs_the_areas():
                 {"particle_area_scale": 2.0, "flake_shear_ratio": 0.0}, {}):
         with pytest.raises(ParameterError, match="needs a friction table of format version 2"):
             make_friction_law(StripDrawParameters(friction_model="table", **bad), t1)
+    with pytest.raises(ParameterError, match=r"particle_area_scale = 1 and flake_shear_ratio = 0.2 needs a friction "
+                                             r"table of format version 2 .* serves the paper's model alone"):
+        make_friction_law(StripDrawParameters(friction_model="table"), t1)  # the values as given, not to 17 digits
 
 
 def test_closed_form_without_a_velocity_law_uses_alpha_b_and_its_cap():

@@ -260,7 +260,9 @@ def test_the_kept_slopes_give_the_lookup_of_slopes_taken_at_each_query(mask):
     # the law reads the share the table keeps the slopes of (A_c = 1 here: the share is A_p)
     params = StripDrawParameters()
     law = make_friction_law(params, t)
-    mu_ref = np.array([params.mu0 * max(0.0, 1.0 - params.particle_area_scale * direct_lookup(t, t.particle_area, *q))
+    r = params.flake_shear_ratio  # mu = mu0 (1 - (1 - r) min(1, s q)): capped where flakes carry the whole contact
+    mu_ref = np.array([params.mu0 * (1.0 - (1.0 - r) * min(1.0, params.particle_area_scale
+                                                           * direct_lookup(t, t.particle_area, *q)))
                        for q in zip(p, v, b)])
     assert_allclose(law.mu(p, v, b)[0], mu_ref, rtol=1e-14, atol=1e-14 * params.mu0)
 

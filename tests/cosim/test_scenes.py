@@ -433,7 +433,8 @@ def test_the_guides_sweep_example_runs_without_warnings_or_clamped_lookups(tmp_p
 def test_a_relative_table_file_is_found_beside_the_scene_then_among_the_packaged_tables(tmp_path):
     """A table next to the scene (its friction halved) is the one the run reads; a packaged table's name finds it in
     models/; the bundled default stays the FMU's own unless a file of its name lies beside the scene; a name found
-    nowhere is one problem naming both places."""
+    nowhere is one problem naming both places. The halved table holds mu alone (format version 1, mu of frictionless
+    flakes): the runs are the paper's model (flake_shear_ratio = 0)."""
     import shutil
 
     from tribocosim.paths import MODELS_DIR
@@ -445,14 +446,16 @@ def test_a_relative_table_file_is_found_beside_the_scene_then_among_the_packaged
 
     write_table(tmp_path / "halved.npz", type(t)(t.pressure, t.velocity, t.beta, 0.5 * t.mu, t.metadata))
 
+    paper = {**CHEAP, "fmus.strip.parameters.flake_shear_ratio": 0.0}
+
     def table(value):
-        plan = load_scene(scene, {**CHEAP, "fmus.strip.parameters.table_file": value})
+        plan = load_scene(scene, {**paper, "fmus.strip.parameters.table_file": value})
         return plan, plan.scene.fmus["strip"].parameters["table_file"]
 
     plan, found = table("halved.npz")
     assert found == str(tmp_path / "halved.npz")
     halved = run(plan, write=False)
-    full = run(load_scene(scene, CHEAP), write=False)
+    full = run(load_scene(scene, paper), write=False)
     ratio = halved["strip.mu_mean"][-1] / full["strip.mu_mean"][-1]
     assert ratio == pytest.approx(0.5, rel=0.05), "the table beside the scene is the one read"
     assert table("friction_table_128um.npz")[1] == str((MODELS_DIR / "friction_table_128um.npz").resolve())

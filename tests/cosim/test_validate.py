@@ -1,9 +1,12 @@
 """Tests of scene validation (cosim.scene.schema + cosim.scene.validate): every problem, one message, file and key."""
 
+from pathlib import Path
+
+import numpy as np
 import pytest
 
 from tribocosim.errors import SceneError
-from tribocosim.cosim import load_scene
+from tribocosim.cosim import load_scene, run
 
 
 def _problems(path):
@@ -130,3 +133,25 @@ def test_toml_syntax_error_names_the_file(tmp_path):
     path.write_text("[experiment\nstop = 1\n")
     msg = _problems(path)
     assert f"{path}: (syntax): not valid TOML" in msg, msg
+
+
+def test_a_parameter_on_a_declared_bound_to_round_off_is_on_it_for_the_projects_fmu(tmp_path):
+    """The StripDraw FMU given by path: density is declared in [1, 1e5] kg/m3. A value within 1e-9 of the bound
+    (relative) is on it, as the FMU's own check compares (tc_below): the scene takes it and the FMU runs with it;
+    1e-6 below is refused, the value printed with all its digits."""
+    from tribocosim.cosim.scene.fmucache import component_fmu
+
+    fmu = component_fmu("stripdraw")
+
+    def scene(density: float) -> Path:
+        path = tmp_path / f"d{density!r}.toml"
+        path.write_text(f'[experiment]\nstop = 0.002\nstep = 1e-3\n[fmus.strip]\npath = "{fmu}"\n'
+                        f'parameters = {{ density = {density!r}, normal_force = 12250.0, grip_velocity = 0.08 }}\n'
+                        '[output]\nvariables = ["strip.pull_force"]\n')
+        return path
+
+    on_bound = 1.0 * (1 - 1e-12)
+    res = run(scene(on_bound), write=False)
+    assert len(res.time) == 3 and np.all(np.isfinite(res["strip.pull_force"]))
+    below = 1.0 - 1e-6
+    assert f"density = {below!r} is outside the declared range [1.0, 100000.0]" in _problems(scene(below))

@@ -18,12 +18,15 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
+import warnings
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
+
+from tribocosim.errors import RangeWarning
 
 HERE = Path(__file__).resolve().parent
 
@@ -187,7 +190,12 @@ def _python_strip(parameters: dict, schedule):
     from tribocosim.components.stripdraw.component import COMPONENT
 
     model = COMPONENT.make(parameters).model
-    outs = [model.step(dt, {"normal_force": f, "grip_velocity": v}) for dt, f, v in schedule]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RangeWarning)
+        outs = [model.step(dt, {"normal_force": f, "grip_velocity": v}) for dt, f, v in schedule]
+    backwards = [w for w in caught if issubclass(w.category, RangeWarning) and "grip_velocity = -" in str(w.message)]
+    reverses = any(v < 0 for _, _, v in schedule)
+    assert len(backwards) == int(reverses), "a grip that moves back is warned once, when it starts (as the FMU does)"
     return np.array([[o[k] for k in STRIP_OUTPUTS] for o in outs]), model
 
 

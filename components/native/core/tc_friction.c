@@ -20,13 +20,16 @@ int tc_law_check(const tc_stripdraw_params *p, const tc_table *table, tc_msg msg
                        "surrogate table", table->format_version);
     if (table->format_version < 2 &&
         (p->contact_area != TC_STRIPDRAW_CONTACT_AREA_MESOSCALE || p->particle_area_scale != 1.0 ||
-         p->flake_shear_ratio != 0.0))
+         p->flake_shear_ratio != 0.0)) {
+        char s[TC_REPR_SIZE], r[TC_REPR_SIZE];
         return tc_fail(msg, TC_ERROR,
-                       "contact_area = '%s' with particle_area_scale = %.17g and flake_shear_ratio = %.17g needs a "
-                       "friction table of format version 2 (with the contact areas); this table is version 1 (mu "
-                       "only): rebuild it with tribocosim surrogate table",
-                       p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8 ? "eq8" : "mesoscale", p->particle_area_scale,
-                       p->flake_shear_ratio);
+                       "contact_area = '%s' with particle_area_scale = %s and flake_shear_ratio = %s needs a friction "
+                       "table of format version 2 (with the contact areas); this table is version 1 (the mu of "
+                       "frictionless flakes only), which serves the paper's model alone (contact_area = 'mesoscale', "
+                       "particle_area_scale = 1, flake_shear_ratio = 0): rebuild it with tribocosim surrogate table",
+                       p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8 ? "eq8" : "mesoscale",
+                       tc_repr_double(p->particle_area_scale, s), tc_repr_double(p->flake_shear_ratio, r));
+    }
     return TC_OK;
 }
 
