@@ -159,19 +159,22 @@ class Native:
     ``convert_resource(source, folder) -> path``: writes a resource file in the form the C code reads (the
     friction table's array file, ``<stem>.tca``) into ``folder``; the native FMU carries what it writes instead of
     the source, and a scene that sets one of ``resource_parameters`` to a file passes the native FMU its
-    converted form.
+    converted form. ``constants``: ``(name, value, what)`` of numbers the C code uses whose single definition is in
+    Python (e.g. the documented friction floor), written into ``params_header`` as ``<PREFIX>_<NAME>``.
     """
 
     __slots__ = ("prefix", "sources", "params_header", "arrays", "array_size", "interpolates_inputs",
-                 "convert_resource", "resource_parameters")
+                 "convert_resource", "resource_parameters", "constants")
 
     def __init__(self, prefix: str, sources: tuple[str, ...], params_header: str, arrays: tuple[Port, ...] = (),
                  array_size: ArraySize | None = None, interpolates_inputs: bool = False,
                  convert_resource: Callable[[Path, Path], Path] | None = None,
-                 resource_parameters: tuple[str, ...] = ()) -> None:
+                 resource_parameters: tuple[str, ...] = (),
+                 constants: tuple[tuple[str, float, str], ...] = ()) -> None:
         self.prefix, self.sources, self.params_header, self.arrays = prefix, sources, params_header, arrays
         self.array_size, self.interpolates_inputs = array_size, interpolates_inputs
         self.convert_resource, self.resource_parameters = convert_resource, resource_parameters
+        self.constants = constants
 
 
 class Component:

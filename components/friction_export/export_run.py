@@ -115,7 +115,7 @@ class ExportResult:
     beyond: str
 
     def summary(self) -> list[str]:
-        """Lines for the command's output."""
+        """Lines for the command's output (its warnings apart: :meth:`warning_lines`)."""
         out = []
         for f in self.files:
             size = " x ".join(f"{n} {what}" for n, what in zip(f.shape, ("pressures", "velocities", "beta levels")))
@@ -123,8 +123,12 @@ class ExportResult:
                        f"tribocosim's mu within {percent_up(f.accuracy)} % (target {100 * f.tolerance:g} %) in the "
                        f"range ({f.checked} points checked)")
             out += [f"  unsimulated: {f.unsimulated}"] if f.unsimulated else []
-            out += [f"  WARNING: {w}" for w in f.warnings]
         return out + [self.range_line, f"beyond it: {self.beyond}"]
+
+    def warning_lines(self) -> list[str]:
+        """One line per warning of a file written (the files are written all the same; each holds its warnings in
+        its header): ``<file>: <warning>``, for the command's error stream."""
+        return [f"{f.path.name}: {w}" for f in self.files for w in f.warnings]
 
 
 def _nodes_in(axis: np.ndarray, low: float, high: float) -> tuple:

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import ParameterError
-from tribocosim.components.stripdraw.friction_floor import mu_at_full_coverage
+from tribocosim.components.stripdraw.friction_floor import below_floor, floor_note, mu_at_full_coverage
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.table import FrictionTable, read_table
 
@@ -215,9 +215,17 @@ class ExportedLaw:
 
 def value_warnings(law: ExportedLaw, mu: np.ndarray) -> list[str]:
     """Warnings about the mu values one exported file holds (``mu``: every value it writes), each one line: written
-    into that file's header and printed by the command. The place where the exported values are checked against a
-    physical bound of the law; an empty list when nothing is to be said."""
-    return []
+    into that file's header and printed by the command. The least value below the documented floor of the strip-draw
+    contact (:func:`~tribocosim.components.stripdraw.friction_floor.floor_note`: it names the setting that lets mu
+    fall there, e.g. ``flake_shear_ratio = 0``, the paper's model); an empty list when nothing is to be said."""
+    values = np.asarray(mu, dtype=float)
+    if values.size == 0:
+        return []
+    note = floor_note(float(np.min(values)), law.params.mu0, law.params.flake_shear_ratio)
+    if note is None:
+        return []
+    share = int(np.count_nonzero(below_floor(values)))
+    return [f"the least value: {note} ({share} of the file's {values.size} values are below the floor)"]
 
 
 def _cell_span(axis: np.ndarray, low: float, high: float) -> tuple[int, int]:

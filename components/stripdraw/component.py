@@ -53,6 +53,7 @@ from tribocosim.components.description import ArraySize, Built, Component, Nativ
 from tribocosim.errors import ParameterError
 from tribocosim.components.params import (BOUND_RTOL, bound_text, outside_text, param, parameters, validate_fields,
                                          within_bounds)
+from tribocosim.components.stripdraw.friction_floor import MU_FLOOR
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.ports import (  # noqa: F401 - the declaration's public names
     DEFAULT_GRIP_VELOCITY, DEFAULT_NORMAL_FORCE, INPUTS, OUTPUTS)
@@ -258,6 +259,8 @@ COMPONENT = Component(
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,
                   array_size=ArraySize("n_nodes", "n_elements", 1, "number of nodes of the bar, n_elements + 1"),
                   interpolates_inputs=True, convert_resource=convert_resource,
-                  resource_parameters=("table_file",)),
+                  resource_parameters=("table_file",),
+                  constants=(("mu_floor", MU_FLOOR, "the documented floor of mu (friction_floor.MU_FLOOR): a lookup "
+                              "below it is warned"),)),
     default_experiment=(0.0, 1.75, 1e-3),
 )

@@ -23,10 +23,17 @@ junction that shears like boundary-lubricated aluminium with an additive (0.09 /
 end: the paper's premise (flakes shear more easily than metal) kept down to the floor and no further.
 :data:`PAPER_MODEL` is the paper's model, frictionless flakes.
 
+A friction coefficient below the floor is reported, naming the setting that lets it (:func:`floor_note`): the
+native FMU logs a warning once per instance, the Python model warns once (RangeWarning), the friction export warns
+and writes the note into the file's header. The floor reaches the C code as ``TC_STRIPDRAW_MU_FLOOR``, generated from
+:data:`MU_FLOOR` (the component's ``Native.constants``).
+
 This module does no I/O and imports nothing of the model, so that the FMU glue and the friction exports can read it.
 """
 
 from __future__ import annotations
+
+from tribocosim.components.params import BOUND_RTOL
 
 #: the documented floor of the friction coefficient in the strip-draw contact (module docstring)
 MU_FLOOR = 0.03
@@ -44,19 +51,32 @@ def mu_at_full_coverage(mu0: float, flake_shear_ratio: float) -> float:
     return flake_shear_ratio * mu0
 
 
-def below_floor(mu: float) -> bool:
-    """Whether a friction coefficient lies below :data:`MU_FLOOR`."""
-    return mu < MU_FLOOR
+def below_floor(mu):
+    """Whether a friction coefficient (or each of an array's) lies below :data:`MU_FLOOR` by more than the project's relative tolerance
+    (:data:`tribocosim.components.params.BOUND_RTOL`, 1e-9 of the floor; ``tc_below`` of tc_common.h): the default
+    r = 0.2 with mu0 = 0.15 gives the floor itself at the cap, up to the round-off of the law's sums, and is not
+    below it."""
+    return mu < MU_FLOOR - BOUND_RTOL * MU_FLOOR
 
 
-def floor_note(mu: float, mu0: float, flake_shear_ratio: float) -> str | None:
-    """A one-line note when ``mu`` lies below :data:`MU_FLOOR`, naming the settings that allow it (None otherwise)."""
+def floor_note(mu: float, mu0: float, flake_shear_ratio: float, mu_const: float | None = None) -> str | None:
+    """A one-line note when ``mu`` lies below :data:`MU_FLOOR` (:func:`below_floor`), naming the setting that lets it
+    fall there (None otherwise): ``mu_const`` (given for the constant law), ``mu0`` (the most the law gives), the
+    flake-borne shear ratio r with mu0 (r mu0, the least value of the table and closed-form laws), or else debris
+    beyond the law's cap. The native model's note (``tc_law_floor_note`` of tc_friction.c) is the same text."""
     if not below_floor(mu):
         return None
     lowest = mu_at_full_coverage(mu0, flake_shear_ratio)
-    why = (f"flake_shear_ratio = {flake_shear_ratio:g} with mu0 = {mu0:g} lets mu fall to {lowest:.4g} where flakes "
-           "carry the whole contact" if below_floor(lowest) else
-           f"the settings give at least {lowest:.4g} at full flake coverage (r mu0); a lower value comes from "
-           "another setting (e.g. beta_threshold above the law's cap, or mu_const)")
+    if mu_const is not None:
+        why = f"friction_model = constant with mu_const = {mu_const:g}; mu_const >= {MU_FLOOR:g} keeps mu at or above it"
+    elif below_floor(mu0):
+        why = f"mu0 = {mu0:g} is below it, and the law gives at most mu0 (no debris)"
+    elif below_floor(lowest):
+        why = (f"flake_shear_ratio = {flake_shear_ratio:g} with mu0 = {mu0:g} lets mu fall to {lowest:.4g} where flakes "
+               f"carry the whole contact; flake_shear_ratio >= {MU_FLOOR / mu0:.4g} keeps mu at or above it")
+    else:
+        why = (f"the settings give at least {lowest:.4g} where flakes carry the whole contact (r mu0); a lower value "
+               "comes from debris beyond the law's cap (beta_threshold above it, or debris made at another pressure "
+               "or velocity)")
     return (f"mu = {mu:.4g} is below the documented floor {MU_FLOOR:g} of the strip-draw contact (docs/model.md, "
             f"the floor under debris): {why}")

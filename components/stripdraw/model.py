@@ -27,7 +27,8 @@ Inputs are checked as the FMU checks them: ``step`` refuses a missing input, an 
 not a number (ParameterError, the state unchanged), and warns (:class:`tribocosim.errors.RangeWarning`) when a step
 takes an input outside the range the component declares for it (:mod:`.ports`: a grip moving backwards), or when an
 output leaves its range after a step (the grip beyond ``draw_length``: the strip's tail runs into the pad; a nominal
-pressure above the hardness), once each time it leaves it.
+pressure above the hardness), once each time it leaves it; and once in the model's life when the least mu of the
+state under the pad falls below the documented floor (:mod:`.friction_floor`), naming the setting that lets it.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ _NODAL = {"X": 0, "U": 1, "V": 2, "A": 3, "Up": 4, "beta": 5, "slip_rate": 6, "c
           "friction_limit": 9, "contact": 10}
 _INFO = {"time": 0, "n_steps": 1, "clamp_count": 2, "beta_removed": 3, "beta_produced": 4, "beta_cap": 5,
          "explicit_time_step": 6, "element_length": 7, "window_lo": 8, "window_hi": 9, "element_stiffness": 10,
-         "shear_stiffness": 11, "normal_force": 12, "grip_velocity": 13, "reaction": 14}
+         "shear_stiffness": 11, "normal_force": 12, "grip_velocity": 13, "reaction": 14, "mu_least": 15}
 # enum tc_stripdraw_refusal -> the error a refused step raises
 _REFUSALS = {0: ParameterError, 1: TableDomainError, 2: ConvergenceError}
 
@@ -132,6 +133,7 @@ class StripDrawModel:
                         for port in ports if port.low is not None or port.high is not None]
         self._inputs = {p.name: float(p.start) for p in INPUTS}
         self._outside = [0] * len(self._bounds)
+        self._floor_warned = False  # the floor is warned once per model (as once per FMU instance)
 
     def __del__(self):
         handle = getattr(self, "_handle", None)
@@ -162,6 +164,8 @@ class StripDrawModel:
     beta = property(lambda self: self._nodal("beta"), doc="nodal debris area fractions (a copy)")
     slip_rate = property(lambda self: self._nodal("slip_rate"), doc="nodal slip rates of the last interval [m/s]")
     friction_limit = property(lambda self: self._nodal("friction_limit"), doc="mu P of the state [Pa]")
+    mu_least = property(lambda self: self._info("mu_least"),
+                        doc="the least mu of the state's friction limits under the pad (NaN: no node, no pressure)")
 
     @property
     def explicit_time_step(self) -> float:
@@ -209,8 +213,8 @@ class StripDrawModel:
         Warns
         -----
         RangeWarning
-            When the step takes an input outside its declared range, or an output leaves its range after it
-            (module docstring).
+            When the step takes an input outside its declared range, or an output leaves its range after it, or
+            (once) when mu under the pad falls below the documented floor (module docstring).
         """
         c = self._core
         fn, v = _checked_inputs(inputs)
@@ -233,7 +237,17 @@ class StripDrawModel:
         self._inputs = {"normal_force": fn, "grip_velocity": v}
         out = self.outputs()
         self._warn_outside(out)
+        self._warn_floor()
         return out
+
+    def _warn_floor(self) -> None:
+        """A RangeWarning, the first time in this model's life, when the least mu of the state lies below the
+        documented floor, naming the setting that lets it (tc_stripdraw_floor_note; the native FMU's message)."""
+        if self._floor_warned or not self._core.lib.tc_stripdraw_floor_note(self._handle, self._msg):
+            return
+        self._floor_warned = True
+        warnings.warn(f"StripDrawModel: at t = {_repr(self.time)} s {self._msg_buf.value.decode(errors='replace')}",
+                      RangeWarning, stacklevel=3)
 
     def _warn_outside(self, outputs: dict) -> None:
         """A RangeWarning for each declared range an input of the step is outside, or an output has just left

@@ -9,7 +9,10 @@
 FORMAT: ``lsdyna`` (an include file: *DEFINE_TABLE and its *DEFINE_CURVEs for contact FS = 2), ``abaqus`` (a *SURFACE
 INTERACTION with a tabulated *FRICTION; without a debris state beta is field variable 1), ``table`` (a neutral JSON
 table). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line naming the option
-on stderr, exit code 2, and no file written. docs/forming-friction.md is the guide.
+on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
+below the documented floor of the strip-draw contact, naming the setting that lets it) is one line on stderr per file,
+``tribocosim export: warning: <file>: ...``, and in the file's header; the file is written and the exit code is 0.
+docs/forming-friction.md is the guide.
 """
 
 from __future__ import annotations
@@ -131,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tribocosim export: {exc}", file=sys.stderr)
         return 2
     print("\n".join(result.summary()))
+    for line in result.warning_lines():  # the files are written; what they hold that the user should know
+        print(f"tribocosim export: warning: {line}", file=sys.stderr)
     return 0
 
 

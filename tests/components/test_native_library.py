@@ -26,6 +26,19 @@ def test_the_cached_library_is_keyed_by_its_sources(tmp_path, monkeypatch):
     assert library.library_path() == path, "found, not built again"
 
 
+def test_the_digest_covers_where_a_generated_constant_is_defined():
+    """The parameter headers carry constants defined in Python (Native.constants: TC_STRIPDRAW_MU_FLOOR from
+    friction_floor.MU_FLOOR); the files the digest reads without importing a component hold the declaration and the
+    module that defines the value, so that a changed value builds a new library."""
+    from pathlib import Path
+
+    from tribocosim.components.stripdraw import component, friction_floor
+
+    assert [c[0] for c in component.COMPONENT.native.constants] == ["mu_floor"]
+    files = library.declaration_files(compiler.NATIVE_DIR.parent)
+    assert {Path(component.__file__), Path(friction_floor.__file__)} <= files
+
+
 @pytest.fixture(scope="module")
 def few_newton_iterations(tmp_path_factory):
     """``build(max_iter) -> Core``: the core library with the generalized-alpha step's Newton iterations limited

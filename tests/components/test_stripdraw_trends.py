@@ -5,6 +5,8 @@ wear (K) lower it, with saturation at large K (the cap beta_thres); a second pas
 strip, starting from the debris the first pass left, gives a lower mu_bar.
 """
 
+import warnings
+
 import numpy as np
 
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law
@@ -61,8 +63,13 @@ def test_friction_at_the_pulling_speed_stays_steady_where_the_slip_rate_law_stic
             "_floor"), flake_shear_ratio=r, **RISING)
         model = StripDrawModel(p, make_friction_law(p))
         fn = 30e6 * 0.07 * 0.035
-        mus = [model.step(1e-3, {"normal_force": fn, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 10)})["mu_mean"]
-               for k in range(1750)]
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            mus = [model.step(1e-3, {"normal_force": fn, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 10)})["mu_mean"]
+                   for k in range(1750)]
+        floor = [str(w.message) for w in caught if "below the documented floor" in str(w.message)]
+        assert len(floor) <= (0 if r > 0 else 1), floor  # r mu0 at the cap is the floor; r = 0 warns once if below
+        assert all("flake_shear_ratio = 0 with mu0 = 0.15" in text for text in floor), floor
         tail = np.array(mus[1400:])
         spread[mode] = tail.max() - tail.min()
     assert spread["grip"] < 0.01, spread

@@ -109,3 +109,35 @@ def test_the_console_lists_the_command():
     proc = subprocess.run([sys.executable, "-m", "tribocosim.cli", "--help"], capture_output=True, text=True,
                           timeout=60)
     assert any(line.split()[:1] == ["export"] for line in proc.stdout.splitlines())
+
+
+def test_mu_below_the_documented_floor_is_a_warning_naming_the_setting_and_the_file_is_written(tmp_path):
+    """particle_area_scale = 2 makes the shipped table's flakes carry the whole contact inside its beta axis (the cap,
+    where mu = r mu0). The default r = 0.2 gives the floor there, 0.2 x 0.15 = 0.03, and its band's lower file is
+    clipped to it: no warning. The paper's model (--set flake_shear_ratio=0) goes to 0 there: one line on stderr
+    per file naming flake_shear_ratio = 0, the exit code 0, the files written with the warning in their header."""
+    import json
+
+    from tribocosim.components.stripdraw.friction_floor import MU_FLOOR
+
+    common = ["--set", "particle_area_scale=2", "--pressure-range", "5", "30"]
+    proc = _cli(["table", "-o", "default.json", *common, "--band", "2"], tmp_path)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    for name in ("default.json", "default.lower.json"):
+        doc = json.loads((tmp_path / name).read_text())
+        assert min(np.ravel(doc["mu"])) == pytest.approx(MU_FLOOR, rel=1e-9), name  # the cap is in the file
+        assert doc["warnings"] == [], name
+    proc = _cli(["table", "-o", "paper.json", *common, "--beta", "0.2", "--band", "2", "--set",
+                 "flake_shear_ratio=0"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert [line.split(": ")[2] for line in lines] == ["paper.json", "paper.upper.json", "paper.lower.json"], lines
+    for line, name in zip(lines, ("paper.json", "paper.upper.json", "paper.lower.json")):
+        assert line.startswith(f"tribocosim export: warning: {name}: the least value: mu = ")
+        assert "is below the documented floor 0.03" in line
+        assert "flake_shear_ratio = 0 with mu0 = 0.15 lets mu fall to 0 where flakes carry the whole contact" in line
+        doc = json.loads((tmp_path / name).read_text())
+        least = min(np.ravel(doc["mu"]))
+        assert least < MU_FLOOR and f"mu = {least:.4g} is below" in line, (least, line)
+        assert doc["warnings"] == [line.split(f"{name}: ", 1)[1]]
+        assert any("WARNING: the least value: mu =" in h for h in doc["header"]), doc["header"]

@@ -10,6 +10,7 @@ import pytest
 
 from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_DEFAULT, MU_FLOOR
 from tribocosim.components.stripdraw.table import FrictionTable, write_table
+from tribocosim.errors import RangeWarning
 from tribocosim.cosim.reports import paper, paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
 
@@ -36,11 +37,13 @@ def test_the_default_model_levels_off_at_the_floor_and_the_papers_keeps_falling(
     write_table(path, table)
     runs = paper.Runs(workers=1)
     params = paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True))
-    options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table, paper.calibrate)
-               for o in pp.OPTIONS if o.name in ("default", "paper")}
+    with pytest.warns(RangeWarning, match="flake_shear_ratio = 0 with mu0 = 0.15 lets mu fall to 0"):
+        # the paper's model falls through the floor: the model says so (friction_floor.floor_note)
+        options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table, paper.calibrate)
+                   for o in pp.OPTIONS if o.name in ("default", "paper")}
+        five = paper_floor.five_passes(runs, options, params)
+        seeded = paper_floor.seeded_strip(runs, options, params)
     assert options["default"]["drops"][0] == pytest.approx(options["paper"]["drops"][0], abs=3e-4)
-    five = paper_floor.five_passes(runs, options, params)
-    seeded = paper_floor.seeded_strip(runs, options, params)
     assert set(five) == set(seeded) == {"default", "paper"}
     floor = FLAKE_SHEAR_RATIO_DEFAULT * 0.15
     default, papers = five["default"]["mu_bar"], five["paper"]["mu_bar"]

@@ -522,6 +522,46 @@ def test_a_step_no_step_size_can_complete_sets_terminate_simulation(unzipped, md
     s.freeInstance()
 
 
+def test_mu_below_the_documented_floor_is_one_fmi3_warning_at_the_step_its_arrays_show_it(unzipped, md):
+    """The paper's model (flake_shear_ratio = 0) with the closed-form law: mu = mu0 (1 - s b beta h'_rms / kappa)
+    (Eq. 9, alpha = b) falls below the floor 0.03 where beta > 0.8 kappa / (s b h'_rms) = 0.0226. The step after
+    which the arrays beta and contact first hold a node under the pad (contact > 0) with that much debris returns
+    fmi3Warning with a message naming flake_shear_ratio = 0 and the time; every other step fmi3OK."""
+    import ctypes
+
+    from tribocosim.components.stripdraw.friction_floor import MU_FLOOR
+    from tribocosim.components.stripdraw.parameters import StripDrawParameters
+
+    m3 = md[3, "StripDraw"]
+    vr = {v.name: v.valueReference for v in m3.modelVariables}
+    messages = []
+    s = _initialized(unzipped, md, "StripDraw", {"friction_model": "closed_form", "flake_shear_ratio": 0.0}, messages)
+    lib = ctypes.CDLL(str(unzipped[3, "StripDraw"] / "binaries" / "x86_64-linux" / "StripDraw.so"))
+    do_step = lib.fmi3DoStep
+    do_step.restype = ctypes.c_int
+    flags = [ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool()]
+    last = ctypes.c_double()
+    p = StripDrawParameters(flake_shear_ratio=0.0)
+    n = _default_nodes()
+    statuses, below, times, t = [], [], [], 0.0
+    for _ in range(300):
+        statuses.append(do_step(ctypes.c_void_p(s.component), ctypes.c_double(t), ctypes.c_double(1e-3),
+                                ctypes.c_bool(True), *(ctypes.byref(f) for f in flags), ctypes.byref(last)))
+        t += 1e-3
+        times.append(t)
+        beta, contact = np.array(s.getFloat64([vr["beta"], vr["contact"]], nValues=2 * n)).reshape(2, n)
+        mu = p.mu0 * (1 - p.particle_area_scale * p.alpha_b * beta[contact > 0] * p.rms_slope / p.kappa)
+        below.append(bool(mu.size) and mu.min() < MU_FLOOR * (1 - 1e-9))
+    first = below.index(True)
+    assert 50 < first < 250 and all(below[first:]), first
+    assert [k for k, st in enumerate(statuses) if st != 0] == [first] and statuses[first] == 1, statuses
+    warned = [m for st, m in messages if st == 1]
+    assert len(warned) == 1 and warned[0].startswith(f"at t = {times[first]!r} s mu = "), warned
+    assert "flake_shear_ratio = 0 with mu0 = 0.15 lets mu fall to 0" in warned[0]
+    s.terminate()
+    s.freeInstance()
+
+
 def test_outputs_read_in_initialization_mode_follow_the_inputs_set_there(unzipped, md):
     """contact_pressure is an InitialUnknown that depends on normal_force: read in Initialization Mode after
     normal_force is set, it is F_N / (L_T w_T) (it read 0); the nodal arrays are still computed from

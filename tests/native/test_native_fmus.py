@@ -657,6 +657,76 @@ def test_a_draw_of_draw_length_ends_without_a_warning_whatever_its_round_off(unz
     s.freeInstance()
 
 
+def _closed_form_first_below_floor(parameters: dict, steps: int) -> int | None:
+    """The first step (index) of a draw of 1 ms steps at the default inputs after which a node under the pad holds mu
+    of the closed-form law below the floor: mu = mu0 (1 - (1 - r) s b beta h'_rms / kappa) (Eq. 9, alpha = b) from the
+    Python model's nodal beta and contact weights; None when none does."""
+    from tribocosim.components.stripdraw import StripDrawParameters, make_friction_law
+    from tribocosim.components.stripdraw.friction_floor import MU_FLOOR
+    from tribocosim.components.stripdraw.model import StripDrawModel
+
+    import warnings
+
+    from tribocosim.errors import RangeWarning
+
+    p = StripDrawParameters(friction_model="closed_form", **parameters)
+    model = StripDrawModel(p, make_friction_law(p, None))
+    for k in range(steps):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RangeWarning)  # its own floor warning (tests/components)
+            model.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08})
+        beta = model.beta[model.fields()["contact"] > 0]
+        mu = p.mu0 * (1 - (1 - p.flake_shear_ratio) * p.particle_area_scale * p.alpha_b * beta * p.rms_slope / p.kappa)
+        if beta.size and mu.min() < MU_FLOOR * (1 - 1e-9):
+            return k
+    return None
+
+
+def test_mu_below_the_documented_floor_is_one_warning_naming_the_setting(unzipped, descriptions):
+    """The paper's model (flake_shear_ratio = 0) with the closed-form law, whose cap of beta the first pass reaches:
+    the doStep after which mu under the pad first falls below the floor 0.03 returns fmi2Warning, once, with a
+    message naming flake_shear_ratio = 0 with mu0 and the time; the steps after it return fmi2OK. A state restored
+    from before it and stepped past it again warns no more (once per instance). The default r = 0.2 gives the floor
+    itself at the cap (r mu0 = 0.03) and no warning over as many steps."""
+    import ctypes
+
+    md = descriptions["StripDraw"]
+    do_step = _raw(unzipped["StripDraw"], md, "fmi2DoStep", ctypes.c_int,
+                   [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int])
+    for r in (0.0, 0.2):
+        msgs = []
+        s = _fmpy_instance(unzipped["StripDraw"], md, {"friction_model": "closed_form", "flake_shear_ratio": r}, msgs)
+        s.exitInitializationMode()
+        statuses, times, t = [], [], 0.0
+        for k in range(300):
+            if k == 50:
+                before = s.getFMUstate()
+            statuses.append(do_step(s.component, t, 1e-3, 1))
+            t += 1e-3
+            times.append(t)
+        cap = s.getReal([_vr(md, "beta_max")])[0]
+        assert cap == pytest.approx(2.0 / (207.91 * 0.34), rel=1e-12), "the cap kappa / (s b h'_rms) is reached"
+        warned = [m for st, m in msgs if st == 1]
+        first = _closed_form_first_below_floor({"flake_shear_ratio": r}, 300)
+        if r == 0.2:
+            assert first is None and statuses == [0] * 300 and not warned, msgs
+            s.freeInstance()
+            continue
+        assert first is not None and 50 < first < 250, first
+        assert [k for k, st in enumerate(statuses) if st != 0] == [first], statuses
+        assert len(warned) == 1 and warned[0].startswith(f"at t = {times[first]!r} s mu = "), (first, warned)
+        assert "below the documented floor 0.03" in warned[0]
+        assert "flake_shear_ratio = 0 with mu0 = 0.15 lets mu fall to 0 where flakes carry the whole contact" in warned[0]
+        s.setFMUstate(before)
+        t = 51e-3 - 1e-3
+        again = []
+        for _ in range(250):
+            again.append(do_step(s.component, t, 1e-3, 1))
+            t += 1e-3
+        assert again == [0] * 250 and len([m for st, m in msgs if st == 1]) == 1, msgs
+        s.freeInstance()
+
+
 _SIMULATE_NEGATIVE = """
 import sys
 from fmpy import simulate_fmu

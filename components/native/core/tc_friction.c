@@ -2,6 +2,7 @@
 #include "tc_friction.h"
 
 #include <math.h>
+#include <stdio.h>
 
 static const tc_msg NO_MSG = {NULL, 0}; /* lookups under the clamp policy cannot fail */
 
@@ -182,4 +183,27 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
     if (clamped != NULL)
         for (size_t k = 0; k < n; ++k) clamped[k] = 0;
     return TC_OK;
+}
+
+int tc_law_floor_note(const tc_stripdraw_params *p, double mu, tc_msg msg) {
+    const double least_allowed = TC_STRIPDRAW_MU_FLOOR, lowest = p->flake_shear_ratio * p->mu0;
+    if (!tc_below(mu, least_allowed)) return 0;
+    char why[512];
+    if (p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_CONSTANT)
+        snprintf(why, sizeof why, "friction_model = constant with mu_const = %g; mu_const >= %g keeps mu at or above "
+                 "it", p->mu_const, least_allowed);
+    else if (tc_below(p->mu0, least_allowed))
+        snprintf(why, sizeof why, "mu0 = %g is below it, and the law gives at most mu0 (no debris)", p->mu0);
+    else if (tc_below(lowest, least_allowed))
+        snprintf(why, sizeof why, "flake_shear_ratio = %g with mu0 = %g lets mu fall to %.4g where flakes carry the "
+                 "whole contact; flake_shear_ratio >= %.4g keeps mu at or above it", p->flake_shear_ratio, p->mu0,
+                 lowest, least_allowed / p->mu0);
+    else
+        snprintf(why, sizeof why, "the settings give at least %.4g where flakes carry the whole contact (r mu0); a "
+                 "lower value comes from debris beyond the law's cap (beta_threshold above it, or debris made at "
+                 "another pressure or velocity)", lowest);
+    if (msg.text != NULL && msg.size > 0)
+        snprintf(msg.text, msg.size, "mu = %.4g is below the documented floor %g of the strip-draw contact "
+                 "(docs/model.md, the floor under debris): %s", mu, least_allowed, why);
+    return 1;
 }

@@ -55,4 +55,11 @@ TC_API double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *tabl
 /* alpha(v) of Eq. 23 (closed form). */
 TC_API double tc_law_alpha(const tc_stripdraw_params *p, double velocity);
 
+/* Whether mu lies below the documented floor TC_STRIPDRAW_MU_FLOOR (components/stripdraw/friction_floor.py, generated
+ * from its MU_FLOOR) by more than TC_BOUND_RTOL of it: 1, with a one-line note into msg naming the setting of p that
+ * lets mu fall there (mu_const of the constant law, mu0, flake_shear_ratio with mu0: the law's least value r mu0 where
+ * flakes carry the whole contact, or else debris beyond the law's cap), the text friction_floor.floor_note gives;
+ * else 0, msg untouched. The default r = 0.2 with mu0 = 0.15 gives the floor itself at the cap: not below. */
+TC_API int tc_law_floor_note(const tc_stripdraw_params *p, double mu, tc_msg msg);
+
 #endif

@@ -183,7 +183,7 @@ static void form_slip_rates(tc_stripdraw *m) {
 
 /* The friction limits mu P of the nodes that can reach the pad within an interval (contact nodes +- reach) at
  * pressure P and grip speed (or the slip rates), into tmax (0 elsewhere), the clamped lookups flagged; the range
- * and the key kept for reuse. */
+ * and the key kept for reuse, and the least mu over the nodes under the pad (what the floor is checked on). */
 static int friction_limits(tc_stripdraw *m, double pressure, double speed, int policy, tc_msg msg) {
     const size_t n = m->n;
     for (size_t i = m->limit_lo; i < m->limit_hi; ++i) m->tmax[i] = 0.0; /* 0 elsewhere already */
@@ -191,6 +191,7 @@ static int friction_limits(tc_stripdraw *m, double pressure, double speed, int p
     m->limit_speed = speed;
     m->limit_lo = m->limit_hi = 0;
     m->limit_clamped = 0;
+    m->mu_least = NAN;
     if (!(pressure > 0)) return TC_OK;
     long long lo = 0, hi = (long long)n;
     if (m->w_first <= m->w_last) {
@@ -211,15 +212,20 @@ static int friction_limits(tc_stripdraw *m, double pressure, double speed, int p
     p.table_policy = policy;
     int rc = tc_law_mu(&p, m->table, pressure, cnt, v, m->beta + l, m->mu, m->clamped, m->ac, &m->rows, msg);
     if (rc != TC_OK) return rc;
-    const double *mu = m->mu;
+    const double *mu = m->mu, *w = m->w + l;
     const unsigned char *clamped = m->clamped;
-    double *tmax = m->tmax + l;
-    int any = 0;
+    double *tmax = m->tmax + l, least = HUGE_VAL;
+    int any = 0, under = 0;
     for (size_t k = 0; k < cnt; ++k) {
         tmax[k] = mu[k] * pressure;
         any |= clamped[k];
+        if (w[k] > 0) {
+            under = 1;
+            least = fmin(least, mu[k]);
+        }
     }
     m->limit_clamped = any;
+    m->mu_least = under ? least : NAN;
     m->limit_lo = l;
     m->limit_hi = l + cnt;
     return TC_OK;
@@ -847,6 +853,7 @@ double tc_stripdraw_info(const tc_stripdraw *m, int which) {
     case TC_SD_INFO_NORMAL_FORCE: return m->normal_force;
     case TC_SD_INFO_GRIP_VELOCITY: return m->grip_velocity;
     case TC_SD_INFO_REACTION: return m->reaction;
+    case TC_SD_INFO_MU_LEAST: return m->mu_least;
     default: return NAN;
     }
 }
@@ -857,3 +864,5 @@ void tc_stripdraw_window(const tc_stripdraw *m, double window[2]) {
 }
 
 double tc_stripdraw_time(const tc_stripdraw *m) { return m->time; }
+
+int tc_stripdraw_floor_note(const tc_stripdraw *m, tc_msg msg) { return tc_law_floor_note(&m->p, m->mu_least, msg); }

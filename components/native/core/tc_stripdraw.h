@@ -118,9 +118,16 @@ enum tc_stripdraw_info {
     TC_SD_INFO_SHEAR_STIFFNESS,   /* k_s [Pa/m] */
     TC_SD_INFO_NORMAL_FORCE,      /* of the last coupling interval [N] */
     TC_SD_INFO_GRIP_VELOCITY,     /* of the last coupling interval [m/s] */
-    TC_SD_INFO_REACTION           /* axial force at the grip of the half bar [N] */
+    TC_SD_INFO_REACTION,          /* axial force at the grip of the half bar [N] */
+    TC_SD_INFO_MU_LEAST           /* the least mu of the state's friction limits over the nodes under the pad (contact
+                                   * weight > 0); NaN when there is none or no pressure */
 };
 TC_API double tc_stripdraw_info(const tc_stripdraw *m, int which);
+
+/* Whether the least mu of the state (TC_SD_INFO_MU_LEAST) lies below the documented floor: 1 with a note naming the
+ * setting that lets it (tc_law_floor_note of tc_friction.h), else 0. The FMU logs it once per instance, the Python
+ * binding warns once per model (RangeWarning). */
+TC_API int tc_stripdraw_floor_note(const tc_stripdraw *m, tc_msg msg);
 
 /* ---------------------------------------------------------------------------------------------------
  * Kernels (n = number of nodes, node n - 1 is the grip), exported for the tests.

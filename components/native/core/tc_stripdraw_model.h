@@ -39,6 +39,7 @@ struct tc_stripdraw {
     double limit_pressure, limit_speed;
     size_t limit_lo, limit_hi; /* the nodes [lo, hi) looked up, flagged in clamped */
     int limit_clamped;         /* a lookup was outside the table */
+    double mu_least;           /* the least mu of these limits over the nodes under the pad (w > 0); NaN: none */
     /* slip_h > 0: slip_rate[i] is |dU[i]| / slip_h, formed when read (form_slip_rates) */
     double slip_h;
     /* every beta <= beta_hi, so a cap >= beta_hi changes no node away from the pad (NaN: not known) */

@@ -79,6 +79,10 @@ int tc_component_start(tc_component *c, const double *inputs, tc_msg msg);
 void tc_component_outputs(const tc_component *c, double *outputs);
 /* After every accepted step (side outputs: the strip's field file); a failure makes the instance unusable. */
 int tc_component_after_step(tc_component *c, tc_msg msg);
+/* After every accepted step, once tc_component_after_step has run: 1 with a message the wrapper logs as a warning
+ * (the step's status is then a warning), for results the model gives but does not support (the strip: mu below the
+ * documented floor, once per instance); else 0. */
+int tc_component_warning(tc_component *c, tc_msg msg);
 /* At fmi2Terminate (write the side outputs); log_line receives what to log on success ("" for nothing). */
 int tc_component_terminate(tc_component *c, char *log_line, size_t size, tc_msg msg);
 /* The component's state as bytes (the model's state, and facts a restored state must match, e.g. the

@@ -390,7 +390,12 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
         snprintf(text, sizeof text, "after the step to t = %s s: %s", tc_repr_double(c->time, a), c->message);
         return tc_inst_fail(c, text);
     }
-    return check_bounds(c);
+    int status = check_bounds(c);
+    if (tc_component_warning(c->component, msg_of(c))) {
+        tc_inst_logf(c, TC_LOG_WARNING, "at t = %s s %s", tc_repr_double(c->time, a), c->message);
+        status = TC_LOG_WARNING;
+    }
+    return status;
 }
 
 void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value) {

@@ -21,7 +21,8 @@
  *     draw_length, a nominal pressure above the hardness), or whose inputs are outside the range they are built
  *     for (a grip moving backwards), is TC_LOG_WARNING with a message naming the variable, its value, the bound
  *     and the time, once each time the variable leaves the range; a value within 1e-9 (relative) of its bound is
- *     on it (the round-off of a displacement summed over many steps);
+ *     on it (the round-off of a displacement summed over many steps); so is one after which the component reports
+ *     a result it does not support (tc_component_warning: the strip's mu below the documented floor, once);
  *   - in initialization mode, the outputs read (fmi2GetReal...) are computed from the parameters and the inputs
  *     set so far (the model description's InitialUnknowns and their dependencies);
  *   - an FMU state (tc_inst_get_state...) holds the parameters, inputs, outputs, time and the component's
@@ -107,7 +108,7 @@ int tc_inst_exit_initialization(tc_instance *c);
 /* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */
 int tc_inst_terminate(tc_instance *c);
 /* Advance by dt from t (the contract above); the input derivatives apply to this step only (zero after it).
- * TC_LOG_OK, TC_LOG_WARNING (accepted; an output left a range it is built for), TC_LOG_DISCARD or TC_LOG_ERROR. */
+ * TC_LOG_OK, TC_LOG_WARNING (accepted; an output left a range it is built for, or the component warned), TC_LOG_DISCARD or TC_LOG_ERROR. */
 int tc_inst_do_step(tc_instance *c, double t, double dt);
 /* Set input variable v (causality input) to value; its derivatives (if any were set) are zero again. */
 void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value);

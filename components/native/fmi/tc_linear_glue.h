@@ -61,6 +61,12 @@ int tc_component_after_step(tc_component *c, tc_msg msg) {
     return TC_OK;
 }
 
+int tc_component_warning(tc_component *c, tc_msg msg) {
+    (void)c;
+    (void)msg;
+    return 0;
+}
+
 int tc_component_terminate(tc_component *c, char *log_line, size_t size, tc_msg msg) {
     (void)c;
     (void)msg;

@@ -9,7 +9,10 @@
  *   - field_output / field_output_interval: the nodal fields recorded at the start, after every step at
  *     least the interval after the last row, and written at terminate with the final state (tc_fields);
  *     a restored state drops the rows recorded after its time;
- *   - FMI 3.0: the nodal fields beta, U and contact of the current state as array outputs.
+ *   - FMI 3.0: the nodal fields beta, U and contact of the current state as array outputs;
+ *   - the first accepted step after which the least mu under the pad lies below the documented floor
+ *     (tc_stripdraw_floor_note) is a warning naming the setting that lets it, once per instance: a restored state
+ *     keeps whether it was given (a host that retries a step from a state taken before is not told again).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,6 +33,7 @@ struct tc_component {
     size_t n;
     double *X, *U, *beta, *contact; /* work rows for the recorder */
     char table_hash[HASH_SIZE + 1];  /* "" without a table */
+    int floor_warned;                /* the floor warning was given */
     char note[1024];
 };
 
@@ -154,6 +158,12 @@ void tc_component_outputs(const tc_component *c, double *outputs) { tc_stripdraw
 
 int tc_component_after_step(tc_component *c, tc_msg msg) {
     return c->recorder == NULL ? TC_OK : record(c, 0, msg);
+}
+
+int tc_component_warning(tc_component *c, tc_msg msg) {
+    if (c->floor_warned || !tc_stripdraw_floor_note(c->model, msg)) return 0;
+    c->floor_warned = 1;
+    return 1;
 }
 
 int tc_component_terminate(tc_component *c, char *log_line, size_t size, tc_msg msg) {

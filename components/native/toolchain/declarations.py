@@ -6,7 +6,8 @@ Two headers, written into a build folder next to the sources:
     ``typedef struct <prefix>_params {...}``: one member per field of the component's parameter
     dataclass, same names, same order; float fields are ``double``, integer fields ``int``, fields
     with choices ``int`` (the index into the choices tuple, named ``<PREFIX>_<FIELD>_<CHOICE>``),
-    text fields ``const char *``. The native model is written against it. And
+    text fields ``const char *``; before it, ``#define <PREFIX>_<NAME> value`` of each of the component's
+    ``Native.constants`` (numbers defined once in Python). The native model is written against it. And
     ``<prefix>_params_check(p, msg)``: every float field finite and within its declared range (both bounds
     inclusive, a value within ``TC_BOUND_RTOL`` of a bound on it, as
     :func:`tribocosim.components.params.within_bounds`),
@@ -116,6 +117,10 @@ def params_header(comp: Component) -> str:
         '#include "tc_common.h"',
         "",
     ]
+    for name, value, what in comp.native.constants:
+        lines.append(f"#define {prefix.upper()}_{name.upper()} {_c_double(value)} /* {what.replace('*/', '* /')} */")
+    if comp.native.constants:
+        lines.append("")
     for f in dataclasses.fields(comp.parameters):
         for k, choice in enumerate(f.metadata.get("choices", ())):
             lines.append(f"#define {prefix.upper()}_{f.name.upper()}_{choice.upper()} {k}")

@@ -130,15 +130,32 @@ def _headers(folder: Path) -> None:
     write_params_headers(folder, [c for c in registry.components().values() if c.native is not None])
 
 
+def declaration_files(package: Path) -> set[Path]:
+    """What the parameter headers are generated from, found without importing a component: each component's
+    parameter module and declaration (``parameters.py``, ``component.py``: the fields, ``Native.constants``) and the
+    modules of the components package they import at their top level (where a constant's value is defined)."""
+    import re
+
+    own = {*package.glob("*/parameters.py"), *package.glob("*/component.py")}
+    imported = set()
+    for path in own:
+        for folder, module in re.findall(r"^from tribocosim\.components\.(\w+)\.(\w+) import", path.read_text(),
+                                         re.MULTILINE):
+            candidate = package / folder / f"{module}.py"
+            if candidate.is_file():
+                imported.add(candidate)
+    return own | imported
+
+
 def digest() -> str:
-    """SHA-256 of what the library is made of: sources, headers, what generates the parameter headers (the
-    parameter modules of the package's components and the generator), flags, compiler. Imports no component."""
+    """SHA-256 of what the library is made of: sources, headers, what generates the parameter headers
+    (:func:`declaration_files`, the generator), flags, compiler. Imports no component."""
     from tribocosim.components.native.toolchain import compiler
 
     h = hashlib.sha256()
     package = compiler.NATIVE_DIR.parent
     for path in sorted({*source_files(), *compiler.headers(), Path(__file__).with_name("declarations.py"),
-                        package / "params.py", *package.glob("*/parameters.py")}):
+                        package / "params.py", *declaration_files(package)}):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     h.update(" ".join((*compiler.CFLAGS, compiler.zig_version())).encode())
