@@ -52,8 +52,9 @@ def mu_at_full_coverage(mu0: float, flake_shear_ratio: float) -> float:
 
 
 def below_floor(mu):
-    """Whether a friction coefficient (or each of an array's) lies below :data:`MU_FLOOR` by more than the project's relative tolerance
-    (:data:`tribocosim.components.params.BOUND_RTOL`, 1e-9 of the floor; ``tc_below`` of tc_common.h): the default
+    """Whether a friction coefficient (or each of an array's) lies below :data:`MU_FLOOR` by more than the project's
+    relative tolerance (:data:`tribocosim.components.params.BOUND_RTOL`, 1e-9 of the floor; ``tc_below`` of
+    tc_common.h): the default
     r = 0.2 with mu0 = 0.15 gives the floor itself at the cap, up to the round-off of the law's sums, and is not
     below it."""
     return mu < MU_FLOOR - BOUND_RTOL * MU_FLOOR

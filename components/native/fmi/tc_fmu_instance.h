@@ -108,7 +108,8 @@ int tc_inst_exit_initialization(tc_instance *c);
 /* Write the side outputs (TC_LOG_ERROR if that fails); the instance is terminated. */
 int tc_inst_terminate(tc_instance *c);
 /* Advance by dt from t (the contract above); the input derivatives apply to this step only (zero after it).
- * TC_LOG_OK, TC_LOG_WARNING (accepted; an output left a range it is built for, or the component warned), TC_LOG_DISCARD or TC_LOG_ERROR. */
+ * TC_LOG_OK, TC_LOG_WARNING (accepted; an output left a range it is built for, or the component warned),
+ * TC_LOG_DISCARD or TC_LOG_ERROR. */
 int tc_inst_do_step(tc_instance *c, double t, double dt);
 /* Set input variable v (causality input) to value; its derivatives (if any were set) are zero again. */
 void tc_inst_set_input(tc_instance *c, const tc_variable *v, double value);
