@@ -26,10 +26,11 @@
  * with x_i = u0_i - u~_i = dt V0 - dt v_i - dt^2 (1/2 - b) a_i, z_i = u0_i - Up_i and dU_e = U_e+1 - U_e:
  * no difference of two displacements of the size of the draw is ever taken. The window is solved by
  * Newton's method on the stick/slip set (tangent k_s w_T ov_i on sticking nodes), globalised by a
- * line search on Pi_W (the full step when it descends by the Armijo condition, else the exact minimiser along
- * the step: Pi_W is piecewise quadratic along it, exact_step); it is converged when a full Newton step lands on the
- * set it was built from (the problem is linear on that set, so that step was exact), or when the window's
- * residual is below ``rtol`` times the force scale (friction capacity + grip pull). The chains are then
+ * line search on Pi_W; it is converged when a full Newton step lands on the set it was built from (the problem is
+ * linear on that set, so that step was exact: it is taken without evaluating Pi_W), or when the window's residual is
+ * below ``rtol`` times the force scale (friction capacity + grip pull). A step that lands on another set crosses a
+ * kink of the interface law: it is taken when it descends by the Armijo condition, else the exact minimiser along
+ * it (Pi_W is piecewise quadratic along the step, exact_step). The chains are then
  * back-substituted and every free node gets its Newmark update.
  *
  * The elimination factors depend on the step length only (tc_sd_chain_factors; the model keeps them per
@@ -156,6 +157,17 @@ static double window_potential(const window_problem *w, const double *d, double 
     pot += (w->st + 0.5 * w->kt * d[lo]) * d[lo];
     pot += (w->sg + 0.5 * w->kg * d[hi]) * d[hi];
     return pot;
+}
+
+/* the tractions T and stick/slip states of the window at d, as window_potential sets them (without the potential) */
+static void window_tractions(const window_problem *w, const double *d, double *T, signed char *state) {
+    const double *z = w->z, *ov = w->ov, *tmax = w->tmax, ks = w->ks;
+    for (size_t i = w->lo; i <= w->hi; ++i) {
+        const double xs = z[i] + d[i], trial = ks * xs;
+        const int on = ov[i] > 0.0, up = trial > tmax[i], down = trial < -tmax[i];
+        T[i] = !on ? 0.0 : (up ? tmax[i] : (down ? -tmax[i] : trial));
+        state[i] = (signed char)(!on ? 0 : (up ? 2 : (down ? 3 : 1)));
+    }
 }
 
 /* the window residual r = dPi_W/dd at d with the tractions T of window_potential, and max |r|; f: the nodal forces
@@ -402,7 +414,7 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
     fscale += tmax[N] * wT * ov[N];
 
     const size_t nw = hi - lo + 1;
-    double pot = window_potential(&w, d, T, state);
+    window_tractions(&w, d, T, state);
     double rmax = window_residual(&w, d, T, f, r);
     int iters = 0;
     while (rmax > rtol * fscale) {
@@ -413,25 +425,23 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
         for (size_t i = 0; i < nw; ++i) slope += r[lo + i] * step[i];
         double alpha = 1.0;
         for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + step[i];
-        double pot_t = window_potential(&w, dtr, T, state);
-        if (!(pot_t <= pot + 1e-4 * slope)) { /* the full step does not descend enough: the minimiser along it */
-            alpha = exact_step(&w, d, step, slope, tw, dtr, T, state, f, r);
-            for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
-            pot_t = window_potential(&w, dtr, T, state);
+        window_tractions(&w, dtr, T, state);
+        /* a full step that ends on the stick/slip set it was built from stays on it (each node's slip is linear along
+         * the step, and each state is an interval of it), where Pi_W is the quadratic the step minimises: it is
+         * exact, and it descends by half its slope. Else it crosses a kink of the interface law: taken when it
+         * descends by the Armijo condition, else the minimiser along it. */
+        const int same = memcmp(state + lo, used + lo, nw) == 0;
+        if (!same) {
+            const double pot = window_potential(&w, d, T, state);
+            if (!(window_potential(&w, dtr, T, state) <= pot + 1e-4 * slope)) {
+                alpha = exact_step(&w, d, step, slope, tw, dtr, T, state, f, r);
+                for (size_t i = 0; i < nw; ++i) dtr[lo + i] = d[lo + i] + alpha * step[i];
+                window_tractions(&w, dtr, T, state); /* at the point taken */
+            }
         }
         for (size_t i = lo; i <= hi; ++i) d[i] = dtr[i];
-        pot = pot_t;
         iters += 1;
-        if (alpha == 1.0) { /* a full step that kept its stick/slip set was exact: the problem is linear there (its
-                             * residual is not needed) */
-            int same = 1;
-            for (size_t i = lo; i <= hi; ++i)
-                if (state[i] != used[i]) {
-                    same = 0;
-                    break;
-                }
-            if (same) break;
-        }
+        if (same) break; /* exact: the problem is linear on that set (its residual is not needed) */
         rmax = window_residual(&w, d, T, f, r);
     }
     /* back-substitute the chains (side by side, as above), then every free node's Newmark update */
