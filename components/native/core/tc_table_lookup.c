@@ -185,19 +185,42 @@ static void rows_at(const tc_table *t, const tc_table_cubic *c, double pressure,
         r->tp = tp;
         r->filled = 0;
         r->reads_unsimulated = 0;
+        r->line_made = 0;
     }
     for (int row = r->filled; row < need; ++row) fill_row(t, c, row, r);
     if (need > r->filled) r->filled = need;
 }
 
-/* The value at the beta cell (ib, tb) of the rows, linear in v between them (tv = 0: the first row alone). */
-static double rows_value(const tc_table *t, const tc_table_rows *r, double tv, size_t ib, double tb) {
-    if (t->n_beta == 1) return tv == 0.0 ? r->y[0][0] : (1.0 - tv) * r->y[0][0] + tv * r->y[1][0];
+/* The line along beta at the local velocity coordinate tv of the rows' cell, into line (y, dl, dr): the first row at
+ * tv = 0, else the rows blended (made into r when it does not hold the line of tv; both rows are made then) */
+static void rows_line(const tc_table *t, tc_table_rows *r, double tv, const double *line[3]) {
+    if (tv == 0.0) {
+        line[0] = r->y[0];
+        line[1] = r->dl[0];
+        line[2] = r->dr[0];
+        return;
+    }
+    if (!(r->line_made && r->line_tv == tv)) {
+        const size_t nb = t->n_beta;
+        const double wa = 1.0 - tv, wb = tv;
+        for (size_t k = 0; k < nb; ++k) r->line_y[k] = wa * r->y[0][k] + wb * r->y[1][k];
+        for (size_t k = 0; k + 1 < nb; ++k) {
+            r->line_dl[k] = wa * r->dl[0][k] + wb * r->dl[1][k];
+            r->line_dr[k] = wa * r->dr[0][k] + wb * r->dr[1][k];
+        }
+        r->line_tv = tv;
+        r->line_made = 1;
+    }
+    line[0] = r->line_y;
+    line[1] = r->line_dl;
+    line[2] = r->line_dr;
+}
+
+/* The value at the beta cell (ib, tb) of a line along beta (rows_line) */
+static double line_value(const tc_table *t, const double *const *line, size_t ib, double tb) {
+    if (t->n_beta == 1) return line[0][0];
     const double h = t->beta[ib + 1] - t->beta[ib];
-    const double a = tc_pchip_hermite(r->y[0][ib], r->y[0][ib + 1], r->dl[0][ib], r->dr[0][ib], h, tb);
-    if (tv == 0.0) return a;
-    const double b = tc_pchip_hermite(r->y[1][ib], r->y[1][ib + 1], r->dl[1][ib], r->dr[1][ib], h, tb);
-    return (1.0 - tv) * a + tv * b;
+    return tc_pchip_hermite(line[0][ib], line[0][ib + 1], line[1][ib], line[2][ib], h, tb);
 }
 
 /* Whether the query at (tv, ib, tb) in the rows' cell reads an unsimulated node, as reads_unsimulated() decides it: a
@@ -225,6 +248,7 @@ static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pres
     const size_t nv = t->n_velocity, nb = t->n_beta;
     size_t iv = 0, ib = 0;
     double tv = 0.0, tb, vprev = 0.0;
+    const double *line[3] = {NULL, NULL, NULL}; /* the line along beta of the query's velocity: y, dl, dr */
     int outv = 0;
     for (size_t k = 0; k < n; ++k) {
         const double v = fabs(velocity[k]);
@@ -232,11 +256,12 @@ static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pres
             locate(t->velocity, nv, v, &iv, &tv);
             outv = outside_velocity(t, v);
             rows_at(t, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
+            rows_line(t, r, tv, line);
             vprev = v;
         }
         const double b = beta[k];
         locate_near(t->beta, nb, b, ib, &ib, &tb);
-        out[k] = rows_value(t, r, tv, ib, tb);
+        out[k] = line_value(t, line, ib, tb);
         if (clamped != NULL)
             clamped[k] = (unsigned char)(outp || outv || outside_beta(t, b) || rows_read_unsimulated(t, r, tv, ib, tb));
     }
@@ -439,20 +464,12 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
     locate_pressure(table, pressure, &ip, &tp);
     locate(table->velocity, nv, fabs(velocity), &iv, &tv);
     rows_at(table, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
-    /* a Hermite piece is linear in its data: the blend of the rows' pieces is the piece of the blended data */
-    if (tv == 0.0) {
-        memcpy(y, r->y[0], nb * sizeof *y);
-        if (nb > 1) {
-            memcpy(dl, r->dl[0], (nb - 1) * sizeof *dl);
-            memcpy(dr, r->dr[0], (nb - 1) * sizeof *dr);
-        }
-    } else {
-        const double wa = 1.0 - tv, wb = tv;
-        for (size_t k = 0; k < nb; ++k) y[k] = wa * r->y[0][k] + wb * r->y[1][k];
-        for (size_t k = 0; k + 1 < nb; ++k) {
-            dl[k] = wa * r->dl[0][k] + wb * r->dl[1][k];
-            dr[k] = wa * r->dr[0][k] + wb * r->dr[1][k];
-        }
+    const double *line[3];
+    rows_line(table, r, tv, line); /* the line the lookups at this velocity evaluate */
+    memcpy(y, line[0], nb * sizeof *y);
+    if (nb > 1) {
+        memcpy(dl, line[1], (nb - 1) * sizeof *dl);
+        memcpy(dr, line[2], (nb - 1) * sizeof *dr);
     }
     tc_table_cubic_free(&temp);
     return TC_OK;

@@ -39,6 +39,12 @@ typedef struct tc_table_rows {
     double unsimulated[2][TC_TABLE_BETA_MAX];
     unsigned char unsimulated_cell[2][TC_TABLE_BETA_MAX]; /* whether either node of beta cell ib has such a weight */
     int reads_unsimulated; /* whether an unsimulated weight above TC_TABLE_READ_WEIGHT is among them */
+    /* the line along beta at the local velocity coordinate line_tv of the cell (when line_made): the rows blended,
+     * (1 - tv) row 0 + tv row 1, in values and piece slopes (a Hermite piece is linear in its data, so the line's
+     * piece is the blend of the rows' pieces); what every query at that velocity evaluates */
+    int line_made;
+    double line_tv;
+    double line_y[TC_TABLE_BETA_MAX], line_dl[TC_TABLE_BETA_MAX], line_dr[TC_TABLE_BETA_MAX];
 } tc_table_rows;
 
 /* mu at one pressure for n (velocity, beta) queries (interpolate in P once, then in (|v|, beta)).
