@@ -44,8 +44,9 @@
  * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
  * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
  * The nodes' residuals at d = 0, their Newmark updates and the elements' forces have no recurrence and are formed
- * in passes of their own (in vector lanes); the recurrences of the two chains are swept side by side (they are
- * independent, so their latencies overlap).
+ * in passes of their own (in vector lanes). Each recurrence is a chain of dependent operations, so a long one is swept
+ * as two halves side by side whose latencies overlap (recurrence(): the second half from zero, then corrected by
+ * the products of its q times the first half's last value); the results differ from one sweep by round-off only.
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
  * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
@@ -348,6 +349,43 @@ static void element_forces(size_t N, double ke, const double *restrict d, double
     fprev[N] = ke * dU[N - 1];
 }
 
+/* A run shorter than this is swept as one recurrence (splitting it would save less latency than it costs) */
+#define SPLIT_RUN 24
+
+/* The linear recurrence y_k = u_k + q_k y_prev over the L nodes k = at, at + s, ... (s = +1 or -1), with u_k = a_k b_k
+ * (b NULL: a_k), q_k = q[k + qoff] and y_prev = carry before the first, into y (which may be a).
+ * A run of SPLIT_RUN nodes or more is swept as two halves side by side, so that their latencies overlap: the first
+ * from the carry, the second from y_prev = 0 with the running products P of its q (into work, L / 2 + 1 doubles), then
+ * corrected by P times the first half's last value (the recurrence is linear: its solution from a start value is the
+ * solution from 0 plus the start value carried by the products of q). */
+static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, const double *a, const double *b,
+                       const double *q, double carry, double *y, double *work) {
+#define U(k) (b != NULL ? a[k] * b[k] : a[k])
+    if (L < SPLIT_RUN) {
+        for (size_t t = 0; t < L; ++t) {
+            const ptrdiff_t k = at + (ptrdiff_t)t * s;
+            y[k] = carry = U(k) + q[k + qoff] * carry;
+        }
+        return;
+    }
+    const size_t h = L / 2, L2 = L - h; /* the first half's nodes, the second's */
+    const ptrdiff_t at2 = at + (ptrdiff_t)h * s;
+    double y1 = carry, y2 = 0.0, p = 1.0;
+    for (size_t t = 0; t < h; ++t) { /* side by side: the second half has h or h + 1 nodes */
+        const ptrdiff_t k1 = at + (ptrdiff_t)t * s, k2 = at2 + (ptrdiff_t)t * s;
+        y[k1] = y1 = U(k1) + q[k1 + qoff] * y1;
+        y[k2] = y2 = U(k2) + q[k2 + qoff] * y2;
+        work[t] = p = p * q[k2 + qoff];
+    }
+    if (L2 > h) {
+        const ptrdiff_t k2 = at2 + (ptrdiff_t)h * s;
+        y[k2] = U(k2) + q[k2 + qoff] * y2;
+        work[h] = p * q[k2 + qoff];
+    }
+    for (size_t t = 0; t < L2; ++t) y[at2 + (ptrdiff_t)t * s] += work[t] * y1;
+#undef U
+}
+
 int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
                  signed char *contact, double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
                  const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
@@ -380,23 +418,19 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
     }
     Upn[N] = Up[N];
     if (ov[N] > 0.0 && contact[N] == 0) Upn[N] = U0[N];
-    /* eliminate the tail forwards (i = k) and the grip side backwards (j = N-1-k): first every node's x and residual
-     * at d = 0 (into rho), then the two recurrences side by side (they are independent) */
-    const size_t nt = lo, ng = N - 1 - hi, both = nt < ng ? nt : ng;
+    /* eliminate the tail forwards and the grip side backwards: first every node's x and residual at d = 0 (into rho),
+     * then the two recurrences */
+    const size_t nt = lo, ng = N - 1 - hi;
     if (nt > 0) {
         x[0] = predictor_gap(shift, dt, cA, V0[0], A0[0]);
         rho[0] = chain_residual(cmm[0], x[0], amm[0], A0[0], af, f0[0], 1.0 - af, 0.0, ke * dU[0]);
         chain_residuals(1, nt, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
     }
     chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
-    double rt = nt > 0 ? rho[0] : 0.0, rg = ng > 0 ? rho[N - 1] : 0.0; /* the recurrences' carries */
-    size_t k = 1;
-    for (size_t j = N - 2; k < both; ++k, --j) { /* side by side, without tests in the loop */
-        rho[k] = rt = rho[k] + qt[k - 1] * rt;
-        rho[j] = rg = rho[j] + qg[j + 1] * rg;
-    }
-    for (size_t i = k; i < nt; ++i) rho[i] = rt = rho[i] + qt[i - 1] * rt;
-    for (size_t j = N - 1 - k; j > hi && k < ng; --j) rho[j] = rg = rho[j] + qg[j + 1] * rg;
+    /* each chain's recurrence from its free end (rho_0 = r_0, rho_N-1 = r_N-1), as two halves side by side (step: work
+     * until the Newton steps) */
+    if (nt > 1) recurrence(nt - 1, 1, 1, -1, rho, NULL, qt, rho[0], rho, step);
+    if (ng > 1) recurrence(ng - 1, (ptrdiff_t)(N - 2), -1, 1, rho, NULL, qg, rho[N - 1], rho, step);
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -444,22 +478,9 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
         if (same) break; /* exact: the problem is linear on that set (its residual is not needed) */
         rmax = window_residual(&w, d, T, f, r);
     }
-    /* back-substitute the chains (side by side, as above), then every free node's Newmark update */
-    double dt_t = d[lo], dt_g = d[hi]; /* the carries of the two sweeps */
-    size_t kb = 0;
-    for (; kb < both; ++kb) { /* side by side, without tests in the loop */
-        const size_t i = lo - 1 - kb, j = hi + 1 + kb;
-        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
-        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-    }
-    for (size_t kt = kb; kt < nt; ++kt) {
-        const size_t i = lo - 1 - kt;
-        d[i] = dt_t = rho[i] * it[i] + qt[i] * dt_t;
-    }
-    for (size_t kg = kb; kg < ng; ++kg) {
-        const size_t j = hi + 1 + kg;
-        d[j] = dt_g = rho[j] * ig[j] + qg[j] * dt_g;
-    }
+    /* back-substitute the chains (each as two halves, as above), then every free node's Newmark update */
+    if (nt > 0) recurrence(nt, (ptrdiff_t)lo - 1, -1, 0, rho, it, qt, d[lo], d, step);
+    if (ng > 0) recurrence(ng, (ptrdiff_t)hi + 1, 1, 0, rho, ig, qg, d[hi], d, step);
     newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U0, V0, A0, U, V, A);
     U[N] = U0[N] + shift;
     V[N] = vg;
