@@ -16,11 +16,13 @@ TC_API void tc_thomas(size_t n, const double *sub, const double *diag, const dou
                       double *x, double *work);
 
 /* The interface law (Eq. 4-5) on one node of elastic slip x: the traction k_s x limited to +-tmax; *slipping when the
- * trial traction exceeds the limit. */
+ * trial traction exceeds the limit. The limits are selects, not branches: a node sliding at its limit has a trial
+ * traction within round-off of it on either side, which no branch predictor foresees. */
 static inline double tc_sd_traction(double x, double ks, double tmax, int *slipping) {
     const double trial = ks * x;
     *slipping = fabs(trial) > tmax;
-    return trial > tmax ? tmax : (trial < -tmax ? -tmax : trial);
+    const double below = tmax < trial ? tmax : trial; /* min(trial, tmax); a NaN trial stays */
+    return -tmax > below ? -tmax : below;
 }
 
 #endif
