@@ -191,14 +191,22 @@ static double window_residual(const window_problem *w, const double *d, const do
     return rm;
 }
 
+/* A window of this many nodes or more is eliminated from both ends at once (newton_step) */
+#define TWIST_NODES 8
+
 /* The Newton step s of the window on its stick/slip set (state), H s = -r: H is tridiagonal with
  *
  *     H_ii = cm m_i + (1 - af) (k_e e_i + k_s w_T ov_i [i sticks])  (+ K_t at lo, + K_g at hi),
- *     H_i,i+1 = H_i+1,i = -(1 - af) k_e,
+ *     H_i,i+1 = H_i+1,i = o = -(1 - af) k_e,
  *
- * e_i the number of window elements at node i. Solved by the Thomas algorithm as tc_thomas does it (the off-diagonal
- * is not 0): c_0 = H_01 / H_00, g_0 = -r_0 / H_00, then m_i = H_ii - H_i,i-1 c_i-1, c_i = H_i,i+1 / m_i,
- * g_i = (-r_i - H_i,i-1 g_i-1) / m_i, and s_i = g_i - c_i s_i+1 backwards. c and g: work of nw values each. */
+ * e_i the number of window elements at node i. Gaussian elimination without pivoting (H is symmetric positive definite
+ * and diagonally dominant) from the top row down (the Thomas algorithm, as tc_thomas does it): c_0 = o / H_00,
+ * g_0 = -r_0 / H_00, then m_i = H_ii - o c_i-1, c_i = o / m_i, g_i = (-r_i - o g_i-1) / m_i, and s_i = g_i - c_i s_i+1
+ * backwards. Each row's elimination waits for the one before (a division among them), so a window of TWIST_NODES or
+ * more is eliminated from both ends at once (a twisted factorization): the rows above the middle row p from the top
+ * down as above, the rows below it from the bottom up (the same recurrences mirrored, into c_i and g_i of those rows),
+ * the middle row solved from both, (H_pp - o c_p-1 - o c_p+1) s_p = -r_p - o g_p-1 - o g_p+1, then s substituted
+ * outwards: s_i = g_i - c_i s_i+1 above p, s_i = g_i - c_i s_i-1 below. c and g: work of nw values each. */
 static void newton_step(const window_problem *w, const signed char *state, const double *r, double *step, double *c,
                         double *g) {
     const size_t lo = w->lo, hi = w->hi, nw = hi - lo + 1;
@@ -212,17 +220,43 @@ static void newton_step(const window_problem *w, const signed char *state, const
     double cp = off / h0, gp = -r[lo] / h0; /* the recurrences' carries */
     c[0] = cp;
     g[0] = gp;
-    for (size_t k = 1; k < nw; ++k) {
-        const size_t i = lo + k;
-        const double h = k < nw - 1 ? DIAGONAL(i, ke_mid) : DIAGONAL(i, ke_end) + w->kg;
-        const double mk = h - off * cp;
+    if (nw < TWIST_NODES) {
+        for (size_t k = 1; k < nw; ++k) {
+            const size_t i = lo + k;
+            const double h = k < nw - 1 ? DIAGONAL(i, ke_mid) : DIAGONAL(i, ke_end) + w->kg;
+            const double mk = h - off * cp;
+            c[k] = cp = off / mk;
+            g[k] = gp = (-r[i] - off * gp) / mk;
+        }
+        double sp = g[nw - 1];
+        step[nw - 1] = sp;
+        for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
+        return;
+    }
+    const size_t p = nw / 2, below = nw - 1 - p; /* the middle row; the rows below it (p or p - 1 of them) */
+    const double hb = DIAGONAL(hi, ke_end) + w->kg;
+    double cb = off / hb, gb = -r[hi] / hb; /* the bottom-up carries */
+    c[nw - 1] = cb;
+    g[nw - 1] = gb;
+    for (size_t t = 1; t < p; ++t) { /* row t from the top and row nw - 1 - t from the bottom, side by side */
+        const size_t k = t, i = lo + k, kb = nw - 1 - t, ib = lo + kb;
+        const double mk = DIAGONAL(i, ke_mid) - off * cp;
         c[k] = cp = off / mk;
         g[k] = gp = (-r[i] - off * gp) / mk;
+        if (t < below) {
+            const double mb = DIAGONAL(ib, ke_mid) - off * cb;
+            c[kb] = cb = off / mb;
+            g[kb] = gb = (-r[ib] - off * gb) / mb;
+        }
     }
+    const size_t ip = lo + p;
+    double su = (-r[ip] - off * gp - off * gb) / (DIAGONAL(ip, ke_mid) - off * cp - off * cb), sd = su;
 #undef DIAGONAL
-    double sp = g[nw - 1];
-    step[nw - 1] = sp;
-    for (size_t k = nw - 1; k-- > 0;) step[k] = sp = g[k] - c[k] * sp;
+    step[p] = su;
+    for (size_t t = 1; t <= p; ++t) { /* row p - t upwards and row p + t downwards, side by side */
+        step[p - t] = su = g[p - t] - c[p - t] * su;
+        if (t <= below) step[p + t] = sd = g[p + t] - c[p + t] * sd;
+    }
 }
 
 /* the derivative of Pi_W along the step s at d + alpha s: sum_i s_i r_i(d + alpha s) (dtr, T, state, f, r: work) */
