@@ -177,13 +177,17 @@ static double window_residual(const window_problem *w, const double *d, const do
     const size_t lo = w->lo, hi = w->hi;
     const double *x = w->x, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m;
     const double wT = w->wT, ke = w->ke, cm = w->cm, caf = 1.0 - w->af;
-    for (size_t i = lo; i <= hi; ++i) f[i] = T[i] * wT * ov[i];
-    for (size_t e = lo; e < hi; ++e) {
-        const double s = dU[e] + (d[e + 1] - d[e]);
-        f[e] -= ke * s;
-        f[e + 1] += ke * s;
+    double kl = 0.0; /* k_e s of the element before node i (none before lo) */
+    for (size_t i = lo; i <= hi; ++i) { /* f_i = (T_i w_T ov_i + k_e s_i-1) - k_e s_i, s_e the elements' extensions */
+        double fi = T[i] * wT * ov[i];
+        if (i > lo) fi += kl;
+        if (i < hi) {
+            kl = ke * (dU[i] + (d[i + 1] - d[i]));
+            fi -= kl;
+        }
+        f[i] = fi;
+        r[i] = cm * m[i] * (x[i] + d[i]) + lin[i] + caf * fi;
     }
-    for (size_t i = lo; i <= hi; ++i) r[i] = cm * m[i] * (x[i] + d[i]) + lin[i] + caf * f[i];
     r[lo] += w->st + w->kt * d[lo];
     r[hi] += w->sg + w->kg * d[hi];
     double rm = 0.0;
