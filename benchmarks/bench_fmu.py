@@ -10,7 +10,8 @@ Measures, for the default parameters (table friction, implicit integrator, 150 e
    the ratio (target <= 0.75 against 2a6e61a's); then where the step's time goes (``benchmarks/callgrind_fmu.py``:
    callgrind's inclusive instruction counts of the parts of a step, integrator, friction lookup, debris transport,
    state backup, bar bookkeeping, outputs, FMI layer, per step and per node from two meshes; the time split is taken
-   as the instruction split) and what bounds the step;
+   as the instruction split), what bounds the step, and the instructions it executes per nanosecond (the callgrind
+   count over the best wall time);
 
 1. overhead per doStep: ``setReal(inputs) + doStep + getReal(outputs)`` through fmpy's
    ``FMU2Slave`` against ``model.step`` (both in this process, in the sliding regime);
@@ -340,6 +341,11 @@ def main(argv=None) -> int:
                 print("  in time, taking the time split as the instruction split: " + ", ".join(
                     f"{p} {step * 1e6 * row[p] / row['total']:.2f} us" for p in row if p != "total"))
                 print("what bounds the step: " + bounds_of_the_step(by_mesh))
+                # the rate at which the step executes its instructions: where it is steady, fewer instructions are
+                # the only lever left (a step that waits on chains of dependent operations or on mispredicted
+                # branches runs fewer per nanosecond)
+                print(f"  the step executes {row['total'] / (step * 1e9):.1f} instructions per nanosecond "
+                      f"({row['total']:.0f} per step in {step * 1e6:.2f} us)")
         if args.host_only:
             return 0
         nat = native(tmp, Path(fmu), args.repeat, args.steps)
