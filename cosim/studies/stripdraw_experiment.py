@@ -13,7 +13,10 @@ every step (the accuracy report and the benchmarks).
 
 from __future__ import annotations
 
+import functools
 import os
+import re
+import warnings
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
@@ -81,16 +84,41 @@ def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
     return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
 
 
+def _recorded(fn, point: Point) -> tuple:
+    """``fn(point)`` and the warnings it raised, as (category, message) pairs, so that :func:`run_points` reports
+    them once for all points (each draw's model warns in its own words, with its own time)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fn(point)
+    return result, [(w.category, str(w.message)) for w in caught]
+
+
+def _report(caught: list[tuple], n_points: int) -> None:
+    """Warn once per distinct message (the time a model warned at and the value it names left out), saying in how
+    many of the points it arose."""
+    counts: dict[tuple, list] = {}
+    for category, message in caught:
+        key = (category, re.sub(r"\bat t = \S+ s (mu = \S+ )?", "", message))
+        counts.setdefault(key, [message, 0])[1] += 1
+    for (category, _), (first, count) in counts.items():
+        more = f" (the first of {count} of the {n_points} draws that warned so)" if count > 1 else ""
+        warnings.warn(first + more, category, stacklevel=3)
+
+
 def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
     """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
-    per point)."""
+    per point). The warnings of the draws are given once per distinct message, with the number of draws that raised
+    it."""
     n = max(1, min(workers or os.cpu_count() or 1, len(points)))
     if n == 1:
-        return [fn(p) for p in points]
-    import multiprocessing
+        done = [_recorded(fn, p) for p in points]
+    else:
+        import multiprocessing
 
-    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return list(pool.map(fn, points))
+        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
+            done = list(pool.map(functools.partial(_recorded, fn), points))
+    _report([w for _, caught in done for w in caught], len(points))
+    return [result for result, _ in done]
 
 
 def run_strip_draw(
