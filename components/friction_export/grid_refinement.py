@@ -46,6 +46,10 @@ CHECK_INTERIOR = {1: 15, 2: 7, 3: 3}
 RANDOM_POINTS, RANDOM_LINES = 20_000, 200
 #: at most this many nodes on one axis, and rounds of steps 2-3
 MAX_NODES, MAX_ROUNDS = 400, 6
+#: at most this many points in the check's tensor grid (step 3): an interval is not split when the split would take
+#: the grid past it (a law with a kink across the range, mu clipped at 0, would else fill every axis with nodes at the
+#: kink: 400^3 nodes and 1600^3 check points, gigabytes); what the grid then reaches is stated as its accuracy
+MAX_CHECK_POINTS = 2_000_000
 #: an interval narrower than this fraction of its axis's span is not split
 MIN_WIDTH = 1e-6
 #: a round of steps 2-3 that leaves the largest deviation above this fraction of the last round's is the last
@@ -122,6 +126,19 @@ def _mesh(axes):
     return np.meshgrid(*axes, indexing="ij")
 
 
+def _check_size(axes) -> int:
+    """The points of the check's tensor grid on ``axes`` (step 3; its random points aside)."""
+    inner = CHECK_INTERIOR.get(len(axes), 3)
+    return math.prod((inner + 1) * (axis.size - 1) + 1 if axis.size > 1 else axis.size for axis in axes)
+
+
+def _grows(axes, a: int, grown: np.ndarray) -> bool:
+    """Whether axis ``a`` may become ``grown``: more nodes, at most :data:`MAX_NODES` on it and the check's grid within
+    :data:`MAX_CHECK_POINTS`."""
+    trial = [grown if b == a else axis for b, axis in enumerate(axes)]
+    return axes[a].size < grown.size <= MAX_NODES and _check_size(trial) <= MAX_CHECK_POINTS
+
+
 def _split(axis: np.ndarray, intervals: np.ndarray, geometric: bool) -> np.ndarray:
     """``axis`` with a node inserted in each of ``intervals`` (indices) wider than :data:`MIN_WIDTH` of the span."""
     lo, hi = axis[intervals], axis[intervals + 1]
@@ -152,7 +169,7 @@ def _refine_axes(evaluate, specs, axes, tol: float, floor: float) -> list:
             bad = np.flatnonzero(per_interval > tol)
             if bad.size:
                 grown = _split(axis, bad, spec.geometric)
-                if axis.size < grown.size <= MAX_NODES:
+                if _grows(axes, a, grown):
                     axes[a] = grown
                     changed = True
         if not changed:
@@ -224,7 +241,7 @@ def sample(evaluate, specs, tolerance: float, floor: float, seed: int = 0) -> Sa
             i = np.clip(np.searchsorted(axis, x, side="right") - 1, 0, axis.size - 2)
             interior = (x > axis[i]) & (x < axis[i + 1])
             grown = _split(axis, np.unique(i[interior]), spec.geometric)
-            if grown.size <= MAX_NODES:
+            if _grows(axes, a, grown):
                 axes[a] = grown
         tol *= 0.5
     return Sampling(tuple(axes), values, accuracy, largest, tuple(float(p[k]) for p in points), int(dev.size),

@@ -65,3 +65,22 @@ def test_several_functions_share_one_grid_and_the_largest_deviation_counts():
     one = sample(lambda p: np.exp(p[0])[..., None], specs, 0.005, 1e-3)
     two = sample(lambda p: np.stack([np.exp(p[0]), np.exp(2 * p[0])], axis=-1), specs, 0.005, 1e-3)
     assert two.axes[0].size > one.axes[0].size and two.reached
+
+
+def test_a_kink_across_the_range_stops_the_refinement_at_the_check_budget_and_the_accuracy_says_so():
+    """mu clipped at 0 along a surface across the range (the paper's frictionless flakes at a high debris share): no
+    grid of finite nodes reads the kink within 0.5 % of a floor of 1e-3, so the refinement would fill every axis
+    with nodes along it (400 per axis: 1600^3 check points, gigabytes). It stops where a split would take the check's
+    tensor grid past MAX_CHECK_POINTS, and the accuracy reached, above the tolerance, is what it states."""
+    from tribocosim.components.friction_export import grid_refinement as gr
+
+    specs = [AxisSpec("p", (1.0, 30.0), geometric=True), AxisSpec("v", (0.0, 0.5)), AxisSpec("beta", (0.0, 0.3))]
+
+    def law(p):  # 0.15 (1 - 2 s), s growing with all three, clipped at 0 where s > 1/2
+        share = 0.02 * np.log(p[0]) + 0.4 * p[1] + 2.0 * p[2]
+        return (0.15 * np.maximum(0.0, 1.0 - 2.0 * share))[..., None]
+
+    s = sample(law, specs, 0.005, 1e-3)
+    assert gr._check_size(list(s.axes)) <= gr.MAX_CHECK_POINTS
+    assert not s.reached and s.accuracy > 0.005, "the kink is not read within the tolerance, and the grid says so"
+    assert s.values.shape == tuple(a.size for a in s.axes) + (1,)
