@@ -139,6 +139,9 @@ double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, doub
     return tc_law_beta_threshold(p, table);
 }
 
+/* max(0, x), and 0 for a NaN x (as fmax(0, x)), in a compare the loops vectorise */
+static inline double at_least_0(double x) { return x > 0.0 ? x : 0.0; }
+
 int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressure, size_t n, const double *velocity,
               const double *beta, double *mu, unsigned char *clamped, double *ac_work, tc_table_rows *rows,
               tc_msg msg) {
@@ -161,11 +164,11 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
                                       n, velocity, beta, p->table_policy, mu, NULL, clamped, rows, msg);
             if (rc != TC_OK) return rc;
             if (!eq8) { /* the share itself (A_c = 1: dividing by it is exact) */
-                for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * mu[k]);
+                for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * at_least_0(1.0 - loss * mu[k]);
                 return TC_OK;
             }
             const double ac = eq8_area(p, pressure);
-            for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * (ac > 0 ? mu[k] / ac : 0.0));
+            for (size_t k = 0; k < n; ++k) mu[k] = p->mu0 * at_least_0(1.0 - loss * (ac > 0 ? mu[k] / ac : 0.0));
             return TC_OK;
         }
         /* A_p (and the table's A_c) located once per query */
@@ -175,7 +178,7 @@ int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double pressu
         if (eq8) contact_area(p, table, pressure, n, velocity, beta, ac_work);
         for (size_t k = 0; k < n; ++k) {
             const double share = ac_work[k] > 0 ? mu[k] / ac_work[k] : 0.0;
-            mu[k] = p->mu0 * fmax(0.0, 1.0 - loss * share);
+            mu[k] = p->mu0 * at_least_0(1.0 - loss * share);
         }
         return TC_OK;
     }

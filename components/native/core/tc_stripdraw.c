@@ -216,13 +216,12 @@ static int friction_limits(tc_stripdraw *m, double pressure, double speed, int p
     const unsigned char *clamped = m->clamped;
     double *tmax = m->tmax + l, least = HUGE_VAL;
     int any = 0, under = 0;
-    for (size_t k = 0; k < cnt; ++k) {
+    for (size_t k = 0; k < cnt; ++k) { /* in selects: the least is a chain from node to node */
         tmax[k] = mu[k] * pressure;
         any |= clamped[k];
-        if (w[k] > 0) {
-            under = 1;
-            least = fmin(least, mu[k]);
-        }
+        under |= w[k] > 0;
+        const double candidate = w[k] > 0 ? mu[k] : HUGE_VAL;
+        least = candidate < least ? candidate : least; /* fmin(least, candidate): a NaN mu is passed over */
     }
     m->limit_clamped = any;
     m->mu_least = under ? least : NAN;
