@@ -78,10 +78,13 @@ def console() -> None:
     were extracted to (:mod:`tribocosim.cosim.ssp.reader`) and the temporary folders of ``weakref.finalize``
     (``tempfile.TemporaryDirectory``), shut process pools down and flush the log; then every output is flushed. What
     is left out frees every object of every module one by one (28 million instructions after ``tribocosim run demo``,
-    callgrind; the operating system takes the memory back at once) and, when a pythonfmu FMU ran in this process (the
-    reports' oscillator FMUs, a user's component in Python), lets its embedded interpreter state corrupt the heap
-    (pythonfmu 0.7.0; seen once as "corrupted double-linked list" after a report had written all its files). It is not
-    left out while another thread runs (Python's exit waits for it)."""
+    callgrind; the operating system takes the memory back at once). It is not left out while another thread runs
+    (Python's exit waits for it), unless a pythonfmu FMU ran in this process (the reports' oscillator FMUs, a user's
+    component in Python): pythonfmu 0.7's library releases the dictionary of the component's module once at every
+    ``fmi2Instantiate`` without owning it (``findClass``: ``Py_DECREF`` of the borrowed ``PyModule_GetDict``), so its
+    count is short by one per instance, and the teardown is what frees that module's objects. (The library's interpreter
+    state, which it releases twice in ``exit``, is released once at the interpreter's exit:
+    :mod:`tribocosim.cosim.engine.libraries`.)"""
     _exit_on_termination()
     code = main()
     threading = sys.modules.get("threading")

@@ -17,8 +17,9 @@ same order, with the same values:
 3. the loop (``tcm_run``), in chunks between which a progress reporter is told the time and a stop asked for by a
    signal (:mod:`tribocosim.interrupt`) ends the run at that communication point (:attr:`SessionResult.interrupted`);
 4. the end-of-run outputs read, ``fmi2Terminate`` and ``fmi2FreeInstance``. The libraries stay loaded for the
-   process (an FMU's extracted folder is named by its content, so a later run loads the same library again; unloading
-   a library that embeds an interpreter, a pythonfmu FMU's, can leave objects behind that point into it).
+   process (:func:`~tribocosim.cosim.engine.libraries.keep`: an FMU's extracted folder is named by its content, so a
+   later run loads the same library again; an instance dropped after fmi2Fatal points into its library as long as
+   the process lives; and a pythonfmu library's interpreter state is released at the interpreter's exit).
 
 So its results are the Python loop's to the last bit (``tests/cosim/test_native_loop.py``). Anything it does not
 take as the Python master would (an FMI status above warning, a discarded step, a non-finite value) frees the FMUs
@@ -42,6 +43,7 @@ from tribocosim.errors import TribocosimError
 from tribocosim.interrupt import stop_requested
 from tribocosim.lazy import INFO, WARNING, log
 from tribocosim.cosim.engine.graph import algebraic_loops, evaluation_order
+from tribocosim.cosim.engine.libraries import keep
 from tribocosim.cosim.engine.native_lib import (CHUNK, KINDS, SINK, TCM_DONE, TcmGet, TcmLogEnv, TcmRig, TcmSet,
                                                 TcmSlave, TcmState, library, next_chunk)
 from tribocosim.cosim.engine.schemes import LinkSpec, loop_message
@@ -140,7 +142,7 @@ class _Fmu:
 
     def __init__(self, slave: SessionSlave) -> None:
         self.slave = slave
-        self.dll = ctypes.CDLL(str(_library_file(slave)))
+        self.dll = keep(_library_file(slave))
         self.component = None
         self.wall_time = 0.0
         self.messages: deque[str] = deque(maxlen=20)

@@ -44,6 +44,7 @@ from fmpy.fmi2 import (
 
 from tribocosim.errors import CosimStepError
 from tribocosim.lazy import WARNING, log
+from tribocosim.cosim.engine.libraries import keep
 
 LOG = "tribocosim.cosim"  # the logger of the FMUs' messages
 
@@ -73,6 +74,9 @@ def _dispatch_log(env, instance, status, category, message) -> None:
 
 
 _LOGGER = fmi2CallbackLoggerTYPE(_dispatch_log)
+# The callbacks of the instances dropped without fmi2FreeInstance (FmpySlave.abandon): such an instance lives, with the
+# address of its callbacks (pythonfmu keeps it in the instance's logger, fmi2.cpp), as long as the process does.
+_ABANDONED: list = []
 
 
 @runtime_checkable
@@ -158,6 +162,7 @@ class FmpySlave:
         self.errored = False
         self.current_time = float("nan")
         self._fmu = None
+        self._callbacks = None  # the fmi2CallbackFunctions given to fmi2Instantiate
         self._dll: dict[str, Any] = {}
         self._arrays: dict[tuple, Any] = {}
 
@@ -223,6 +228,7 @@ class FmpySlave:
                 modelIdentifier=md.coSimulation.modelIdentifier,
                 instanceName=self.name,
             )
+            keep(self._fmu.dll._name)  # the library stays loaded to the end of the process (libraries.keep)
             key = next(_KEYS)
             _SLAVES[key] = self
             cb = fmi2CallbackFunctions()
@@ -276,9 +282,12 @@ class FmpySlave:
                 self._dll = {}
 
     def abandon(self) -> None:
-        """Drop the instance without an FMI call and leave its library loaded: after fmi2Fatal of any instance of
-        its FMU, no function of any of them may be called (FMI 2.0.4, section 2.1.3), fmi2FreeInstance included
-        (a pythonfmu FMU releases the Python objects of an instance that raised once more when it is freed)."""
+        """Drop the instance without an FMI call: after fmi2Fatal of any instance of its FMU, no function of any of
+        them may be called (FMI 2.0.4, section 2.1.3), fmi2FreeInstance included (a pythonfmu FMU releases the Python
+        objects of an instance that raised once more when it is freed). The instance, its library (kept by
+        :func:`~tribocosim.cosim.engine.libraries.keep`) and the callbacks it was given stay for the process."""
+        if self._fmu is not None and self._callbacks is not None:
+            _ABANDONED.append(self._callbacks)
         self._fmu = None
         self._dll = {}
 

@@ -3,6 +3,8 @@ FMU of its own) run in a scene beside the project's native press and strip-draw 
 
 from __future__ import annotations
 
+import os
+import re
 import shutil
 import subprocess
 import sys
@@ -81,7 +83,8 @@ def test_a_python_component_that_raised_leaves_the_process_sound(example, tmp_pa
     """pythonfmu turns the component's exception into fmi2Fatal, after which no function of the FMU may be called
     (FMI 2.0.4, section 2.1.3): freeing the instance anyway releases its Python objects a second time (pythonfmu
     0.7), and the interpreter crashes at a later garbage collection. Failing runs of both masters and a collection
-    in one process (a subprocess here, so that a crash fails this test alone)."""
+    in one process (a subprocess here, so that a crash fails this test alone), to the end of the process (its exit:
+    the next test)."""
     scene, _ = _bad_profile_scene(example, tmp_path)
     code = textwrap.dedent("""
         import gc, sys
@@ -99,3 +102,34 @@ def test_a_python_component_that_raised_leaves_the_process_sound(example, tmp_pa
         """)
     proc = subprocess.run([sys.executable, "-c", code, str(scene)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and proc.stdout.strip() == "sound", (proc.returncode, proc.stderr[-3000:])
+
+
+def test_the_library_of_a_python_component_touches_no_freed_memory_to_the_end_of_the_process(example, tmp_path):
+    """pythonfmu 0.7's library, still loaded when the process exits, releases its interpreter state twice in ``exit``:
+    the static ``pyState``'s destructor frees it, then the library's destructor (``finalizePythonInterpreter``) writes
+    into the freed block. That aborts the process only when glibc holds the block in one of its bins at that moment
+    ("corrupted double-linked list", as the test above sees now and then); memcheck sees the write every time. After a
+    run that succeeds (the C loop) and one that fails (the Python loop), to the end of the process, the library makes no
+    access that memcheck refuses (:mod:`tribocosim.cosim.engine.libraries` releases the state once, at the interpreter's
+    exit)."""
+    if shutil.which("valgrind") is None:
+        pytest.skip("valgrind is not installed")
+    scene, _ = _bad_profile_scene(example, tmp_path)
+    code = textwrap.dedent("""
+        import sys
+        from tribocosim.cosim import run
+        from tribocosim.errors import RunFailed
+        run(sys.argv[1], write=False)
+        try:
+            run(sys.argv[2], write=False, loop="python")
+        except RunFailed:
+            print("sound")
+        """)
+    env = {**os.environ, "PYTHONMALLOC": "malloc"}  # memcheck sees each of Python's blocks, not its arenas
+    memcheck = ["valgrind", "--undef-value-errors=no", "--error-limit=no", "--num-callers=30"]
+    proc = subprocess.run([*memcheck, sys.executable, "-c", code, str(example / "measured_drive.toml"), str(scene)],
+                          capture_output=True, text=True, timeout=600, env=env)
+    library = "/MeasuredDrive.so"  # the FMU's binaries/linux64/MeasuredDrive.so, as memcheck names it in a stack
+    refused = [r for r in re.split(r"\n==\d+== \n", proc.stderr) if library in r]
+    assert proc.returncode == 0 and proc.stdout.strip() == "sound", (proc.returncode, proc.stderr[-3000:])
+    assert refused == [], "\n\n".join(refused)[-4000:]
