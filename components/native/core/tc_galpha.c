@@ -160,14 +160,17 @@ static double window_potential(const window_problem *w, const double *d, double 
     return pot;
 }
 
-/* the tractions T and stick/slip states of the window at d, as window_potential sets them (without the potential) */
+/* the tractions T (tc_sd_traction) and stick/slip states of the window at d, as window_potential sets them (without
+ * the potential) */
 static void window_tractions(const window_problem *w, const double *d, double *T, signed char *state) {
     const double *z = w->z, *ov = w->ov, *tmax = w->tmax, ks = w->ks;
     for (size_t i = w->lo; i <= w->hi; ++i) {
-        const double xs = z[i] + d[i], trial = ks * xs;
-        const int on = ov[i] > 0.0, up = trial > tmax[i], down = trial < -tmax[i];
-        T[i] = !on ? 0.0 : (up ? tmax[i] : (down ? -tmax[i] : trial));
-        state[i] = (signed char)(!on ? 0 : (up ? 2 : (down ? 3 : 1)));
+        const double xs = z[i] + d[i];
+        int slipping;
+        const double t = tc_sd_traction(xs, ks, tmax[i], &slipping);
+        const int on = ov[i] > 0.0;
+        T[i] = on ? t : 0.0;
+        state[i] = (signed char)(!on ? 0 : (!slipping ? 1 : (xs > 0 ? 2 : 3)));
     }
 }
 
