@@ -37,7 +37,8 @@
  * What a lookup computes in stages, each reused by the next: the slopes of the table's rows along beta and of each
  * piece of its columns along ln P are the table's (tc_table_cubic, made with the table); the two rows of a velocity cell
  * at a pressure, with the limited end slopes of their pieces, are made once for every query in that cell
- * (tc_table_rows, which a caller may keep); a query evaluates one Hermite piece per row.
+ * (tc_table_rows, which a caller may keep); the line along beta of a query's velocity, the rows blended, once for
+ * every query at that velocity (rows_line); a query evaluates one Hermite piece of the line.
  */
 #include "tc_table_lookup.h"
 
@@ -191,50 +192,62 @@ static void rows_at(const tc_table *t, const tc_table_cubic *c, double pressure,
     if (need > r->filled) r->filled = need;
 }
 
-/* The line along beta at the local velocity coordinate tv of the rows' cell, into line (y, dl, dr): the first row at
- * tv = 0, else the rows blended (made into r when it does not hold the line of tv; both rows are made then) */
-static void rows_line(const tc_table *t, tc_table_rows *r, double tv, const double *line[3]) {
+/* The line along beta at the local velocity coordinate tv of the rows' cell, made into r when it does not hold the line
+ * of tv: row 0 at tv = 0, else the rows blended (both rows are made then), and whether the cell of each of its pieces
+ * has a node of unsimulated weight (the last node's piece: the last cell's). */
+static void rows_line(const tc_table *t, tc_table_rows *r, double tv) {
+    if (r->line_made && r->line_tv == tv) return;
+    const size_t nb = t->n_beta;
     if (tv == 0.0) {
-        line[0] = r->y[0];
-        line[1] = r->dl[0];
-        line[2] = r->dr[0];
-        return;
-    }
-    if (!(r->line_made && r->line_tv == tv)) {
-        const size_t nb = t->n_beta;
+        memcpy(r->line_y, r->y[0], nb * sizeof *r->line_y);
+        memcpy(r->line_dl, r->dl[0], (nb - 1) * sizeof *r->line_dl);
+        memcpy(r->line_dr, r->dr[0], (nb - 1) * sizeof *r->line_dr);
+    } else {
         const double wa = 1.0 - tv, wb = tv;
         for (size_t k = 0; k < nb; ++k) r->line_y[k] = wa * r->y[0][k] + wb * r->y[1][k];
         for (size_t k = 0; k + 1 < nb; ++k) {
             r->line_dl[k] = wa * r->dl[0][k] + wb * r->dl[1][k];
             r->line_dr[k] = wa * r->dr[0][k] + wb * r->dr[1][k];
         }
-        r->line_tv = tv;
-        r->line_made = 1;
     }
-    line[0] = r->line_y;
-    line[1] = r->line_dl;
-    line[2] = r->line_dr;
+    for (size_t k = 0; k < nb; ++k) {
+        const size_t ib = k + 1 == nb && nb > 1 ? k - 1 : k;
+        r->line_unsimulated[k] = r->reads_unsimulated &&
+                                 (r->unsimulated_cell[0][ib] || (tv != 0.0 && r->unsimulated_cell[1][ib]));
+    }
+    r->line_tv = tv;
+    r->line_made = 1;
 }
 
-/* The value at the beta cell (ib, tb) of a line along beta (rows_line) */
-static double line_value(const tc_table *t, const double *const *line, size_t ib, double tb) {
-    if (t->n_beta == 1) return line[0][0];
-    const double h = t->beta[ib + 1] - t->beta[ib];
-    return tc_pchip_hermite(line[0][ib], line[0][ib + 1], line[1][ib], line[2][ib], h, tb);
+/* The piece of the line (rows_line) of a beta query clamped to the axis, qc: the k with beta_k <= qc < beta_k+1, or
+ * nb - 1 at the axis's last node (where the line is its value); the piece h (of the query before) is tried first */
+static size_t beta_piece(const double *axis, size_t n, double qc, size_t h) {
+    if (h + 1 < n && axis[h] <= qc && qc < axis[h + 1]) return h;
+    if (!(qc < axis[n - 1])) return n - 1;
+    size_t lo = 0, hi = n - 1; /* the first k with qc < axis[k] */
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (qc < axis[mid])
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo > 0 ? lo - 1 : 0;
 }
 
-/* Whether the query at (tv, ib, tb) in the rows' cell reads an unsimulated node, as reads_unsimulated() decides it: a
- * corner's weight is wp wv wb, and the largest wp of an unsimulated node at a beta node times wv wb exceeds the read
- * weight exactly when one of them does (rounding keeps the order of products). */
-static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, double tv, size_t ib, double tb) {
-    if (!r->reads_unsimulated) return 0;
-    if (!r->unsimulated_cell[0][ib] && (tv == 0.0 || !r->unsimulated_cell[1][ib]))
-        return 0; /* the cell's nodes were all simulated */
+/* Whether the query of the clamped beta qc in piece k (beta_piece) of the line at tv, a piece whose cell has an
+ * unsimulated node (line_unsimulated), reads one, as reads_unsimulated() decides it at the cell (ib, tb) locate() gives
+ * (the last node: ib = nb - 2, tb = 1): a corner's weight is wp wv wb, and the largest wp of an unsimulated node at a
+ * beta node times wv wb exceeds the read weight exactly when one of them does (rounding keeps the order of
+ * products). */
+static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, double tv, size_t k, double qc) {
+    const size_t nb = t->n_beta, ib = k + 1 == nb && nb > 1 ? k - 1 : k;
+    const double tb = nb == 1 ? 0.0 : (k == ib ? (qc - t->beta[ib]) / (t->beta[ib + 1] - t->beta[ib]) : 1.0);
     const double wv[2] = {1.0 - tv, tv}, wb[2] = {1.0 - tb, tb};
     for (int b = 0; b < 2; ++b) {
         if (!(wv[b] > 0.0)) continue;
         for (size_t c = 0; c < 2; ++c)
-            if (wb[c] > 0.0 && ib + c < t->n_beta && r->unsimulated[b][ib + c] * wv[b] * wb[c] > TC_TABLE_READ_WEIGHT)
+            if (wb[c] > 0.0 && ib + c < nb && r->unsimulated[b][ib + c] * wv[b] * wb[c] > TC_TABLE_READ_WEIGHT)
                 return 1;
     }
     return 0;
@@ -246,24 +259,34 @@ static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pres
                          size_t n, const double *velocity, const double *beta, double *out, unsigned char *clamped,
                          tc_table_rows *r) {
     const size_t nv = t->n_velocity, nb = t->n_beta;
-    size_t iv = 0, ib = 0;
-    double tv = 0.0, tb, vprev = 0.0;
-    const double *line[3] = {NULL, NULL, NULL}; /* the line along beta of the query's velocity: y, dl, dr */
-    int outv = 0;
-    for (size_t k = 0; k < n; ++k) {
-        const double v = fabs(velocity[k]);
-        if (k == 0 || !(v == vprev)) {
+    const double *axis = t->beta, lo = axis[0], hi = axis[nb - 1];
+    const double *y = r->line_y, *dl = r->line_dl, *dr = r->line_dr;
+    const unsigned char *unsimulated = r->line_unsimulated;
+    size_t iv = 0, k = 0;
+    double tv = 0.0, vprev = 0.0;
+    int outpv = 0;
+    for (size_t q = 0; q < n; ++q) {
+        const double v = fabs(velocity[q]);
+        if (q == 0 || !(v == vprev)) {
             locate(t->velocity, nv, v, &iv, &tv);
-            outv = outside_velocity(t, v);
+            outpv = outp || outside_velocity(t, v);
             rows_at(t, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
-            rows_line(t, r, tv, line);
+            rows_line(t, r, tv);
             vprev = v;
         }
-        const double b = beta[k];
-        locate_near(t->beta, nb, b, ib, &ib, &tb);
-        out[k] = line_value(t, line, ib, tb);
+        const double b = beta[q];
+        double qc = b < lo ? lo : b;
+        qc = qc > hi ? hi : qc;
+        k = beta_piece(axis, nb, qc, k);
+        if (k + 1 < nb) {
+            const double h = axis[k + 1] - axis[k];
+            out[q] = tc_pchip_hermite(y[k], y[k + 1], dl[k], dr[k], h, (qc - axis[k]) / h);
+        } else {
+            out[q] = y[k];
+        }
         if (clamped != NULL)
-            clamped[k] = (unsigned char)(outp || outv || outside_beta(t, b) || rows_read_unsimulated(t, r, tv, ib, tb));
+            clamped[q] = (unsigned char)((outpv | outside_beta(t, b)) ||
+                                         (unsimulated[k] && rows_read_unsimulated(t, r, tv, k, qc)));
     }
 }
 /* ---- multilinear --------------------------------------------------------------------------------------------- */
@@ -464,12 +487,11 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
     locate_pressure(table, pressure, &ip, &tp);
     locate(table->velocity, nv, fabs(velocity), &iv, &tv);
     rows_at(table, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
-    const double *line[3];
-    rows_line(table, r, tv, line); /* the line the lookups at this velocity evaluate */
-    memcpy(y, line[0], nb * sizeof *y);
+    rows_line(table, r, tv); /* the line the lookups at this velocity evaluate */
+    memcpy(y, r->line_y, nb * sizeof *y);
     if (nb > 1) {
-        memcpy(dl, line[1], (nb - 1) * sizeof *dl);
-        memcpy(dr, line[2], (nb - 1) * sizeof *dr);
+        memcpy(dl, r->line_dl, (nb - 1) * sizeof *dl);
+        memcpy(dr, r->line_dr, (nb - 1) * sizeof *dr);
     }
     tc_table_cubic_free(&temp);
     return TC_OK;

@@ -45,6 +45,7 @@ typedef struct tc_table_rows {
     int line_made;
     double line_tv;
     double line_y[TC_TABLE_BETA_MAX], line_dl[TC_TABLE_BETA_MAX], line_dr[TC_TABLE_BETA_MAX];
+    unsigned char line_unsimulated[TC_TABLE_BETA_MAX]; /* whether piece k's cell has a node of unsimulated weight */
 } tc_table_rows;
 
 /* mu at one pressure for n (velocity, beta) queries (interpolate in P once, then in (|v|, beta)).
