@@ -59,6 +59,14 @@ def _model():
     return StripDrawModel(params, make_friction_law(params, read_table(PROJECT_ROOT / "models" / "friction_table.npz")))
 
 
+def kernels_variant() -> str:
+    """Which per-step kernels of the bar (and implicit step) this processor runs, as the FMU chooses them
+    (components/native/core/tc_cpu.h): the AVX variant or the SSE2 baseline; the same numbers either way."""
+    from tribocosim.components.native.toolchain.library import core
+
+    return "AVX (tc_step_kernels_avx.c)" if core().lib.tc_step_kernels_avx_chosen() else "the SSE2 baseline"
+
+
 def _slave(unzipped: str, md):
     from fmpy.fmi2 import FMU2Slave
 
@@ -314,7 +322,7 @@ def main(argv=None) -> int:
 
         load = os.getloadavg()
         print(f"StripDraw FMU benchmark ({fmu}); load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, "
-              f"{os.cpu_count()} CPUs")  # fmt: skip
+              f"{os.cpu_count()} CPUs; the bar's per-step kernels run as {kernels_variant()}")  # fmt: skip
         fmus = {"this": Path(fmu)}
         label = args.baseline_rev or "baseline"
         if args.baseline_rev or args.baseline_fmu:

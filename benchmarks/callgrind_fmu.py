@@ -13,8 +13,8 @@ library keeps only the fmi2 functions' names), split by the inclusive costs call
 make each part of a step:
 
 ==================  =============================================================================================
-integrator          ``tc_sd_galpha`` (the implicit bar step: the free bar condensed, Newton on the pad's window),
-                    ``tc_sd_explicit``, ``tc_sd_chain_factors``
+integrator          ``tc_sd_galpha`` or ``tc_sd_galpha_avx`` (the implicit bar step: the free bar condensed, Newton on
+                    the pad's window), ``tc_sd_explicit``, ``tc_sd_chain_factors``
 friction lookup     ``tc_law_mu``, ``tc_law_beta_cap`` (the table's lookups for the friction limits and the cap)
 debris transport    ``tc_sd_debris_interval`` without the cap's lookup (source, sink, upwind transport, cap)
 state backup        ``tc_sd_backup``, ``tc_sd_restore`` (what makes a refused step leave the state unchanged)
@@ -35,7 +35,10 @@ nothing is written into the checkout) and prints the ratio.
     python benchmarks/callgrind_fmu.py [--steps 1750] [--n-elements N] [--where] [--meshes 100 450]
                                        [--baseline-rev 2a6e61a] [--keep FILE]
 
-Needs valgrind on the PATH. The count is the same from run to run up to a few instructions per step.
+Needs valgrind on the PATH. The count is the same from run to run up to a few instructions per step. It is the count
+of the variant the processor runs: on one with AVX (valgrind reports it as the processor does) the bar's per-step
+kernels and its implicit step are those compiled for it (components/native/core/tc_step_kernels_avx.c), which execute fewer
+instructions than the baseline's for the same numbers; the script prints which ran.
 """
 
 from __future__ import annotations
@@ -51,11 +54,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fmu import N_DRAW, host_command, revision_fmu  # noqa: E402 (the same host, draw and baseline build)
+from bench_fmu import N_DRAW, host_command, kernels_variant, revision_fmu  # noqa: E402 (the same host, draw, build)
 
 #: the parts of a step and the functions whose inclusive costs make them (see the module docstring)
 PARTS = {
-    "integrator": ("tc_sd_galpha", "tc_sd_explicit", "tc_sd_chain_factors"),
+    "integrator": ("tc_sd_galpha", "tc_sd_galpha_avx", "tc_sd_explicit", "tc_sd_chain_factors"),
     "friction lookup": ("tc_law_mu", "tc_law_beta_cap"),
     "debris transport": ("tc_sd_debris_interval",),
     "state backup": ("tc_sd_backup", "tc_sd_restore"),
@@ -215,7 +218,8 @@ def main(argv=None) -> int:
     base.add_argument("--baseline-fmu", type=Path, help="also count this StripDraw.fmu")
     args = parser.parse_args(argv)
     total, per = count(args.steps, args.n_elements, args.keep)
-    print(f"callgrind, C host loop (fmi2SetReal + fmi2DoStep + fmi2GetReal), {args.steps} steps of the default draw: "
+    print(f"callgrind, C host loop (fmi2SetReal + fmi2DoStep + fmi2GetReal), {args.steps} steps of the default draw, "
+          f"the bar's per-step kernels as {kernels_variant()}: "
           f"{total} instructions, {per:.0f} per step")
     if args.baseline_rev or args.baseline_fmu:
         with tempfile.TemporaryDirectory(prefix="tribocosim-baseline-") as tmp:

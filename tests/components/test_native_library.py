@@ -84,3 +84,41 @@ def test_a_step_that_cannot_converge_is_refused_with_the_state_unchanged(few_new
     with pytest.raises(ConvergenceError, match="did not converge .* halved 12 times"):
         m2.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08})
     assert (m2.get_state() == before).all()
+
+
+@pytest.mark.parametrize("settings", [{}, {"n_elements": 451, "debris_sink_length": 0.01},
+                                      {"friction_velocity": "slip_rate", "internal_step": 2.5e-4},
+                                      {"n_elements": 7, "rho_inf": 1.0}])
+def test_the_avx_kernels_give_the_baseline_numbers_bit_for_bit(settings, tmp_path_factory, monkeypatch):
+    """On a processor with AVX the bar's per-step kernels and its implicit step run as compiled for it
+    (components/native/core/tc_step_kernels_avx.c: the same C in four-double registers); a build with -DTC_NO_AVX runs the
+    baseline's (SSE2). The same arithmetic in wider registers: every output of every step and the whole state at the
+    end (displacements, velocities, accelerations, plastic slip, debris, forces) the same bits, on meshes whose node
+    counts leave every remainder of the four-wide loops."""
+    import numpy as np
+
+    import tribocosim
+    from tribocosim.components.stripdraw import (StripDrawModel, StripDrawParameters, friction, make_friction_law, model,
+                                                 read_table)
+
+    avx = library.core()
+    if not avx.lib.tc_step_kernels_avx_chosen():
+        pytest.skip("this processor (or its operating system) does not run AVX: only the baseline is chosen here")
+    path = tmp_path_factory.getbasetemp() / "no_avx" / "libtc_core.so"
+    baseline = library.Core(path if path.is_file() else library.build(path, ["TC_NO_AVX"]))
+    assert baseline.lib.tc_step_kernels_avx_chosen() == 0
+
+    def draw(core):
+        for module in (friction, model, library):  # the table's handle is made by library.core()
+            monkeypatch.setattr(module, "core", lambda: core)
+        p = StripDrawParameters(draw_length=0.03, **settings)
+        m = StripDrawModel(p, make_friction_law(p, read_table(tribocosim.DEFAULT_TABLE)))
+        outs = [m.step(1e-3, {"normal_force": 12250.0, "grip_velocity": 0.08 * min(1.0, (k + 0.5) / 20)})
+                for k in range(300)]
+        return outs, m.get_state()
+
+    outs_avx, state_avx = draw(avx)
+    outs_base, state_base = draw(baseline)
+    assert outs_avx == outs_base
+    assert np.array_equal(state_avx, state_base)
+    assert outs_avx[-1]["pull_force"] > 0 and outs_avx[-1]["beta_max"] > 0, "the draw slid and made debris"

@@ -43,10 +43,11 @@
  * and the end springs are K_t = q_{lo-1} e_{lo-1}, K_g = q'_{hi+1} g_{hi+1} (c with no grip side: the
  * element to the grip node itself). With rho the eliminated right-hand sides (the negative residuals at
  * d = 0, rho_i += q_{i-1} rho_{i-1} along the tail), the back-substitution is d_i = rho_i / d'_i + q_i d_{i+1}.
- * The nodes' residuals at d = 0, their Newmark updates and the elements' forces have no recurrence and are formed
- * in passes of their own (in vector lanes). Each recurrence is a chain of dependent operations, so a long one is swept
- * as two halves side by side whose latencies overlap (recurrence(): the second half from zero, then corrected by
- * the products of its q times the first half's last value); the results differ from one sweep by round-off only.
+ * The nodes' residuals at d = 0, the terms rho_i / d'_i, their Newmark updates and the elements' forces have no
+ * recurrence and are formed in passes of their own (in vector lanes: two doubles, or four where the processor runs
+ * AVX, tc_step_kernels_avx.c). Each recurrence is a chain of dependent operations, so a long one is swept as two
+ * halves side by side whose latencies overlap (recurrence(): the second half from zero, then corrected by the
+ * products of its q times the first half's last value); the results differ from one sweep by round-off only.
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
  * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
@@ -58,6 +59,11 @@
 
 #include "tc_galpha.h"
 #include "tc_kernels.h"
+
+#ifndef TC_VARIANT /* the baseline; tc_step_kernels_avx.c compiles this file again, naming its step tc_sd_galpha_avx */
+#define TC_VARIANT(name) name
+#define TC_GALPHA_BASELINE
+#endif
 
 /* the interface law (Eq. 4-5) for one node: traction, slipping flag, and the potential phi of the return-mapped
  * spring (k_s x^2 / 2 sticking, T_max |x| - T_max^2 / (2 k_s) slipping; its derivative is T) */
@@ -78,6 +84,7 @@ static double interface_law(double x, double ks, double tmax, int *slipping, dou
     return trial;
 }
 
+#ifdef TC_GALPHA_BASELINE /* defined once, in the baseline's translation unit */
 void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double c, double *chain) {
     const size_t N = n - 1;
     double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
@@ -100,6 +107,7 @@ void tc_sd_chain_factors(size_t n, double cm, double am, const double *m, double
         qg[j] = c * ig[j];
     }
 }
+#endif
 
 /* the window: the nodes with ov > 0 and the free nodes between them, free nodes only (<= N-1); node N-1 alone
  * when no free node touches the pad. The nodes with ov > 0 lie in [first, last] (first > last: anywhere). */
@@ -174,23 +182,23 @@ static void window_tractions(const window_problem *w, const double *d, double *T
     }
 }
 
-/* the window residual r = dPi_W/dd at d with the tractions T of window_potential, and max |r|; f: the nodal forces
- * (contact + elements inside the window) */
+/* the window residual r = dPi_W/dd at d with the tractions T of window_potential, and max |r|; f: work (the elements'
+ * forces k_e s_e, s_e = dU_e + d_e+1 - d_e the extensions of the window's elements [lo, hi)) */
 static double window_residual(const window_problem *w, const double *d, const double *T, double *f, double *r) {
     const size_t lo = w->lo, hi = w->hi;
     const double *x = w->x, *dU = w->dU, *lin = w->lin, *ov = w->ov, *m = w->m;
     const double wT = w->wT, ke = w->ke, cm = w->cm, caf = 1.0 - w->af;
-    double kl = 0.0; /* k_e s of the element before node i (none before lo) */
-    for (size_t i = lo; i <= hi; ++i) { /* f_i = (T_i w_T ov_i + k_e s_i-1) - k_e s_i, s_e the elements' extensions */
-        double fi = T[i] * wT * ov[i];
-        if (i > lo) fi += kl;
-        if (i < hi) {
-            kl = ke * (dU[i] + (d[i + 1] - d[i]));
-            fi -= kl;
-        }
-        f[i] = fi;
-        r[i] = cm * m[i] * (x[i] + d[i]) + lin[i] + caf * fi;
+    for (size_t e = lo; e < hi; ++e) f[e] = ke * (dU[e] + (d[e + 1] - d[e]));
+    /* the nodal force (T_i w_T ov_i + k_e s_i-1) - k_e s_i, without the terms of elements outside the window */
+#define RESIDUAL(i, fi) (cm * m[i] * (x[i] + d[i]) + lin[i] + caf * (fi))
+    if (lo == hi) {
+        r[lo] = RESIDUAL(lo, T[lo] * wT * ov[lo]);
+    } else {
+        r[lo] = RESIDUAL(lo, T[lo] * wT * ov[lo] - f[lo]);
+        for (size_t i = lo + 1; i < hi; ++i) r[i] = RESIDUAL(i, (T[i] * wT * ov[i] + f[i - 1]) - f[i]);
+        r[hi] = RESIDUAL(hi, T[hi] * wT * ov[hi] + f[hi - 1]);
     }
+#undef RESIDUAL
     r[lo] += w->st + w->kt * d[lo];
     r[hi] += w->sg + w->kg * d[hi];
     double rm = 0.0;
@@ -393,19 +401,18 @@ static void element_forces(size_t N, double ke, const double *restrict d, double
 /* A run shorter than this is swept as one recurrence (splitting it would save less latency than it costs) */
 #define SPLIT_RUN 24
 
-/* The linear recurrence y_k = u_k + q_k y_prev over the L nodes k = at, at + s, ... (s = +1 or -1), with u_k = a_k b_k
- * (b NULL: a_k), q_k = q[k + qoff] and y_prev = carry before the first, into y (which may be a).
+/* The linear recurrence y_k = a_k + q_k y_prev over the L nodes k = at, at + s, ... (s = +1 or -1), with
+ * q_k = q[k + qoff] and y_prev = carry before the first, into y (which may be a).
  * A run of SPLIT_RUN nodes or more is swept as two halves side by side, so that their latencies overlap: the first
  * from the carry, the second from y_prev = 0 with the running products P of its q (into work, L / 2 + 1 doubles), then
  * corrected by P times the first half's last value (the recurrence is linear: its solution from a start value is the
  * solution from 0 plus the start value carried by the products of q). */
-static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, const double *a, const double *b,
-                       const double *q, double carry, double *y, double *work) {
-#define U(k) (b != NULL ? a[k] * b[k] : a[k])
+static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, const double *a, const double *q,
+                       double carry, double *y, double *work) {
     if (L < SPLIT_RUN) {
         for (size_t t = 0; t < L; ++t) {
             const ptrdiff_t k = at + (ptrdiff_t)t * s;
-            y[k] = carry = U(k) + q[k + qoff] * carry;
+            y[k] = carry = a[k] + q[k + qoff] * carry;
         }
         return;
     }
@@ -414,24 +421,23 @@ static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, cons
     double y1 = carry, y2 = 0.0, p = 1.0;
     for (size_t t = 0; t < h; ++t) { /* side by side: the second half has h or h + 1 nodes */
         const ptrdiff_t k1 = at + (ptrdiff_t)t * s, k2 = at2 + (ptrdiff_t)t * s;
-        y[k1] = y1 = U(k1) + q[k1 + qoff] * y1;
-        y[k2] = y2 = U(k2) + q[k2 + qoff] * y2;
+        y[k1] = y1 = a[k1] + q[k1 + qoff] * y1;
+        y[k2] = y2 = a[k2] + q[k2 + qoff] * y2;
         work[t] = p = p * q[k2 + qoff];
     }
     if (L2 > h) {
         const ptrdiff_t k2 = at2 + (ptrdiff_t)h * s;
-        y[k2] = U(k2) + q[k2 + qoff] * y2;
+        y[k2] = a[k2] + q[k2 + qoff] * y2;
         work[h] = p * q[k2 + qoff];
     }
     for (size_t t = 0; t < L2; ++t) y[at2 + (ptrdiff_t)t * s] += work[t] * y1;
-#undef U
 }
 
-int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
-                 signed char *contact, double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
-                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
-                 double rtol, const double *chain, double *fric, double *reaction, double *work,
-                 signed char *iwork) {
+int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
+                             signed char *contact, double *fprev, const double *ov, size_t first, size_t last,
+                             const double *m, double ke, double ks, double wT, const double *tmax, double vg, double am,
+                             double af, double beta, double gamma, int max_iter, double rtol, const double *chain,
+                             double *fric, double *reaction, double *work, signed char *iwork) {
     const size_t N = n - 1;
     const double c = (1.0 - af) * ke;
     const double *et = chain, *qt = chain + n, *it = chain + 2 * n, *eg = chain + 3 * n, *qg = chain + 4 * n,
@@ -470,8 +476,8 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
     chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
     /* each chain's recurrence from its free end (rho_0 = r_0, rho_N-1 = r_N-1), as two halves side by side (step: work
      * until the Newton steps) */
-    if (nt > 1) recurrence(nt - 1, 1, 1, -1, rho, NULL, qt, rho[0], rho, step);
-    if (ng > 1) recurrence(ng - 1, (ptrdiff_t)(N - 2), -1, 1, rho, NULL, qg, rho[N - 1], rho, step);
+    if (nt > 1) recurrence(nt - 1, 1, 1, -1, rho, qt, rho[0], rho, step);
+    if (ng > 1) recurrence(ng - 1, (ptrdiff_t)(N - 2), -1, 1, rho, qg, rho[N - 1], rho, step);
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -484,6 +490,9 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
         w.sg = -c * dU[hi];
         w.kg = c;
     }
+    /* the back-substitution's own terms rho_i / d'_i (rho_i times the inverse diagonal), in vector lanes */
+    for (size_t i = 0; i < nt; ++i) rho[i] *= it[i];
+    for (size_t i = hi + 1; i < N; ++i) rho[i] *= ig[i];
     double fscale = ke * fabs(dt * vg) + 1e-300;
     for (size_t i = lo; i <= hi; ++i) fscale += tmax[i] * wT * ov[i]; /* ov = 0 outside: those terms are +0 */
     fscale += tmax[N] * wT * ov[N];
@@ -520,8 +529,8 @@ int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *
         rmax = window_residual(&w, d, T, f, r);
     }
     /* back-substitute the chains (each as two halves, as above), then every free node's Newmark update */
-    if (nt > 0) recurrence(nt, (ptrdiff_t)lo - 1, -1, 0, rho, it, qt, d[lo], d, step);
-    if (ng > 0) recurrence(ng, (ptrdiff_t)hi + 1, 1, 0, rho, ig, qg, d[hi], d, step);
+    if (nt > 0) recurrence(nt, (ptrdiff_t)lo - 1, -1, 0, rho, qt, d[lo], d, step);
+    if (ng > 0) recurrence(ng, (ptrdiff_t)hi + 1, 1, 0, rho, qg, d[hi], d, step);
     newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U0, V0, A0, U, V, A);
     U[N] = U0[N] + shift;
     V[N] = vg;

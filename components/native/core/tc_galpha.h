@@ -21,9 +21,11 @@ typedef struct {
  * with ov > 0 lie in [first, last] (first > last: not known). */
 #define TC_SD_GALPHA_WORK(n) (14 * (n))
 #define TC_SD_GALPHA_IWORK(n) (2 * (n))
-int tc_sd_galpha(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
-                 signed char *contact, double *fprev, const double *ov, size_t first, size_t last, const double *m, double ke, double ks, double wT,
-                 const double *tmax, double vg, double am, double af, double beta, double gamma, int max_iter,
-                 double rtol, const double *chain, double *fric, double *reaction, double *work, signed char *iwork);
+typedef int tc_sd_galpha_fn(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
+                            signed char *contact, double *fprev, const double *ov, size_t first, size_t last,
+                            const double *m, double ke, double ks, double wT, const double *tmax, double vg, double am,
+                            double af, double beta, double gamma, int max_iter, double rtol, const double *chain,
+                            double *fric, double *reaction, double *work, signed char *iwork);
+tc_sd_galpha_fn tc_sd_galpha;
 
 #endif

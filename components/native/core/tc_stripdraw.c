@@ -52,6 +52,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "tc_cpu.h"
 #include "tc_debris.h"
 #include "tc_explicit.h"
 #include "tc_friction.h"
@@ -107,17 +108,6 @@ void tc_sd_overlap(size_t n, const double *X, const double *U, double half_le, d
  * the model
  * ------------------------------------------------------------------------------------------------- */
 
-/* whether the node positions X + U are in order (none below the one before it; not with a NaN) */
-static int positions_in_order(size_t n, const double *X, const double *U) {
-    int sorted = 1;
-    double before = X[0] + U[0];
-    for (size_t i = 1; i < n; ++i) {
-        const double x = X[i] + U[i];
-        sorted &= before <= x;
-        before = x;
-    }
-    return sorted;
-}
 /* The contact weights of U (the overlap with the pad over l_e) and their nonzero range. With the positions in order,
  * the interior nodes whose segment reaches past a_lo (x + l_e/2 > a_lo) are those from some node on, those whose
  * segment starts before a_hi (x - l_e/2 < a_hi) those up to some node: only the nodes of both sets can meet the pad,
@@ -128,7 +118,7 @@ static void update_weights(tc_stripdraw *m) {
     const size_t n = m->n;
     const double *X = m->X, *U = m->U, h = m->half_le;
     size_t b = 1, e = n > 1 ? n - 1 : 1; /* the interior nodes that may meet the pad: [b, e) */
-    if (n > 2 && positions_in_order(n, X, U)) {
+    if (n > 2 && m->kernels->positions_in_order(n, X, U)) {
         size_t lo = 1, hi = n - 1;
         while (lo < hi) { /* the first interior node with x + l_e/2 > a_lo */
             const size_t mid = lo + (hi - lo) / 2;
@@ -265,10 +255,10 @@ static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const
                          double vg, int depth, tc_msg msg) {
     const size_t n = m->n;
     double fric, reaction;
-    int it = tc_sd_galpha(n, h, from, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass, m->ke,
-                          m->ks, m->wT,
-                          m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma, TC_STRIPDRAW_NEWTON_MAX_ITER,
-                          NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork, m->giwork);
+    int it = m->kernels->galpha(n, h, from, m->U, m->V, m->A, m->Up, m->contact, m->fprev, ov, first, last, m->mass,
+                                m->ke, m->ks, m->wT, m->tmax, vg, m->am, m->af, m->beta_nm, m->gamma,
+                                TC_STRIPDRAW_NEWTON_MAX_ITER, NEWTON_RTOL, chain_for(m, h), &fric, &reaction, m->gwork,
+                                m->giwork);
     if (it >= 0) {
         m->reaction = reaction;
         return TC_OK;
@@ -288,43 +278,6 @@ static int implicit_step(tc_stripdraw *m, double h, const tc_sd_bar *from, const
     tc_sd_overlap(n, m->X, m->U, m->half_le, m->a_lo, m->a_hi, ov_mid);
     const tc_sd_bar mid = {m->U, m->V, m->A, m->fprev};
     return implicit_step(m, 0.5 * h, &mid, ov_mid, 1, 0, vg, depth + 1, msg);
-}
-
-/* d = a - b over n values, whether every d is finite (returned) and whether every a is (*a_finite): sums of 0 d in
- * four lanes (inf or NaN anywhere makes a sum NaN; the lanes let the loop run in vector registers). A finite
- * difference has finite operands, so a is scanned only when a d is not finite. */
-static int difference_finite(size_t n, const double *restrict a, const double *restrict b, double *restrict d,
-                             int *a_finite) {
-    double s[4] = {0.0, 0.0, 0.0, 0.0};
-    size_t i = 0;
-    for (; i + 4 <= n; i += 4)
-        for (int k = 0; k < 4; ++k) {
-            d[i + (size_t)k] = a[i + (size_t)k] - b[i + (size_t)k];
-            s[k] += 0.0 * d[i + (size_t)k];
-        }
-    for (; i < n; ++i) {
-        d[i] = a[i] - b[i];
-        s[0] += 0.0 * d[i];
-    }
-    if (isfinite(s[0] + s[1] + s[2] + s[3])) {
-        *a_finite = 1;
-        return 1;
-    }
-    double sa = 0.0;
-    for (i = 0; i < n; ++i) sa += 0.0 * a[i];
-    *a_finite = isfinite(sa);
-    return 0;
-}
-
-/* the largest of a[0..n-1], n >= 1, in four lanes (the compares overlap) */
-static double largest(const double *a, size_t n) {
-    double mx[4] = {a[0], a[0], a[0], a[0]};
-    size_t i = 0;
-    for (; i + 4 <= n; i += 4)
-        for (int k = 0; k < 4; ++k) mx[k] = a[i + (size_t)k] > mx[k] ? a[i + (size_t)k] : mx[k];
-    for (; i < n; ++i) mx[0] = a[i] > mx[0] ? a[i] : mx[0];
-    const double m01 = mx[1] > mx[0] ? mx[1] : mx[0], m23 = mx[3] > mx[2] ? mx[3] : mx[2];
-    return m23 > m01 ? m23 : m01;
 }
 
 /* whether the bar is at rest as made: every U, V, A, fprev and Up 0 (scanned from the grip, whose node moves first,
@@ -421,7 +374,7 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     }
     m->bar_in_backup = 0;
     /* the interval's increments; their slip rates |dU| / h are formed when read (form_slip_rates) */
-    const int du_finite = difference_finite(n, m->U, U0, m->dU, &m->u_finite);
+    const int du_finite = m->kernels->difference_finite(n, m->U, U0, m->dU, &m->u_finite);
     m->slip_h = h;
     m->normal_force = fn;
     m->grip_velocity = vg;
@@ -435,12 +388,17 @@ static int interval(tc_stripdraw *m, double h, double fn, double vg, tc_msg msg)
     m->w0_last = l0;
     update_weights(m);
     tc_sd_debris_interval(m, pressure, speed, w0, f0, l0, du_finite);
-    unsigned char *slipped = (unsigned char *)m->giwork + m->n; /* of the interval's limits, over [lo, hi) */
-    const size_t lo = m->limit_lo, hi = m->limit_hi;
+    /* the nodes that slid at the interval's limits, over [lo, hi): those of the limits' range that settle_interface
+     * reads (under the pad now) */
+    unsigned char *slipped = (unsigned char *)m->giwork + m->n;
+    const size_t lo = m->limit_lo > m->w_first ? m->limit_lo : m->w_first;
+    const size_t hi = m->limit_hi < m->w_last + 1 ? m->limit_hi : m->w_last + 1;
     const double ks = m->ks, *U = m->U, *Up = m->Up, *tmax = m->tmax;
     const signed char *contact = m->contact;
-    for (size_t i = lo; i < hi; ++i) /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
-        slipped[i] = contact[i] && fabs(ks * (U[i] - Up[i])) >= tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * ks * fabs(U[i]);
+    for (size_t i = lo; i < hi; ++i) { /* at the limit to its rounding: k_s times that of U (Up = U - T / k_s) */
+        const int at_limit = fabs(ks * (U[i] - Up[i])) >= tmax[i] * (1.0 - 1e-9) - 8.0 * DBL_EPSILON * ks * fabs(U[i]);
+        slipped[i] = (unsigned char)((contact[i] != 0) & at_limit);
+    }
     state_limits(m);
     settle_interface(m, slipped, lo, hi);
     return TC_OK;
@@ -616,6 +574,7 @@ int tc_stripdraw_create(const tc_stripdraw_params *p, const tc_table *table, con
                             (implicit ? (size_t)TC_SD_GALPHA_WORK(1) + MAX_HALVINGS + 1 + TC_SD_CHAIN_CACHE * TC_SD_CHAIN(1)
                                       : 1);
     m->state_size = tc_sd_state_size(n);
+    m->kernels = tc_step_kernels_for_cpu();
     m->pool = calloc(n_arrays * n, sizeof *m->pool);
     m->bytes = calloc(5 * n, 1); /* contact, clamped, generalized-alpha flags (2), bcontact */
     if (m->pool == NULL || m->bytes == NULL) {
@@ -786,7 +745,7 @@ void tc_stripdraw_outputs(const tc_stripdraw *m, double out[TC_STRIPDRAW_N_OUTPU
         int slipping;
         fs += tc_sd_traction(m->U[i] - m->Up[i], m->ks, m->tmax[i], &slipping) * m->wT * (w * m->le);
     }
-    const double bmax = largest(m->beta, n);
+    const double bmax = m->kernels->largest(m->beta, n);
     out[TC_STRIPDRAW_PULL_FORCE] = 2.0 * m->reaction;
     out[TC_STRIPDRAW_FRICTION_FORCE] = fs;
     out[TC_STRIPDRAW_MU_MEAN] = fn > 0 ? fs / fn : 0.0;

@@ -9,6 +9,7 @@
 #include "tc_common.h"
 #include "tc_stripdraw_params.h"
 #include "tc_table.h"
+#include "tc_step_kernels.h"
 #include "tc_table_lookup.h"
 
 #define TC_SD_CHAIN_CACHE 4   /* step lengths whose elimination factors are kept */
@@ -46,6 +47,7 @@ struct tc_stripdraw {
     double beta_hi;
     int refusal; /* enum tc_stripdraw_refusal of the last refused step */
     int u_finite; /* every U is finite after the last interval */
+    const tc_step_kernels *kernels; /* the passes over the bar and the implicit step for this processor */
     /* work arrays */
     double *U0, *w0, *dU, *weight, *vel, *mu, *ac, *bsrc, *bnew, *awork;
     double *fwork;          /* explicit: nodal forces */
