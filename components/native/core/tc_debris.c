@@ -35,6 +35,7 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
         sub[k] = 0.0;
         sup[k] = 0.0;
     }
+    int lower = 0; /* whether a subdiagonal entry is nonzero */
     for (size_t k = 0; k + 1 < n; ++k) {
         const size_t a = lo + k, b = a + 1;
         if (weight[a] > 0.0 && weight[b] > 0.0) {
@@ -46,10 +47,12 @@ void tc_sd_advect(size_t n_all, const double *beta, const double *dU, const doub
             } else {
                 diag[k] -= c;
                 sub[k + 1] += c;
+                lower |= c != 0.0;
             }
         }
     }
-    tc_thomas(n, sub, diag, sup, beta + lo, out + lo, tw); /* rhs is only read before x is written */
+    /* rhs is only read before x is written */
+    tc_thomas(n, lower ? sub : NULL, diag, sup, beta + lo, out + lo, tw);
 }
 
 /* the cap of beta of an interval at pressure P and grip speed (Eq. 24), kept for the last (P, speed) */

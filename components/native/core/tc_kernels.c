@@ -17,9 +17,7 @@ void tc_thomas(size_t n, const double *sub, const double *diag, const double *su
     double *c = work, *d = work + n;
     /* with no subdiagonal (the advection of debris on a strip drawn forwards) the forward sweep is divisions that
      * need not wait for each other */
-    int lower = 0;
-    for (size_t i = 1; i < n && !lower; ++i) lower = sub[i] != 0.0;
-    if (!lower) {
+    if (sub == NULL) {
         for (size_t i = 0; i < n; ++i) {
             c[i] = sup[i] / diag[i];
             d[i] = rhs[i] / diag[i];

@@ -11,7 +11,8 @@
 /* the first and last index k < n with a[k] > 0 (the pad's nodes); returns 0 when there is none. */
 TC_API int tc_sd_positive_range(size_t n, const double *a, size_t *first, size_t *last);
 
-/* tridiagonal solve (Thomas algorithm); work holds 2 n doubles; x must not alias the inputs. */
+/* tridiagonal solve (Thomas algorithm); sub NULL: no subdiagonal (an upper bidiagonal system); work holds 2 n doubles;
+ * x must not alias the inputs. */
 TC_API void tc_thomas(size_t n, const double *sub, const double *diag, const double *sup, const double *rhs,
                       double *x, double *work);
 

@@ -334,7 +334,7 @@ static int repeats_refusal(const tc_instance *c, double t, double dt) {
 }
 
 int tc_inst_do_step(tc_instance *c, double t, double dt) {
-    char a[TC_REPR_SIZE], b[TC_REPR_SIZE], shown[1024] = "", text[4096];
+    char a[TC_REPR_SIZE], b[TC_REPR_SIZE], text[4096];
     if (c->phase == TC_PHASE_FAILED) {
         tc_inst_logf(c, TC_LOG_ERROR, "doStep refused: the FMU is not usable (%s)", c->failure);
         return TC_LOG_ERROR;
@@ -361,6 +361,7 @@ int tc_inst_do_step(tc_instance *c, double t, double dt) {
     memset(c->input_derivatives, 0, sizeof c->input_derivatives); /* they were for this step */
     c->terminate_requested = 0;
     if (rc != TC_OK) {
+        char shown[1024] = ""; /* the inputs, for the message (made only for a refused step) */
         for (int k = 0; k < TC_N_VARIABLES; ++k) {
             const tc_variable *v = &TC_VARIABLES[k];
             if (v->causality != TC_CAUSALITY_INPUT) continue;
