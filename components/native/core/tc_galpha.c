@@ -398,6 +398,26 @@ static void element_forces(size_t N, double ke, const double *restrict d, double
     fprev[N] = ke * dU[N - 1];
 }
 
+/* Node i under the pad at the step's end: in contact, its plastic slip (Up = U - T / k_s where it slides, else as it
+ * was), its nodal force the elements' and the contact force T w_T ov; returns the contact force */
+static inline double in_contact(size_t i, size_t N, const signed char *state, const double *T, const double *U,
+                                const double *Upn, const double *ov, double ks, double wT, double ke, const double *dU,
+                                signed char *contact, double *Up, double *fprev) {
+    contact[i] = 1;
+    Up[i] = state[i] != 1 ? U[i] - T[i] / ks : Upn[i];
+    const double fc = T[i] * wT * ov[i];
+    double f_i = fc;
+    if (i > 0) f_i += ke * dU[i - 1];
+    if (i < N) f_i -= ke * dU[i];
+    fprev[i] = f_i;
+    return fc;
+}
+
+/* y += c p over n values (in vector lanes) */
+static void add_scaled(size_t n, double *restrict y, const double *restrict p, double c) {
+    for (size_t j = 0; j < n; ++j) y[j] += p[j] * c;
+}
+
 /* A run shorter than this is swept as one recurrence (splitting it would save less latency than it costs) */
 #define SPLIT_RUN 24
 
@@ -418,19 +438,22 @@ static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, cons
     }
     const size_t h = L / 2, L2 = L - h; /* the first half's nodes, the second's */
     const ptrdiff_t at2 = at + (ptrdiff_t)h * s;
+    /* P in the order of the second half's nodes in memory (backwards when s = -1), so that the correction is one
+     * contiguous pass in vector lanes */
+    double *P = work + (s > 0 ? 0 : L2 - 1);
     double y1 = carry, y2 = 0.0, p = 1.0;
     for (size_t t = 0; t < h; ++t) { /* side by side: the second half has h or h + 1 nodes */
         const ptrdiff_t k1 = at + (ptrdiff_t)t * s, k2 = at2 + (ptrdiff_t)t * s;
         y[k1] = y1 = a[k1] + q[k1 + qoff] * y1;
         y[k2] = y2 = a[k2] + q[k2 + qoff] * y2;
-        work[t] = p = p * q[k2 + qoff];
+        P[(ptrdiff_t)t * s] = p = p * q[k2 + qoff];
     }
     if (L2 > h) {
         const ptrdiff_t k2 = at2 + (ptrdiff_t)h * s;
         y[k2] = a[k2] + q[k2 + qoff] * y2;
-        work[h] = p * q[k2 + qoff];
+        P[(ptrdiff_t)h * s] = p * q[k2 + qoff];
     }
-    for (size_t t = 0; t < L2; ++t) y[at2 + (ptrdiff_t)t * s] += work[t] * y1;
+    add_scaled(L2, y + (s > 0 ? at2 : at2 - (ptrdiff_t)(L2 - 1)), work, y1); /* from its first node in memory */
 }
 
 int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
@@ -549,19 +572,9 @@ int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double 
     element_forces(N, ke, d, dU, fprev);
     memset(contact, 0, n);
     double fr = 0.0;
-    for (size_t kw = lo; kw <= hi + 1; ++kw) {
-        const size_t i = kw <= hi ? kw : N; /* the window, then the grip node (hi < N always) */
-        if (!(ov[i] > 0.0)) continue;
-        contact[i] = 1;
-        Up[i] = Upn[i];
-        if (state[i] != 1) Up[i] = U[i] - T[i] / ks;
-        const double fc = T[i] * wT * ov[i];
-        fr += fc;
-        double f_i = fc;
-        if (i > 0) f_i += ke * dU[i - 1];
-        if (i < N) f_i -= ke * dU[i];
-        fprev[i] = f_i;
-    }
+    for (size_t i = lo; i <= hi; ++i) /* the window (hi < N always), then the grip node */
+        if (ov[i] > 0.0) fr += in_contact(i, N, state, T, U, Upn, ov, ks, wT, ke, dU, contact, Up, fprev);
+    if (ov[N] > 0.0) fr += in_contact(N, N, state, T, U, Upn, ov, ks, wT, ke, dU, contact, Up, fprev);
     *fric = fr;
     *reaction = fprev[N];
     return iters;
