@@ -9,7 +9,10 @@ read from the files, and the aarch64-linux one run under qemu-user against the x
 - the aarch64-linux binary, run by an aarch64 build of the C host (tests/native/host/fmi3_host.c) under
   qemu-aarch64 (Debian's qemu-user, the aarch64 glibc from libc6-arm64-cross), draws the strip as the x86_64
   binary does: the same outputs and nodal fields, to the last bit or within 1e-12 relative (libm may round an
-  exp or pow differently on the two CPUs; -ffp-contract=off keeps the arithmetic itself identical).
+  exp or pow differently on the two CPUs; -ffp-contract=off keeps the arithmetic itself identical);
+- the win64 DLL, run by a Windows host (tests/native/host/fmi2_host_windows.c) under wine (Debian's wine64), draws as
+  the linux64 library does (within 1e-12 relative), and a build of it with the SSE2 step kernels only
+  (-DTC_NO_AVX) gives the same bits as the shipped one, which chooses the AVX kernels on a processor with AVX.
 
 The cross-builds take minutes the first time (zig builds each C library once): slow, run by .ci/run.
 """
@@ -250,3 +253,70 @@ def test_the_aarch64_linux_binary_under_qemu_draws_as_the_x86_64_one(every_platf
           f"{'bit-identical' if same else f'max relative difference {rel:.3g}'}")
     assert same or rel <= 1e-12, rel
     assert np.max(native[:, 1]) > 100.0, "a real draw: the pull force is there"
+
+
+def _wine() -> str | None:
+    """Debian's wine64 (apt-get install wine64): the command, or None."""
+    found = shutil.which("wine64")
+    return found or ("/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").is_file() else None)
+
+
+@pytest.mark.slow
+def test_the_win64_binary_under_wine_draws_as_the_x86_64_linux_one_with_either_step_kernels(every_platform, tmp_path):
+    """The FMI 2.0 win64 DLL in a Windows host (tests/native/host/fmi2_host_windows.c) under wine: the default draw's
+    outputs those of the linux64 library to round-off (another C library's exp and log), and a win64 DLL built with
+    -DTC_NO_AVX (the SSE2 step kernels whatever the processor, components/native/core/tc_cpu.h) gives the same bits as
+    the shipped one (which runs the AVX kernels where the processor has AVX): the variant chosen at run time is
+    exercised on Windows too."""
+    from fmpy import extract, read_model_description
+
+    from tribocosim.components.fmus import native_build
+    from tribocosim.components.native.toolchain import declarations
+
+    wine = _wine()
+    assert wine, "wine64 (Debian: apt-get install wine64) runs the win64 binary"
+    fmu = every_platform[2] / "StripDraw.fmu"
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    folders = {label: Path(extract(str(fmu), str(tmp_path / label))) for label in ("shipped", "no_avx")}
+    comp = native_build.component("StripDraw")
+    include = tmp_path / "include"
+    declarations.write_params_headers(include, [comp])
+    (include / "tc_fmu_model.h").write_text(declarations.model_header(comp, md.guid), encoding="ascii")
+    dll = native_build.binary_path("StripDraw", "win64")
+    compiler.compile_shared(native_build.sources(comp), folders["no_avx"] / dll, "win64",
+                            include_dirs=[include, native_build.fmi2_headers()], defines=["TC_NO_AVX"])
+    host = compiler.compile_executable([HERE / "host" / "fmi2_host_windows.c"], tmp_path / "fmi2_host_windows.exe",
+                                       extra_flags=["-isystem", str(native_build.fmi2_headers())], platform="win64")
+    outputs = [str(vr[n]) for n in ("pull_force", "friction_force", "mu_mean", "beta_max", "sliding_distance")]
+    inputs = [f"{vr['normal_force']}=12250", f"{vr['grip_velocity']}=0.08"]
+
+    def windows(label: str) -> np.ndarray:
+        folder = folders[label]
+        cmd = [wine, str(host), "Z:" + str(folder / dll).replace("/", "\\"), md.guid,
+               (folder / "resources").as_uri().replace("file://", "file:///Z:"), "300", "0.001", *inputs, *outputs]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
+                              env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "WINEDEBUG": "-all"})
+        assert proc.returncode == 0, f"{label}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
+        return np.array([[float(x) for x in line.split(",")] for line in proc.stdout.split()])
+
+    shipped, no_avx = windows("shipped"), windows("no_avx")
+    assert shipped.shape == (300, 5) and np.array_equal(shipped, no_avx)
+    linux_host = compiler.compile_executable([HERE / "host" / "fmi2_host.c"], tmp_path / "fmi2_host",
+                                             extra_flags=["-isystem", str(native_build.fmi2_headers())], libs=["-ldl"])
+    steps = [(1e-3, 12250.0, 0.08)] * 300
+    steps_file = tmp_path / "steps.txt"
+    steps_file.write_text("\n".join(",".join(repr(x) for x in row) for row in steps) + "\n")
+    linux_folder = Path(extract(str(fmu), str(tmp_path / "linux")))
+    proc = subprocess.run([str(linux_host), str(linux_folder), "StripDraw", md.guid, "--inputs",
+                           f"{vr['normal_force']},{vr['grip_velocity']}", "--outputs",
+                           ",".join(f"r:{o}" for o in outputs), "--steps", str(steps_file)],
+                          capture_output=True, text=True, timeout=600, env={"PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    linux = np.array([[float(x) for x in line.split(",")[1:]] for line in proc.stdout.split()])
+    scale = np.maximum(np.max(np.abs(linux), axis=0), 1e-300)
+    rel = np.max(np.abs(shipped - linux) / scale)
+    print(f"\nwin64 (wine) vs x86_64-linux, 300 steps: max relative difference {rel:.3g}; the win64 DLL with the SSE2 "
+          "step kernels only: bit-identical")
+    assert rel <= 1e-12, rel
+    assert np.max(linux[:, 0]) > 100.0, "a real draw: the pull force is there"

@@ -256,10 +256,10 @@ def write_universal(slices, output: str | os.PathLike) -> Path:
 
 def compile_executable(sources, output: str | os.PathLike, *, include_dirs=(), defines=(), extra_flags=(),
                        libs=(), platform: str = "linux64") -> Path:
-    """Compile C ``sources`` into an executable for a Linux platform (the tests' FMI hosts: linux64, or
-    aarch64-linux to run under qemu-user)."""
-    if platform not in ("linux64", "aarch64-linux"):
-        raise CompileError(f"platform = {platform!r}: executables are built for linux64 or aarch64-linux")
+    """Compile C ``sources`` into an executable (the tests' FMI hosts: linux64, aarch64-linux to run under qemu-user,
+    or win64 to run under wine)."""
+    if platform not in ("linux64", "aarch64-linux", "win64"):
+        raise CompileError(f"platform = {platform!r}: executables are built for linux64, aarch64-linux or win64")
     out = Path(output)
     out.parent.mkdir(parents=True, exist_ok=True)
     cmd = [*_command(PLATFORMS[platform][0], include_dirs, defines, extra_flags), "-o", str(out),
