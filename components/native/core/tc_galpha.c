@@ -46,8 +46,9 @@
  * The nodes' residuals at d = 0, the terms rho_i / d'_i, their Newmark updates and the elements' forces have no
  * recurrence and are formed in passes of their own (in vector lanes: two doubles, or four where the processor runs
  * AVX, tc_step_kernels_avx.c). Each recurrence is a chain of dependent operations, so a long one is swept as two
- * halves side by side whose latencies overlap (recurrence(): the second half from zero, then corrected by the
- * products of its q times the first half's last value); the results differ from one sweep by round-off only.
+ * halves side by side whose latencies overlap (the second half from zero, then corrected by the products of its q
+ * times the first half's last value; the results differ from one sweep by round-off only), and the tail's and the grip
+ * side's side by side too (recurrences()).
  *
  * The cost of a step is one pass over the free nodes plus Newton on the window (~24 of the default 151
  * nodes). tests/components/test_stripdraw_verification.py holds the step to its convergence order on the linear
@@ -422,38 +423,78 @@ static void add_scaled(size_t n, double *restrict y, const double *restrict p, d
 #define SPLIT_RUN 24
 
 /* The linear recurrence y_k = a_k + q_k y_prev over the L nodes k = at, at + s, ... (s = +1 or -1), with
- * q_k = q[k + qoff] and y_prev = carry before the first, into y (which may be a).
+ * q_k = q[k + qoff] and y_prev = carry before the first, into y (which may be a): a run.
  * A run of SPLIT_RUN nodes or more is swept as two halves side by side, so that their latencies overlap: the first
  * from the carry, the second from y_prev = 0 with the running products P of its q (into work, L / 2 + 1 doubles), then
  * corrected by P times the first half's last value (the recurrence is linear: its solution from a start value is the
  * solution from 0 plus the start value carried by the products of q). */
-static void recurrence(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, const double *a, const double *q,
-                       double carry, double *y, double *work) {
-    if (L < SPLIT_RUN) {
-        for (size_t t = 0; t < L; ++t) {
-            const ptrdiff_t k = at + (ptrdiff_t)t * s;
-            y[k] = carry = a[k] + q[k + qoff] * carry;
-        }
-        return;
-    }
-    const size_t h = L / 2, L2 = L - h; /* the first half's nodes, the second's */
+typedef struct {
+    size_t L, h;                     /* its nodes; the first half's (a split run) */
+    const double *a1, *q1, *a2, *q2; /* a and q at each half's first node */
+    double *y1, *y2, *P;             /* y at each half's first node; P at the second half's first node */
+    double *work;                    /* P's first value in memory */
+    ptrdiff_t s;
+    double carry;
+} run;
+
+/* a run of L nodes set up for its sweep */
+static run make_run(size_t L, ptrdiff_t at, ptrdiff_t s, ptrdiff_t qoff, const double *a, const double *q, double carry,
+                    double *y, double *work) {
+    if (L == 0) return (run){0, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, s, carry}; /* no pointer into y */
+    const size_t h = L / 2, L2 = L - h;
     const ptrdiff_t at2 = at + (ptrdiff_t)h * s;
     /* P in the order of the second half's nodes in memory (backwards when s = -1), so that the correction is one
      * contiguous pass in vector lanes */
-    double *P = work + (s > 0 ? 0 : L2 - 1);
-    double y1 = carry, y2 = 0.0, p = 1.0;
-    for (size_t t = 0; t < h; ++t) { /* side by side: the second half has h or h + 1 nodes */
-        const ptrdiff_t k1 = at + (ptrdiff_t)t * s, k2 = at2 + (ptrdiff_t)t * s;
-        y[k1] = y1 = a[k1] + q[k1 + qoff] * y1;
-        y[k2] = y2 = a[k2] + q[k2 + qoff] * y2;
-        P[(ptrdiff_t)t * s] = p = p * q[k2 + qoff];
+    return (run){L, h, a + at, q + at + qoff, a + at2, q + at2 + qoff, y + at, y + at2, work + (s > 0 ? 0 : L2 - 1),
+                 work, s, carry};
+}
+
+/* a run shorter than SPLIT_RUN, swept as one recurrence */
+static void whole_run(const run *r) {
+    double carry = r->carry;
+    for (size_t t = 0; t < r->L; ++t) {
+        const ptrdiff_t k = (ptrdiff_t)t * r->s;
+        r->y1[k] = carry = r->a1[k] + r->q1[k] * carry;
     }
-    if (L2 > h) {
-        const ptrdiff_t k2 = at2 + (ptrdiff_t)h * s;
-        y[k2] = a[k2] + q[k2 + qoff] * y2;
-        P[(ptrdiff_t)h * s] = p * q[k2 + qoff];
+}
+
+/* node t of each half of a split run, from and into the carries c[0] (first half), c[1] (second), c[2] (P) */
+static inline void split_node(const run *r, size_t t, double c[3]) {
+    const ptrdiff_t k = (ptrdiff_t)t * r->s;
+    r->y1[k] = c[0] = r->a1[k] + r->q1[k] * c[0];
+    r->y2[k] = c[1] = r->a2[k] + r->q2[k] * c[1];
+    r->P[k] = c[2] = c[2] * r->q2[k];
+}
+
+/* a split run's last node of an odd second half, then the second half corrected */
+static void split_finish(const run *r, const double c[3]) {
+    const size_t L2 = r->L - r->h;
+    if (L2 > r->h) {
+        const ptrdiff_t k = (ptrdiff_t)r->h * r->s;
+        r->y2[k] = r->a2[k] + r->q2[k] * c[1];
+        r->P[k] = c[2] * r->q2[k];
     }
-    add_scaled(L2, y + (s > 0 ? at2 : at2 - (ptrdiff_t)(L2 - 1)), work, y1); /* from its first node in memory */
+    add_scaled(L2, r->s > 0 ? r->y2 : r->y2 - (L2 - 1), r->work, c[0]); /* from its first node in memory */
+}
+
+/* Two independent runs (the tail's and the grip side's; L = 0: none, their work apart) swept side by side while both
+ * are split, so that the latencies of all four halves overlap; each run's operations are those it has alone, in its
+ * order (the same numbers as one run after the other). */
+static void recurrences(const run *u, const run *v) {
+    const int su = u->L >= SPLIT_RUN, sv = v->L >= SPLIT_RUN;
+    if (!su) whole_run(u);
+    if (!sv) whole_run(v);
+    const size_t hu = su ? u->h : 0, hv = sv ? v->h : 0, both = hu < hv ? hu : hv;
+    double cu[3] = {u->carry, 0.0, 1.0}, cv[3] = {v->carry, 0.0, 1.0};
+    size_t t = 0;
+    for (; t < both; ++t) {
+        split_node(u, t, cu);
+        split_node(v, t, cv);
+    }
+    for (size_t tu = t; tu < hu; ++tu) split_node(u, tu, cu);
+    for (size_t tv = t; tv < hv; ++tv) split_node(v, tv, cv);
+    if (su) split_finish(u, cu);
+    if (sv) split_finish(v, cv);
 }
 
 int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double *U, double *V, double *A, double *Up,
@@ -497,10 +538,11 @@ int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double 
         chain_residuals(1, nt, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
     }
     chain_residuals(hi + 1, N, shift, dt, cA, ke, af, V0, A0, f0, dU, cmm, amm, x, rho);
-    /* each chain's recurrence from its free end (rho_0 = r_0, rho_N-1 = r_N-1), as two halves side by side (step: work
-     * until the Newton steps) */
-    if (nt > 1) recurrence(nt - 1, 1, 1, -1, rho, qt, rho[0], rho, step);
-    if (ng > 1) recurrence(ng - 1, (ptrdiff_t)(N - 2), -1, 1, rho, qg, rho[N - 1], rho, step);
+    /* each chain's recurrence from its free end (rho_0 = r_0, rho_N-1 = r_N-1), as two halves side by side, the two
+     * chains side by side too (step and tw: work until the Newton steps) */
+    run tail = make_run(nt > 1 ? nt - 1 : 0, 1, 1, -1, rho, qt, rho[0], rho, step);
+    run grip = make_run(ng > 1 ? ng - 1 : 0, (ptrdiff_t)(N - 2), -1, 1, rho, qg, rho[N - 1], rho, tw);
+    recurrences(&tail, &grip);
     window_problem w = {lo, hi, x, z, dU, lin, ov, m, tmax, ke, ks, wT, af, cm, 0.0, 0.0, 0.0, 0.0};
     if (lo > 0) {
         w.st = c * dU[lo - 1] - qt[lo - 1] * rho[lo - 1];
@@ -551,9 +593,10 @@ int TC_VARIANT(tc_sd_galpha)(size_t n, double dt, const tc_sd_bar *from, double 
         if (same) break; /* exact: the problem is linear on that set (its residual is not needed) */
         rmax = window_residual(&w, d, T, f, r);
     }
-    /* back-substitute the chains (each as two halves, as above), then every free node's Newmark update */
-    if (nt > 0) recurrence(nt, (ptrdiff_t)lo - 1, -1, 0, rho, qt, d[lo], d, step);
-    if (ng > 0) recurrence(ng, (ptrdiff_t)hi + 1, 1, 0, rho, qg, d[hi], d, step);
+    /* back-substitute the chains (side by side, each as two halves, as above), then every free node's Newmark update */
+    tail = make_run(nt, (ptrdiff_t)lo - 1, -1, 0, rho, qt, d[lo], d, step);
+    grip = make_run(ng, (ptrdiff_t)hi + 1, 1, 0, rho, qg, d[hi], d, tw);
+    recurrences(&tail, &grip);
     newmark_update(N, dt, beta * dt * dt, gamma, shift, x, d, U0, V0, A0, U, V, A);
     U[N] = U0[N] + shift;
     V[N] = vg;
