@@ -1,5 +1,7 @@
 /* What the processor running the library can execute, and the variant of the code that has one for it (the passes
- * over the strip's bar a step makes, tc_step_kernels.h) chosen for it. */
+ * over the strip's bar a step makes, tc_step_kernels.h) chosen for it. The native code's only departures from ISO C11
+ * are here and in tc_step_kernels_avx.c: GNU inline assembly (CPUID, XGETBV) and clang's target attribute, each behind
+ * a check of the compiler and the processor, so that any other C11 compiler builds the portable baseline alone. */
 #ifndef TC_CPU_H
 #define TC_CPU_H
 
