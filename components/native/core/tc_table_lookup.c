@@ -55,6 +55,19 @@ static int outside_pressure(const tc_table *t, double q) { return outside(t->pre
 static int outside_velocity(const tc_table *t, double q) { return outside(t->velocity_lo, t->velocity_hi, q); }
 static int outside_beta(const tc_table *t, double q) { return outside(t->beta_lo, t->beta_hi, q); }
 
+/* the first k < n with q < axis[k] (n when there is none), by bisection of the increasing axis */
+static size_t first_above(const double *axis, size_t n, double q) {
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (q < axis[mid])
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
 /* the cell and the local coordinate of one query */
 static void locate(const double *axis, size_t n, double q, size_t *i, double *t) {
     double qc = q < axis[0] ? axis[0] : q;
@@ -64,14 +77,7 @@ static void locate(const double *axis, size_t n, double q, size_t *i, double *t)
         *t = 0.0;
         return;
     }
-    size_t lo = 0, hi = n; /* the first k with qc < axis[k] */
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (qc < axis[mid])
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
+    const size_t lo = first_above(axis, n, qc);
     size_t k = lo > 0 ? lo - 1 : 0;
     if (k > n - 2) k = n - 2;
     *i = k;
@@ -224,14 +230,7 @@ static void rows_line(const tc_table *t, tc_table_rows *r, double tv) {
 static size_t beta_piece(const double *axis, size_t n, double qc, size_t h) {
     if (h + 1 < n && axis[h] <= qc && qc < axis[h + 1]) return h;
     if (!(qc < axis[n - 1])) return n - 1;
-    size_t lo = 0, hi = n - 1; /* the first k with qc < axis[k] */
-    while (lo < hi) {
-        const size_t mid = lo + (hi - lo) / 2;
-        if (qc < axis[mid])
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
+    const size_t lo = first_above(axis, n, qc); /* <= n - 1 here */
     return lo > 0 ? lo - 1 : 0;
 }
 
