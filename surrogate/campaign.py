@@ -76,6 +76,31 @@ def code_version() -> str:
 
 
 @functools.lru_cache(maxsize=1)
+def numerics() -> str:
+    """What besides the project's code sets a slide's round-off, in one line: the processor as the JIT compiler sees it
+    (numba compiles for the host's instruction set), the machine architecture, and the versions of numpy, numba and
+    pyFFTW with its FFTW (FFTW's plans depend on both). A rerun is bit-identical to a recorded slide only with the same
+    code and the same numerics (surrogate.verify)."""
+    import platform
+
+    parts = [platform.machine()]
+    try:
+        import llvmlite.binding as llvm
+
+        parts.append(llvm.get_host_cpu_name())
+    except Exception:  # noqa: BLE001 - the line says what it could not read
+        parts.append("cpu ?")
+    from importlib.metadata import PackageNotFoundError, version
+
+    for dist in ("numpy", "numba", "pyFFTW"):
+        try:
+            parts.append(f"{dist} {version(dist)}")
+        except PackageNotFoundError:
+            parts.append(f"{dist} ?")
+    return ", ".join(parts)
+
+
+@functools.lru_cache(maxsize=1)
 def source_digest() -> str:
     """SHA-256 (12 hex digits) of the mesoscale sources (surrogate/*.py) and the table module.
 
@@ -196,7 +221,7 @@ def run_case(payload: dict) -> dict:
     """
     t0 = time.perf_counter()
     base = {"case_id": payload["case_id"], "host": socket.gethostname(), "pid": os.getpid(),
-            "token": uuid.uuid4().hex, "code_version": code_version()}
+            "token": uuid.uuid4().hex, "code_version": code_version(), "numerics": numerics()}
     try:
         from .coupling import run_slide
 

@@ -367,7 +367,7 @@ def _verify(argv: list[str]) -> int:
     from .campaign import write_json
     from .executors import make_executor
     from .table_build import json_clean
-    from .verify import code_versions, recorded_cases, sample_cases, verify_cases
+    from .verify import code_versions, numerics_of, recorded_cases, sample_cases, verify_cases
 
     t0 = time.perf_counter()
     with interrupt.stop_on_signals():
@@ -379,7 +379,7 @@ def _verify(argv: list[str]) -> int:
             _check_campaign_memory([r.case.config for r in sample], len(sample), f"the sample of {args.table}", executor,
                                    None if args.max_memory is None else memory.parse_bytes(args.max_memory))
             try:
-                results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table))
+                results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table), numerics_of(table))
             finally:
                 executor.close()
         except CampaignInterrupted as exc:
