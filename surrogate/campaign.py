@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tribocosim.atomic import replaced, write_text
 from tribocosim.errors import CampaignInterrupted, CaseRecordError, TribocosimError
 
 from . import measured_surfaces
@@ -242,19 +243,9 @@ def run_case(payload: dict) -> dict:
     return out
 
 
-def _atomic_write(path: Path, write) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
 def write_json(path: Path, data) -> None:
     """Write ``data`` as JSON to ``path`` atomically."""
-    _atomic_write(Path(path), lambda tmp: tmp.write_text(json.dumps(data, indent=1, sort_keys=True)))
+    write_text(path, json.dumps(data, indent=1, sort_keys=True))
 
 
 @dataclass(frozen=True)
@@ -329,10 +320,8 @@ class CampaignStore:
         record[DIGEST_KEY] = case_digest(record, arrays)
         npz = self.cases_dir / f"{cid}.npz"
         if arrays is not None:
-            def save(tmp):
-                with open(tmp, "wb") as fh:
-                    np.savez_compressed(fh, **arrays)
-            _atomic_write(npz, save)
+            with replaced(npz) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
         elif npz.exists():
             npz.unlink()
         write_json(self.case_path(cid), record)

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from pathlib import Path
@@ -165,19 +164,13 @@ def _write_table(path: Path, table, fits_path: Path, fits: dict) -> str:
     from .campaign import write_json
     from .table_build import json_clean
 
+    from tribocosim.atomic import replaced
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.partial.npz")
-    fits_tmp = fits_path.with_name(f".{fits_path.name}.{os.getpid()}.partial")
-    try:
+    with replaced(fits_path) as fits_tmp, replaced(path, ".npz") as tmp:
         digest = write_table(tmp, table)
         read_table(tmp)
         write_json(fits_tmp, json_clean({"table": str(path), "content_hash": digest, **fits}))
-        os.replace(tmp, path)
-        os.replace(fits_tmp, fits_path)
-    finally:
-        for leftover in (tmp, fits_tmp, tmp.with_name(tmp.name + ".tmp.npz")):
-            if leftover.exists():
-                leftover.unlink()
     return digest
 
 

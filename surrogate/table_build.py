@@ -279,7 +279,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     if not records:
         raise TableError("the campaign has no finished case; nothing to build a table from")
     grid = Grid.of(manifest["sweep"])
-    sweep, mu0, e_star, n_pixels = grid.sweep, grid.mu0, grid.e_star, grid.n_pixels
+    sweep, mu0, e_star = grid.sweep, grid.mu0, grid.e_star
     pressures, v_grid, vel_axis, levels, beta_axis = (grid.pressures, grid.v_grid, grid.vel_axis, grid.levels,
                                                       grid.beta_axis)
     if surface_stats is None:

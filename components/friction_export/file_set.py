@@ -37,21 +37,13 @@ def check_target(path: Path) -> None:
 
 
 def write_all(contents: dict) -> list[Path]:
-    """Write ``{path: text}``: all files or none (module docstring); ParameterError naming the file that failed."""
+    """Write ``{path: text}``: all files or none (module docstring, :func:`tribocosim.atomic.write_all`);
+    ParameterError naming the file that failed."""
+    from tribocosim import atomic
+
     for path in contents:
         check_target(path)
-    temporary: dict[Path, Path] = {}
     try:
-        for path, text in contents.items():
-            path = Path(path)
-            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            temporary[path] = tmp
-            with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-                f.write(text)
-        for path, tmp in temporary.items():
-            os.replace(tmp, path)
+        return atomic.write_all(contents)
     except OSError as exc:
-        for tmp in temporary.values():
-            tmp.unlink(missing_ok=True)
         raise ParameterError(f"-o: {exc.filename or ''} cannot be written: {exc.strerror or exc}") from None
-    return list(temporary)

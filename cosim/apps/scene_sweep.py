@@ -71,6 +71,7 @@ from typing import Any
 
 import numpy as np
 
+from tribocosim.atomic import write_text
 from tribocosim.errors import Interrupted, RunInterrupted, SceneError, SweepInterrupted
 from tribocosim.interrupt import raise_if_stopped
 
@@ -385,10 +386,8 @@ def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
         row.update(run_counts(result.metadata))
         row["wall_time"] = time.perf_counter() - t0
         rows.append(row)
-    tmp = folder / f".summary.{os.getpid()}.partial"
-    tmp.write_text(json.dumps({"key": key, "case": case.name, "variables": case.variables,
-                               "overrides": case.overrides, "rows": rows}, indent=2, default=str))
-    os.replace(tmp, done)
+    write_text(done, json.dumps({"key": key, "case": case.name, "variables": case.variables,
+                                 "overrides": case.overrides, "rows": rows}, indent=2, default=str))
     return rows
 
 
