@@ -148,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except TribocosimError as exc:
         print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     from .coupling import run_slide
 
     try:
@@ -156,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"tribocosim meso slide: interrupted by SIGINT: the slide is discarded, nothing is written into "
+              f"{args.out}", file=sys.stderr)
+        return 130
     try:
         summary = write_result(result, out)
         if args.plot:

@@ -21,9 +21,10 @@ finished before it are kept, the slides in progress discarded (:mod:`tribocosim.
 Before any case runs, ``build`` and ``verify`` estimate the memory of their local workers together (workers x the
 peak of a case, :mod:`tribocosim.surrogate.memory`), and ``build`` and ``table`` that of the table build, and
 refuse when it exceeds the memory available or ``--max-memory``.
-Exit status: 0 on success; 1 on bad input, when cases failed, are missing or refused (no table is written
-then, unless ``--allow-failed``); 2 on usage errors and on a refusal for memory; 128 + the signal's number when a
-signal stopped it.
+Exit status, as every tribocosim command: 0 on success; 1 when the work ran and did not succeed: cases failed, are
+missing or refused (no table is written then, unless ``--allow-failed``), ``verify`` found a rerun that differs,
+``compare`` found the tables apart; 2 on bad input (usage, a file or a value that cannot be read or is not allowed)
+and on a refusal for memory; 128 + the signal's number when a signal stopped it.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import sys
 import time
 from pathlib import Path
 
-from tribocosim.errors import CampaignInterrupted, MemoryLimitError, TribocosimError
+from tribocosim.errors import CampaignInterrupted, MemoryLimitError, TableError, TribocosimError
 
 PROG = "tribocosim surrogate"
 #: at most this many files are named per kind of unfinished case
@@ -209,7 +210,7 @@ def _build(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     out = Path(args.out)
     t0 = time.perf_counter()
     with interrupt.stop_on_signals():
@@ -239,7 +240,7 @@ def _build(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, TableError) else 2  # the campaign's results make no table, or bad input
     print(f"build wall time {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return status
 
@@ -278,7 +279,7 @@ def _table(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} table: error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, TableError) else 2  # the campaign's results make no table, or bad input
 
 
 def _show(argv: list[str]) -> int:
@@ -299,7 +300,7 @@ def _show(argv: list[str]) -> int:
         table = read_table(args.table)
     except TribocosimError as exc:
         print(f"{PROG} show: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     print(describe(table))
     if args.no_plot:
         return 0
@@ -338,7 +339,7 @@ def _compare(argv: list[str]) -> int:
         res = compare_tables(read_table(args.a), read_table(args.b))
     except TribocosimError as exc:
         print(f"{PROG} compare: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     print(json.dumps(res, indent=2))
     return 0 if res["within_uncertainty"] else 1
 
@@ -383,7 +384,7 @@ def _verify(argv: list[str]) -> int:
             return 2
         except TribocosimError as exc:
             print(f"{PROG} verify: error: {exc}", file=sys.stderr)
-            return 1
+            return 2
     for reason in dict.fromkeys(r["reason"] for r in results if "reason" in r):
         print(f"comparison: {reason}")
     for r in results:

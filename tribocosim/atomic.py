@@ -8,7 +8,8 @@ old file, if any, is left as it was.
 
 - :func:`replaced`: a context manager for a writer that needs a path (``numpy.savez``, a zip file, a compiler);
 - :func:`write_text`, :func:`write_bytes`: one file from its content;
-- :func:`write_all`: several files, all of them or none (an export's file set).
+- :func:`write_all`: several files, all of them or none (an export's file set);
+- :func:`check_writable`: whether a file can be written there, asked before the work that makes it.
 """
 
 from __future__ import annotations
@@ -18,6 +19,21 @@ import threading
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from collections.abc import Iterator
+
+
+def check_writable(path: str | os.PathLike, option: str) -> None:
+    """ParameterError naming ``option`` when ``path`` cannot be written: its folder is missing or is not a folder, the
+    path is a folder, or the folder is not writable."""
+    from tribocosim.errors import ParameterError
+
+    path = Path(path)
+    folder = path.parent
+    if not folder.is_dir():
+        raise ParameterError(f"{option} {path}: its folder {folder} does not exist or is not a folder")
+    if path.is_dir():
+        raise ParameterError(f"{option} {path} is a folder; give the file to write")
+    if not os.access(folder, os.W_OK):
+        raise ParameterError(f"{option} {path}: the folder {folder} is not writable")
 
 
 def _temporary(path: Path, suffix: str) -> Path:

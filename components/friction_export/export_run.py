@@ -247,8 +247,14 @@ class _Flags:
 def _refusal(law: ExportedLaw, request: ExportRequest, state: DebrisState, flags: _Flags, prange) -> str:
     u = request.units
     how = state.record.get("how")
-    what = {"given": f"--beta {state.beta:g}", "passes": f"--passes {state.record.get('after_pass')} (beta = "
-            f"{state.beta:.6g} after that pass)"}.get(how, "the beta axis")
+    if how == "given":
+        what = f"--beta {state.beta:g}"
+    elif how == "passes":
+        what = f"--passes {state.record.get('after_pass')} (beta = {state.beta:.6g} after that pass)"
+    elif request.beta_levels is not None:
+        what = f"the beta axis (--beta-levels {' '.join(f'{b:g}' for b in request.beta_levels)})"
+    else:
+        what = "the beta axis"
     hint = ""
     above = law.table.pressure[law.table.pressure > flags.pressure[1] * (1 + END_TOLERANCE)]
     if state.beta is not None and above.size and flags.pressure[0] <= prange[0] * (1 + END_TOLERANCE):

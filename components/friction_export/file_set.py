@@ -9,7 +9,6 @@ files are removed and nothing is left behind.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from tribocosim.errors import ParameterError
@@ -24,16 +23,10 @@ def tagged(path: Path, *tags: str) -> Path:
 
 
 def check_target(path: Path) -> None:
-    """ParameterError naming ``-o`` when ``path`` cannot be written: its folder is missing or is not a folder, or the
-    path is a folder."""
-    path = Path(path)
-    folder = path.parent
-    if not folder.is_dir():
-        raise ParameterError(f"-o {path}: its folder {folder} does not exist or is not a folder")
-    if path.is_dir():
-        raise ParameterError(f"-o {path} is a folder; give the file to write")
-    if not os.access(folder, os.W_OK):
-        raise ParameterError(f"-o {path}: the folder {folder} is not writable")
+    """ParameterError naming ``-o`` when ``path`` cannot be written (:func:`tribocosim.atomic.check_writable`)."""
+    from tribocosim.atomic import check_writable
+
+    check_writable(path, "-o")
 
 
 def write_all(contents: dict) -> list[Path]:

@@ -91,18 +91,6 @@ def _number(option: str, text, integer: bool = False):
     return int(value) if integer else value
 
 
-def _settings(items) -> dict:
-    from tribocosim.errors import ParameterError
-
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise ParameterError(f"--set {item!r}: expected NAME=VALUE with a strip-draw parameter name")
-        out[name.strip()] = value.strip()
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim export``."""
     parser = _parser()
@@ -112,6 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     except _ArgumentError as exc:
         print(f"tribocosim export: {exc}", file=sys.stderr)
         return 2
+    from tribocosim.components.stripdraw.settings import parse_settings
     from tribocosim.cosim.apps.debris_state import DebrisChoice
     from tribocosim.cosim.apps.export_friction import export_friction
 
@@ -121,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         result = export_friction(
             args.format, args.out, state, units=args.units,
             band=None if args.band is None else _number("--band", args.band),
-            table=args.table, calibration=args.calibration, settings=_settings(args.set), option=args.option,
+            table=args.table, calibration=args.calibration, settings=parse_settings(args.set), option=args.option,
             pressure_range=None if args.pressure_range is None else
             tuple(_number("--pressure-range", x) for x in args.pressure_range),
             beta_levels=None if args.beta_levels is None else tuple(_number("--beta-levels", x)
@@ -133,6 +122,9 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim export: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("tribocosim export: interrupted by SIGINT: no file is written", file=sys.stderr)
+        return 130
     print("\n".join(result.summary()))
     for line in result.warning_lines():  # the files are written; what they hold that the user should know
         print(f"tribocosim export: warning: {line}", file=sys.stderr)

@@ -17,7 +17,6 @@ import functools
 import os
 import re
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -106,17 +105,30 @@ def _report(caught: list[tuple], n_points: int) -> None:
 
 
 def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
-    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
-    per point). The warnings of the draws are given once per distinct message, with the number of draws that raised
-    it."""
+    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (at most one per point: the
+    project's local executor, whose workers ignore SIGINT and SIGTERM and are killed on a stop,
+    :class:`tribocosim.surrogate.executors.ProcessPoolCaseExecutor`). Within :func:`tribocosim.interrupt.
+    stop_on_signals` a signal stops it between draws with :class:`~tribocosim.errors.Interrupted` (the draws in
+    progress are discarded). The warnings of the draws are given once per distinct message, with the number of draws
+    that raised it; a draw that raises raises here."""
+    from tribocosim import interrupt
+    from tribocosim.errors import Interrupted
+
     n = max(1, min(workers or os.cpu_count() or 1, len(points)))
     if n == 1:
-        done = [_recorded(fn, p) for p in points]
+        done = []
+        for p in points:
+            interrupt.raise_if_stopped(Interrupted)
+            done.append(_recorded(fn, p))
     else:
-        import multiprocessing
+        from tribocosim.surrogate.executors import ProcessPoolCaseExecutor
 
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
-            done = list(pool.map(functools.partial(_recorded, fn), points))
+        outcomes = dict(ProcessPoolCaseExecutor(n).map_unordered(functools.partial(_recorded, fn),
+                                                                 list(enumerate(points))))
+        for outcome in outcomes.values():
+            if isinstance(outcome, BaseException):
+                raise outcome
+        done = [outcomes[i] for i in range(len(points))]
     _report([w for _, caught in done for w in caught], len(points))
     return [result for result, _ in done]
 
