@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 from tribocosim.errors import ParameterError
-from tribocosim.settings import split_settings
+from tribocosim.name_value import split_settings
 
 from .parameters import StripDrawParameters
 

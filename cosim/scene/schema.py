@@ -178,7 +178,7 @@ def parse_ref(p: Problems, text, key: str) -> VariableRef | None:
 def parse_overrides(items: list[str]) -> dict:
     """``--set KEY=VALUE`` items as ``{dotted key: value}``: the value in TOML syntax (``1e-3``, ``"jacobi"``,
     ``[1, 2]``), else the text as it is; SceneError for an item that is not ``KEY=VALUE``."""
-    from tribocosim.settings import split_settings
+    from tribocosim.name_value import split_settings
 
     out = {}
     for key, value in split_settings(items, "--set", "KEY", SceneError).items():

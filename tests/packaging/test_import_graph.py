@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: (``tribocosim``, ``tribocosim.cosim`` and the console script ``tribocosim.cli``) are facades over every layer.
 LAYERS = (
     ("tribocosim.atomic", "tribocosim.errors", "tribocosim.interrupt", "tribocosim.lazy", "tribocosim.paths",
-     "tribocosim.settings"),
+     "tribocosim.name_value", "tribocosim.public"),
     ("tribocosim.components", "tribocosim.models"),
     ("tribocosim.surrogate",),
     ("tribocosim.cosim.engine",),
