@@ -67,6 +67,19 @@ class Result:
             self._columns = {n: data[:, j].copy() for j, n in enumerate(names)}
         return self._columns
 
+    def series(self, name: str) -> list:
+        """One recorded variable (or ``"time"``) as a list of floats, read without numpy from a run of the C master;
+        KeyError as ``result[name]``."""
+        if self._recording is not None and self._columns is None:
+            times, rows, names = self._recording
+            if name == "time":
+                return list(times)
+            if name not in names:
+                raise KeyError(f"{name!r} is not recorded")
+            j, n = names.index(name), len(names)
+            return [rows[k * n + j] for k in range(len(times))]
+        return [float(x) for x in self[name]]
+
     def __getitem__(self, name: str):
         if name == "time":
             return self.time

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from tribocosim.cosim.studies.steady_state import steady_ratio  # noqa: F401 - the studies' mu_bar
+
 V0 = 0.08  # m/s
 RAMP = 0.01  # s
 STEP = 1e-3  # s
@@ -73,14 +75,6 @@ def draw(point: Point) -> list[dict]:
                     "debris_g_m2": 1e3 * left * model.params.particle_thickness * FLAKE_DENSITY})
         beta = model.beta.copy()
     return out
-
-
-def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
-    """mu_bar of recorded signals: the mean of pull_force / (2 normal_force) (Eq. 1) over the last fraction of the
-    run (where the normal force is positive)."""
-    t = np.asarray(time)
-    sel = (t >= t[-1] - last * (t[-1] - t[0]) - 1e-12) & (np.asarray(normal_force) > 0)
-    return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
 
 
 def _recorded(fn, point: Point) -> tuple:
