@@ -90,6 +90,19 @@ class Result:
         return columns[name]
 
 
+def recorded_units(plan: Plan, columns) -> dict:
+    """The unit each recorded ``instance.variable`` declares in its FMU's model description ("" when none)."""
+    from tribocosim.cosim.scene.validate import unit_of
+
+    out = {}
+    for name in columns:
+        inst, _, var = name.partition(".")
+        model = plan.fmus.get(inst)
+        v = model.variables.get(var) if model is not None else None
+        out[name] = (unit_of(v) or "") if v is not None else ""
+    return out
+
+
 class Build:
     """A master assembled from a plan (:class:`~tribocosim.cosim.engine.master.Master`), the instance names, the
     parameter values to set into each instance, the notes on the coupling; and what is needed to clean up
@@ -602,5 +615,5 @@ def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
         "fmu_warnings": o.fmu_warnings,
         "end_checks": o.end_values,
         "notes": o.notes,
-        "outputs": {"columns": ["time", *o.columns]},
+        "outputs": {"columns": ["time", *o.columns], "units": {"time": "s", **recorded_units(plan, o.columns)}},
     }

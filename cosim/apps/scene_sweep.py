@@ -426,6 +426,8 @@ class SweepResult:
     plots: list[Path] = field(default_factory=list)
     #: the columns of :func:`run_counts` (``warnings``, the end checks): a row with one above 0 is marked
     counts: list[str] = field(default_factory=list)
+    #: the unit of each column whose unit the FMUs declare (:func:`column_units`)
+    units: dict[str, str] = field(default_factory=dict)
 
     def marked(self) -> list[dict]:
         """The rows (runs) with warnings or with lookups outside the friction table (any count above 0)."""
@@ -465,9 +467,11 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     out.mkdir(parents=True, exist_ok=True)
     cases = sweep.cases()
     problems = Problems(sweep.path, "sweep")
+    first = None
     for case in cases:  # every case checked before any runs (the first builds the FMUs); a later pass's
         try:            # field_input is the file its previous pass writes
-            load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
+            plan = load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
+            first = first or plan
         except SceneError as exc:
             for p in exc.problems or [None]:
                 problems.add(f"{case.name}" + (f": {p.key}" if p else ""),
@@ -518,7 +522,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                      "counts": {c: sum(r[c] for r in rows) for c in counts},
                                      "runs_with_warnings_or_clamps": len(marked), "rows": rows},
                                     indent=2, default=str), encoding="utf-8")
-    result = SweepResult(sweep, rows, csv_path, json_path, wall, counts=counts)
+    result = SweepResult(sweep, rows, csv_path, json_path, wall, counts=counts, units=column_units(sweep, first))
     if plot:
         from tribocosim.cosim.studies.plotting import plot_beta_maps, plot_sweep
 
@@ -539,6 +543,30 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                                title=f"{sweep.title}: beta(X, t) at "
                                                + ", ".join(f"{k} = {v}" for k, v in maps.items())))
     return result
+
+
+def column_units(sweep: Sweep, plan) -> dict[str, str]:
+    """The units of a sweep's columns that the FMUs declare: a variable set as it is to one FMU parameter
+    (``"fmus.I.parameters.P" = { expr = "v" }``) has P's unit, a summary of one recorded variable (``mean``, ``std``
+    or ``final`` of ``"I.V"``) V's; the others (an expression of several, or of a variable with a factor) none."""
+    from tribocosim.cosim.scene.validate import unit_of
+
+    def unit(inst, var):
+        model = plan.fmus.get(inst)
+        v = model.variables.get(var) if model is not None else None
+        return unit_of(v) or "" if v is not None else ""
+
+    out = {}
+    for key, value in sweep.settings.items():
+        parts = key.split(".")
+        if isinstance(value, Expression) and len(parts) == 4 and parts[0] == "fmus" and parts[2] == "parameters" \
+                and value.text.strip() in sweep.variables:
+            out[value.text.strip()] = unit(parts[1], parts[3])
+    for s in sweep.summaries:
+        text = s.expression.text.strip()
+        if text.count(".") == 1 and text.replace(".", "").replace("_", "").isalnum():
+            out[s.name] = unit(*text.split("."))
+    return out
 
 
 def _same(a, b) -> bool:
