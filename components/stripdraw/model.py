@@ -217,6 +217,8 @@ class StripDrawModel:
             (once) when mu under the pad falls below the documented floor (module docstring).
         """
         c = self._core
+        if isinstance(dt, bool) or not isinstance(dt, numbers.Real):
+            raise ParameterError(f"dt = {dt!r} is not a number; allowed: a real number of seconds > 0")
         fn, v = _checked_inputs(inputs)
         if derivatives:
             _check_names(derivatives, "derivatives")

@@ -263,6 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         if not args.keep_unconverged:
             return 1
     values = dict(zip(f.names, f.values))
+    scaled = not all(n in d.stds for d in data for n in d.values)  # calibrate_fit's covariance rule
     scale = float(values.get("particle_area_scale", parameters.get("particle_area_scale", 1.0)))
     mu0 = float(parameters.get("mu0", COMPONENT.defaults["mu0"]))
     rule = str(parameters.get("particle_area_rule", COMPONENT.defaults["particle_area_rule"]))
@@ -273,6 +274,7 @@ def main(argv: list[str] | None = None) -> int:
         "inseparable": f.inseparable, "correlation": f.correlation.tolist(),
         "singular_values_in_scale_units": f.singular_values.tolist(),
         "chi2": f.chi2, "dof": f.dof, "shear_scale_product": f.shear_scale,
+        "stderr_scaled_by_reduced_chi2": scaled,
         "contact_area": args.contact_area, "particle_area_rule": rule,
         "parameters": {k: v for k, v in parameters.items() if k != "table_file"},
         "source_table": {"file": table_path.name, "content_hash": table.metadata.get("content_hash")},
@@ -296,6 +298,14 @@ def main(argv: list[str] | None = None) -> int:
     for name, v, e in zip(f.names, f.values, f.stderr):
         error = f"+- {e:.2g} (standard error)" if np.isfinite(e) else f"(at its {f.at_bound.get(name)} bound)"
         print(f"{name} = {v:.6g} {error}{'' if f.succeeded else ', ' + f.status().upper()}")
+    reduced = f.chi2 / f.dof if f.dof > 0 else float("nan")
+    if scaled:
+        print(f"standard errors scaled by the reduced chi^2 = {reduced:.3g} (chi^2 {f.chi2:.4g} over {f.dof} degrees "
+              "of freedom): the data give no standard deviations, so their scatter about the fit stands for them")
+    else:
+        print(f"standard errors from the data's standard deviations, not scaled by the reduced chi^2 = {reduced:.3g} "
+              f"(chi^2 {f.chi2:.4g} over {f.dof} degrees of freedom; near 1 when the model describes the data within "
+              "them)")
     if f.shear_scale is not None:
         print(f"(1 - flake_shear_ratio) particle_area_scale = {f.shear_scale['value']:.6g} +- "
               f"{f.shear_scale['stderr']:.2g} (the combination mu depends on below the cap)")

@@ -50,9 +50,12 @@ def _parser() -> argparse.ArgumentParser:
     state.add_argument("--beta", nargs="+", default=[], metavar="B", help="debris area fraction(s): one file each")
     state.add_argument("--passes", nargs="+", default=[], metavar="N",
                        help="the state a strip-draw test reaches after N passes: one file each")
-    state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure (required)")
-    state.add_argument("--velocity", default=None, help="--passes: the drawing speed (default: the paper's 0.08 m/s)")
-    state.add_argument("--pad-length", default=None, help="--passes: the pad length (default: tool_length, 35 mm)")
+    state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure in the --units system "
+                       "(required; MPa in mm-t-s, Pa in SI)")
+    state.add_argument("--velocity", default=None, help="--passes: the drawing speed in the --units system (default: "
+                       "the paper's 0.08 m/s, which is 80 in mm-t-s and 0.08 in SI)")
+    state.add_argument("--pad-length", default=None, help="--passes: the pad length in the --units system (default: "
+                       "tool_length, 35 mm, which is 35 in mm-t-s and 0.035 in SI)")
     p.add_argument("--units", default=DEFAULT_UNITS, help=f"{' or '.join(UNIT_SYSTEMS)} (default {DEFAULT_UNITS}: "
                    "N, MPa, mm/s, mm)")
     p.add_argument("--band", default=None, metavar="K", help="also write FILE.upper.SUFFIX and FILE.lower.SUFFIX: mu "

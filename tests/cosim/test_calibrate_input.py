@@ -153,3 +153,16 @@ def test_ctrl_c_ends_the_fit_in_one_line_with_exit_130_and_nothing_left(tmp_path
     lines = [x for x in err.splitlines() if x.strip()]
     assert "Traceback" not in err and lines[-1].startswith("tribocosim calibrate: stopped by SIGINT"), err
     assert "nothing is written" in lines[-1] and list(out.parent.iterdir()) == []
+
+
+def test_the_command_says_whether_its_standard_errors_are_scaled_by_the_reduced_chi2(tmp_path, tables, capsys):
+    wide, _ = tables
+    rows = _model_rows(wide, 0.6, [(5e6, 0.035, 1), (20e6, 0.035, 1), (10e6, 0.035, 1)])
+    out = tmp_path / "cal.npz"
+    assert main(_args(_write(tmp_path / "with.csv", rows), out, wide)) == 0
+    assert "standard errors from the data's standard deviations, not scaled" in capsys.readouterr().out
+    assert read_table(out).metadata["strip_draw_calibration"]["stderr_scaled_by_reduced_chi2"] is False
+    without = _write(tmp_path / "without.csv", [r[:4] for r in rows], "pressure,tool_length,passes,mu_bar")
+    assert main(_args(without, out, wide)) == 0
+    assert "standard errors scaled by the reduced chi^2 = " in capsys.readouterr().out
+    assert read_table(out).metadata["strip_draw_calibration"]["stderr_scaled_by_reduced_chi2"] is True
