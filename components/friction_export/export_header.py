@@ -53,15 +53,17 @@ def header_lines(f: FileFacts) -> list[str]:
     out += _wrap(f"written by tribocosim {f.code_version}" + (f" with: {f.command}" if f.command else ""))
     out += _wrap("law: mu = mu0 (1 - (1 - r) s A_p/A_c) of the strip-draw model (docs/model.md section 4), "
                  "evaluated by its native core (tc_friction.c), the code the StripDraw FMU runs")
-    out += _wrap(f"table: {table['path']} (content hash {table['content_hash']}, {table['provenance']}, format "
+    out += _wrap(f"table: {table['file']} (content hash {table['content_hash']}, {table['provenance']}, format "
                  f"version {table['format_version']})")
     cal = prov.get("calibration")
     if cal:
         scale = (cal.get("fitted") or {}).get("particle_area_scale")
         fitted = (f"s = {scale['value']:.6g}" + (f" +- {scale['stderr']:.2g}" if scale.get("stderr") is not None
                                                    else "")) if scale else "s not fitted"
-        out += _wrap(f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data "
-                     f"{(cal.get('data') or {}).get('path')}")
+        data = cal.get("data") or {}
+        name = data.get("file") or (data.get("path") and data["path"].replace("\\", "/").rsplit("/", 1)[-1])
+        out += _wrap(f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data {name} (SHA-256 "
+                     f"{data.get('sha256')})")
     out += _wrap(f"debris state: {f.state}")
     out += _wrap(f.units_line)
     for line in f.range_lines:

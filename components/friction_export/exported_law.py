@@ -184,10 +184,11 @@ class ExportedLaw:
 
     # ---------------------------------------------------------------------------------------------- provenance
     def provenance(self) -> dict:
-        """What the law is: the table (path, content hash, provenance, format version), the calibration (status,
-        scale, note), every parameter of the model."""
+        """What the law is: the table (file name, content hash, provenance, format version: the hash, not the
+        writer's folders, names it), the calibration (status, scale, note, its data by file name and SHA-256), every
+        parameter of the model."""
         meta = self.table.metadata
-        out = {"table": {"path": str(self.table_path), "content_hash": meta.get("content_hash"),
+        out = {"table": {"file": self.table_path.name, "content_hash": meta.get("content_hash"),
                          "provenance": self.table.provenance, "format_version": self.table.version},
                "parameters": dataclasses.asdict(self.params)}
         if self.calibration is not None:

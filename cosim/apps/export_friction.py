@@ -84,7 +84,7 @@ def export_friction(format: str, out, state: DebrisChoice | None = None, *, unit
                             pressure_range=prange, beta_levels=None if beta_levels is None else tuple(beta_levels),
                             allow_unsimulated=allow_unsimulated, tolerance=tolerance, table_id=table_id,
                             interaction_name=interaction_name, command=command, notes=notes)
-    return run_export(law, request)
+    return run_export(law, request, log)
 
 
 def multipass_option(name: str | None) -> tuple[dict, tuple]:
