@@ -1,0 +1,49 @@
+/* The friction of one contact point with its own debris state (the equations are in tc_node_friction.h). */
+#include "tc_node_friction.h"
+
+#include <math.h>
+
+#include "tc_debris_node.h"
+
+double tc_node_law_cap(const tc_stripdraw_params *p, const tc_table *table) {
+    if (p->beta_threshold > 0) return p->beta_threshold;
+    return tc_law_beta_threshold(p, p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL);
+}
+
+int tc_node_law_make(const tc_stripdraw_params *p, const tc_table *table, tc_node_law *out, tc_msg msg) {
+    int rc = tc_stripdraw_params_check(p, msg);
+    if (rc != TC_OK) return rc;
+    rc = tc_law_check(p, table, msg);
+    if (rc != TC_OK) return rc;
+    out->p = *p;
+    out->p.table_policy = TC_TABLE_CLAMP;
+    out->table = p->friction_model == TC_STRIPDRAW_FRICTION_MODEL_TABLE ? table : NULL;
+    out->beta_cap = tc_node_law_cap(&out->p, out->table);
+    return TC_OK;
+}
+
+double tc_node_friction(const tc_node_law *law, double pressure, double slip, double dt, double *beta, int *flagged,
+                        tc_table_rows *rows) {
+    const tc_stripdraw_params *p = &law->p;
+    const double b0 = *beta, ds = fabs(slip);
+    if (flagged != NULL) *flagged = 0;
+    if (!(isfinite(pressure) && isfinite(ds) && isfinite(dt) && isfinite(b0))) {
+        if (flagged != NULL) *flagged = 1;
+        return 0.0;
+    }
+    if (!(pressure > 0)) return 0.0;
+    const double v = dt > 0 ? ds / dt : 0.0;
+    const tc_msg none = {NULL, 0};
+    double mu, ac;
+    unsigned char clamped = 0;
+    (void)tc_law_mu(p, law->table, pressure, 1, &v, &b0, &mu, &clamped, &ac, rows, none); /* clamp: cannot fail */
+    /* the debris the increment's slide makes (the strip's formula at contact weight 1) and the cap at (P, v) */
+    double source, sunk = 0.0;
+    const double b = tc_debris_slide(b0, ds, 1.0, p->archard_k * pressure, p->hardness * p->particle_thickness,
+                                     p->debris_sink_length, &source, &sunk);
+    const double cap = p->beta_threshold > 0 ? law->beta_cap
+                                             : fmin(law->beta_cap, tc_law_beta_cap(p, law->table, pressure, v, rows));
+    *beta = b > cap ? cap : b;
+    if (flagged != NULL) *flagged = clamped != 0;
+    return mu;
+}
