@@ -6,7 +6,7 @@
  * - sink (debris_sink_length lambda > 0: lateral ejection or compaction into a transfer layer): source and sink are one
  *   local equation per unit slide s under the pad, d beta / ds = q - beta / lambda (q = K P / (H h_p)), integrated
  *   exactly over the interval's slide s_i = w_i |dU_i|: beta_i e^(-s_i/lambda) + q lambda (1 - e^(-s_i/lambda));
- *   source and sink of a node are tc_debris_slide (tc_debris_node.h), the formula a forming code's contact point
+ *   source and sink of a node are tc_debris_source and tc_debris_sunk (tc_debris_node.h), the formula a forming code's contact point
  *   evaluates too (tc_node_friction.c);
  * - transport (Eq. 13-14): implicit upwind advection with the tool-carried flux -zeta u beta (u = face velocity)
  *   between nodes that are both under the pad: a tridiagonal M-matrix with unit column sums, so beta >= 0 and
@@ -101,8 +101,14 @@ void tc_sd_debris_interval(struct tc_stripdraw *m, double pressure, double speed
         const double lambda = p->debris_sink_length;
         for (size_t i = t0; i <= t1; ++i) {
             m->weight[i] = 0.5 * (w0[i] + m->w[i]);
-            double src;
-            m->bsrc[i] = tc_debris_slide(m->beta[i], fabs(m->dU[i]), m->weight[i], kp, hh, lambda, &src, &sunk);
+            const double slide = m->weight[i] * fabs(m->dU[i]); /* s of the interval under the pad */
+            const double src = tc_debris_source(fabs(m->dU[i]), m->weight[i], kp, hh);
+            m->bsrc[i] = m->beta[i] + src;
+            if (lambda > 0 && slide > 0) {
+                const double b = tc_debris_sunk(m->beta + i, src, slide, lambda);
+                sunk += m->bsrc[i] - b;
+                m->bsrc[i] = b;
+            }
             produced += src;
         }
         m->beta_produced += produced;

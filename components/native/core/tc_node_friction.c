@@ -38,9 +38,9 @@ double tc_node_friction(const tc_node_law *law, double pressure, double slip, do
     unsigned char clamped = 0;
     (void)tc_law_mu(p, law->table, pressure, 1, &v, &b0, &mu, &clamped, &ac, rows, none); /* clamp: cannot fail */
     /* the debris the increment's slide makes (the strip's formula at contact weight 1) and the cap at (P, v) */
-    double source, sunk = 0.0;
-    const double b = tc_debris_slide(b0, ds, 1.0, p->archard_k * pressure, p->hardness * p->particle_thickness,
-                                     p->debris_sink_length, &source, &sunk);
+    const double lambda = p->debris_sink_length;
+    const double src = tc_debris_source(ds, 1.0, p->archard_k * pressure, p->hardness * p->particle_thickness);
+    const double b = lambda > 0 && ds > 0 ? tc_debris_sunk(&b0, src, ds, lambda) : b0 + src;
     const double cap = p->beta_threshold > 0 ? law->beta_cap
                                              : fmin(law->beta_cap, tc_law_beta_cap(p, law->table, pressure, v, rows));
     *beta = b > cap ? cap : b;

@@ -9,7 +9,8 @@
  *   - mu = mu(P, v, beta) of the strip's law (tc_law_mu of tc_friction.c, the same parameters and table lookup), from
  *     the state at the increment's start, as the strip holds mu over a coupling interval at its start's debris;
  *   - then beta from the increment's slide: the Archard production q |ds| with q = K P / (H h_p) (Eq. 37) and the sink
- *     lambda integrated exactly (tc_debris_slide of tc_debris_node.h, the strip's own formula, at contact weight 1),
+ *     lambda integrated exactly (tc_debris_source and tc_debris_sunk of tc_debris_node.h, the strip's own formulas, at
+ *     contact weight 1),
  *     capped at the law's cap at (P, v) (Eq. 24: tc_law_beta_cap, never above the law's largest cap beta_cap), as the
  *     strip caps its nodes at the interval's pressure and speed.
  * A point whose pressure is not > 0 (open, or no normal force) bears no friction and keeps its state.
