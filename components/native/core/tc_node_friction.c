@@ -22,9 +22,25 @@ int tc_node_law_make(const tc_stripdraw_params *p, const tc_table *table, tc_nod
     return TC_OK;
 }
 
+void tc_node_mu(const tc_node_law *law, double pressure, size_t n, const double *rate, const double *beta,
+                double *mu, unsigned char *flagged, double *work, tc_table_rows *rows) {
+    const tc_msg none = {NULL, 0};
+    (void)tc_law_mu(&law->p, law->table, pressure, n, rate, beta, mu, flagged, work, rows, none); /* clamp: no fail */
+}
+
+double tc_node_debris(const tc_node_law *law, double pressure, double slip, double rate, double beta,
+                      tc_table_rows *rows) {
+    const tc_stripdraw_params *p = &law->p;
+    const double lambda = p->debris_sink_length;
+    /* the debris the increment's slide makes (the strip's formulas at contact weight 1), then the cap at (P, v) */
+    const double src = tc_debris_source(slip, 1.0, p->archard_k * pressure, p->hardness * p->particle_thickness);
+    const double b = lambda > 0 && slip > 0 ? tc_debris_sunk(&beta, src, slip, lambda) : beta + src;
+    const double held = b > law->beta_cap ? law->beta_cap : b; /* beta_cap <= 1 */
+    return p->beta_threshold > 0 ? held : tc_law_beta_capped(p, law->table, pressure, rate, held, rows);
+}
+
 double tc_node_friction(const tc_node_law *law, double pressure, double slip, double dt, double *beta, int *flagged,
                         tc_table_rows *rows) {
-    const tc_stripdraw_params *p = &law->p;
     const double b0 = *beta, ds = fabs(slip);
     if (flagged != NULL) *flagged = 0;
     if (!(isfinite(pressure) && isfinite(ds) && isfinite(dt) && isfinite(b0))) {
@@ -33,17 +49,10 @@ double tc_node_friction(const tc_node_law *law, double pressure, double slip, do
     }
     if (!(pressure > 0)) return 0.0;
     const double v = dt > 0 ? ds / dt : 0.0;
-    const tc_msg none = {NULL, 0};
-    double mu, ac;
+    double mu, work;
     unsigned char clamped = 0;
-    (void)tc_law_mu(p, law->table, pressure, 1, &v, &b0, &mu, &clamped, &ac, rows, none); /* clamp: cannot fail */
-    /* the debris the increment's slide makes (the strip's formula at contact weight 1) and the cap at (P, v) */
-    const double lambda = p->debris_sink_length;
-    const double src = tc_debris_source(ds, 1.0, p->archard_k * pressure, p->hardness * p->particle_thickness);
-    const double b = lambda > 0 && ds > 0 ? tc_debris_sunk(&b0, src, ds, lambda) : b0 + src;
-    const double cap = p->beta_threshold > 0 ? law->beta_cap
-                                             : fmin(law->beta_cap, tc_law_beta_cap(p, law->table, pressure, v, rows));
-    *beta = b > cap ? cap : b;
+    tc_node_mu(law, pressure, 1, &v, &b0, &mu, &clamped, &work, rows);
+    *beta = tc_node_debris(law, pressure, ds, v, b0, rows);
     if (flagged != NULL) *flagged = clamped != 0;
     return mu;
 }

@@ -53,4 +53,13 @@ TC_API int tc_node_law_make(const tc_stripdraw_params *p, const tc_table *table,
 TC_API double tc_node_friction(const tc_node_law *law, double pressure, double slip, double dt, double *beta,
                                int *flagged, tc_table_rows *rows);
 
+/* The two halves of tc_node_friction for n points at one pressure > 0 (finite inputs): mu from their slip rates
+ * (|ds| / dt) and their beta at the increment's start, flagged[k] as tc_node_friction's (one lookup for the n points,
+ * as the strip looks up its nodes); work holds n doubles. */
+TC_API void tc_node_mu(const tc_node_law *law, double pressure, size_t n, const double *rate, const double *beta,
+                       double *mu, unsigned char *flagged, double *work, tc_table_rows *rows);
+/* and one point's beta at the increment's end from its slip |ds|, its slip rate and its beta at the start. */
+TC_API double tc_node_debris(const tc_node_law *law, double pressure, double slip, double rate, double beta,
+                             tc_table_rows *rows);
+
 #endif

@@ -28,23 +28,55 @@ static double point(const tc_fe_law *fe, double pressure, double slip, double dt
     return mu;
 }
 
+/* the points of a VFRICTION block looked up together: runs of one pressure, at most this many at once */
+#define RUN 64
+
 int tc_fe_vfriction(const tc_fe_law *fe, int n_block, int n_dir, int n_fric_dir, int n_states, int n_nod_state,
                     const double *props, int n_props, double dt, const double *dslip, const double *fstick,
                     const double *fnormal, const double *area, double *state, double *ftang) {
     const int rc = checked(fe, props, n_props, n_states);
     if (rc != TC_FE_OK) return rc;
     if (n_block < 0 || n_dir < 1 || n_fric_dir < 1 || n_nod_state < 1) return TC_FE_BAD_SIZES;
+    const size_t stride = (size_t)n_nod_state * (size_t)n_states;
     tc_table_rows rows = {0};
-    for (int k = 0; k < n_block; ++k) {
-        double *ft = ftang + (size_t)k * (size_t)n_fric_dir;
-        for (int i = 0; i < n_fric_dir; ++i) ft[i] = 0.0;
-        const double fn = fnormal[k], a = area[k]; /* F_N / A: the deck's pressure unit */
-        const double pressure = fn > 0 && a > 0 ? fn / a : 0.0;
-        double *st = state + (size_t)k * (size_t)n_nod_state * (size_t)n_states;
-        const double mu = point(fe, pressure, magnitude(dslip + (size_t)k * (size_t)n_dir, n_dir), dt, st, n_states,
-                                &rows);
-        const double force = mu * (fn > 0 ? fn : 0.0), stick = fstick[k];
-        ft[0] = -(force < stick ? force : stick); /* opposite to the slip, no more than what sticks the point */
+    double pressure[RUN], slide[RUN], slip[RUN], rate[RUN], beta[RUN], mu[RUN], work[RUN];
+    unsigned char flagged[RUN];
+    for (int k0 = 0; k0 < n_block;) {
+        /* a run of points in contact at one pressure (F_N / A: the deck's unit), a point out of contact or with an
+         * input that is not finite alone */
+        int n = 0;
+        for (int k = k0; k < n_block && n < RUN; ++k) {
+            const double fn = fnormal[k], a = area[k];
+            const double p = (fn > 0 && a > 0 ? fn / a : 0.0) * fe->pressure_scale;
+            const double d = magnitude(dslip + (size_t)k * (size_t)n_dir, n_dir), b = state[(size_t)k * stride];
+            const int valid = p > 0 && isfinite(p) && isfinite(d) && isfinite(dt) && isfinite(b);
+            if (n > 0 && !(valid && p == pressure[0])) break;
+            pressure[n] = p;
+            slide[n] = d;
+            slip[n] = d * fe->length_scale;
+            beta[n] = b;
+            rate[n] = dt > 0 ? slip[n] / dt : 0.0;
+            ++n;
+            if (!valid) break;
+        }
+        const double p = pressure[0];
+        const int looked_up = p > 0 && isfinite(p) && isfinite(slide[0]) && isfinite(dt) && isfinite(beta[0]);
+        if (looked_up) tc_node_mu(&fe->law, p, (size_t)n, rate, beta, mu, flagged, work, &rows);
+        for (int j = 0; j < n; ++j) {
+            const int k = k0 + j;
+            double *st = state + (size_t)k * stride, *ft = ftang + (size_t)k * (size_t)n_fric_dir;
+            for (int i = 0; i < n_fric_dir; ++i) ft[i] = 0.0;
+            if (!looked_up) { /* out of contact (no friction, the state kept) or an input not finite (counted) */
+                if (p > 0 && n_states > 2) st[2] += 1.0;
+                continue;
+            }
+            st[0] = tc_node_debris(&fe->law, p, slip[j], rate[j], beta[j], &rows);
+            st[1] += slide[j];
+            if (n_states > 2 && flagged[j]) st[2] += 1.0;
+            const double force = mu[j] * fnormal[k], stick = fstick[k];
+            ft[0] = -(force < stick ? force : stick); /* opposite to the slip, no more than what sticks the point */
+        }
+        k0 += n;
     }
     return TC_FE_OK;
 }
