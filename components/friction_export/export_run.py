@@ -137,6 +137,11 @@ def _nodes_in(axis: np.ndarray, low: float, high: float) -> tuple:
     return tuple([low, *inner, high]) if high > low else (low,)
 
 
+def code_version() -> str:
+    """The package's version and the native core library's name, for a file's header."""
+    return _code_version()
+
+
 def _code_version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 

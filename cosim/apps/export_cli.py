@@ -1,4 +1,5 @@
-"""``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table).
+"""``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table, user
+friction routines).
 
     tribocosim export FORMAT -o FILE [--beta B ... | --passes N ... --pressure P [--velocity V] [--pad-length L]]
                      [--units mm-t-s|SI] [--band K] [--table T | --calibration C] [--set NAME=VALUE ...]
@@ -8,8 +9,10 @@
 
 FORMAT: ``lsdyna`` (an include file: *DEFINE_TABLE and its *DEFINE_CURVEs for contact FS = 2), ``abaqus`` (a *SURFACE
 INTERACTION with a tabulated *FRICTION; without a debris state beta is field variable 1), ``table`` (a neutral JSON
-table). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line naming the option
-on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
+table), ``vfriction``, ``fric``, ``usrfrc`` (user friction routines for Abaqus/Explicit, Abaqus/Standard and LS-DYNA:
+FILE.f with FILE.c and FILE.h beside it, the debris state kept per contact node; they take --table, --calibration,
+--set, --option and --units). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line
+naming the option on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
 below the documented floor of the strip-draw contact, naming the setting that lets it) is one line on stderr per file,
 ``tribocosim export: warning: <file>: ...``, and in the file's header; the file is written and the exit code is 0.
 docs/forming-friction.md is the guide.
@@ -23,7 +26,7 @@ import sys
 
 from tribocosim.errors import TribocosimError
 
-FORMATS = ("lsdyna", "abaqus", "table")
+FORMATS = ("lsdyna", "abaqus", "table", "vfriction", "fric", "usrfrc")
 
 
 class _ArgumentError(Exception):
