@@ -26,7 +26,7 @@ from pathlib import Path
 
 from tribocosim.errors import ParameterError
 from tribocosim.components.friction_export import c_amalgamation, fortran_routines, table_source
-from tribocosim.components.friction_export.export_header import WIDTH
+from tribocosim.components.friction_export.export_header import WIDTH, calibration_line, table_line
 from tribocosim.components.friction_export.exported_law import ExportedLaw
 from tribocosim.components.friction_export.export_units import UnitSystem
 from tribocosim.components.friction_export.file_set import check_target, write_all
@@ -156,7 +156,6 @@ def header(routine: Routine, law: ExportedLaw, units: UnitSystem, check: int, st
            code_version: str) -> list[str]:
     """The header of the three files (lines of at most :data:`WIDTH` characters before wrapping)."""
     prov = law.provenance()
-    table = prov["table"]
     prm = law.params
     lines = [f"tribocosim user friction routine: {routine.code} {routine.routine}",
              f"written by tribocosim {code_version}" + (f" with: {command}" if command else ""),
@@ -180,15 +179,9 @@ def header(routine: Routine, law: ExportedLaw, units: UnitSystem, check: int, st
              "routine keeps the debris a point makes at that point: its physics is the strip model's with zeta = 0",
              *_keywords(routine, check, units),
              *_build(routine, stem),
-             f"table: {table['path']} (content hash {table['content_hash']}, {table['provenance']}, format version "
-             f"{table['format_version']}), embedded as constant data in {stem}.c"]
-    cal = prov.get("calibration")
-    if cal:
-        scale = (cal.get("fitted") or {}).get("particle_area_scale")
-        fitted = (f"s = {scale['value']:.6g}" + (f" +- {scale['stderr']:.2g}" if scale.get("stderr") is not None
-                                                   else "")) if scale else "s not fitted"
-        lines.append(f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data "
-                     f"{(cal.get('data') or {}).get('path')}")
+             f"{table_line(prov)}, embedded as constant data in {stem}.c"]
+    if prov.get("calibration"):
+        lines.append(calibration_line(prov))
     else:
         lines.append("calibration: none (the table's areas as the mesoscale campaign measured them, scaled by "
                      f"particle_area_scale = {prm.particle_area_scale:g})")
