@@ -4,7 +4,7 @@ A sweep file (TOML, with a ``[sweep]`` table; ``tribocosim run SWEEP.toml`` reco
 base scene and what to vary::
 
     [sweep]
-    scene = "demo.toml"          # base scene, relative to this file
+    scene = "demo.toml"          # base scene: a file relative to this one, or a packaged scene by name
     passes = 1                   # > 1: chained passes over the same strip (see below)
     field_instance = "strip"     # the StripDraw instance whose beta field is recorded / handed over
     field_interval = 0.02        # [s] between recorded field rows (0: every step); needs field_instance
@@ -226,6 +226,11 @@ def load_sweep(path: str | Path) -> Sweep:
         add("sweep.scene", f"must name the base scene file, got {scene!r}")
         scene = ""
     scene_path = (path.parent / scene).resolve()
+    if scene and not scene_path.exists():  # a packaged scene by name ("demo" or "demo.toml"), as tribocosim run takes
+        from tribocosim.paths import SCENES_DIR
+
+        packaged = SCENES_DIR / (scene if scene.endswith(".toml") else f"{scene}.toml")
+        scene_path = packaged if "/" not in scene and packaged.is_file() else scene_path
     if scene and scene_path.is_dir():
         add("sweep.scene", f"{scene_path} is a folder, not a scene file")
     elif scene and not scene_path.is_file():
