@@ -30,7 +30,8 @@ COMMAND is split as a shell would split it (no shell runs it); a leading ``tribo
 interpreter (``python -m tribocosim.cli``), a leading ``python`` this interpreter. It runs in a fresh temporary folder
 (its relative paths land there), with ``{root}`` the repository's folder; the folder's path is written as ``.`` in
 what it prints. A command that ends with a status other than 0 is an error. FILTERs of a block, in order: ``stdout``
-(the default), ``stderr`` or ``both`` (stdout, then stderr), ``grep REGEX`` (the lines that match), ``file PATH`` (the
+(the default), ``stderr`` or ``both`` (stdout, then stderr), ``grep REGEX`` (the lines that match), ``drop REGEX`` (what matches, removed from each line:
+a column of wall times), ``file PATH`` (the
 content of a file the command wrote, relative to its folder, as it is: Markdown, not fenced). Each command runs once
 per check, however many markers name it.
 
@@ -110,10 +111,13 @@ def _block(spec: str, run: Runner) -> str:
             text = {"stdout": printed.stdout, "stderr": printed.stderr, "both": printed.stdout + printed.stderr}[word]
         elif word == "grep":
             text = "".join(line for line in text.splitlines(keepends=True) if re.search(arg, line))
+        elif word == "drop":
+            text = "".join(re.sub(arg, "", line) + "\n" for line in text.splitlines())
         elif word == "file":
             text, fenced = (printed.folder / arg).read_text(encoding="utf-8"), False
         else:
-            raise DocOutputError(f"{spec!r}: {word!r} is not a filter (stdout, stderr, both, grep REGEX, file PATH)")
+            raise DocOutputError(f"{spec!r}: {word!r} is not a filter (stdout, stderr, both, grep REGEX, drop REGEX, "
+                                 "file PATH)")
     if not text.strip():
         raise DocOutputError(f"{spec!r} gives no text")
     text = text if text.endswith("\n") else text + "\n"
