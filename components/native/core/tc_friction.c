@@ -79,13 +79,11 @@ static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table
     const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
     const double level = eq8 ? eq8_area(p, pressure) : 1.0, s = p->particle_area_scale;
     if (!(s > 0)) return 1.0;
-    double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX], at;
-    (void)tc_table_beta_line(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, velocity, y,
-                             dl, dr, rows, NO_MSG);
-    if (!tc_table_first_crossing_below(table->n_beta, table->beta, y, dl, dr, level / s * (1.0 - TC_REACH_RTOL), limit,
-                                       &at))
-        return 1.0;
-    return fmin(1.0, at);
+    double at;
+    int found = 0; /* the table's own arrays: the search cannot fail */
+    (void)tc_table_beta_crossing(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, velocity,
+                                 level / s * (1.0 - TC_REACH_RTOL), limit, &found, &at, rows, NO_MSG);
+    return found ? fmin(1.0, at) : 1.0;
 }
 
 /* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */

@@ -110,10 +110,10 @@ static void locate_pressure(const tc_table *t, double q, size_t *i, double *tp) 
     locate(t->log_pressure, n, log(qc), i, tp);
 }
 
-/* the pressure's cell, from rows made at this pressure when they are (locate_pressure's cell for it: the rows keep the
- * cell they were made at) */
+/* the pressure's cell, from rows made at this pressure when they are, whole or in part (locate_pressure's cell for it:
+ * the rows keep the cell they were made at) */
 static void pressure_cell(const tc_table *t, double q, const tc_table_rows *rows, size_t *i, double *tp) {
-    if (rows != NULL && rows->filled > 0 && rows->table == t && rows->pressure == q) {
+    if (rows != NULL && rows->filled != 0 && rows->table == t && rows->pressure == q) {
         *i = rows->ip;
         *tp = rows->tp;
         return;
@@ -144,74 +144,146 @@ static int reads_unsimulated(const tc_table *t, size_t ip, double tp, size_t iv,
 
 /* ---- monotone cubic: the rows of a velocity cell at a pressure ------------------------------------------------ */
 
-/* Row `row` (table velocity iv + row) of rows r at the pressure cell (ip, tp) from the monotone cubic form c: its
- * values and slopes along beta, each the Hermite piece along ln P of its column between the pressure nodes ip and
- * ip + 1 (with the piece's slopes of the form), then the limited end slopes of each piece along beta; and at each beta
- * node the largest weight in P, 1 - tp or tp, of an unsimulated node of the row's two pressure nodes (0: none). */
-static void fill_row(const tc_table *t, const tc_table_cubic *c, int row, tc_table_rows *r) {
-    const size_t nP = t->n_pressure, nb = t->n_beta, plane = t->n_velocity * nb, ip = r->ip;
-    const size_t j = r->iv + (t->n_velocity > 1 ? (size_t)row : 0);
-    const double tp = r->tp, *values = c->values, *u = t->unsimulated;
-    double d[TC_TABLE_BETA_MAX], *y = r->y[row];
-    const size_t at = ip * plane + j * nb;
-    if (nP == 1) {
-        for (size_t k = 0; k < nb; ++k) {
-            y[k] = values[at + k];
-            d[k] = c->beta_slope[at + k];
-        }
-    } else {
-        const double h = t->log_pressure[ip + 1] - t->log_pressure[ip];
-        const double *y0 = values + at, *y1 = values + at + plane, *s0 = c->beta_slope + at,
-                     *s1 = c->beta_slope + at + plane;
-        const double *vl = c->value_piece[0] + at, *vr = c->value_piece[1] + at, *sl = c->slope_piece[0] + at,
-                     *sr = c->slope_piece[1] + at;
-        for (size_t k = 0; k < nb; ++k) {
-            y[k] = tc_pchip_hermite(y0[k], y1[k], vl[k], vr[k], h, tp);
-            d[k] = tc_pchip_hermite(s0[k], s1[k], sl[k], sr[k], h, tp);
-        }
+/* Node k (flat index i into the arrays, row ip's) of a table row at the pressure cell (ip, tp) from the monotone cubic
+ * form c: its value and its slope along beta, each the Hermite piece along ln P (of length h) of its column between the
+ * pressure nodes ip and ip + 1 with the piece's slopes of the form; the node's own on a one-point pressure axis. */
+static inline void row_node(const tc_table_cubic *c, int one_pressure, size_t i, size_t plane, double h, double tp,
+                            double *y, double *d) {
+    if (one_pressure) {
+        *y = c->values[i];
+        *d = c->beta_slope[i];
+        return;
     }
-    for (size_t k = 0; k + 1 < nb; ++k) {
+    *y = tc_pchip_hermite(c->values[i], c->values[i + plane], c->value_piece[0][i], c->value_piece[1][i], h, tp);
+    *d = tc_pchip_hermite(c->beta_slope[i], c->beta_slope[i + plane], c->slope_piece[0][i], c->slope_piece[1][i], h,
+                          tp);
+}
+
+/* the flat index of beta node 0 of row `row` (table velocity iv + row) of rows r at their pressure node ip */
+static inline size_t row_start(const tc_table *t, const tc_table_rows *r, int row) {
+    const size_t nb = t->n_beta;
+    return r->ip * t->n_velocity * nb + (r->iv + (t->n_velocity > 1 ? (size_t)row : 0)) * nb;
+}
+
+/* The nodes [lo, hi) of row `row` of rows r at their pressure cell (r->ip, r->tp), values and slopes along beta
+ * (row_node), then the end slopes of its pieces [plo, phi) along beta, limited to the square of each piece's secant
+ * (their nodes made). */
+static void make_row(const tc_table *t, const tc_table_cubic *c, int row, tc_table_rows *r, size_t lo, size_t hi,
+                     size_t plo, size_t phi) {
+    const size_t at = row_start(t, r, row), plane = t->n_velocity * t->n_beta;
+    const int one_pressure = t->n_pressure == 1;
+    const double h = one_pressure ? 0.0 : t->log_pressure[r->ip + 1] - t->log_pressure[r->ip], tp = r->tp;
+    double *y = r->y[row], *d = r->d[row];
+    for (size_t k = lo; k < hi; ++k) row_node(c, one_pressure, at + k, plane, h, tp, &y[k], &d[k]);
+    for (size_t k = plo; k < phi; ++k) {
         const double m = (y[k + 1] - y[k]) / (t->beta[k + 1] - t->beta[k]);
         r->dl[row][k] = tc_pchip_limited(d[k], m);
         r->dr[row][k] = tc_pchip_limited(d[k + 1], m);
     }
+}
+
+/* At the beta nodes [lo, hi) of row `row` of rows r: the largest weight in P, 1 - tp or tp, of an unsimulated node of
+ * the row's two pressure nodes (0: none); returns whether one is not 0 (and writes none when the table marks no node
+ * there: all are 0). */
+static inline int row_weights(const tc_table *t, int row, tc_table_rows *r, size_t lo, size_t hi) {
+    const double *u = t->unsimulated;
     double *w = r->unsimulated[row];
-    const double wp[2] = {1.0 - tp, tp};
-    int reads = 0;
-    for (size_t k = 0; k < nb; ++k) {
+    const size_t at = row_start(t, r, row), plane = t->n_velocity * t->n_beta;
+    int marked = 0; /* whether the table marks a node of the row's two pressure nodes there (weight 0 or not) */
+    if (u != NULL)
+        for (size_t k = lo; k < hi; ++k) marked |= u[at + k] != 0 || (t->n_pressure > 1 && u[at + plane + k] != 0);
+    if (!marked) return 0;
+    const double wp[2] = {1.0 - r->tp, r->tp};
+    int any = 0;
+    for (size_t k = lo; k < hi; ++k) {
         double top = 0.0;
         for (size_t a = 0; a < 2; ++a)
-            if (wp[a] > 0.0 && u != NULL && u[at + a * plane + k] != 0) top = wp[a] > top ? wp[a] : top;
+            if (wp[a] > 0.0 && u[at + a * plane + k] != 0) top = wp[a] > top ? wp[a] : top;
         w[k] = top;
-        reads |= top > TC_TABLE_READ_WEIGHT;
+        any |= top != 0.0;
     }
+    return any;
+}
+
+/* Row `row` of rows r made on the whole beta axis (make_row, row_weights), with whether each beta cell has a node of
+ * unsimulated weight and whether one above TC_TABLE_READ_WEIGHT is among them. */
+static void fill_row(const tc_table *t, const tc_table_cubic *c, int row, tc_table_rows *r) {
+    const size_t nb = t->n_beta;
+    make_row(t, c, row, r, 0, nb, 0, nb - 1);
+    double *w = r->unsimulated[row];
+    if (!row_weights(t, row, r, 0, nb))
+        for (size_t k = 0; k < nb; ++k) w[k] = 0.0;
+    int reads = 0;
+    for (size_t k = 0; k < nb; ++k) reads |= w[k] > TC_TABLE_READ_WEIGHT;
     if (nb < TC_TABLE_BETA_MAX) w[nb] = 0.0; /* the second node of a one-point axis's cell (weight tb = 0) */
     for (size_t k = 0; k + 1 < nb || k == 0; ++k) r->unsimulated_cell[row][k] = w[k] != 0.0 || w[k + 1] != 0.0;
     r->reads_unsimulated |= reads;
+}
+
+/* whether r is keyed to the velocity cell iv of form c at this pressure (its rows made whole or in part) */
+static int rows_key(const tc_table *t, const tc_table_cubic *c, double pressure, size_t iv, const tc_table_rows *r) {
+    return r->table == t && r->values == c->values && r->pressure == pressure && r->iv == iv;
+}
+
+/* r keyed to the velocity cell iv of form c at the pressure (ip, tp), nothing made */
+static void rows_reset(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, size_t iv,
+                       tc_table_rows *r) {
+    r->table = t;
+    r->values = c->values;
+    r->form = c;
+    r->pressure = pressure;
+    r->iv = iv;
+    r->ip = ip;
+    r->tp = tp;
+    r->filled = 0;
+    r->reads_unsimulated = 0;
+    r->line_made = 0;
 }
 
 /* The rows of the velocity cell iv at the pressure (ip, tp) (pressure: their key), the first `need` of them (1, or 2
  * when a query lies inside the cell): kept as they are when r holds them already. */
 static void rows_at(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, size_t iv,
                     int need, tc_table_rows *r) {
-    if (!(r->filled > 0 && r->table == t && r->values == c->values && r->pressure == pressure && r->iv == iv)) {
-        r->table = t;
-        r->values = c->values;
-        r->pressure = pressure;
-        r->iv = iv;
-        r->ip = ip;
-        r->tp = tp;
-        r->filled = 0;
-        r->reads_unsimulated = 0;
-        r->line_made = 0;
-    }
+    if (!(r->filled > 0 && rows_key(t, c, pressure, iv, r))) rows_reset(t, c, pressure, ip, tp, iv, r);
     for (int row = r->filled; row < need; ++row) fill_row(t, c, row, r);
     if (need > r->filled) r->filled = need;
 }
 
+/* The first `need` rows of a partial fill r (filled < 0, keyed) on the beta nodes [lo, hi) too (lo < hi), with the
+ * pieces between them: the nodes r lacks made, so that it holds the nodes from the lower of the two ranges' starts to
+ * the higher of their ends. The numbers are those of rows_at. */
+static inline void rows_extend(const tc_table *t, int need, size_t lo, size_t hi, tc_table_rows *r) {
+    const tc_table_cubic *c = r->form;
+    const int made = -r->filled;
+    const size_t a = made > 0 && r->lo < lo ? r->lo : lo, b = made > 0 && r->hi > hi ? r->hi : hi;
+    for (int row = 0; row < made; ++row) {
+        if (a < r->lo) make_row(t, c, row, r, a, r->lo, a, r->lo);
+        if (b > r->hi) make_row(t, c, row, r, r->hi, b, r->hi - 1, b - 1);
+    }
+    for (int row = made; row < need; ++row) make_row(t, c, row, r, a, b, a, b - 1);
+    r->lo = a;
+    r->hi = b;
+    r->filled = -(need > made ? need : made);
+}
+
+/* one value of the line: rows blended at the local velocity coordinate tv, (1 - tv) a + tv b (a Hermite piece is linear
+ * in its data, so the line's piece is the blend of the rows' pieces) */
+static inline double blend(double wa, double a, double wb, double b) { return wa * a + wb * b; }
+
+/* The line along beta at tv != 0 on the nodes [lo, hi) of the rows r holds and the pieces between them: the rows
+ * blended (at tv = 0 the line is row 0). */
+static void blend_line(const tc_table_rows *r, double tv, size_t lo, size_t hi, double *y, double *dl, double *dr) {
+    const double wa = 1.0 - tv, wb = tv;
+    for (size_t k = lo; k < hi; ++k) y[k] = blend(wa, r->y[0][k], wb, r->y[1][k]);
+    for (size_t k = lo; k + 1 < hi; ++k) {
+        dl[k] = blend(wa, r->dl[0][k], wb, r->dl[1][k]);
+        dr[k] = blend(wa, r->dr[0][k], wb, r->dr[1][k]);
+    }
+}
+
 /* The line along beta at the local velocity coordinate tv of the rows' cell, made into r when it does not hold the line
- * of tv: row 0 at tv = 0, else the rows blended (both rows are made then), and whether the cell of each of its pieces
- * has a node of unsimulated weight (the last node's piece: the last cell's). */
+ * of tv (row 0 at tv = 0, else blend_line on the whole axis: both rows are made then), and whether the cell of each of
+ * its pieces has a node of unsimulated weight (the last node's piece: the last cell's). */
 static void rows_line(const tc_table *t, tc_table_rows *r, double tv) {
     if (r->line_made && r->line_tv == tv) return;
     const size_t nb = t->n_beta;
@@ -220,12 +292,7 @@ static void rows_line(const tc_table *t, tc_table_rows *r, double tv) {
         memcpy(r->line_dl, r->dl[0], (nb - 1) * sizeof *r->line_dl);
         memcpy(r->line_dr, r->dr[0], (nb - 1) * sizeof *r->line_dr);
     } else {
-        const double wa = 1.0 - tv, wb = tv;
-        for (size_t k = 0; k < nb; ++k) r->line_y[k] = wa * r->y[0][k] + wb * r->y[1][k];
-        for (size_t k = 0; k + 1 < nb; ++k) {
-            r->line_dl[k] = wa * r->dl[0][k] + wb * r->dl[1][k];
-            r->line_dr[k] = wa * r->dr[0][k] + wb * r->dr[1][k];
-        }
+        blend_line(r, tv, 0, nb, r->line_y, r->line_dl, r->line_dr);
     }
     for (size_t k = 0; k < nb; ++k) {
         const size_t ib = k + 1 == nb && nb > 1 ? k - 1 : k;
@@ -234,6 +301,22 @@ static void rows_line(const tc_table *t, tc_table_rows *r, double tv) {
     }
     r->line_tv = tv;
     r->line_made = 1;
+}
+
+/* The line of a partial fill r at its tv on the nodes [lo, hi) (r holds them) and the pieces between them: row 0's own
+ * arrays at tv = 0, else the rows blended into y, dl, dr; *ly, *ldl, *ldr point at the one that holds it. */
+static void part_line(const tc_table_rows *r, size_t lo, size_t hi, double *y, double *dl, double *dr,
+                      const double **ly, const double **ldl, const double **ldr) {
+    if (r->tv == 0.0) {
+        *ly = r->y[0];
+        *ldl = r->dl[0];
+        *ldr = r->dr[0];
+        return;
+    }
+    blend_line(r, r->tv, lo, hi, y, dl, dr);
+    *ly = y;
+    *ldl = dl;
+    *ldr = dr;
 }
 
 /* The piece of the line (rows_line) of a beta query clamped to the axis, qc: the k with beta_k <= qc < beta_k+1, or
@@ -245,11 +328,22 @@ static size_t beta_piece(const double *axis, size_t n, double qc, size_t h) {
     return lo > 0 ? lo - 1 : 0;
 }
 
+/* the line through y with the piece slopes dl, dr at the clamped beta qc of piece k (beta_piece): its Hermite piece,
+ * or the last node's value */
+static inline double line_at(const double *axis, size_t nb, const double *y, const double *dl, const double *dr,
+                             size_t k, double qc) {
+    if (k + 1 < nb) {
+        const double h = axis[k + 1] - axis[k];
+        return tc_pchip_hermite(y[k], y[k + 1], dl[k], dr[k], h, (qc - axis[k]) / h);
+    }
+    return y[k];
+}
+
 /* Whether the query of the clamped beta qc in piece k (beta_piece) of the line at tv, a piece whose cell has an
  * unsimulated node (line_unsimulated), reads one, as reads_unsimulated() decides it at the cell (ib, tb) locate() gives
  * (the last node: ib = nb - 2, tb = 1): a corner's weight is wp wv wb, and the largest wp of an unsimulated node at a
  * beta node times wv wb exceeds the read weight exactly when one of them does (rounding keeps the order of
- * products). */
+ * products). It reads the weights of the nodes of weight wb > 0 only: k and, inside the piece, k + 1. */
 static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, double tv, size_t k, double qc) {
     const size_t nb = t->n_beta, ib = k + 1 == nb && nb > 1 ? k - 1 : k;
     const double tb = nb == 1 ? 0.0 : (k == ib ? (qc - t->beta[ib]) / (t->beta[ib + 1] - t->beta[ib]) : 1.0);
@@ -263,11 +357,51 @@ static int rows_read_unsimulated(const tc_table *t, const tc_table_rows *r, doub
     return 0;
 }
 
+/* One query (P, |v|, beta) in the monotone cubic form c at the pressure (ip, tp) when r does not hold the rows of its
+ * velocity cell whole: the rows made on the nodes of its piece only (a partial fill, extended when r holds one of the
+ * cell), the line there and the piece evaluated, the numbers cubic_lookup gives; the flag as cubic_lookup's (a piece
+ * whose rows have no node of unsimulated weight reads none, else rows_read_unsimulated decides). Returns 0, with
+ * nothing done, when r holds the rows whole. */
+static int one_query(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, int outp,
+                     double v, double b, double *out, unsigned char *clamped, tc_table_rows *r) {
+    const size_t nb = t->n_beta;
+    size_t iv;
+    double tv;
+    locate(t->velocity, t->n_velocity, v, &iv, &tv);
+    const int key = rows_key(t, c, pressure, iv, r);
+    if (r->filled > 0 && key) return 0;
+    if (!(r->filled < 0 && key)) {
+        rows_reset(t, c, pressure, ip, tp, iv, r);
+        r->lo = r->hi = 0;
+    }
+    r->velocity = v;
+    r->velocity_cell = iv;
+    r->tv = tv;
+    const double *axis = t->beta;
+    double qc = b < axis[0] ? axis[0] : b;
+    qc = qc > axis[nb - 1] ? axis[nb - 1] : qc;
+    const size_t k = beta_piece(axis, nb, qc, 0), hi = k + 1 < nb ? k + 2 : k + 1;
+    const int need = tv != 0.0 ? 2 : 1;
+    if (-r->filled < need || k < r->lo || hi > r->hi) rows_extend(t, need, k, hi, r);
+    double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX];
+    const double *ly, *ldl, *ldr;
+    part_line(r, k, hi, y, dl, dr, &ly, &ldl, &ldr);
+    *out = line_at(axis, nb, ly, ldl, ldr, k, qc);
+    if (clamped != NULL) {
+        int unsimulated = 0;
+        for (int row = 0; row < need; ++row) unsimulated |= row_weights(t, row, r, k, hi);
+        *clamped = (unsigned char)((outp || outside_velocity(t, v) || outside_beta(t, b)) ||
+                                   (unsimulated && rows_read_unsimulated(t, r, tv, k, qc)));
+    }
+    return 1;
+}
+
 /* Every query in the monotone cubic form c at the pressure (ip, tp): the rows of a velocity cell made (or found in
- * r) when the cell changes, then each query evaluated on them. */
+ * r) when the cell changes, then each query evaluated on them; one query not in r on its piece alone (one_query). */
 static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pressure, size_t ip, double tp, int outp,
                          size_t n, const double *velocity, const double *beta, double *out, unsigned char *clamped,
                          tc_table_rows *r) {
+    if (n == 1 && one_query(t, c, pressure, ip, tp, outp, fabs(velocity[0]), beta[0], out, clamped, r)) return;
     const size_t nv = t->n_velocity, nb = t->n_beta;
     const double *axis = t->beta, lo = axis[0], hi = axis[nb - 1];
     const double *y = r->line_y, *dl = r->line_dl, *dr = r->line_dr;
@@ -288,17 +422,13 @@ static void cubic_lookup(const tc_table *t, const tc_table_cubic *c, double pres
         double qc = b < lo ? lo : b;
         qc = qc > hi ? hi : qc;
         k = beta_piece(axis, nb, qc, k);
-        if (k + 1 < nb) {
-            const double h = axis[k + 1] - axis[k];
-            out[q] = tc_pchip_hermite(y[k], y[k + 1], dl[k], dr[k], h, (qc - axis[k]) / h);
-        } else {
-            out[q] = y[k];
-        }
+        out[q] = line_at(axis, nb, y, dl, dr, k, qc);
         if (clamped != NULL)
             clamped[q] = (unsigned char)((outpv | outside_beta(t, b)) ||
                                          (unsimulated[k] && rows_read_unsimulated(t, r, tv, k, qc)));
     }
 }
+
 /* ---- multilinear --------------------------------------------------------------------------------------------- */
 
 #define ROWS_MAX 64 /* beta axes up to this length get the rows of one velocity cell interpolated in P once */
@@ -507,7 +637,6 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
     return TC_OK;
 }
 
-
 /* the cubic c0 + c1 t + c2 t^2 + c3 t^3 */
 static double cubic(const double c[4], double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }
 
@@ -578,4 +707,98 @@ int tc_table_first_crossing(size_t n, const double *x, const double *y, const do
 int tc_table_first_crossing_below(size_t n, const double *x, const double *y, const double *dl, const double *dr,
                                   double level, double limit, double *at) {
     return first_crossing(n, x, y, dl, dr, level, limit, at);
+}
+
+/* the margin, relative to the largest magnitude of the nodes, by which the bound of line_below lies below the level:
+ * far above the rounding of the line's values (a few hundred units in the last place of that magnitude) */
+#define BOUND_RTOL 1e-9
+
+/* Whether the line of rows r's velocity cell at their pressure (its first `need` rows: 2 when tv != 0) stays below
+ * level on the beta nodes [0, n) and the pieces between them, decided from the table's nodes: each row's value at a
+ * beta node is a monotone Hermite piece in ln P of its column (PCHIP slopes, limited where kinds differ), each of its
+ * pieces in beta monotone between its ends (slopes limited to the square of the secant) and the line a convex blend of
+ * the rows, so that the line there is at most the largest value of the array at the cell's pressure and velocity nodes
+ * and beta nodes below n; when that lies below level by BOUND_RTOL of their largest magnitude, no value the search
+ * computes reaches level (first_crossing finds nothing, as on the line made). */
+static inline int line_below(const tc_table *t, const tc_table_rows *r, int need, size_t n, double level) {
+    const size_t plane = t->n_pressure > 1 ? t->n_velocity * t->n_beta : 0; /* row ip + 1's offset (ip's alone) */
+    double top = -HUGE_VAL, bottom = HUGE_VAL;
+    for (int row = 0; row < need; ++row) {
+        const double *c0 = r->values + row_start(t, r, row), *c1 = c0 + plane;
+        for (size_t k = 0; k < n; ++k) {
+            const double a = c0[k], b = c1[k], hi = a > b ? a : b, lo = a > b ? b : a;
+            top = hi > top ? hi : top;
+            bottom = lo < bottom ? lo : bottom;
+        }
+    }
+    const double size = top > -bottom ? top : -bottom; /* the largest magnitude */
+    return top + BOUND_RTOL * size < level;
+}
+
+int tc_table_beta_crossing(const tc_table *table, const double *values, double pressure, double velocity, double level,
+                           double limit, int *found, double *at, tc_table_rows *rows, tc_msg msg) {
+    const size_t nb = table->n_beta;
+    const double v = fabs(velocity);
+    /* the search reads the first node and the pieces k + 1 < nb with beta_k <= limit: the nodes [0, n) (the axis's
+     * nodes at or below limit counted from its start: a debris state lies near it) */
+    size_t below = 0;
+    while (below < nb && !(limit < table->beta[below])) ++below;
+    const size_t n = below + 1 < nb ? below + 1 : nb;
+    double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX];
+    const double *ly, *ldl, *ldr;
+    tc_table_rows *r = rows;
+    if (r != NULL && r->filled != 0 && r->table == table && r->values == values && r->pressure == pressure &&
+        r->velocity == v && r->iv == r->velocity_cell) { /* rows of the cell of |v|, made by a lookup or a search */
+        const int need = r->tv != 0.0 ? 2 : 1;
+        if (line_below(table, r, need, n, level)) {
+            *found = 0;
+            return TC_OK;
+        }
+        if (r->filled < 0) { /* in part */
+            if (-r->filled < need || r->lo > 0 || n > r->hi) rows_extend(table, need, 0, n, r);
+            part_line(r, 0, n, y, dl, dr, &ly, &ldl, &ldr);
+            *found = first_crossing(n, table->beta, ly, ldl, ldr, level, limit, at);
+            return TC_OK;
+        }
+        if (r->line_made && r->line_tv == r->tv) { /* whole, with the line of |v| */
+            *found = first_crossing(nb, table->beta, r->line_y, r->line_dl, r->line_dr, level, limit, at);
+            return TC_OK;
+        }
+    }
+    if (table->interpolation != TC_TABLE_MONOTONE_CUBIC)
+        return tc_fail(msg, TC_ERROR, "the beta line is that of a version 4 table; this table is version %d",
+                       table->format_version);
+    size_t ip, iv;
+    double tp, tv;
+    tc_table_cubic temp = {0};
+    int rc = TC_OK;
+    const tc_table_cubic *c = cubic_form(table, values, &temp, &rc, msg);
+    if (c == NULL) return rc;
+    tc_table_rows local;
+    r = rows != NULL && c != &temp ? rows : &local;
+    if (r == &local) local.filled = 0;
+    pressure_cell(table, pressure, r, &ip, &tp);
+    locate(table->velocity, table->n_velocity, v, &iv, &tv);
+    const int need = tv != 0.0 ? 2 : 1;
+    const int whole = r->filled > 0 && rows_key(table, c, pressure, iv, r);
+    if (!whole && !(r->filled < 0 && rows_key(table, c, pressure, iv, r))) {
+        rows_reset(table, c, pressure, ip, tp, iv, r);
+        r->lo = r->hi = 0;
+    }
+    r->velocity = v; /* the rows of the search below are those of this cell */
+    r->velocity_cell = iv;
+    r->tv = tv;
+    if (line_below(table, r, need, n, level)) {
+        *found = 0;
+    } else if (whole) { /* the line whole, as the lookups at tv have it */
+        rows_at(table, c, pressure, ip, tp, iv, need, r);
+        rows_line(table, r, tv);
+        *found = first_crossing(nb, table->beta, r->line_y, r->line_dl, r->line_dr, level, limit, at);
+    } else {
+        rows_extend(table, need, 0, n, r);
+        part_line(r, 0, n, y, dl, dr, &ly, &ldl, &ldr);
+        *found = first_crossing(n, table->beta, ly, ldl, ldr, level, limit, at);
+    }
+    tc_table_cubic_free(&temp);
+    return TC_OK;
 }

@@ -30,12 +30,22 @@
 typedef struct tc_table_rows {
     const tc_table *table;
     const double *values;
+    const tc_table_cubic *form; /* the monotone cubic form of values the rows are made from */
     double pressure;
     size_t iv;
-    int filled; /* how many of the two rows are made (the second one only when a query lies inside the cell) */
+    /* how many of the two rows are made (the second one only when a query lies inside the cell) on the whole beta axis;
+     * or minus how many are made on the beta nodes [lo, hi) only, with the pieces between them: a lookup of one query
+     * (tc_table_lookup2 with n = 1) and the cap's search (tc_table_beta_crossing) make the nodes they read */
+    int filled;
+    size_t lo, hi;
+    /* the |v| of the last such query or search and its velocity cell and local coordinate (a function of |v|: the
+     * search at the lookup's velocity finds them here) */
+    double velocity, tv;
+    size_t velocity_cell;
     size_t ip;
     double tp;
     double y[2][TC_TABLE_BETA_MAX], dl[2][TC_TABLE_BETA_MAX], dr[2][TC_TABLE_BETA_MAX];
+    double d[2][TC_TABLE_BETA_MAX]; /* the rows' slopes along beta at the nodes, before the pieces' limits */
     double unsimulated[2][TC_TABLE_BETA_MAX];
     unsigned char unsimulated_cell[2][TC_TABLE_BETA_MAX]; /* whether either node of beta cell ib has such a weight */
     int reads_unsimulated; /* whether an unsimulated weight above TC_TABLE_READ_WEIGHT is among them */
@@ -62,7 +72,8 @@ TC_API int tc_table_lookup(const tc_table *table, const double *values, double p
 
 /* Two arrays of the table at the same queries (A_p and A_c of the strip-draw law): the axes are located once
  * per query for both (and the velocity only when it differs from the query before). values_b and out_b may be
- * NULL (one array). rows (may be NULL) holds the rows of values a version 4 table's lookup made last (tc_table_rows).
+ * NULL (one array). rows (may be NULL) holds the rows of values a version 4 table's lookup made last (tc_table_rows);
+ * a lookup of one query (n = 1) that does not find its rows there makes them on the two beta nodes of its piece only.
  * TC_NOMEM when the monotone cubic form of an array that is not one the table keeps cannot be made. */
 TC_API int tc_table_lookup2(const tc_table *table, const double *values, const double *values_b, double pressure,
                             size_t n, const double *velocity, const double *beta, int policy, double *out,
@@ -80,6 +91,13 @@ TC_API size_t tc_table_read_nodes(const tc_table *table, double pressure, double
  * of another version. */
 TC_API int tc_table_beta_line(const tc_table *table, const double *values, double pressure, double velocity,
                               double *y, double *dl, double *dr, tc_table_rows *rows, tc_msg msg);
+
+/* tc_table_first_crossing_below of the line tc_table_beta_line gives at (P, |v|) with level and limit, *found its
+ * result and *at its crossing (set when found): the same numbers, from the line made on the pieces the search reads
+ * only (those that start at or below limit, and the first node) unless rows holds the line whole. TC_ERROR for a table
+ * of another version, TC_NOMEM as tc_table_lookup2's. */
+TC_API int tc_table_beta_crossing(const tc_table *table, const double *values, double pressure, double velocity,
+                                  double level, double limit, int *found, double *at, tc_table_rows *rows, tc_msg msg);
 
 /* The first x at which the piecewise cubic Hermite line through (x[k], y[k]) with the piece end slopes dl[k], dr[k]
  * (k < n - 1) reaches level: returns 1 and sets *at (x[0] when y[0] >= level; else within TC_TABLE_CROSSING_TOL below

@@ -28,7 +28,8 @@ static double point(const tc_fe_law *fe, double pressure, double slip, double dt
     return mu;
 }
 
-/* the points of a VFRICTION block looked up together: runs of one pressure, at most this many at once */
+/* the points of a VFRICTION block taken this many at a time: their inputs made once, then each run of points at one
+ * pressure looked up together */
 #define RUN 64
 
 int tc_fe_vfriction(const tc_fe_law *fe, int n_block, int n_dir, int n_fric_dir, int n_states, int n_nod_state,
@@ -40,43 +41,46 @@ int tc_fe_vfriction(const tc_fe_law *fe, int n_block, int n_dir, int n_fric_dir,
     const size_t stride = (size_t)n_nod_state * (size_t)n_states;
     tc_table_rows rows = {0};
     double pressure[RUN], slide[RUN], slip[RUN], rate[RUN], beta[RUN], mu[RUN], work[RUN];
-    unsigned char flagged[RUN];
-    for (int k0 = 0; k0 < n_block;) {
-        /* a run of points in contact at one pressure (F_N / A: the deck's unit), a point out of contact or with an
-         * input that is not finite alone */
-        int n = 0;
-        for (int k = k0; k < n_block && n < RUN; ++k) {
+    unsigned char flagged[RUN], valid[RUN];
+    for (int k0 = 0; k0 < n_block; k0 += RUN) {
+        const int m = n_block - k0 < RUN ? n_block - k0 : RUN;
+        for (int j = 0; j < m; ++j) { /* the pressure (F_N / A: the deck's unit), the slip and the state of each point */
+            const int k = k0 + j;
             const double fn = fnormal[k], a = area[k];
             const double p = (fn > 0 && a > 0 ? fn / a : 0.0) * fe->pressure_scale;
             const double d = magnitude(dslip + (size_t)k * (size_t)n_dir, n_dir), b = state[(size_t)k * stride];
-            const int valid = p > 0 && isfinite(p) && isfinite(d) && isfinite(dt) && isfinite(b);
-            if (n > 0 && !(valid && p == pressure[0])) break;
-            pressure[n] = p;
-            slide[n] = d;
-            slip[n] = d * fe->length_scale;
-            beta[n] = b;
-            rate[n] = dt > 0 ? slip[n] / dt : 0.0;
-            ++n;
-            if (!valid) break;
+            pressure[j] = p;
+            slide[j] = d;
+            slip[j] = d * fe->length_scale;
+            beta[j] = b;
+            rate[j] = dt > 0 ? slip[j] / dt : 0.0;
+            valid[j] = (unsigned char)(p > 0 && isfinite(p) && isfinite(d) && isfinite(dt) && isfinite(b));
         }
-        const double p = pressure[0];
-        const int looked_up = p > 0 && isfinite(p) && isfinite(slide[0]) && isfinite(dt) && isfinite(beta[0]);
-        if (looked_up) tc_node_mu(&fe->law, p, (size_t)n, rate, beta, mu, flagged, work, &rows);
-        for (int j = 0; j < n; ++j) {
-            const int k = k0 + j;
-            double *st = state + (size_t)k * stride, *ft = ftang + (size_t)k * (size_t)n_fric_dir;
-            for (int i = 0; i < n_fric_dir; ++i) ft[i] = 0.0;
-            if (!looked_up) { /* out of contact (no friction, the state kept) or an input not finite (counted) */
-                if (p > 0 && n_states > 2) st[2] += 1.0;
-                continue;
+        for (int j0 = 0; j0 < m;) {
+            /* a run of points in contact at one pressure; a point out of contact or with an input that is not finite
+             * alone */
+            int j1 = j0 + 1;
+            if (valid[j0]) {
+                while (j1 < m && valid[j1] && pressure[j1] == pressure[j0]) ++j1;
+                tc_node_mu(&fe->law, pressure[j0], (size_t)(j1 - j0), rate + j0, beta + j0, mu + j0, flagged + j0,
+                           work, &rows);
             }
-            st[0] = tc_node_debris(&fe->law, p, slip[j], rate[j], beta[j], &rows);
-            st[1] += slide[j];
-            if (n_states > 2 && flagged[j]) st[2] += 1.0;
-            const double force = mu[j] * fnormal[k], stick = fstick[k];
-            ft[0] = -(force < stick ? force : stick); /* opposite to the slip, no more than what sticks the point */
+            for (int j = j0; j < j1; ++j) {
+                const int k = k0 + j;
+                double *st = state + (size_t)k * stride, *ft = ftang + (size_t)k * (size_t)n_fric_dir;
+                for (int i = 0; i < n_fric_dir; ++i) ft[i] = 0.0;
+                if (!valid[j]) { /* out of contact (no friction, the state kept) or an input not finite (counted) */
+                    if (pressure[j] > 0 && n_states > 2) st[2] += 1.0;
+                    continue;
+                }
+                st[0] = tc_node_debris(&fe->law, pressure[j], slip[j], rate[j], beta[j], &rows);
+                st[1] += slide[j];
+                if (n_states > 2 && flagged[j]) st[2] += 1.0;
+                const double force = mu[j] * fnormal[k], stick = fstick[k];
+                ft[0] = -(force < stick ? force : stick); /* opposite to the slip, no more than what sticks the point */
+            }
+            j0 = j1;
         }
-        k0 += n;
     }
     return TC_FE_OK;
 }
