@@ -118,9 +118,9 @@ def _failure(f: Fit) -> str:
         moved = ", ".join(f"{n} = {v:.6g} changed by {d:+.3g} (standard error {e:.2g})"
                           for n, v, d, e in zip(f.names, f.values, f.last_change, f.stderr))
         parts.append(f"the fit has not converged in {f.iterations} iterations ({f.evaluations} model evaluations): in "
-                     f"the last one {moved}; converged means every change within {RTOL:g} of the value or "
-                     f"{STDERR_FRACTION:.0%} of the standard error")
-    parts += f.inseparable
+                     f"the last one {moved}; converged means every change within {RTOL:g} of its value, or the "
+                     f"change within {STDERR_FRACTION:.0%} of a standard error")
+    parts += f.problems
     rms = np.sqrt(np.mean([(r["residual"] / r["measured"]) ** 2 for r in f.residuals if r["measured"]] or [0.0]))
     return "; ".join(parts) + f" (RMS residual {100 * rms:.3g} % of the data)"
 
@@ -175,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         "inseparable": f.inseparable, "correlation": f.correlation.tolist(),
         "singular_values_in_scale_units": f.singular_values.tolist(),
         "chi2": f.chi2, "dof": f.dof, "shear_scale_product": f.shear_scale,
+        "residual_test": f.residual_test.as_dict(), "cap_search": f.search,
         "contact_area": args.contact_area, "particle_area_rule": rule,
         "parameters": {k: v for k, v in parameters.items() if k != "table_file"},
         "source_table": {"path": str(table_path), "content_hash": table.metadata.get("content_hash")},
@@ -200,6 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     if f.shear_scale is not None:
         print(f"(1 - flake_shear_ratio) particle_area_scale = {f.shear_scale['value']:.6g} +- "
               f"{f.shear_scale['stderr']:.2g} (the combination mu depends on below the cap)")
+    print(f"residual: {f.residual_test.line()}")
     if len(f.names) > 1:
         print("correlations: " + ", ".join(f"{a}/{b} {f.correlation[i, j]:+.3f}" for i, a in enumerate(f.names)
                                            for j, b in enumerate(f.names) if j > i))
