@@ -18,20 +18,25 @@ how much debris there is: the production K / H (``archard_k``, H fixed), the sha
 the parameters to fit (default: particle_area_scale); the fit (:mod:`tribocosim.cosim.apps.calibrate_fit`) is
 Gauss-Newton least squares within the parameters' bounds on the pure strip-draw model, with standard errors from the
 Jacobian. Below the cap mu depends on s and r only through (1 - r) s: fitted together, they are separated only by
-tests whose debris reaches the cap (several passes, high pressure, long pads); otherwise the command says in one line
-that the data determine only (1 - r) s, with its value and standard error.
+tests whose debris reaches the cap (several passes, high pressure, long pads). When the fit from the start does not
+succeed, the fit searches the valley (1 - r) s = const for where the model's debris reaches the cap and fits from
+there (the cap search); when no start there fits better, the command says in one line that the data determine only
+(1 - r) s, with its value and standard error.
 
-It succeeds when it has converged (every change within 1e-6 of the value or 1 % of the standard error), no parameter
-is held at a bound the data push it against, and the data separate the parameters (the Jacobian's singular values,
-the parameters' correlations). Otherwise the command says which of these failed, writes nothing and exits with 1,
-unless ``--keep-unconverged`` asks for the last iterate; that table's metadata then give the status.
+It succeeds when it has converged (every change within 1e-6 of its value, or the change within 1 % of a standard
+error), no parameter is held at a bound the data push it against, the residual is not larger than the data's noise
+(chi^2 against the stated standard deviations, or the lack of fit against the spread of replicated tests; not judged,
+and said so, when the data carry neither) and the data separate the parameters (the Jacobian's singular values, the
+parameters' correlations), each judged at the best fit. Otherwise the command says which of these failed (a residual
+beyond the noise: the model does not describe the data, with the residual), writes nothing and exits with 1, unless
+``--keep-unconverged`` asks for the last iterate; that table's metadata then give the status.
 
 The output is the input table (format version 2 or later) with the A_p of the chosen rule (and its spread and
 standard error) times s and mu recomputed, so that the model with ``particle_area_scale = 1`` and the same
 ``contact_area`` is the calibrated one; its metadata (``strip_draw_calibration``) record every fitted parameter with
 its standard error, their correlations, the status, the convention, every point's measured and model values and
-residuals, and the data file's SHA-256. The fitted debris-balance parameters are strip-draw parameters: the note
-says which values to run with.
+residuals, the residual's judgement, the cap search's starts, and the data file's SHA-256. The fitted debris-balance
+parameters are strip-draw parameters: the note says which values to run with.
 """
 
 from __future__ import annotations
@@ -101,8 +106,8 @@ def _parser() -> argparse.ArgumentParser:
                    help=f"Gauss-Newton iterations at most (default: {MAX_ITERATIONS})")
     p.add_argument("--keep-unconverged", action="store_true",
                    help="write the table from the last iterate (metadata: its status) and exit 0 when the fit has not "
-                        "converged, is held at a bound or cannot separate its parameters; without it, that is exit "
-                        "code 1 and no table")
+                        "converged, is held at a bound, does not describe the data or cannot separate its parameters; "
+                        "without it, that is exit code 1 and no table")
     return p
 
 

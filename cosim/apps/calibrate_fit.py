@@ -16,25 +16,59 @@ within its bounds (the strip-draw parameter's declared range; a sink length abov
 r_i = (model_i - measured_i) / sigma_i; Gauss-Newton with a forward-difference Jacobian J (steps of 1e-3 times the
 value or the parameter's scale), the step solved in units of the parameters' scales without the directions the data
 do not see (below :data:`SINGULAR_RATIO` of the largest singular value), clipped to the bounds and halved while it
-does not lower sum r^2. Covariance C = (J^T J)^-1, scaled by chi^2 / (N - n) when the data give no standard deviations
-(one observable only: without them observables of different units cannot be weighed against each other).
+does not lower sum r^2 (:data:`HALVINGS` times at most; when none does, the iteration keeps its point). Covariance
+C = (J^T J)^-1, scaled by chi^2 / (N - n) when the data give no standard deviations (one observable only: without them
+observables of different units cannot be weighed against each other).
 
-The outcome (:class:`Fit`) says what the data determine:
+**The cap search (s and r fitted together).** Below the cap mu = mu0 (1 - (1 - r) s A_p / A_c) depends on s and r only
+through q = (1 - r) s, and so does everything the model computes from mu (the strip's slip, the debris): along the
+valley (1 - r) s = q the model's values are the same, bit for bit, until s A_p reaches A_c somewhere (the cap's onset,
+where the cap starts removing debris); beyond it mu = r mu0 where flakes carry the whole contact, and the data see r. A
+fit that starts below the onset (the shipped table's largest A_p / A_c is 0.878: no debris reaches the cap at s < 1.14,
+the default s = 1 included) sees q alone, and Gauss-Newton cannot leave the valley's flat part: its Jacobian has no
+component along it. So when the fit from the start does not succeed, :func:`search_the_cap` evaluates the valley through
+its q at r = 0, 0.05, ..., 0.95 (:data:`CAP_SEARCH_RATIOS`, s = q / (1 - r), the other fitted parameters as fitted), in
+one batch of 20 model evaluations run in parallel: the starts whose values differ from the r = 0 start's are beyond the
+onset, found exactly whatever the data's noise, and Gauss-Newton starts from the one of them with the least chi^2; the
+outcome is the better of the two fits. Why this and not several starts or a global bounded method: the model's structure
+says where the unknown lies (one bounded number, r in [0, 1], once q is fitted), so a grid over r's range costs 20
+evaluations, where each extra Gauss-Newton start costs a run (10-20 evaluations for two parameters in the review's case
+below) and a global method spends its evaluations over the whole box; and from beyond the onset Gauss-Newton reached the
+data's (s, r) from every start tried (in the review's case six, from (1.215, 0.3) to (3.0, 0.7), in 10-20 evaluations
+each; the tests' starts beyond the onset). Measured on the review's case (mu_bar after passes 1-5 at 1, 10, 25 and 30
+MPa on the 35 mm pad, made by the default strip at s = 1.28, r = 0.3, no noise; tests/cosim/test_calibrate.py, ``pytest
+-m slow -s -k reviews``): from the default start the fit sees q = 0.8507 only (RMS residual 6.9 %), 14 of the 20 starts
+reach the cap (r >= 0.3), and the fit from r = 0.3 ends at (1.28, 0.3) to 1e-6 after 4 iterations, 45 model evaluations
+in all (the fit from the start alone: 2 iterations, 13 evaluations, ending at q). What it does not do: an onset beyond r
+= 0.95 (s > 20 q) is not found; it runs along one valley, that of the fit from the start, with the other fitted
+parameters at their values there in every start (Gauss-Newton then moves them all); and only when s and r are both
+fitted, the pair only the cap separates.
 
-- converged: an iteration that changes every parameter by at most 1e-6 of its value (of its scale below it) or 1 %
-  of its standard error; a fit that reaches the iteration limit without it is not converged;
+The outcome (:class:`Fit`) says what the data determine, every judgement at the fit the outcome reports:
+
+- converged: an iteration that changes every parameter by at most 1e-6 of its value (of its scale below it), or
+  whose change is at most 1 % of a standard error in the metric of the covariance, sqrt(d^T C^-1 d) <= 0.01 (for one
+  parameter |d| / its standard error; a change along a direction the data hardly see counts as little as they see
+  it, one along the directions they see in full); a fit that reaches the iteration limit without it is not converged;
 - at a bound: a parameter on its bound whose unconstrained Gauss-Newton step points beyond it; the data ask for a
   value the model does not allow (measured mu_bar above mu0 needs s < 0), so the fit has failed, whatever its
   changes; its standard error is not given;
+- the residual against the data's noise (:mod:`tribocosim.cosim.apps.calibrate_noise`): chi^2 against its
+  distribution on N - n degrees of freedom when the data state their standard deviations, the lack of fit against
+  the spread of replicated tests when they do not, not judged (and said so) when they carry neither; a residual the
+  noise gives with probability below 0.01 says the model does not describe the data: that fit has failed, with the
+  residual and the largest residuals named, whatever the Jacobian;
 - separable: the singular values of the Jacobian with each column in units of its parameter's scale; the data
   cannot separate the parameters when the smallest is below 1e-6 of the largest (a direction the residuals do not
   see: fewer independent data than parameters, or a parameter the data do not touch), when two parameters'
   correlation C_ij / sqrt(C_ii C_jj) exceeds 0.99 in magnitude (only a combination of them is determined), or when a
   bounded parameter's standard error exceeds the width of its range (the data barely touch it: the debris left on
-  the strip hardly depends on zeta, which moves the debris under the pad). s and r fitted together: below the cap
-  mu depends on them only through (1 - r) s, and r acts alone where flakes carry the whole contact (mu = r mu0); when
-  their correlation exceeds 0.99 the outcome says in one line that the data determine only (1 - r) s, with its value
-  and standard error (:func:`shear_scale_product`), in place of the general messages for that pair.
+  the strip hardly depends on zeta, which moves the debris under the pad). s and r fitted together: when their
+  correlation exceeds 0.99 at the best fit (after the cap search: no start on the valley that reaches the cap fits
+  better) the outcome says in one line that the data determine only (1 - r) s, with its value and standard error
+  (:func:`shear_scale_product`), in place of the general messages for that pair. "Not separable" is the status only
+  when the residual is the data's noise or cannot be judged (the outcome then says so); a residual beyond the noise
+  is the misfit above.
 """
 
 from __future__ import annotations
@@ -193,8 +227,11 @@ class Fit:
         if self.describes is not False:
             return []
         values = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names, self.values))
+        if not self.separable:
+            values += "; there the data do not separate the parameters"
         return [f"the model does not describe the data: at the best fit found ({values}), "
-                f"{self.residual_test.line(with_rms=False)}; the largest residuals: {self.residual_test.worst_line()}. The "
+                f"{self.residual_test.line(with_rms=False)}; the largest residuals: "
+                f"{self.residual_test.worst_line()}. The "
                 "strip-draw model with these parameters free cannot follow these data: fit other parameters (the "
                 "debris balance: archard_k, debris_carry_over, debris_sink_length) or check the data's standard "
                 "deviations"]
@@ -205,7 +242,8 @@ class Fit:
         cannot separate (with a word on the residual when the data carry no measure of their noise)."""
         if self.misfit:
             return self.misfit
-        note = ([f"{self.residual_test.reason}: whether the residual is their noise is not judged"]
+        note = ([f"{self.residual_test.reason}: whether the residual is their noise is not judged (give each value's "
+                 "<name>_std, or repeat tests, to judge it)"]
                 if self.inseparable and self.residual_test is not None and self.describes is None else [])
         return self.inseparable + note
 
