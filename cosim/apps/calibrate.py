@@ -253,6 +253,13 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim calibrate: {exc}", file=sys.stderr)
         return 2
+    if not f.succeeded and not args.keep_unconverged:
+        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. Nothing written; fix the data or "
+              "the parameters fitted (--fit), allow more iterations (--max-iterations), or write the last iterate "
+              "with --keep-unconverged.", file=sys.stderr)
+        if clamped:
+            print(f"tribocosim calibrate: note: {_clamped_line(clamped)}", file=sys.stderr)
+        return 1
     if clamped and not args.allow_clamped:
         print(f"tribocosim calibrate: {_clamped_line(clamped)}. Nothing written; leave these rows out, or keep them "
               "with --allow-clamped (the table's metadata then counts their clamped lookups).", file=sys.stderr)
@@ -261,12 +268,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tribocosim calibrate: warning: {_clamped_line(clamped)}; kept as asked (--allow-clamped), the table's "
               "metadata counts them (strip_draw_calibration.clamped_rows)", file=sys.stderr)
     if not f.succeeded:
-        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. "
-              + (f"Writing the last iterate to {args.out} as asked (--keep-unconverged)." if args.keep_unconverged
-                 else "Nothing written; fix the data or the parameters fitted (--fit), allow more iterations "
-                      "(--max-iterations), or write the last iterate with --keep-unconverged."), file=sys.stderr)
-        if not args.keep_unconverged:
-            return 1
+        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. Writing the last iterate to "
+              f"{args.out} as asked (--keep-unconverged).", file=sys.stderr)
     values = dict(zip(f.names, f.values))
     scaled = not all(n in d.stds for d in data for n in d.values)  # calibrate_fit's covariance rule
     scale = float(values.get("particle_area_scale", parameters.get("particle_area_scale", 1.0)))

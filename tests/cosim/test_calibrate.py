@@ -375,7 +375,7 @@ def test_data_a_debris_sink_made_end_with_a_residual_that_says_the_floor_model_d
                  "--fit", "particle_area_scale", "flake_shear_ratio"]) == 1
     err = capsys.readouterr().err
     with capsys.disabled():
-        print("\n" + err.splitlines()[-1])
+        print("\n" + next(line for line in err.splitlines() if "the fit failed" in line))
     assert "the fit failed (does not describe the data): the model does not describe the data" in err, err
     assert "degrees of freedom, a value the stated standard deviations exceed with probability" in err, err
     assert "cannot be separated" not in err and not out.exists()
