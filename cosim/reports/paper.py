@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import time
 from pathlib import Path
 
@@ -48,7 +49,7 @@ import numpy as np
 from tribocosim.errors import TribocosimError
 from tribocosim.components.stripdraw.friction_floor import (FLAKE_SHEAR_RATIO_DEFAULT, FLAKE_SHEAR_RATIO_RANGE,
                                                            MU_FLOOR, PAPER_MODEL)
-from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, run_points
+from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, point_pool, run_points
 from tribocosim.cosim.reports import paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports import paper_text
@@ -120,11 +121,19 @@ class Calibration:
 
 
 class Runs:
-    """mu_bar of strip-draw tests, each run once (a test with n passes also gives passes 1..n-1)."""
+    """mu_bar of strip-draw tests, each run once (a test with n passes also gives passes 1..n-1), in one pool of
+    worker processes kept until :meth:`close` (a calibration's steps are batches of two tests)."""
 
     def __init__(self, workers: int | None, log=None):
         self.workers, self.log, self._done = workers, log, {}
         self.evaluations = 0
+        self._pool = None
+
+    def close(self) -> None:
+        """End the worker processes (the results stay)."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
 
     @staticmethod
     def _key(p: Point) -> tuple:
@@ -139,7 +148,9 @@ class Runs:
         todo = list(need.values())
         if todo:
             t0 = time.perf_counter()
-            for p, passes in zip(todo, run_points(todo, self.workers, draw)):
+            if self._pool is None and len(todo) > 1 and (self.workers or os.cpu_count() or 1) > 1:
+                self._pool = point_pool(self.workers)
+            for p, passes in zip(todo, run_points(todo, self.workers, draw, self._pool)):
                 self._done[self._key(p)] = passes
             self.evaluations += sum(p.passes for p in todo)
             if self.log:
@@ -437,21 +448,10 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     out.mkdir(parents=True, exist_ok=True)
     runs = Runs(workers, log)
     t0 = time.perf_counter()
-    cals = {}
-    for config in CONFIGS:
-        if config.calibrated and config.key not in cals:
-            if log:
-                log(f"calibrating s for {config.key} on the 35 % one-pass drop at 25 MPa ...")
-            cals[config.key] = calibrate_drop(runs, base, config, table, log=log)
-    figs = {c: figure_points(base, c, cals[c.key].scale if c.calibrated else 1.0, grid) for c in CONFIGS}
-    if log:
-        log("figures ...")
-    runs.run([p for f in figs.values() for pairs in f.values() for _, p in pairs])
-    results = {}
-    for c in CONFIGS:
-        figures = collect(runs, figs[c])
-        results[c] = {"figures": figures, "metrics": metrics(figures, grid)}
-    extra = physics(runs, base, table, cals["mesoscale"], quick, workers, log)
+    try:
+        cals, results, extra = _compute(runs, base, table, grid, quick, workers, log)
+    finally:
+        runs.close()
     wall = time.perf_counter() - t0
     with open(out / "paper.csv", "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
@@ -492,6 +492,25 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     }
     (out / "paper.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return summary
+
+
+def _compute(runs: Runs, base: dict, table, grid: Grid, quick: bool, workers: int | None, log=None) -> tuple:
+    """The calibrations, every configuration's figures with their metrics, and :func:`physics`."""
+    cals = {}
+    for config in CONFIGS:
+        if config.calibrated and config.key not in cals:
+            if log:
+                log(f"calibrating s for {config.key} on the 35 % one-pass drop at 25 MPa ...")
+            cals[config.key] = calibrate_drop(runs, base, config, table, log=log)
+    figs = {c: figure_points(base, c, cals[c.key].scale if c.calibrated else 1.0, grid) for c in CONFIGS}
+    if log:
+        log("figures ...")
+    runs.run([p for f in figs.values() for pairs in f.values() for _, p in pairs])
+    results = {}
+    for c in CONFIGS:
+        figures = collect(runs, figs[c])
+        results[c] = {"figures": figures, "metrics": metrics(figures, grid)}
+    return cals, results, physics(runs, base, table, cals["mesoscale"], quick, workers, log)
 
 
 def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
