@@ -7,7 +7,8 @@ each report's Markdown and JSON because wall times on a shared machine are upper
 
 Usage::
 
-    python benchmarks/bench_reports.py [--out docs/reports] [--quick] [--only accuracy|stability]
+    python benchmarks/bench_reports.py --out DIR [--quick] [--only accuracy|stability]   # DIR = docs/reports: the
+                                                                                          # tracked reports
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from pathlib import Path
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "reports"))
+    ap.add_argument("--out", required=True, help="the folder of the reports (docs/reports rewrites the tracked ones)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("accuracy", "stability"))
     args = ap.parse_args(argv)

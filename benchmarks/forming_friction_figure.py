@@ -6,7 +6,8 @@ table, whose grid is the LS-DYNA file's); the figure draws the nominal, upper an
 sliding speed as the FE code reads them (straight between the exported pressures, dots at the nodes) and the law
 itself on a fine grid, and the script prints the numbers the page quotes::
 
-    python benchmarks/forming_friction_figure.py [--out docs/images/forming_friction_band.png] [--band 2]
+    python benchmarks/forming_friction_figure.py --out PNG [--band 2]   # docs/images/forming_friction_band.png: the
+                                                                        # tracked figure
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ SPEED = 80.0  # mm/s, the strip-draw test's
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, default=Path("docs/images/forming_friction_band.png"))
+    parser.add_argument("--out", type=Path, required=True, help="the figure to write (PNG)")
     parser.add_argument("--band", type=float, default=2.0)
     args = parser.parse_args(argv)
 

@@ -67,6 +67,19 @@ class Result:
             self._columns = {n: data[:, j].copy() for j, n in enumerate(names)}
         return self._columns
 
+    def series(self, name: str) -> list:
+        """One recorded variable (or ``"time"``) as a list of floats, read without numpy from a run of the C master;
+        KeyError as ``result[name]``."""
+        if self._recording is not None and self._columns is None:
+            times, rows, names = self._recording
+            if name == "time":
+                return list(times)
+            if name not in names:
+                raise KeyError(f"{name!r} is not recorded")
+            j, n = names.index(name), len(names)
+            return [rows[k * n + j] for k in range(len(times))]
+        return [float(x) for x in self[name]]
+
     def __getitem__(self, name: str):
         if name == "time":
             return self.time
@@ -75,6 +88,19 @@ class Result:
             raise KeyError(f"{name!r} is not recorded; the recorded columns: {', '.join(columns) or 'none'} (the "
                            "scene's output.variables says which are)")
         return columns[name]
+
+
+def recorded_units(plan: Plan, columns) -> dict:
+    """The unit each recorded ``instance.variable`` declares in its FMU's model description ("" when none)."""
+    from tribocosim.cosim.scene.validate import unit_of
+
+    out = {}
+    for name in columns:
+        inst, _, var = name.partition(".")
+        model = plan.fmus.get(inst)
+        v = model.variables.get(var) if model is not None else None
+        out[name] = (unit_of(v) or "") if v is not None else ""
+    return out
 
 
 class Build:
@@ -589,5 +615,5 @@ def _metadata(plan: Plan, o: Outcome, started: str, total: float) -> dict:
         "fmu_warnings": o.fmu_warnings,
         "end_checks": o.end_values,
         "notes": o.notes,
-        "outputs": {"columns": ["time", *o.columns]},
+        "outputs": {"columns": ["time", *o.columns], "units": {"time": "s", **recorded_units(plan, o.columns)}},
     }

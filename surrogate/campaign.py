@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tribocosim.atomic import replaced, write_text
 from tribocosim.errors import CampaignInterrupted, CaseRecordError, TribocosimError
 
 from . import measured_surfaces
@@ -73,6 +74,31 @@ def code_version() -> str:
         return f"{ver}+g{ref[:12]}"
     except OSError:
         return ver
+
+
+@functools.lru_cache(maxsize=1)
+def numerics() -> str:
+    """What besides the project's code sets a slide's round-off, in one line: the processor as the JIT compiler sees it
+    (numba compiles for the host's instruction set), the machine architecture, and the versions of numpy, numba and
+    pyFFTW with its FFTW (FFTW's plans depend on both). A rerun is bit-identical to a recorded slide only with the same
+    code and the same numerics (surrogate.verify)."""
+    import platform
+
+    parts = [platform.machine()]
+    try:
+        import llvmlite.binding as llvm
+
+        parts.append(llvm.get_host_cpu_name())
+    except Exception:  # noqa: BLE001 - the line says what it could not read
+        parts.append("cpu ?")
+    from importlib.metadata import PackageNotFoundError, version
+
+    for dist in ("numpy", "numba", "pyFFTW"):
+        try:
+            parts.append(f"{dist} {version(dist)}")
+        except PackageNotFoundError:
+            parts.append(f"{dist} ?")
+    return ", ".join(parts)
 
 
 @functools.lru_cache(maxsize=1)
@@ -196,7 +222,7 @@ def run_case(payload: dict) -> dict:
     """
     t0 = time.perf_counter()
     base = {"case_id": payload["case_id"], "host": socket.gethostname(), "pid": os.getpid(),
-            "token": uuid.uuid4().hex, "code_version": code_version()}
+            "token": uuid.uuid4().hex, "code_version": code_version(), "numerics": numerics()}
     try:
         from .coupling import run_slide
 
@@ -217,19 +243,9 @@ def run_case(payload: dict) -> dict:
     return out
 
 
-def _atomic_write(path: Path, write) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
 def write_json(path: Path, data) -> None:
     """Write ``data`` as JSON to ``path`` atomically."""
-    _atomic_write(Path(path), lambda tmp: tmp.write_text(json.dumps(data, indent=1, sort_keys=True)))
+    write_text(path, json.dumps(data, indent=1, sort_keys=True))
 
 
 @dataclass(frozen=True)
@@ -304,10 +320,8 @@ class CampaignStore:
         record[DIGEST_KEY] = case_digest(record, arrays)
         npz = self.cases_dir / f"{cid}.npz"
         if arrays is not None:
-            def save(tmp):
-                with open(tmp, "wb") as fh:
-                    np.savez_compressed(fh, **arrays)
-            _atomic_write(npz, save)
+            with replaced(npz) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
         elif npz.exists():
             npz.unlink()
         write_json(self.case_path(cid), record)

@@ -117,10 +117,9 @@ def export_wisdom(path: str | os.PathLike) -> None:
     truncated file.
     """
     texts = [w.decode("latin-1") for w in pyfftw.export_wisdom()]
-    tmp = f"{os.fspath(path)}.tmp{os.getpid()}.{threading.get_ident()}"
-    with open(tmp, "w", encoding="latin-1") as fh:
-        json.dump(texts, fh)
-    os.replace(tmp, path)
+    from tribocosim.atomic import write_text
+
+    write_text(path, json.dumps(texts), encoding="latin-1")
 
 
 def import_wisdom(path: str | os.PathLike) -> bool:

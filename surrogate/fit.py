@@ -30,6 +30,7 @@ Everything here is plain arithmetic on the case records: no I/O.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import asdict, dataclass
@@ -246,6 +247,11 @@ def fit_contact(ens: dict, e_star: float, rms_slope: float) -> ContactFit:
 
 #: the forms of A_p(beta) at one (P, v) that the table build compares (module docstring)
 BETA_FORMS = ("linear", "langmuir")
+#: bounds of the langmuir form's (a, c)
+LANGMUIR_BOUNDS = ([0.0, 0.0], [np.inf, 1e6])
+#: when the langmuir fit stops (scipy's least_squares, method "trf", through curve_fit): its default tolerances,
+#: named because what a rebuild of the table may move (:func:`parameter_shift`) follows from them
+LANGMUIR_TERMINATION = {"ftol": 1e-8, "xtol": 1e-8, "gtol": 1e-8}
 
 
 def beta_form(name: str, beta, params) -> np.ndarray:
@@ -334,8 +340,8 @@ def fit_beta_forms(beta, y, sigma) -> dict:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     popt, pcov = curve_fit(lambda x, a_, c_: a_ * x / (1.0 + c_ * x), b, yv, p0=(a * (1 + c0 * b.mean()), c0),
-                                           sigma=sg, absolute_sigma=True, bounds=([0.0, 0.0], [np.inf, 1e6]),
-                                           maxfev=20000)
+                                           sigma=sg, absolute_sigma=True, bounds=LANGMUIR_BOUNDS,
+                                           maxfev=20000, **LANGMUIR_TERMINATION)
             except (RuntimeError, ValueError):
                 continue
             c2 = float(np.sum(w * (yv - beta_form("langmuir", b, popt)) ** 2))
@@ -367,6 +373,54 @@ def fit_affine(x, y, sigma) -> BetaFit:
     c2 = float(np.sum(w * (yv - fitted) ** 2))
     return BetaFit("affine", (float(params[0]), float(params[1])), tuple(float(v) for v in cov.ravel()), c2, c2 + 4.0,
                    int(xv.size), _residuals(yv, fitted, sg))
+
+
+def parameter_shift(fit: BetaFit, beta, sigma) -> np.ndarray:
+    """How far from the optimum of its data the computation of ``fit`` may leave each parameter: what a refit of the
+    same data on another processor or another build of numpy, scipy and LAPACK may move (the data: the levels
+    ``beta`` and their standard errors ``sigma``).
+
+    - ``linear``: a closed-form ratio of two sums of n products: relative round-off at most 4 n eps (each sum of n
+      rounded products within (n + 1) eps, the division one more);
+    - ``affine``: the 2 x 2 normal equations solved through LAPACK (``numpy.linalg.inv``): at most
+      8 kappa(N) eps ||p|| per parameter, kappa(N) the 2-norm condition number of the normal matrix;
+    - ``langmuir``: an iterative least-squares fit that stops on the first of three tests
+      (:data:`LANGMUIR_TERMINATION`), each of which bounds the distance to the optimum p* once the iteration
+      converges superlinearly: the relative reduction of the cost F = chi^2 / 2 below ftol (F - F* <= ftol F, and
+      chi^2 - chi^2* = dp^T C^-1 dp with C the covariance, so |dp_k| <= sqrt(ftol chi^2 C_kk)); the step below
+      xtol (xtol + ||p||) (|dp_k| <= that bound); the gradient g = C^-1 dp of F below gtol in its largest component
+      (|dp_k| <= gtol sum_j |C_kj|). The shift is the largest of the three, with the round-off of the parameters.
+    """
+    p = np.asarray(fit.params, float)
+    eps = np.finfo(float).eps
+    n = len(np.atleast_1d(beta))
+    if fit.form == "linear":
+        return 4.0 * n * eps * np.abs(p)
+    cov = np.asarray(fit.covariance, float).reshape(p.size, p.size)
+    if fit.form == "affine":
+        w = 1.0 / np.asarray(sigma, float) ** 2
+        design = np.stack([np.ones(n), np.asarray(beta, float)], axis=1)
+        kappa = float(np.linalg.cond(design.T @ (w[:, None] * design)))
+        return np.full(p.size, 8.0 * kappa * eps * float(np.linalg.norm(p)))
+    t = LANGMUIR_TERMINATION
+    by_cost = np.sqrt(t["ftol"] * max(fit.chi2, 0.0) * np.abs(np.diag(cov)))
+    by_step = np.full(p.size, t["xtol"] * (t["xtol"] + float(np.linalg.norm(p))))
+    by_gradient = t["gtol"] * np.abs(cov).sum(axis=1)
+    return np.maximum.reduce([by_cost, by_step, by_gradient, 4.0 * n * eps * np.abs(p)])
+
+
+def with_params(fit: BetaFit, beta, sigma, params) -> BetaFit:
+    """``fit`` moved to ``params`` (within the form's bounds), with the covariance its fit would report there: the
+    Gauss-Newton covariance (J^T J)^-1 of the residuals weighted by 1 / ``sigma`` at the levels ``beta`` (what
+    scipy's curve_fit returns with absolute sigma; the linear and affine forms' does not depend on the parameters)."""
+    p = np.asarray(params, float)
+    if fit.form == "langmuir":
+        p = np.clip(p, LANGMUIR_BOUNDS[0], LANGMUIR_BOUNDS[1])
+        jac = _beta_form_gradient(fit.form, beta, p) / np.asarray(sigma, float)
+        cov = tuple(float(x) for x in np.linalg.pinv(jac @ jac.T).ravel())
+    else:
+        cov = fit.covariance
+    return dataclasses.replace(fit, params=tuple(float(x) for x in p), covariance=cov)
 
 
 @dataclass(frozen=True)

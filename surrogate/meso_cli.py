@@ -29,9 +29,7 @@ import argparse
 import importlib
 import json
 import math
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -128,17 +126,13 @@ def _save_npy(out: Path, heights) -> None:
     """Save ``heights`` to ``out`` through a temporary name in its folder and a rename (no partial file is left)."""
     import numpy as np
 
-    tmp = None
+    from tribocosim.atomic import replaced
+
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent)
-        with os.fdopen(fd, "wb") as fh:
+        with replaced(out) as tmp, open(tmp, "wb") as fh:
             np.save(fh, heights)
-        os.replace(tmp, out)
     except OSError as exc:
         raise TribocosimError(f"cannot write {out}: {exc.strerror or exc}") from None
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def _surface(argv: list[str]) -> int:

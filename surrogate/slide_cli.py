@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -41,15 +40,13 @@ def _version() -> str:
 
 
 def _atomic(path: Path, write) -> None:
-    tmp = path.with_name(path.name + ".tmp")
+    from tribocosim.atomic import replaced
+
     try:
-        write(tmp)
-        os.replace(tmp, path)
+        with replaced(path) as tmp:
+            write(tmp)
     except OSError as exc:  # named by the file the user asked for, not by the temporary one
         raise OSError(exc.errno, exc.strerror, str(path)) from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def write_result(result, out: Path) -> dict:
@@ -151,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except TribocosimError as exc:
         print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     from .coupling import run_slide
 
     try:
@@ -159,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim meso slide: error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"tribocosim meso slide: interrupted by SIGINT: the slide is discarded, nothing is written into "
+              f"{args.out}", file=sys.stderr)
+        return 130
     try:
         summary = write_result(result, out)
         if args.plot:

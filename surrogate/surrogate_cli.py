@@ -21,21 +21,21 @@ finished before it are kept, the slides in progress discarded (:mod:`tribocosim.
 Before any case runs, ``build`` and ``verify`` estimate the memory of their local workers together (workers x the
 peak of a case, :mod:`tribocosim.surrogate.memory`), and ``build`` and ``table`` that of the table build, and
 refuse when it exceeds the memory available or ``--max-memory``.
-Exit status: 0 on success; 1 on bad input, when cases failed, are missing or refused (no table is written
-then, unless ``--allow-failed``); 2 on usage errors and on a refusal for memory; 128 + the signal's number when a
-signal stopped it.
+Exit status, as every tribocosim command: 0 on success; 1 when the work ran and did not succeed: cases failed, are
+missing or refused (no table is written then, unless ``--allow-failed``), ``verify`` found a rerun that differs,
+``compare`` found the tables apart; 2 on bad input (usage, a file or a value that cannot be read or is not allowed)
+and on a refusal for memory; 128 + the signal's number when a signal stopped it.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from pathlib import Path
 
-from tribocosim.errors import CampaignInterrupted, MemoryLimitError, TribocosimError
+from tribocosim.errors import CampaignInterrupted, MemoryLimitError, TableError, TribocosimError
 
 PROG = "tribocosim surrogate"
 #: at most this many files are named per kind of unfinished case
@@ -165,19 +165,13 @@ def _write_table(path: Path, table, fits_path: Path, fits: dict) -> str:
     from .campaign import write_json
     from .table_build import json_clean
 
+    from tribocosim.atomic import replaced
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.partial.npz")
-    fits_tmp = fits_path.with_name(f".{fits_path.name}.{os.getpid()}.partial")
-    try:
+    with replaced(fits_path) as fits_tmp, replaced(path, ".npz") as tmp:
         digest = write_table(tmp, table)
         read_table(tmp)
         write_json(fits_tmp, json_clean({"table": str(path), "content_hash": digest, **fits}))
-        os.replace(tmp, path)
-        os.replace(fits_tmp, fits_path)
-    finally:
-        for leftover in (tmp, fits_tmp, tmp.with_name(tmp.name + ".tmp.npz")):
-            if leftover.exists():
-                leftover.unlink()
     return digest
 
 
@@ -216,7 +210,7 @@ def _build(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     out = Path(args.out)
     t0 = time.perf_counter()
     with interrupt.stop_on_signals():
@@ -246,7 +240,7 @@ def _build(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} build: error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, TableError) else 2  # the campaign's results make no table, or bad input
     print(f"build wall time {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return status
 
@@ -285,7 +279,7 @@ def _table(argv: list[str]) -> int:
         return 2
     except TribocosimError as exc:
         print(f"{PROG} table: error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, TableError) else 2  # the campaign's results make no table, or bad input
 
 
 def _show(argv: list[str]) -> int:
@@ -306,7 +300,7 @@ def _show(argv: list[str]) -> int:
         table = read_table(args.table)
     except TribocosimError as exc:
         print(f"{PROG} show: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     print(describe(table))
     if args.no_plot:
         return 0
@@ -345,7 +339,7 @@ def _compare(argv: list[str]) -> int:
         res = compare_tables(read_table(args.a), read_table(args.b))
     except TribocosimError as exc:
         print(f"{PROG} compare: error: {exc}", file=sys.stderr)
-        return 1
+        return 2
     print(json.dumps(res, indent=2))
     return 0 if res["within_uncertainty"] else 1
 
@@ -367,7 +361,7 @@ def _verify(argv: list[str]) -> int:
     from .campaign import write_json
     from .executors import make_executor
     from .table_build import json_clean
-    from .verify import code_versions, recorded_cases, sample_cases, verify_cases
+    from .verify import code_versions, numerics_of, recorded_cases, sample_cases, verify_cases
 
     t0 = time.perf_counter()
     with interrupt.stop_on_signals():
@@ -379,7 +373,7 @@ def _verify(argv: list[str]) -> int:
             _check_campaign_memory([r.case.config for r in sample], len(sample), f"the sample of {args.table}", executor,
                                    None if args.max_memory is None else memory.parse_bytes(args.max_memory))
             try:
-                results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table))
+                results = verify_cases(sample, executor, 1.0 / (n * n), code_versions(table), numerics_of(table))
             finally:
                 executor.close()
         except CampaignInterrupted as exc:
@@ -390,7 +384,7 @@ def _verify(argv: list[str]) -> int:
             return 2
         except TribocosimError as exc:
             print(f"{PROG} verify: error: {exc}", file=sys.stderr)
-            return 1
+            return 2
     for reason in dict.fromkeys(r["reason"] for r in results if "reason" in r):
         print(f"comparison: {reason}")
     for r in results:

@@ -119,12 +119,15 @@ class _Row:
         sig_c = [max(q.apc_std / math.sqrt(q.n) if q.n > 1 else 0.0, f) for q, f in zip(pts, floor)]
         free = [self.points[0.0], *pts]
         sig_ac = [max(q.ac_std / math.sqrt(q.n) if q.n > 1 else 0.0, 1.0 / n_pixels) for q in free]
+        #: per filled quantity, the levels and standard errors its fits weigh
+        self.fit_data = {"particle_area": (self.simulated, [_sigma(q, n_pixels) for q in pts]),
+                         "particle_area_clusters": (self.simulated, sig_c),
+                         "contact_area": ([0.0, *self.simulated], sig_ac)}
         self.fits = {
             "particle_area": fit_beta_forms(self.simulated, [q.ap_mean for q in pts],
-                                            [_sigma(q, n_pixels) for q in pts]),
+                                            self.fit_data["particle_area"][1]),
             "particle_area_clusters": fit_beta_forms(self.simulated, [q.apc_mean for q in pts], sig_c),
-            "contact_area": ({"affine": fit_affine([0.0, *self.simulated], [q.ac_mean for q in free], sig_ac)}
-                             if self.simulated else {}),
+            "contact_area": {"affine": fit_affine([0.0, *self.simulated], [q.ac_mean for q in free], sig_ac)},
         }
         best = {}
         for name, forms in FILLED.items():
@@ -134,9 +137,9 @@ class _Row:
         # the areas fill together or not at all: a share A_p / A_c of a fit over a held value would be neither
         self.fill = best if all(f is not None for f in best.values()) else {name: None for name in FILLED}
 
-    def node(self, beta: float, mu0: float) -> dict:
+    def node(self, beta: float, mu0: float, fill: dict | None = None) -> dict:
         """The values of the node at ``beta``: the ensemble's where simulated, else per quantity the passing fit or
-        the nearest simulated level below (``sources``)."""
+        the nearest simulated level below (``sources``); ``fill`` replaces the row's fits (``self.fill``)."""
         if beta == 0.0 or beta in self.simulated:
             q = self.points[beta]
             return {"contact_area": q.ac_mean, "contact_area_se": _se(q.ac_std, q.n, self.n_pixels),
@@ -148,7 +151,7 @@ class _Row:
         held = self.node(max(b for b in [0.0, *self.simulated] if b < beta), mu0)
         out = {"simulated": 0.0, "members": 0, "sources": {}}
         for name in FILLED:
-            fit = self.fill[name]
+            fit = (self.fill if fill is None else fill)[name]
             if fit is None:
                 out[name], out[name + "_se"] = held[name], held[name + "_se"]
                 out["sources"][name] = "held"
@@ -166,6 +169,53 @@ class _Row:
         return {"pressure": self.p, "velocity": self.v, "levels": self.simulated,
                 **{name: {f: fit.to_dict() for f, fit in forms.items()} for name, forms in self.fits.items()},
                 "fills": {name: (f.form if f is not None else "held") for name, f in self.fill.items()}}
+
+
+@dataclasses.dataclass(frozen=True)
+class Grid:
+    """The table's axes and settings from a campaign's sweep, and the (P, v) rows of an ensemble on them."""
+
+    sweep: dict
+    pressures: list
+    v_grid: list
+    qs_row: bool
+    levels: list
+    mu0: float
+    e_star: float
+    p_crit: float
+    n_pixels: int
+
+    @classmethod
+    def of(cls, sweep: dict) -> "Grid":
+        if not sweep.get("particle_free", True):
+            raise TableError("the sweep has no particle-free cases (particle_free = false); A_c at beta = 0 and tau0 "
+                             "need them")
+        base = SlideConfig(**{**sweep["slide"], **sweep["surfaces"][0]})  # [slide] checked with a pair (sweep.py)
+        return cls(sweep, sorted(float(p) for p in sweep["pressures"]), sorted(float(v) for v in sweep["velocities"]),
+                   bool(sweep["table"].get("quasi_static_row", False)),
+                   sorted({_key(f["beta"]) for f in sweep["flakes"]}), float(sweep["table"]["mu0"]), base.e_star,
+                   base.p_crit, base.n * base.n)
+
+    @property
+    def vel_axis(self) -> list:
+        return ([0.0] if self.qs_row else []) + self.v_grid
+
+    @property
+    def beta_axis(self) -> list:
+        return [0.0] + self.levels
+
+    def row_key(self, p: float, v: float) -> tuple:
+        """The (P, v) row that the table's node velocity v reads (v = 0: the slowest velocity's, the quasi-static
+        row)."""
+        return p, (v if v > 0 or not self.qs_row else self.v_grid[0])
+
+    def rows(self, ens: dict) -> dict:
+        def level_at(f, p, v):
+            return p >= f.get("min_pressure", 0.0) and (f.get("velocities") is None or v in f["velocities"])
+
+        flakes = self.sweep["flakes"]
+        return {(p, v): _Row(ens, p, v, sorted({_key(f["beta"]) for f in flakes if level_at(f, p, v)}),
+                             self.n_pixels) for p in self.pressures for v in self.v_grid}
 
 
 def _fit_summary(rows: list[_Row]) -> dict:
@@ -226,16 +276,12 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     """
     from .campaign import case_cpu_seconds, code_version, source_digest
 
-    sweep = manifest["sweep"]
     if not records:
         raise TableError("the campaign has no finished case; nothing to build a table from")
-    if not sweep.get("particle_free", True):
-        raise TableError("the sweep has no particle-free cases (particle_free = false); A_c at beta = 0 and tau0 "
-                         "need them")
-    base = SlideConfig(**{**sweep["slide"], **sweep["surfaces"][0]})  # [slide] checked with a pair (sweep.py)
-    e_star, p_crit, n_pixels = base.e_star, base.p_crit, base.n * base.n
-    tset = sweep["table"]
-    mu0 = float(tset["mu0"])
+    grid = Grid.of(manifest["sweep"])
+    sweep, mu0, e_star = grid.sweep, grid.mu0, grid.e_star
+    pressures, v_grid, vel_axis, levels, beta_axis = (grid.pressures, grid.v_grid, grid.vel_axis, grid.levels,
+                                                      grid.beta_axis)
     if surface_stats is None:
         surface_stats = surface_statistics(sweep["slide"], sweep["surfaces"])
     h_rms_slope = surface_stats["gap_rms_slope_mean"]
@@ -245,20 +291,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     if not contact.slope > 0:
         raise TableError(f"the A_c/A0-vs-P slope is {contact.slope!r}; a positive slope is needed for tau0")
     tau0 = mu0 / contact.slope
-
-    pressures = sorted(float(p) for p in sweep["pressures"])
-    v_grid = sorted(float(v) for v in sweep["velocities"])
-    qs_row = bool(tset.get("quasi_static_row", False))
-    vel_axis = ([0.0] if qs_row else []) + v_grid
-    flakes = sweep["flakes"]
-    levels = sorted({_key(f["beta"]) for f in flakes})
-    beta_axis = [0.0] + levels
-
-    def level_at(f, p, v):
-        return p >= f.get("min_pressure", 0.0) and (f.get("velocities") is None or v in f["velocities"])
-
-    rows = {(p, v): _Row(ens, p, v, sorted({_key(f["beta"]) for f in flakes if level_at(f, p, v)}), n_pixels)
-            for p in pressures for v in v_grid}
+    rows = grid.rows(ens)
 
     shape = (len(pressures), len(vel_axis), len(beta_axis))
     names = ("contact_area", "contact_area_se", "contact_area_std", "particle_area", "particle_area_se",
@@ -268,7 +301,7 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
     nodes, unsimulated = [], []
     for i, p in enumerate(pressures):
         for j, v in enumerate(vel_axis):
-            row = rows[(p, v if v > 0 or not qs_row else v_grid[0])]
+            row = rows[grid.row_key(p, v)]
             for k, b in enumerate(beta_axis):
                 node = row.node(b, mu0)
                 for name in names:
@@ -326,13 +359,13 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "calibration": {"mu0": mu0, "tau0": tau0, "tau0_unit": "Pa",
                         "tau0_source": "for reference: tau0 = mu0 / s_c, s_c the through-origin slope of "
                                        f"<A_c>/A0 vs P of the {contact.source}; mu uses mu0 and the areas"},
-        "e_star": e_star, "p_crit": p_crit,
+        "e_star": e_star, "p_crit": grid.p_crit,
         "axes": {
             "pressure": {"unit": UNITS["pressure"], "values": pressures, "source": "campaign grid"},
-            "velocity": {"unit": UNITS["velocity"], "campaign": v_grid, "quasi_static_row": qs_row,
+            "velocity": {"unit": UNITS["velocity"], "campaign": v_grid, "quasi_static_row": grid.qs_row,
                          "note": (f"v = 0: the quasi-static limit, the values of the {v_grid[0]:g} m/s row (the "
                                   "plateau of A_p where the damping per pixel of sliding is large; "
-                                  "docs/physics/table_domain.md). " if qs_row else "")
+                                  "docs/physics/table_domain.md). " if grid.qs_row else "")
                                  + "Slides slower than the sweep's dem_velocity run the DEM at that speed with the "
                                    "damping per pixel of the physical one (surrogate.slide_config)."},
             "beta": {"unit": UNITS["beta"], "levels": levels, "simulated_max": levels[-1],
@@ -369,32 +402,10 @@ def build_table(records: list[dict], manifest: dict, *, failed: list | None = No
         "source_digest": source_digest(),
         "case_code_versions": sorted({r.get("code_version", "unknown") for r in records}),
         "case_source_digests": sorted({r.get("source_digest", "unknown") for r in records}),
+        "case_numerics": sorted({r.get("numerics", "unknown") for r in records}),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
     return dataclasses.replace(table, metadata=json_clean(meta)), json_clean(fits)
-
-
-def rebuild_from_metadata(metadata: dict, cases: list[dict] | None = None) -> FrictionTable:
-    """The table :func:`build_table` makes from the cases a version 3 or 4 table records (``metadata["cases"]``, or the
-    subset ``cases`` of them) with its recorded sweep and surface statistics: what the table was built from, without
-    the campaign folder."""
-    cases = metadata["cases"] if cases is None else cases
-    # the code that computed the cases: known per case only when the table records one version for all of them
-    digests, versions = metadata.get("case_source_digests") or [], metadata.get("case_code_versions") or []
-    origin = {}
-    if len(digests) == 1:
-        origin["source_digest"] = digests[0]
-    if len(versions) == 1:
-        origin["code_version"] = versions[0]
-    records = [{"case_id": c["case_id"], "labels": c["labels"], "wall_s": c.get("wall_s", 0.0), **origin,
-                "summary": {"mean_particle_fraction": c["a_p"], "mean_contact_fraction": c["a_c"],
-                            "mean_particle_fraction_clusters": c.get("a_p_clusters") or 0.0}} for c in cases]
-    manifest = {"sweep": metadata["campaign"]["sweep"],
-                "cases": [{"case_id": c["case_id"], "labels": c["labels"]} for c in cases]}
-    built = {"sweep", "cases_total", "cases_finished", "cases_failed", "case_cpu_seconds"}
-    info = {k: v for k, v in metadata["campaign"].items() if k not in built}  # the executor's, as recorded
-    table, _ = build_table(records, manifest, surface_stats=metadata["surfaces"], campaign_info=info)
-    return table
 
 
 def compare_tables(a: FrictionTable, b: FrictionTable) -> dict:

@@ -7,12 +7,15 @@ configuration is the one that ran) and :func:`verify_cases` reruns them and comp
 cluster rule and <A_c>/A0 with the recorded values. How depends on the code that reran the case:
 
 - the same mesoscale code as the table's cases (the rerun's ``source_digest`` is the table's one
-  ``case_source_digests``): a slide is deterministic, so the rerun must be bit-identical (verdict ``identical``);
-  any difference is ``differs``. The FFT plans are part of that determinism: FFTW measures its plans in every
-  process, and two plans of one size may round differently in the last bit, which the DEM can carry to another
-  trajectory. A campaign and its check on one FFTW wisdom file (``TRIBOCOSIM_FFTW_WISDOM``) use the same plans;
-- another version of the mesoscale code (or a table whose cases come from several versions, when which one ran
-  a case is not recorded): the rerun may round differently and follow another trajectory of the same ensemble.
+  ``case_source_digests``) on the same numerics (the rerun's ``numerics`` is the table's one ``case_numerics``: the
+  processor the JIT compiles for, numpy, numba, pyFFTW; :func:`tribocosim.surrogate.campaign.numerics`): a slide is
+  deterministic, so the rerun must be bit-identical (verdict ``identical``); any difference is ``differs``. The FFT
+  plans are part of that determinism: FFTW measures its plans in every process, and two plans of one size may round
+  differently in the last bit, which the DEM can carry to another trajectory. A campaign and its check on one FFTW
+  wisdom file (``TRIBOCOSIM_FFTW_WISDOM``) use the same plans;
+- another version of the mesoscale code, other numerics (another processor, another build of the numerical
+  libraries), or a table that does not record one version and one set of numerics for its cases: the rerun may
+  round differently and follow another trajectory of the same ensemble.
   Equal values are ``identical``; otherwise each value x (recorded x_r, rerun x_n) must satisfy
   ``|x_n - x_r| <= max(1 pixel, min(SPREAD_FACTOR sigma, REL_CAP min(|x_r|, |x_n|)))`` (verdict
   ``within_tolerance``), where sigma is the member standard deviation of the node's *other* members (the recorded
@@ -128,7 +131,13 @@ def code_versions(table) -> list[str]:
     return list(table.metadata.get("case_source_digests") or [])
 
 
-def verify_cases(sample: list[Recorded], executor, pixel: float, recorded_versions: list[str]) -> list[dict]:
+def numerics_of(table) -> list[str]:
+    """The numerics (:func:`tribocosim.surrogate.campaign.numerics`) of the table's cases, as the table records them."""
+    return list(table.metadata.get("case_numerics") or [])
+
+
+def verify_cases(sample: list[Recorded], executor, pixel: float, recorded_versions: list[str],
+                 recorded_numerics: list[str] | None = None) -> list[dict]:
     """Rerun ``sample`` through ``executor`` and compare (module docstring); one result dict per case with
     ``verdict`` "identical", "within_tolerance" or "differs", the ``mode`` of the comparison ("exact" or
     "tolerance") and its ``reason``."""
@@ -142,7 +151,8 @@ def verify_cases(sample: list[Recorded], executor, pixel: float, recorded_versio
             results.append({**entry, "verdict": "differs", "error": str(err)})
             continue
         rerun_by = outcome.get("source_digest", "unknown")
-        mode, reason = comparison(recorded_versions, rerun_by)
+        mode, reason = comparison(recorded_versions, rerun_by, recorded_numerics or [],
+                                  outcome.get("numerics", "unknown"))
         got = {k: outcome["summary"].get(name) for k, name in KEYS}
         keys = [k for k, _ in KEYS if rec.values[k] is not None and got[k] is not None]
         diffs = {k: abs(got[k] - rec.values[k]) for k in keys}
@@ -165,11 +175,23 @@ def tolerance_of(recorded: float, rerun: float, sigma: float, pixel: float) -> f
     return max(pixel, min(SPREAD_FACTOR * sigma, REL_CAP * min(abs(recorded), abs(rerun))))
 
 
-def comparison(recorded_versions: list[str], rerun_by: str) -> tuple[str, str]:
-    """("exact" or "tolerance", why) for a rerun by code ``rerun_by`` of cases computed by ``recorded_versions``."""
+def comparison(recorded_versions: list[str], rerun_by: str, recorded_numerics: list[str] | None = None,
+               rerun_numerics: str = "unknown") -> tuple[str, str]:
+    """("exact" or "tolerance", why) for a rerun by code ``rerun_by`` on ``rerun_numerics`` of cases computed by
+    ``recorded_versions`` on ``recorded_numerics``."""
+    same_numerics = recorded_numerics == [rerun_numerics] and rerun_numerics != "unknown"
+    if recorded_versions == [rerun_by] and same_numerics:
+        return "exact", (f"the same mesoscale code ({rerun_by}) on the same numerics ({rerun_numerics}) computed the "
+                         "recorded case: a rerun on the same FFT plans is bit-identical")
     if recorded_versions == [rerun_by]:
-        return "exact", (f"the same mesoscale code ({rerun_by}) computed the recorded case: a rerun on the same FFT "
-                         "plans is bit-identical")
+        recorded = ("are not recorded" if not recorded_numerics or recorded_numerics == ["unknown"]
+                    else f"were {'; '.join(recorded_numerics)}")
+        return "tolerance", (f"the same mesoscale code ({rerun_by}) computed the recorded cases, but their numerics "
+                             f"{recorded} and this rerun's are {rerun_numerics}: another processor or build of the "
+                             f"numerical libraries may round differently and follow another trajectory of the node's "
+                             f"ensemble, so each value may differ by {SPREAD_FACTOR:g} member standard deviations of "
+                             f"the node without the case, at most {REL_CAP:g} of the smaller value and at least one "
+                             "contact pixel")
     if not recorded_versions:
         which = "a version of the mesoscale code the table does not record"
     elif len(recorded_versions) == 1:

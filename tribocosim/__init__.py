@@ -25,20 +25,6 @@ The names below are imported on first use, so ``import tribocosim`` costs nothin
 from __future__ import annotations
 
 from tribocosim.lazy import lazy_exports
+from tribocosim.public import NAMES
 
-__getattr__, __all__ = lazy_exports(__name__, {
-    "run": "tribocosim.cosim.apps.scripting",
-    "Result": "tribocosim.cosim.api",
-    "load_scene": "tribocosim.cosim.scene.validate",
-    "StripDrawModel": "tribocosim.components.stripdraw.model",
-    "StripDrawParameters": "tribocosim.components.stripdraw.parameters",
-    "make_friction_law": "tribocosim.components.stripdraw.friction",
-    "export_friction": "tribocosim.cosim.apps.export_friction",
-    "DebrisChoice": "tribocosim.cosim.apps.debris_state",
-    "FrictionTable": "tribocosim.components.stripdraw.table",
-    "read_table": "tribocosim.components.stripdraw.table",
-    "write_table": "tribocosim.components.stripdraw.table",
-    "DEFAULT_TABLE": "tribocosim.paths",
-    "scene_file": "tribocosim.paths",
-    "TribocosimError": "tribocosim.errors",
-})
+__getattr__, __all__ = lazy_exports(__name__, NAMES)

@@ -52,7 +52,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tribocosim: command {name!r} is not available in this version", file=sys.stderr)
             return 2
         raise
-    return int(module.main(rest) or 0)
+    try:
+        return int(module.main(rest) or 0)
+    except KeyboardInterrupt:  # a command that says nothing else: every file is written whole or not at all
+        print(f"tribocosim {name}: interrupted by SIGINT; no file is left half-written", file=sys.stderr)
+        return 130
 
 
 def _exit_on_termination() -> None:

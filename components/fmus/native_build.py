@@ -44,6 +44,7 @@ from tribocosim.components.fmus.modeldescription import (INITIAL_DEPENDENCIES, O
                                                          unit_definitions)
 from tribocosim.components.native.toolchain import compiler, declarations, digests
 from tribocosim.components.native.toolchain.library import COMMON_SOURCES
+from tribocosim.atomic import replaced, write_text
 from tribocosim.errors import TribocosimError
 
 #: the sources every native FMU compiles beside its component's, per FMI version: the shared helpers, the
@@ -332,10 +333,10 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int, compiling=None
     comp = component(name)
     digest = source_digest(name, fmi_version)
     targets = _targets(platforms, fmi_version)
-    with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp:
+    target = out / f"{name}.fmu"
+    with tempfile.TemporaryDirectory(prefix=f"tribocosim-native-{name}-") as tmp, replaced(target, ".fmu") as partial:
         stage = Path(tmp)
         compile_binaries(name, stage, platforms, digest, fmi_version, compiling)
-        partial = out / f".{name}.{os.getpid()}.partial.fmu"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             _member(z, "modelDescription.xml", description(comp, guid(digest), fmi_version).encode("utf-8"))
             for platform in targets:
@@ -347,32 +348,24 @@ def _build_one(name: str, out: Path, platforms, fmi_version: int, compiling=None
                 _member(z, f"resources/{path.name}", path.read_bytes())
             if not comp.resource_files:
                 _member(z, "resources/", b"")
+        if progress is not None:
+            progress(f"validating {name}.fmu (fmpy validate)")
+        _validate(name, partial)  # the FMU replaces the one at its name only when it passes
     # the platforms whose binaries the zip holds (FMI 2.0 has no ARM Linux folder, and darwin64 serves both Macs)
-    held = sorted(targets)
-    if progress is not None:
-        progress(f"validating {name}.fmu (fmpy validate)")
-    return _validate_and_place(name, partial, out, {"name": name, "variant": "native", "fmi_version": fmi_version,
-                                                    "source_digest": digest, "platforms": held,
-                                                    "python": sys.version.split()[0], "ziglang": compiler.zig_version()})
+    record = {"name": name, "variant": "native", "fmi_version": fmi_version, "source_digest": digest,
+              "platforms": sorted(targets), "python": sys.version.split()[0], "ziglang": compiler.zig_version()}
+    write_text(out / f"{name}.fmu.json", json.dumps(record, indent=2) + "\n")
+    return target
 
 
 __all__ = ["binary_path", "build_native_fmus", "compile_binaries", "description", "fmi3_headers", "fmus",
            "model_description", "source_digest"]
 
 
-def _validate_and_place(name: str, partial: Path, out: Path, record: dict) -> Path:
-    """``fmpy validate`` the built FMU, then move it and its JSON record into place atomically."""
-    try:
-        from fmpy.validation import validate_fmu
+def _validate(name: str, fmu: Path) -> None:
+    """``fmpy validate`` the built FMU: FmuBuildError with its problems."""
+    from fmpy.validation import validate_fmu
 
-        problems = validate_fmu(str(partial))
-        if problems:
-            raise FmuBuildError(f"FMU {name}: fmpy validate found problems:\n" + "\n".join(problems))
-        target = out / f"{name}.fmu"
-        os.replace(partial, target)
-    finally:
-        partial.unlink(missing_ok=True)
-    tmp_json = out / f".{name}.{os.getpid()}.partial.json"
-    tmp_json.write_text(json.dumps(record, indent=2) + "\n")
-    os.replace(tmp_json, out / f"{name}.fmu.json")
-    return target
+    problems = validate_fmu(str(fmu))
+    if problems:
+        raise FmuBuildError(f"FMU {name}: fmpy validate found problems:\n" + "\n".join(problems))

@@ -44,24 +44,36 @@ def _wrap(text: str, indent: str = "  ") -> list[str]:
     return textwrap.wrap(text, WIDTH, subsequent_indent=indent, break_long_words=True, break_on_hyphens=False) or [""]
 
 
+def table_line(provenance: dict) -> str:
+    """The table a law reads, by file name and content hash (:meth:`ExportedLaw.provenance`)."""
+    table = provenance["table"]
+    return (f"table: {table['file']} (content hash {table['content_hash']}, {table['provenance']}, format version "
+            f"{table['format_version']})")
+
+
+def calibration_line(provenance: dict) -> str:
+    """The calibration of a law: its status, the scale fitted and its data by file name and SHA-256."""
+    cal = provenance["calibration"]
+    scale = (cal.get("fitted") or {}).get("particle_area_scale")
+    fitted = (f"s = {scale['value']:.6g}" + (f" +- {scale['stderr']:.2g}" if scale.get("stderr") is not None
+                                               else "")) if scale else "s not fitted"
+    data = cal.get("data") or {}
+    name = data.get("file") or (data.get("path") and data["path"].replace("\\", "/").rsplit("/", 1)[-1])
+    return (f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data {name} (SHA-256 "
+            f"{data.get('sha256')})")
+
+
 def header_lines(f: FileFacts) -> list[str]:
     """The header of one file (module docstring)."""
     prov = f.provenance
-    table = prov["table"]
     out = _wrap(f"tribocosim friction export: {f.format_title}" + ("" if f.role == "nominal" else
                                                                   f" ({f.role} band)"))
     out += _wrap(f"written by tribocosim {f.code_version}" + (f" with: {f.command}" if f.command else ""))
     out += _wrap("law: mu = mu0 (1 - (1 - r) s A_p/A_c) of the strip-draw model (docs/model.md section 4), "
                  "evaluated by its native core (tc_friction.c), the code the StripDraw FMU runs")
-    out += _wrap(f"table: {table['path']} (content hash {table['content_hash']}, {table['provenance']}, format "
-                 f"version {table['format_version']})")
-    cal = prov.get("calibration")
-    if cal:
-        scale = (cal.get("fitted") or {}).get("particle_area_scale")
-        fitted = (f"s = {scale['value']:.6g}" + (f" +- {scale['stderr']:.2g}" if scale.get("stderr") is not None
-                                                   else "")) if scale else "s not fitted"
-        out += _wrap(f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data "
-                     f"{(cal.get('data') or {}).get('path')}")
+    out += _wrap(table_line(prov))
+    if prov.get("calibration"):
+        out += _wrap(calibration_line(prov))
     out += _wrap(f"debris state: {f.state}")
     out += _wrap(f.units_line)
     for line in f.range_lines:

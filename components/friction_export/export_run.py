@@ -137,6 +137,11 @@ def _nodes_in(axis: np.ndarray, low: float, high: float) -> tuple:
     return tuple([low, *inner, high]) if high > low else (low,)
 
 
+def code_version() -> str:
+    """The package's version and the native core library's name, for a file's header."""
+    return _code_version()
+
+
 def _code_version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -247,8 +252,14 @@ class _Flags:
 def _refusal(law: ExportedLaw, request: ExportRequest, state: DebrisState, flags: _Flags, prange) -> str:
     u = request.units
     how = state.record.get("how")
-    what = {"given": f"--beta {state.beta:g}", "passes": f"--passes {state.record.get('after_pass')} (beta = "
-            f"{state.beta:.6g} after that pass)"}.get(how, "the beta axis")
+    if how == "given":
+        what = f"--beta {state.beta:g}"
+    elif how == "passes":
+        what = f"--passes {state.record.get('after_pass')} (beta = {state.beta:.6g} after that pass)"
+    elif request.beta_levels is not None:
+        what = f"the beta axis (--beta-levels {' '.join(f'{b:g}' for b in request.beta_levels)})"
+    else:
+        what = "the beta axis"
     hint = ""
     above = law.table.pressure[law.table.pressure > flags.pressure[1] * (1 + END_TOLERANCE)]
     if state.beta is not None and above.size and flags.pressure[0] <= prange[0] * (1 + END_TOLERANCE):
@@ -279,9 +290,10 @@ def _beyond(fmt: Format, units: UnitSystem, prange, vrange, betas) -> str:
     return text + "; tribocosim's table holds no simulation there"
 
 
-def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
+def run_export(law: ExportedLaw, request: ExportRequest, log=None) -> ExportResult:
     """Sample, check and write the export (module docstring); ParameterError naming the option when the request
-    cannot be written, and then no file is written."""
+    cannot be written, and then no file is written. ``log`` (one line of text) hears of the progress of an export
+    that samples long (several debris states, a refinement that passes its first rounds)."""
     fmt = _check_request(law, request)
     units = request.units
     prange = _pressure_range(law, request)
@@ -294,6 +306,7 @@ def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
     code_version = _code_version()
     contents, files = {}, []
     range_line = beyond = ""
+    next_id = int(request.table_id)  # several states share a deck: each its own table and curve ids, own name
     for state in request.states:
         specs = [AxisSpec("pressure", p_nodes, geometric=True), AxisSpec("velocity", v_nodes)]
         if state.beta is None:
@@ -312,7 +325,9 @@ def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
                 columns += list(law.band(p, v, b, request.band))
             return np.stack(columns, axis=-1)
 
-        grid = sample(evaluate, specs, request.tolerance, ACCURACY_FLOOR)
+        if several and log is not None:
+            log(f"sampling {state.description} ({len(files) // len(roles) + 1} of {len(request.states)})")
+        grid = sample(evaluate, specs, request.tolerance, ACCURACY_FLOOR, log=log)
         if flags.count and not request.allow_unsimulated:
             raise ParameterError(_refusal(law, request, state, flags, prange))
         betas = grid.axes[2] if state.beta is None else None
@@ -336,11 +351,24 @@ def run_export(law: ExportedLaw, request: ExportRequest) -> ExportResult:
                 checked=grid.checked, floor=ACCURACY_FLOOR,
                 band=_band_words(law, request.band, role), unsimulated=unsimulated, warnings=warnings,
                 code_version=code_version, command=request.command, notes=request.notes + _notes(law))
-            contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged)
+            contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged, next_id,
+                                     _interaction_name(request.interaction_name, state.label if several else ""))
             files.append(ExportedFile(path, role, state, tuple(a.size for a in grid.axes), grid.accuracy,
                                       grid.tolerance, grid.checked, unsimulated, warnings))
+        next_id += grid.axes[0].size + 1  # the table's id, then one curve id per pressure
+        if next_id > lsdyna_deck.MAX_ID:
+            raise ParameterError(f"--table-id {request.table_id}: the tables and curves of {len(request.states)} "
+                                 f"debris states need ids up to {next_id - 1}, above {lsdyna_deck.MAX_ID}")
     write_all(contents)
     return ExportResult(tuple(files), range_line, beyond)
+
+
+def _interaction_name(name: str, label: str) -> str:
+    """The *SURFACE INTERACTION name of a debris state when an export has several (``NAME_BETA0_1``): Abaqus names
+    are letters, digits and underscores."""
+    if not label:
+        return name
+    return f"{name}_" + "".join(c if c.isalnum() else "_" for c in label.upper())
 
 
 def _accuracy_warning(grid, request: ExportRequest) -> tuple:
@@ -374,7 +402,7 @@ def _notes(law: ExportedLaw) -> tuple:
 
 
 def _render(fmt: Format, facts: FileFacts, grid, values, law: ExportedLaw, request: ExportRequest,
-            state: DebrisState, node_flagged: np.ndarray) -> str:
+            state: DebrisState, node_flagged: np.ndarray, table_id: int, interaction_name: str) -> str:
     u = request.units
     header = header_lines(facts)
     pressures = u.pressure_to_file(grid.axes[0])
@@ -382,10 +410,10 @@ def _render(fmt: Format, facts: FileFacts, grid, values, law: ExportedLaw, reque
     if fmt.name == "lsdyna":
         marked = {i: "UNSIMULATED: lookups at this pressure read table nodes not simulated"
                   for i in range(pressures.size) if node_flagged[i].any()}
-        return lsdyna_deck.render(header, pressures, velocities, values, int(request.table_id), u, marked)
+        return lsdyna_deck.render(header, pressures, velocities, values, table_id, u, marked)
     if fmt.name == "abaqus":
         betas = grid.axes[2] if state.beta is None else None
-        return abaqus_friction.render(header, velocities, pressures, values, u, betas, request.interaction_name)
+        return abaqus_friction.render(header, velocities, pressures, values, u, betas, interaction_name)
     axes = [{"name": "pressure", "unit": u.pressure, "values": pressures.tolist()},
             {"name": "velocity", "unit": u.velocity, "values": velocities.tolist()}]
     if state.beta is None:

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tribocosim.components.stripdraw.settings import typed_setting
 from tribocosim.errors import ParameterError
 from tribocosim.components.stripdraw.friction_floor import below_floor, floor_note, mu_at_full_coverage
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
@@ -41,23 +42,6 @@ CALIBRATION_KEY = "strip_draw_calibration"
 CAP_RTOL = 1e-12
 #: mu0 of a table's mu column is recovered where the share A_p / A_c is below this (far from the cap)
 MU0_SHARE_MAX = 0.5
-
-
-def typed_setting(name: str, value):
-    """The value of strip-draw parameter ``name`` as the parameter dataclass takes it (text as given, a number from
-    its text); ParameterError naming ``--set`` for a name that is not a parameter or a value that is not a number."""
-    fields = {f.name: f for f in dataclasses.fields(StripDrawParameters)}
-    if name not in fields:
-        hint = " (the table is --table, a calibration file --calibration)" if name == "table_file" else ""
-        raise ParameterError(f"--set {name}={value}: {name!r} is not a strip-draw parameter{hint}; the parameters are "
-                             f"the fields of StripDrawParameters (docs/fmu-reference.md)")
-    meta = fields[name].metadata
-    if not isinstance(value, str) or meta.get("text") or "choices" in meta:
-        return value
-    try:
-        return int(value) if meta.get("integer") else float(value)
-    except ValueError:
-        raise ParameterError(f"--set {name}={value}: {value!r} is not a number") from None
 
 
 def table_mu0(table: FrictionTable) -> float:
@@ -200,10 +184,11 @@ class ExportedLaw:
 
     # ---------------------------------------------------------------------------------------------- provenance
     def provenance(self) -> dict:
-        """What the law is: the table (path, content hash, provenance, format version), the calibration (status,
-        scale, note), every parameter of the model."""
+        """What the law is: the table (file name, content hash, provenance, format version: the hash, not the
+        writer's folders, names it), the calibration (status, scale, note, its data by file name and SHA-256), every
+        parameter of the model."""
         meta = self.table.metadata
-        out = {"table": {"path": str(self.table_path), "content_hash": meta.get("content_hash"),
+        out = {"table": {"file": self.table_path.name, "content_hash": meta.get("content_hash"),
                          "provenance": self.table.provenance, "format_version": self.table.version},
                "parameters": dataclasses.asdict(self.params)}
         if self.calibration is not None:

@@ -9,7 +9,6 @@ files are removed and nothing is left behind.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from tribocosim.errors import ParameterError
@@ -24,34 +23,20 @@ def tagged(path: Path, *tags: str) -> Path:
 
 
 def check_target(path: Path) -> None:
-    """ParameterError naming ``-o`` when ``path`` cannot be written: its folder is missing or is not a folder, or the
-    path is a folder."""
-    path = Path(path)
-    folder = path.parent
-    if not folder.is_dir():
-        raise ParameterError(f"-o {path}: its folder {folder} does not exist or is not a folder")
-    if path.is_dir():
-        raise ParameterError(f"-o {path} is a folder; give the file to write")
-    if not os.access(folder, os.W_OK):
-        raise ParameterError(f"-o {path}: the folder {folder} is not writable")
+    """ParameterError naming ``-o`` when ``path`` cannot be written (:func:`tribocosim.atomic.check_writable`)."""
+    from tribocosim.atomic import check_writable
+
+    check_writable(path, "-o")
 
 
 def write_all(contents: dict) -> list[Path]:
-    """Write ``{path: text}``: all files or none (module docstring); ParameterError naming the file that failed."""
+    """Write ``{path: text}``: all files or none (module docstring, :func:`tribocosim.atomic.write_all`);
+    ParameterError naming the file that failed."""
+    from tribocosim import atomic
+
     for path in contents:
         check_target(path)
-    temporary: dict[Path, Path] = {}
     try:
-        for path, text in contents.items():
-            path = Path(path)
-            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            temporary[path] = tmp
-            with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-                f.write(text)
-        for path, tmp in temporary.items():
-            os.replace(tmp, path)
+        return atomic.write_all(contents)
     except OSError as exc:
-        for tmp in temporary.values():
-            tmp.unlink(missing_ok=True)
         raise ParameterError(f"-o: {exc.filename or ''} cannot be written: {exc.strerror or exc}") from None
-    return list(temporary)

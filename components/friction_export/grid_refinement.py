@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +55,9 @@ MAX_CHECK_POINTS = 2_000_000
 MIN_WIDTH = 1e-6
 #: a round of steps 2-3 that leaves the largest deviation above this fraction of the last round's is the last
 STALL = 0.9
+
+#: a sampling that takes longer than this [s] reports each further round (``sample``'s log)
+PROGRESS_AFTER_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -200,7 +204,7 @@ def _check_points(axes, specs, rng) -> tuple:
     return tuple(np.concatenate([g, e]) for g, e in zip(grid, extra))
 
 
-def sample(evaluate, specs, tolerance: float, floor: float, seed: int = 0) -> Sampling:
+def sample(evaluate, specs, tolerance: float, floor: float, seed: int = 0, log=None) -> Sampling:
     """The grid of the module docstring.
 
     Parameters
@@ -216,7 +220,11 @@ def sample(evaluate, specs, tolerance: float, floor: float, seed: int = 0) -> Sa
         The least |mu| a deviation is taken relative to.
     seed : int
         Seed of the check's random points.
+    log : callable, optional
+        Told in one line of each round that did not reach the tolerance once the sampling has taken
+        :data:`PROGRESS_AFTER_S` (its grid and deviation): a long refinement says how far it is.
     """
+    started = time.monotonic()
     rng = np.random.default_rng(seed)
     axes = [np.asarray(s.nodes, dtype=float) for s in specs]
     tol = REFINE_FRACTION * tolerance
@@ -231,6 +239,9 @@ def sample(evaluate, specs, tolerance: float, floor: float, seed: int = 0) -> Sa
         accuracy = largest * (1.0 + 1.0 / (CHECK_INTERIOR.get(len(axes), 3) + 1) ** 2)
         if accuracy <= tolerance or rounds == MAX_ROUNDS or largest > STALL * previous:
             break
+        if log is not None and time.monotonic() - started > PROGRESS_AFTER_S:
+            log(f"  refining the grid: round {rounds} of at most {MAX_ROUNDS}, {' x '.join(str(a.size) for a in axes)} "
+                f"nodes, deviation up to {percent_up(accuracy)} % (target {100 * tolerance:g} %)")
         previous = largest
         failing = dev * (accuracy / largest) > tolerance
         for a, spec in enumerate(specs):  # the intervals the failing points lie in

@@ -254,7 +254,7 @@ COMPONENT = Component(
                   sources=("core/tc_stripdraw.c", "core/tc_stripdraw_state.c", "core/tc_galpha.c", "core/tc_explicit.c",
                            "core/tc_kernels.c", "core/tc_step_kernels.c", "core/tc_step_kernels_avx.c", "core/tc_cpu.c",
                            "core/tc_debris.c", "core/tc_friction.c", "core/tc_table.c", "core/tc_table_lookup.c",
-                           "core/tc_pchip.c", "resource_io/tc_table_file.c",
+                           "core/tc_pchip.c", "core/tc_node_friction.c", "resource_io/tc_table_file.c",
                            "resource_io/tc_sha256.c", "resource_io/tc_arrays.c", "resource_io/tc_fields.c",
                            "fmi/tc_stripdraw_fmu.c"),
                   params_header="tc_stripdraw_params.h", arrays=FIELDS,

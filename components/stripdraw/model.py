@@ -41,32 +41,29 @@ from dataclasses import dataclass
 import numpy as np
 
 from tribocosim.errors import ConvergenceError, ParameterError, RangeWarning, TableDomainError
+from tribocosim.components.native.toolchain.compiler import NATIVE_DIR
 from tribocosim.components.native.toolchain.library import DBL_P, TC_NOMEM, TC_OK, VP, Msg, core, ptr
+from tribocosim.components.native.toolchain.prototypes import enums
 from tribocosim.components.stripdraw.parameters import StripDrawParameters
 from tribocosim.components.stripdraw.ports import INPUTS, OUTPUTS
 
-OUTPUT_NAMES = (
-    "pull_force",
-    "friction_force",
-    "mu_mean",
-    "sliding_distance",
-    "beta_mean",
-    "beta_max",
-    "contact_pressure",
-    "grip_position",
-    "table_clamp_count",
-)
+# the core's indices, read from its header (tc_stripdraw.h): the outputs in enum tc_stripdraw_output's order, the
+# nodal arrays and scalars of enum tc_stripdraw_nodal and tc_stripdraw_info, and what enum tc_stripdraw_refusal's
+# kinds raise
+_ENUMS = enums((NATIVE_DIR / "core" / "tc_stripdraw.h").read_text(encoding="utf-8"))
+OUTPUT_NAMES = tuple(name[len("TC_STRIPDRAW_"):].lower() for name, _ in
+                     sorted(_ENUMS["tc_stripdraw_output"].items(), key=lambda kv: kv[1]) if name != "TC_STRIPDRAW_N_OUTPUTS")
 INPUT_NAMES = ("normal_force", "grip_velocity")
 _UNITS = {p.name: p.unit for p in (*INPUTS, *OUTPUTS)}
-
-# enum tc_stripdraw_nodal and enum tc_stripdraw_info (tc_stripdraw.h)
-_NODAL = {"X": 0, "U": 1, "V": 2, "A": 3, "Up": 4, "beta": 5, "slip_rate": 6, "contact_weight": 7, "mass": 8,
-          "friction_limit": 9, "contact": 10}
-_INFO = {"time": 0, "n_steps": 1, "clamp_count": 2, "beta_removed": 3, "beta_produced": 4, "beta_cap": 5,
-         "explicit_time_step": 6, "element_length": 7, "window_lo": 8, "window_hi": 9, "element_stiffness": 10,
-         "shear_stiffness": 11, "normal_force": 12, "grip_velocity": 13, "reaction": 14, "mu_least": 15}
-# enum tc_stripdraw_refusal -> the error a refused step raises
-_REFUSALS = {0: ParameterError, 1: TableDomainError, 2: ConvergenceError}
+_NODAL = {name: _ENUMS["tc_stripdraw_nodal"][f"TC_SD_NODAL_{name.upper()}"]
+          for name in ("X", "U", "V", "A", "Up", "beta", "slip_rate", "contact_weight", "mass", "friction_limit",
+                       "contact")}
+_INFO = {name: _ENUMS["tc_stripdraw_info"][f"TC_SD_INFO_{name.upper()}"]
+         for name in ("time", "n_steps", "clamp_count", "beta_removed", "beta_produced", "beta_cap",
+                      "explicit_time_step", "element_length", "window_lo", "window_hi", "element_stiffness",
+                      "shear_stiffness", "normal_force", "grip_velocity", "reaction", "mu_least")}
+_REFUSALS = {_ENUMS["tc_stripdraw_refusal"][f"TC_REFUSED_{kind}"]: error
+             for kind, error in (("INPUT", ParameterError), ("TABLE", TableDomainError), ("SOLVER", ConvergenceError))}
 
 
 @dataclass(frozen=True)
@@ -217,6 +214,8 @@ class StripDrawModel:
             (once) when mu under the pad falls below the documented floor (module docstring).
         """
         c = self._core
+        if isinstance(dt, bool) or not isinstance(dt, numbers.Real):
+            raise ParameterError(f"dt = {dt!r} is not a number; allowed: a real number of seconds > 0")
         fn, v = _checked_inputs(inputs)
         if derivatives:
             _check_names(derivatives, "derivatives")

@@ -352,15 +352,15 @@ def write_table(path: str | os.PathLike, table: FrictionTable) -> str:
     stamped = dataclasses.replace(table, metadata=meta)
     digest = stamped.content_hash()
     meta["content_hash"] = digest
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(
-        tmp,
-        **{name: getattr(stamped, name) for name in AXES},
-        **{name: stamped.array(name) for name in stamped.arrays()},
-        metadata=np.array(json.dumps(meta, sort_keys=True)),
-    )
-    os.replace(tmp, path)
+    from tribocosim.atomic import replaced
+
+    with replaced(path, ".npz") as tmp:
+        np.savez(
+            tmp,
+            **{name: getattr(stamped, name) for name in AXES},
+            **{name: stamped.array(name) for name in stamped.arrays()},
+            metadata=np.array(json.dumps(meta, sort_keys=True)),
+        )
     return digest
 
 

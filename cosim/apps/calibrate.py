@@ -1,14 +1,24 @@
 """``tribocosim calibrate``: fit the particle-borne area and the debris balance to measured friction and debris.
 
     tribocosim calibrate --measured DATA.csv --out TABLE.npz [--table T] [--contact-area mesoscale|eq8]
-                         [--fit NAME ...] [--set NAME=VALUE ...] [--workers N] [--max-iterations N]
-                         [--keep-unconverged]
+                         [--fit NAME ...] [--set NAME=VALUE ...] [--units SI|mm-t-s] [--workers N]
+                         [--max-iterations N] [--allow-clamped] [--keep-unconverged]
 
-DATA.csv: a header, then one row per measurement; columns ``pressure`` [Pa], ``tool_length`` [m], ``passes`` (1, 2,
-3...: a later pass starts from the debris the previous one left) and at least one of ``mu_bar`` (the steady-state
-friction coefficient), ``debris_g_m2`` (the debris left on the strip after that pass, weighed per unit area
-[g/m^2]) and ``beta`` (its coverage), each with an optional standard deviation ``<name>_std`` (the residuals are
-weighted by 1 / std; data that mix observables need every std).
+DATA.csv: a header, then one row per measurement; columns ``pressure`` [Pa], ``tool_length`` [m] (``--units
+mm-t-s``: MPa and mm, as ``tribocosim export`` writes them), ``passes`` (1, 2, 3...: a later pass starts from the
+debris the previous one left) and at least one of ``mu_bar`` (the steady-state friction coefficient),
+``debris_g_m2`` (the debris left on the strip after that pass, weighed per unit area [g/m^2]) and ``beta`` (its
+coverage), each with an optional standard deviation ``<name>_std`` (the residuals are weighted by 1 / std; data that
+mix observables need every std).
+
+Refused before anything runs (exit code 2, one line, nothing written): an ``--out`` that cannot be written (a folder,
+a missing or read-only folder), a bad ``--set``, a row the model cannot draw (a pad length out of its range), and a
+pressure outside the friction table's pressure axis (the line names the column, its values, the table's range and a
+likely unit slip, e.g. pressures in MPa read as Pa). Refused after the fit (exit code 2, nothing written): rows whose
+draws at the fitted values read the table outside its axes or its simulated range (clamped lookups, e.g. debris beyond
+the levels simulated at that pressure), unless ``--allow-clamped`` keeps them; the table's metadata then counts them
+per row. SIGINT (Ctrl-C) or SIGTERM stops the fit between draws: one line, nothing written, exit code 128 + the
+signal's number.
 
 What the mesoscale campaign does not pin down is the load share of blocked flakes at the test's 0.08 m/s (the scale
 s of the table's A_p, ``particle_area_scale``: mu = mu0 (1 - (1 - r) s A_p / A_c)), the flake-borne shear ratio r
@@ -99,6 +109,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=None, help="processes (default: one per CPU)")
     p.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS, metavar="N",
                    help=f"Gauss-Newton iterations at most (default: {MAX_ITERATIONS})")
+    p.add_argument("--units", default="SI", help="the unit system of the data's pressure and tool_length columns: SI "
+                   "(Pa, m; the default) or mm-t-s (MPa, mm), as tribocosim export's --units")
+    p.add_argument("--allow-clamped", action="store_true",
+                   help="keep rows whose draws at the fitted values read the friction table outside its axes or its "
+                        "simulated range (clamped lookups; the table's metadata counts them per row); without it, "
+                        "such rows are refused (exit code 2, nothing written)")
     p.add_argument("--keep-unconverged", action="store_true",
                    help="write the table from the last iterate (metadata: its status) and exit 0 when the fit has not "
                         "converged, is held at a bound or cannot separate its parameters; without it, that is exit "
@@ -125,38 +141,120 @@ def _failure(f: Fit) -> str:
     return "; ".join(parts) + f" (RMS residual {100 * rms:.3g} % of the data)"
 
 
+def in_si(data, units) -> list:
+    """The measurements with their pressure and tool_length columns converted from ``units`` to SI."""
+    return [dataclasses.replace(d, pressure=float(units.pressure_from_file(d.pressure)),
+                                tool_length=float(units.length_from_file(d.tool_length))) for d in data]
+
+
+def _values(xs) -> str:
+    return ", ".join(f"{x:g}" for x in dict.fromkeys(xs))
+
+
+def check_rows(data, parameters: dict, table, source, units) -> None:
+    """ParameterError, before anything runs, for a row the model cannot draw or whose lookups would leave the table's
+    pressure axis: one line naming the column, its values (in the data's units), what is allowed and the likely unit
+    slip."""
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    scale, name = units.pressure_scale, units.pressure
+    if parameters.get("friction_model", COMPONENT.defaults["friction_model"]) == "table":
+        lo, hi = float(table.pressure[0]), float(table.pressure[-1])
+        tol = 1e-9  # an axis end within this (relative) is on it, as the table's lookups take it
+        outside = [d for d in data if d.pressure < lo * (1 - tol) or d.pressure > hi * (1 + tol)]
+        if outside:
+            pressures = [d.pressure for d in outside]
+            hint = ""
+            if units.name == "SI" and all(lo <= 1e6 * x <= hi for x in pressures):
+                hint = "; they look like MPa: give --units mm-t-s (pressure in MPa, tool_length in mm)"
+            elif units.name != "SI" and all(lo <= x <= hi for x in pressures):
+                hint = "; they look like Pa: give --units SI (pressure in Pa, tool_length in m)"
+            raise ParameterError(
+                f"--measured {source}: column pressure holds {_values(x / scale for x in pressures)} {name} (rows "
+                f"{', '.join(str(d.row) for d in outside)}), outside the friction table's {lo / scale:g}-{hi / scale:g} "
+                f"{name}: the model would read the table clamped at its edge{hint}")
+    for d in data:
+        try:
+            COMPONENT.split({**parameters, "tool_length": d.tool_length})
+        except ParameterError as exc:
+            hint = (" (in mm? give --units mm-t-s)" if units.name == "SI" and d.tool_length >= 1.0 else "")
+            raise ParameterError(f"--measured {source}, row {d.row}, column tool_length: "
+                                 f"{d.tool_length / units.length_scale:g} {units.length}{hint}: {exc}") from None
+
+
+def clamped_lookups(data, parameters: dict, workers: int | None = None) -> list[dict]:
+    """The rows whose draws with ``parameters`` read the friction table outside its axes or its simulated range: per
+    row its test and the number of clamped nodal lookups in its pass (the strip-draw model's ``table_clamp_count``)."""
+    from tribocosim.cosim.studies.stripdraw_experiment import Point, draw, run_points
+
+    tests: dict = {}
+    for d in data:
+        tests[(d.pressure, d.tool_length)] = max(tests.get((d.pressure, d.tool_length), 0), d.passes)
+    done = dict(zip(tests, run_points([Point(p, pad, n, parameters) for (p, pad), n in tests.items()], workers,
+                                      draw)))
+    out = []
+    for d in data:
+        count = done[(d.pressure, d.tool_length)][d.passes - 1]["table_clamps"]
+        if count:
+            out.append({"row": d.row, "pressure": d.pressure, "tool_length": d.tool_length, "passes": d.passes,
+                        "clamped_lookups": int(count)})
+    return out
+
+
+def _clamped_line(rows: list[dict]) -> str:
+    tests = "; ".join(f"row {r['row']} (P = {r['pressure'] / 1e6:g} MPa, L_T = {r['tool_length'] * 1e3:g} mm, pass "
+                      f"{r['passes']}): {r['clamped_lookups']}" for r in rows)
+    return (f"at the fitted values the draws of {len(rows)} row(s) read the friction table outside its axes or its "
+            f"simulated range (clamped lookups: {tests}): the fit rests on values the mesoscale campaign did not "
+            "simulate (debris beyond its levels at that pressure)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim calibrate``."""
     args = _parser().parse_args(argv)
-    from tribocosim.paths import DEFAULT_TABLE
+    from tribocosim import interrupt
+    from tribocosim.atomic import check_writable
+    from tribocosim.components.friction_export.export_units import unit_system
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.table import read_table, write_table
+    from tribocosim.components.stripdraw.settings import parse_settings
+    from tribocosim.errors import Interrupted
+    from tribocosim.paths import DEFAULT_TABLE
 
     try:
-        data = read_measurements(args.measured)
+        check_writable(args.out, "--out")
+        units = unit_system(args.units)
+        data = in_si(read_measurements(args.measured), units)
         table_path = (args.table or DEFAULT_TABLE).resolve()
         table = read_table(table_path)
         if table.version < 2:
             raise ParameterError(f"--table {table_path} is format version 1 (mu only); calibration scales the particle "
                                  "area: rebuild the table with tribocosim surrogate table (version 2 or later)")
-        parameters = {"table_file": str(table_path), "contact_area": args.contact_area}
-        for item in args.set:
-            name, sep, value = item.partition("=")
-            field = next((f for f in COMPONENT.parameter_fields if f.name == name.strip()), None)
-            if not sep or field is None:
-                raise ParameterError(f"--set {item!r}: expected NAME=VALUE with a strip-draw parameter name")
-            kind = field.metadata
-            parameters[name.strip()] = (value if kind.get("text") or "choices" in kind
-                                        else int(value) if kind.get("integer") else float(value))
+        parameters = {"table_file": str(table_path), "contact_area": args.contact_area,
+                      **parse_settings(args.set, "--set")}
         COMPONENT.split(parameters)  # every value checked before anything runs
+        check_rows(data, parameters, table, args.measured, units)
         t0 = time.perf_counter()
         print(f"calibrating {', '.join(args.fit)} on {len(data)} row(s) of {args.measured} "
               f"(contact_area = {args.contact_area}, table {table_path.name})", file=sys.stderr)
-        f = calibrate(data, parameters, tuple(args.fit), args.workers, log=lambda s: print(s, file=sys.stderr),
-                      max_iterations=args.max_iterations)
+        with interrupt.stop_on_signals("nothing is written"):
+            f = calibrate(data, parameters, tuple(args.fit), args.workers, log=lambda s: print(s, file=sys.stderr),
+                          max_iterations=args.max_iterations)
+            clamped = clamped_lookups(data, {**parameters, **dict(zip(f.names, map(float, f.values)))},
+                                      args.workers)
+    except Interrupted as exc:
+        print(f"tribocosim calibrate: {exc}: the fit is discarded and nothing is written", file=sys.stderr)
+        return 128 + exc.signum
     except TribocosimError as exc:
         print(f"tribocosim calibrate: {exc}", file=sys.stderr)
         return 2
+    if clamped and not args.allow_clamped:
+        print(f"tribocosim calibrate: {_clamped_line(clamped)}. Nothing written; leave these rows out, or keep them "
+              "with --allow-clamped (the table's metadata then counts their clamped lookups).", file=sys.stderr)
+        return 2
+    if clamped:
+        print(f"tribocosim calibrate: warning: {_clamped_line(clamped)}; kept as asked (--allow-clamped), the table's "
+              "metadata counts them (strip_draw_calibration.clamped_rows)", file=sys.stderr)
     if not f.succeeded:
         print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. "
               + (f"Writing the last iterate to {args.out} as asked (--keep-unconverged)." if args.keep_unconverged
@@ -165,6 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         if not args.keep_unconverged:
             return 1
     values = dict(zip(f.names, f.values))
+    scaled = not all(n in d.stds for d in data for n in d.values)  # calibrate_fit's covariance rule
     scale = float(values.get("particle_area_scale", parameters.get("particle_area_scale", 1.0)))
     mu0 = float(parameters.get("mu0", COMPONENT.defaults["mu0"]))
     rule = str(parameters.get("particle_area_rule", COMPONENT.defaults["particle_area_rule"]))
@@ -175,11 +274,13 @@ def main(argv: list[str] | None = None) -> int:
         "inseparable": f.inseparable, "correlation": f.correlation.tolist(),
         "singular_values_in_scale_units": f.singular_values.tolist(),
         "chi2": f.chi2, "dof": f.dof, "shear_scale_product": f.shear_scale,
+        "stderr_scaled_by_reduced_chi2": scaled,
         "contact_area": args.contact_area, "particle_area_rule": rule,
         "parameters": {k: v for k, v in parameters.items() if k != "table_file"},
-        "source_table": {"path": str(table_path), "content_hash": table.metadata.get("content_hash")},
-        "data": {"path": str(args.measured.resolve()),
+        "source_table": {"file": table_path.name, "content_hash": table.metadata.get("content_hash")},
+        "data": {"file": args.measured.name, "units": units.name,
                  "sha256": hashlib.sha256(args.measured.read_bytes()).hexdigest()},
+        "clamped_rows": clamped,
         "points": [{**r, **next({"pressure": d.pressure, "tool_length": d.tool_length, "passes": d.passes}
                                 for d in data if d.row == r["row"])} for r in f.residuals],
         "note": f"the {'cluster-rule ' if rule == 'clusters' else ''}particle area holds the table's times the fitted "
@@ -197,6 +298,14 @@ def main(argv: list[str] | None = None) -> int:
     for name, v, e in zip(f.names, f.values, f.stderr):
         error = f"+- {e:.2g} (standard error)" if np.isfinite(e) else f"(at its {f.at_bound.get(name)} bound)"
         print(f"{name} = {v:.6g} {error}{'' if f.succeeded else ', ' + f.status().upper()}")
+    reduced = f.chi2 / f.dof if f.dof > 0 else float("nan")
+    if scaled:
+        print(f"standard errors scaled by the reduced chi^2 = {reduced:.3g} (chi^2 {f.chi2:.4g} over {f.dof} degrees "
+              "of freedom): the data give no standard deviations, so their scatter about the fit stands for them")
+    else:
+        print(f"standard errors from the data's standard deviations, not scaled by the reduced chi^2 = {reduced:.3g} "
+              f"(chi^2 {f.chi2:.4g} over {f.dof} degrees of freedom; near 1 when the model describes the data within "
+              "them)")
     if f.shear_scale is not None:
         print(f"(1 - flake_shear_ratio) particle_area_scale = {f.shear_scale['value']:.6g} +- "
               f"{f.shear_scale['stderr']:.2g} (the combination mu depends on below the cap)")

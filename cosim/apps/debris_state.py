@@ -32,13 +32,21 @@ from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw
 @dataclass(frozen=True)
 class DebrisChoice:
     """The debris state asked for: ``beta`` values, or ``passes`` of a strip-draw test at ``pressure`` (and
-    ``velocity``, ``pad_length``; None: the paper's), in the export's units; neither: beta is an axis of the file."""
+    ``velocity``, ``pad_length``; None: the paper's), in the export's units; neither: beta is an axis of the file.
+    ``beta`` and ``passes`` take one value or a sequence of them (``DebrisChoice(beta=0.1)``, ``beta=(0, 0.1)``)."""
 
     beta: tuple = ()
     passes: tuple = ()
     pressure: float | None = None
     velocity: float | None = None
     pad_length: float | None = None
+
+    def __post_init__(self):
+        for name in ("beta", "passes"):
+            value = getattr(self, name)
+            if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+                value = (value,)
+            object.__setattr__(self, name, tuple(value))
 
 
 def _finite(option: str, value) -> float:

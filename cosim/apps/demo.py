@@ -69,7 +69,7 @@ def run_demo(out_dir, *, pressure: float | None = None, tool_length: float | Non
     """
     from tribocosim.cosim.api import run
     from tribocosim.cosim.studies.plotting import plot_demo
-    from tribocosim.cosim.studies.stripdraw_experiment import steady_ratio
+    from tribocosim.cosim.studies.steady_state import steady_ratio
     from tribocosim.cosim.scene.validate import load_scene
 
     out = Path(out_dir).resolve()

@@ -1,4 +1,5 @@
-"""``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table).
+"""``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table, user
+friction routines).
 
     tribocosim export FORMAT -o FILE [--beta B ... | --passes N ... --pressure P [--velocity V] [--pad-length L]]
                      [--units mm-t-s|SI] [--band K] [--table T | --calibration C] [--set NAME=VALUE ...]
@@ -8,8 +9,10 @@
 
 FORMAT: ``lsdyna`` (an include file: *DEFINE_TABLE and its *DEFINE_CURVEs for contact FS = 2), ``abaqus`` (a *SURFACE
 INTERACTION with a tabulated *FRICTION; without a debris state beta is field variable 1), ``table`` (a neutral JSON
-table). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line naming the option
-on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
+table), ``vfriction``, ``fric``, ``usrfrc`` (user friction routines for Abaqus/Explicit, Abaqus/Standard and LS-DYNA:
+FILE.f with FILE.c and FILE.h beside it, the debris state kept per contact node; they take --table, --calibration,
+--set, --option and --units). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line
+naming the option on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
 below the documented floor of the strip-draw contact, naming the setting that lets it) is one line on stderr per file,
 ``tribocosim export: warning: <file>: ...``, and in the file's header; the file is written and the exit code is 0.
 docs/forming-friction.md is the guide.
@@ -23,7 +26,7 @@ import sys
 
 from tribocosim.errors import TribocosimError
 
-FORMATS = ("lsdyna", "abaqus", "table")
+FORMATS = ("lsdyna", "abaqus", "table", "vfriction", "fric", "usrfrc")
 
 
 class _ArgumentError(Exception):
@@ -50,9 +53,12 @@ def _parser() -> argparse.ArgumentParser:
     state.add_argument("--beta", nargs="+", default=[], metavar="B", help="debris area fraction(s): one file each")
     state.add_argument("--passes", nargs="+", default=[], metavar="N",
                        help="the state a strip-draw test reaches after N passes: one file each")
-    state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure (required)")
-    state.add_argument("--velocity", default=None, help="--passes: the drawing speed (default: the paper's 0.08 m/s)")
-    state.add_argument("--pad-length", default=None, help="--passes: the pad length (default: tool_length, 35 mm)")
+    state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure in the --units system "
+                       "(required; MPa in mm-t-s, Pa in SI)")
+    state.add_argument("--velocity", default=None, help="--passes: the drawing speed in the --units system (default: "
+                       "the paper's 0.08 m/s, which is 80 in mm-t-s and 0.08 in SI)")
+    state.add_argument("--pad-length", default=None, help="--passes: the pad length in the --units system (default: "
+                       "tool_length, 35 mm, which is 35 in mm-t-s and 0.035 in SI)")
     p.add_argument("--units", default=DEFAULT_UNITS, help=f"{' or '.join(UNIT_SYSTEMS)} (default {DEFAULT_UNITS}: "
                    "N, MPa, mm/s, mm)")
     p.add_argument("--band", default=None, metavar="K", help="also write FILE.upper.SUFFIX and FILE.lower.SUFFIX: mu "
@@ -91,18 +97,6 @@ def _number(option: str, text, integer: bool = False):
     return int(value) if integer else value
 
 
-def _settings(items) -> dict:
-    from tribocosim.errors import ParameterError
-
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise ParameterError(f"--set {item!r}: expected NAME=VALUE with a strip-draw parameter name")
-        out[name.strip()] = value.strip()
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``tribocosim export``."""
     parser = _parser()
@@ -112,6 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     except _ArgumentError as exc:
         print(f"tribocosim export: {exc}", file=sys.stderr)
         return 2
+    from tribocosim.components.stripdraw.settings import parse_settings
     from tribocosim.cosim.apps.debris_state import DebrisChoice
     from tribocosim.cosim.apps.export_friction import export_friction
 
@@ -121,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         result = export_friction(
             args.format, args.out, state, units=args.units,
             band=None if args.band is None else _number("--band", args.band),
-            table=args.table, calibration=args.calibration, settings=_settings(args.set), option=args.option,
+            table=args.table, calibration=args.calibration, settings=parse_settings(args.set), option=args.option,
             pressure_range=None if args.pressure_range is None else
             tuple(_number("--pressure-range", x) for x in args.pressure_range),
             beta_levels=None if args.beta_levels is None else tuple(_number("--beta-levels", x)
@@ -133,6 +128,9 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim export: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("tribocosim export: interrupted by SIGINT: no file is written", file=sys.stderr)
+        return 130
     print("\n".join(result.summary()))
     for line in result.warning_lines():  # the files are written; what they hold that the user should know
         print(f"tribocosim export: warning: {line}", file=sys.stderr)

@@ -73,18 +73,51 @@ def export_friction(format: str, out, state: DebrisChoice | None = None, *, unit
     ParameterError
         A bad request, naming the option; nothing is written then. TableError for a table that cannot be read.
     """
-    if format not in FORMATS:
-        raise ParameterError(f"FORMAT {format!r} is not an export format; choose one of {', '.join(FORMATS)}")
+    from tribocosim.components.friction_export.user_routines import ROUTINES
+
+    if format not in FORMATS and format not in ROUTINES:
+        raise ParameterError(f"FORMAT {format!r} is not an export format; choose one of "
+                             f"{', '.join((*FORMATS, *ROUTINES))}")
     system = unit_system(units)
     chosen, notes = multipass_option(option)
+    if format in ROUTINES:
+        _check_routine_request(format, state, band, pressure_range, beta_levels, allow_unsimulated, tolerance,
+                               table_id, interaction_name)
     law = load_law(table, calibration, {**chosen, **(settings or {})})
+    if format in ROUTINES:
+        from tribocosim.components.friction_export.export_run import code_version
+        from tribocosim.components.friction_export.user_routines import write_routine
+
+        return write_routine(format, law, system, out, command=command, code_version=code_version())
     states = debris_states(state or DebrisChoice(), law, system, log)
     prange = None if pressure_range is None else tuple(system.pressure_from_file(float(x)) for x in pressure_range)
     request = ExportRequest(format=format, out=Path(out), states=states, units=system, band=band,
                             pressure_range=prange, beta_levels=None if beta_levels is None else tuple(beta_levels),
                             allow_unsimulated=allow_unsimulated, tolerance=tolerance, table_id=table_id,
                             interaction_name=interaction_name, command=command, notes=notes)
-    return run_export(law, request)
+    return run_export(law, request, log)
+
+
+def _check_routine_request(format, state, band, pressure_range, beta_levels, allow_unsimulated, tolerance,
+                           table_id, interaction_name) -> None:
+    """ParameterError naming the first option a user friction routine does not take: it keeps beta per contact point
+    as its state (no --beta or --passes: the deck's initial state is the debris the blank arrives with), evaluates
+    the law itself (no sampling: --pressure-range, --beta-levels, --tolerance; no file band: --band; every lookup
+    counted in state 3: --allow-unsimulated) and is no LS-DYNA table or Abaqus interaction file."""
+    given = [("--beta", bool(state and state.beta)), ("--passes", bool(state and state.passes)),
+             ("--band", band is not None), ("--pressure-range", pressure_range is not None),
+             ("--beta-levels", beta_levels is not None), ("--allow-unsimulated", bool(allow_unsimulated)),
+             ("--tolerance", tolerance != DEFAULT_TOLERANCE), ("--table-id", table_id != DEFAULT_TABLE_ID),
+             ("--interaction-name", interaction_name != DEFAULT_NAME)]
+    why = {"--beta": "the routine keeps beta per contact point (state 1); the deck's initial state is the debris "
+                     "the blank arrives with",
+           "--passes": "the routine keeps beta per contact point (state 1) and makes it as the sheet slides",
+           "--band": "the routine evaluates the nominal law",
+           "--allow-unsimulated": "the routine counts the lookups on unsimulated nodes per point (state 3)"}
+    for option, on in given:
+        if on:
+            reason = why.get(option, "the routine evaluates the law itself, nothing is sampled into a file")
+            raise ParameterError(f"{option} does not apply to FORMAT {format}: {reason}")
 
 
 def multipass_option(name: str | None) -> tuple[dict, tuple]:

@@ -66,7 +66,7 @@ def _main(args) -> int:
 
     from tribocosim.cosim.apps.run_output import OutputError, OutputFolder, run_files
 
-    png = None
+    png = plan = None
     try:
         args.scene = scene_file(args.scene)
         if args.scene.suffix.lower() == ".ssp":  # an SSP package, read as a scene (cosim.ssp.reader)
@@ -142,6 +142,11 @@ def _main(args) -> int:
         if result.csv_path is not None:
             print(f"results:  {result.csv_path}")
         print(f"metadata: {result.metadata_path}")
+        if plan is not None:
+            from tribocosim.cosim.studies.steady_state import strip_mu_bars
+
+            for name, mu in strip_mu_bars(plan.scene, result):
+                print(f"mu_bar:   {mu:.4f}   ({name}.pull_force / (2 normal_force), last 20 % of the run)")
     return 0
 
 

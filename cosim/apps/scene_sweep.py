@@ -4,7 +4,7 @@ A sweep file (TOML, with a ``[sweep]`` table; ``tribocosim run SWEEP.toml`` reco
 base scene and what to vary::
 
     [sweep]
-    scene = "demo.toml"          # base scene, relative to this file
+    scene = "demo.toml"          # base scene: a file relative to this one, or a packaged scene by name
     passes = 1                   # > 1: chained passes over the same strip (see below)
     field_instance = "strip"     # the StripDraw instance whose beta field is recorded / handed over
     field_interval = 0.02        # [s] between recorded field rows (0: every step); needs field_instance
@@ -71,6 +71,7 @@ from typing import Any
 
 import numpy as np
 
+from tribocosim.atomic import write_text
 from tribocosim.errors import Interrupted, RunInterrupted, SceneError, SweepInterrupted
 from tribocosim.interrupt import raise_if_stopped
 
@@ -225,6 +226,11 @@ def load_sweep(path: str | Path) -> Sweep:
         add("sweep.scene", f"must name the base scene file, got {scene!r}")
         scene = ""
     scene_path = (path.parent / scene).resolve()
+    if scene and not scene_path.exists():  # a packaged scene by name ("demo" or "demo.toml"), as tribocosim run takes
+        from tribocosim.paths import SCENES_DIR
+
+        packaged = SCENES_DIR / (scene if scene.endswith(".toml") else f"{scene}.toml")
+        scene_path = packaged if "/" not in scene and packaged.is_file() else scene_path
     if scene and scene_path.is_dir():
         add("sweep.scene", f"{scene_path} is a folder, not a scene file")
     elif scene and not scene_path.is_file():
@@ -385,10 +391,8 @@ def run_case(sweep: Sweep, case: Case, out: Path) -> list[dict]:
         row.update(run_counts(result.metadata))
         row["wall_time"] = time.perf_counter() - t0
         rows.append(row)
-    tmp = folder / f".summary.{os.getpid()}.partial"
-    tmp.write_text(json.dumps({"key": key, "case": case.name, "variables": case.variables,
-                               "overrides": case.overrides, "rows": rows}, indent=2, default=str))
-    os.replace(tmp, done)
+    write_text(done, json.dumps({"key": key, "case": case.name, "variables": case.variables,
+                                 "overrides": case.overrides, "rows": rows}, indent=2, default=str))
     return rows
 
 
@@ -427,6 +431,8 @@ class SweepResult:
     plots: list[Path] = field(default_factory=list)
     #: the columns of :func:`run_counts` (``warnings``, the end checks): a row with one above 0 is marked
     counts: list[str] = field(default_factory=list)
+    #: the unit of each column whose unit the FMUs declare (:func:`column_units`)
+    units: dict[str, str] = field(default_factory=dict)
 
     def marked(self) -> list[dict]:
         """The rows (runs) with warnings or with lookups outside the friction table (any count above 0)."""
@@ -466,9 +472,11 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
     out.mkdir(parents=True, exist_ok=True)
     cases = sweep.cases()
     problems = Problems(sweep.path, "sweep")
+    first = None
     for case in cases:  # every case checked before any runs (the first builds the FMUs); a later pass's
         try:            # field_input is the file its previous pass writes
-            load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
+            plan = load_scene(sweep.scene, pass_overrides(sweep, case, out / "cases" / case.name, 1))
+            first = first or plan
         except SceneError as exc:
             for p in exc.problems or [None]:
                 problems.add(f"{case.name}" + (f": {p.key}" if p else ""),
@@ -519,7 +527,7 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                      "counts": {c: sum(r[c] for r in rows) for c in counts},
                                      "runs_with_warnings_or_clamps": len(marked), "rows": rows},
                                     indent=2, default=str), encoding="utf-8")
-    result = SweepResult(sweep, rows, csv_path, json_path, wall, counts=counts)
+    result = SweepResult(sweep, rows, csv_path, json_path, wall, counts=counts, units=column_units(sweep, first))
     if plot:
         from tribocosim.cosim.studies.plotting import plot_beta_maps, plot_sweep
 
@@ -540,6 +548,30 @@ def run_sweep(path: str | Path, out: str | Path | None = None, *, workers: int |
                                                title=f"{sweep.title}: beta(X, t) at "
                                                + ", ".join(f"{k} = {v}" for k, v in maps.items())))
     return result
+
+
+def column_units(sweep: Sweep, plan) -> dict[str, str]:
+    """The units of a sweep's columns that the FMUs declare: a variable set as it is to one FMU parameter
+    (``"fmus.I.parameters.P" = { expr = "v" }``) has P's unit, a summary of one recorded variable (``mean``, ``std``
+    or ``final`` of ``"I.V"``) V's; the others (an expression of several, or of a variable with a factor) none."""
+    from tribocosim.cosim.scene.validate import unit_of
+
+    def unit(inst, var):
+        model = plan.fmus.get(inst)
+        v = model.variables.get(var) if model is not None else None
+        return unit_of(v) or "" if v is not None else ""
+
+    out = {}
+    for key, value in sweep.settings.items():
+        parts = key.split(".")
+        if isinstance(value, Expression) and len(parts) == 4 and parts[0] == "fmus" and parts[2] == "parameters" \
+                and value.text.strip() in sweep.variables:
+            out[value.text.strip()] = unit(parts[1], parts[3])
+    for s in sweep.summaries:
+        text = s.expression.text.strip()
+        if text.count(".") == 1 and text.replace(".", "").replace("_", "").isalnum():
+            out[s.name] = unit(*text.split("."))
+    return out
 
 
 def _same(a, b) -> bool:

@@ -141,18 +141,16 @@ def digest() -> str:
 
 def build(output: str | os.PathLike) -> Path:
     """Compile the loop's library for this machine into ``output`` (atomically)."""
-    import tempfile
+    from tribocosim.atomic import replaced
 
     from tribocosim.components.native.toolchain import compiler
 
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
     out = Path(output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="tribocosim-master-", dir=out.parent) as tmp:
-        partial = Path(tmp) / out.name
+    with replaced(out, out.suffix) as partial:
         compiler.compile_shared([NATIVE_DIR / s for s in SOURCES], partial, platform,
                                 include_dirs=[str(NATIVE_DIR), str(fmi_headers())])
-        os.replace(partial, out)
     return out
 
 

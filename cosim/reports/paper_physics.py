@@ -164,7 +164,7 @@ def table_variants(table, folder: Path, domain_tables: dict[str, Path] | None = 
         meta = table.metadata
         surfaces = {c["labels"]["surface"] for c in meta.get("cases", [])}
         if "sweep" in meta.get("campaign", {}) and len(surfaces) > 1:
-            from tribocosim.surrogate.table_build import rebuild_from_metadata
+            from tribocosim.surrogate.table_rebuild import rebuild_from_metadata
 
             for s in sorted(surfaces):
                 rebuilt = rebuild_from_metadata(meta, [c for c in meta["cases"] if c["labels"]["surface"] == s])

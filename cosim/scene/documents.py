@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 
@@ -65,15 +64,10 @@ def _json_exact(value) -> bool:
 
 
 def _write_atomically(path: Path, text: str) -> None:
-    import tempfile
+    from tribocosim.atomic import write_text
 
-    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".document-", dir=path.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
+        write_text(path, text)
     except OSError:  # a cache that cannot be written costs time, not results
-        if tmp is not None:
-            Path(tmp).unlink(missing_ok=True)
+        pass

@@ -136,14 +136,11 @@ def summary(path: str | Path) -> FmuSummary:
 
 
 def _write_atomically(path: Path, text: str) -> None:
-    import tempfile
+    from tribocosim.atomic import write_text
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".summary-", dir=path.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
+        write_text(path, text)
     except OSError:  # a cache that cannot be written costs time, not results
         pass
 

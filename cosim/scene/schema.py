@@ -178,15 +178,14 @@ def parse_ref(p: Problems, text, key: str) -> VariableRef | None:
 def parse_overrides(items: list[str]) -> dict:
     """``--set KEY=VALUE`` items as ``{dotted key: value}``: the value in TOML syntax (``1e-3``, ``"jacobi"``,
     ``[1, 2]``), else the text as it is; SceneError for an item that is not ``KEY=VALUE``."""
+    from tribocosim.name_value import split_settings
+
     out = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise SceneError(f"--set {item!r}: expected KEY=VALUE")
+    for key, value in split_settings(items, "--set", "KEY", SceneError).items():
         try:
-            out[key.strip()] = parse_toml(f"v = {value.strip()}")["v"]
+            out[key] = parse_toml(f"v = {value}")["v"]
         except TomlError:
-            out[key.strip()] = value.strip()
+            out[key] = value
     return out
 
 

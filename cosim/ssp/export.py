@@ -41,9 +41,7 @@ exist where the package runs. Enumeration connectors are written as the standard
 from __future__ import annotations
 
 import hashlib
-import os
 import re
-import tempfile
 import tomllib
 import xml.etree.ElementTree as ET
 import zipfile
@@ -296,22 +294,14 @@ def _check_out(out: Path) -> None:
 def _write_zip(out: Path, members: dict[str, bytes]) -> None:
     """Write the members (in order, fixed timestamps) to ``out`` via a temporary file and a rename; an OS error is a
     TribocosimError naming ``out`` (not the temporary file)."""
-    tmp = None
+    from tribocosim.atomic import replaced
+
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".ssp", dir=out.parent)
-        os.close(fd)
-        with zipfile.ZipFile(tmp, "w") as zf:
+        with replaced(out, ".ssp") as tmp, zipfile.ZipFile(tmp, "w") as zf:
             for name, data in members.items():
                 info = zipfile.ZipInfo(name, date_time=_EPOCH)
                 info.external_attr = 0o644 << 16  # rw-r--r-- for tools that apply it
                 zf.writestr(info, data, compress_type=zipfile.ZIP_DEFLATED)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; the package is an ordinary file
-        os.replace(tmp, out)
     except OSError as exc:
         raise TribocosimError(f"cannot write the SSP package {out}: {exc.strerror or exc}") from None
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)

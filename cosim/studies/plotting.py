@@ -21,16 +21,22 @@ def plot_result(result, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     names = list(result.columns)
+    units = result.metadata.get("outputs", {}).get("units", {})
     n = max(1, len(names))
     fig, axes = plt.subplots(n, 1, figsize=(7.0, 1.8 * n + 0.6), sharex=True, squeeze=False)
     for ax, name in zip(axes[:, 0], names):
         ax.plot(result.time, result.columns[name], lw=1.0)
-        ax.set_ylabel(name, fontsize=8)
+        ax.set_ylabel(labelled(name, units.get(name, "")), fontsize=8)
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("time [s]")
     m = result.metadata["master"]
     fig.suptitle(f"{Path(result.metadata['scene']).name}: {m['algorithm']}, extrapolation {m['extrapolation']}", fontsize=9)
     return _save(fig, path, dpi=120)
+
+
+def labelled(name: str, unit: str) -> str:
+    """``name [unit]``, or ``name`` for a quantity without a unit ("" or "1")."""
+    return f"{name} [{unit}]" if unit not in ("", "1") else name
 
 
 def _pyplot():
@@ -170,9 +176,12 @@ def plot_sweep(result, path: Path) -> Path:
         groups.setdefault(r[series] if series else "", []).append(r)
     flag = spec.get("flag")
     flagged = False
+    units = getattr(result, "units", {}) or {}
+    unit_of = (lambda name: f" {units[name]}" if units.get(name, "") not in ("", "1") else "")
     for key, rows in groups.items():
         rows = sorted(rows, key=lambda r: r[x])
-        label = f"{series} = {key:g}" if series and not isinstance(key, str) else (f"{series} = {key}" if series else None)
+        label = (f"{series} = {key:g}{unit_of(series)}" if series and not isinstance(key, str)
+                 else (f"{series} = {key}" if series else None))
         (line,) = ax.plot([r[x] for r in rows], [r[y] for r in rows], "o-", lw=1.2, ms=4, label=label)
         bad = [r for r in rows if flag and abs(r[flag]) > 0.05 * abs(r[y])]
         if bad:
@@ -185,8 +194,8 @@ def plot_sweep(result, path: Path) -> Path:
     if marked:  # the runs that warned or read the friction table outside its axes
         ax.plot([r[x] for r in marked], [r[y] for r in marked], "x", ms=9, mew=1.6, color="crimson", zorder=4,
                 label=f"warned or read outside the table ({len(marked)} runs)")
-    ax.set_xlabel(spec.get("xlabel", x))
-    ax.set_ylabel(spec.get("ylabel", y))
+    ax.set_xlabel(spec.get("xlabel", labelled(x, units.get(x, ""))))
+    ax.set_ylabel(spec.get("ylabel", labelled(y, units.get(y, ""))))
     ax.grid(True, alpha=0.3)
     if series or flagged or marked:
         ax.legend(fontsize=8)

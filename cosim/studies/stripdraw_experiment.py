@@ -18,10 +18,11 @@ import functools
 import os
 import re
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from tribocosim.cosim.studies.steady_state import steady_ratio  # noqa: F401 - the studies' mu_bar
 
 V0 = 0.08  # m/s
 RAMP = 0.01  # s
@@ -82,14 +83,6 @@ def draw(point: Point) -> list[dict]:
     return out
 
 
-def steady_ratio(time, pull_force, normal_force, last: float = 0.2) -> float:
-    """mu_bar of recorded signals: the mean of pull_force / (2 normal_force) (Eq. 1) over the last fraction of the
-    run (where the normal force is positive)."""
-    t = np.asarray(time)
-    sel = (t >= t[-1] - last * (t[-1] - t[0]) - 1e-12) & (np.asarray(normal_force) > 0)
-    return float(np.mean(np.asarray(pull_force)[sel] / (2.0 * np.asarray(normal_force)[sel])))
-
-
 def _recorded(fn, point: Point) -> tuple:
     """``fn(point)`` and the warnings it raised, as (category, message) pairs, so that :func:`run_points` reports
     them once for all points (each draw's model warns in its own words, with its own time)."""
@@ -121,19 +114,33 @@ def point_pool(workers: int | None = None) -> ProcessPoolExecutor:
 
 
 def run_points(points: list[Point], workers: int | None = None, fn=mu_bar, pool=None) -> list:
-    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (spawned; at most one
-    per point; in ``pool``, a :func:`point_pool`, when given). The warnings of the draws are given once per distinct
-    message, with the number of draws that raised it."""
+    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes: in ``pool`` (a
+    :func:`point_pool`, for a caller that runs many small batches) when given, otherwise at most one per point on the
+    project's local executor, whose workers ignore SIGINT and SIGTERM and are killed on a stop
+    (:class:`tribocosim.surrogate.executors.ProcessPoolCaseExecutor`). Within :func:`tribocosim.interrupt.
+    stop_on_signals` a signal stops the latter between draws with :class:`~tribocosim.errors.Interrupted` (the draws in
+    progress are discarded). The warnings of the draws are given once per distinct message, with the number of draws
+    that raised it; a draw that raises raises here."""
+    from tribocosim import interrupt
+    from tribocosim.errors import Interrupted
+
     n = max(1, min(workers or os.cpu_count() or 1, len(points)))
     if pool is not None and len(points) > 1:
         done = list(pool.map(functools.partial(_recorded, fn), points))
     elif n == 1:
-        done = [_recorded(fn, p) for p in points]
+        done = []
+        for p in points:
+            interrupt.raise_if_stopped(Interrupted)
+            done.append(_recorded(fn, p))
     else:
-        import multiprocessing
+        from tribocosim.surrogate.executors import ProcessPoolCaseExecutor
 
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn")) as pool:
-            done = list(pool.map(functools.partial(_recorded, fn), points))
+        outcomes = dict(ProcessPoolCaseExecutor(n).map_unordered(functools.partial(_recorded, fn),
+                                                                 list(enumerate(points))))
+        for outcome in outcomes.values():
+            if isinstance(outcome, BaseException):
+                raise outcome
+        done = [outcomes[i] for i in range(len(points))]
     _report([w for _, caught in done for w in caught], len(points))
     return [result for result, _ in done]
 

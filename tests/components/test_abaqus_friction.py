@@ -131,3 +131,12 @@ def test_given_beta_levels_are_written_as_they_are_and_the_accuracy_they_leave_i
     deviation = (np.abs(fe - mu) / mu).max()
     assert 0.005 < deviation <= stated, "four levels leave mu's curvature in beta: above the target, as stated"
     assert "** WARNING: the FE code's reading of this file deviates" in text
+
+
+def test_several_debris_states_get_their_own_abaqus_interaction_names(law, tmp_path):
+    states = tuple(DebrisState(b, f"beta{b:g}", f"beta = {b}", {"beta": b, "how": "given"}) for b in (0.05, 0.1))
+    run_export(law, ExportRequest("abaqus", tmp_path / "friction.inp", states, UNIT_SYSTEMS["mm-t-s"]))
+    names = [line for f in sorted(tmp_path.iterdir()) for line in f.read_text().splitlines()
+             if line.startswith("*SURFACE INTERACTION")]
+    assert names == ["*SURFACE INTERACTION, NAME=TRIBOCOSIM_FRICTION_BETA0_05",
+                     "*SURFACE INTERACTION, NAME=TRIBOCOSIM_FRICTION_BETA0_1"]

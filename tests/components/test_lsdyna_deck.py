@@ -153,3 +153,17 @@ def test_the_band_files_share_ids_and_nodes_and_bracket_the_nominal_law(law, tmp
     # the upper file at its nodes: mu + 2 se(mu), the law's band
     p, (_, v, m) = upper[1][2], upper[2][2]
     np.testing.assert_allclose(m, law.band(p * 1e6, v * 1e-3, 0.1, 2.0)[0], rtol=1e-12)
+
+
+def test_several_debris_states_can_share_one_deck(law, tmp_path):
+    """Two --beta states: each file's table and curves take ids of their own (PyDyna reads each file's table with its
+    curves), so both files can be included in one deck, and each state's band files share its ids."""
+    states = tuple(DebrisState(b, f"beta{b:g}", f"beta = {b}", {"beta": b, "how": "given"}) for b in (0.05, 0.1))
+    run_export(law, ExportRequest("lsdyna", tmp_path / "friction.k", states, UNIT_SYSTEMS["mm-t-s"], band=2.0))
+    ids = {}
+    for b in ("0.05", "0.1"):
+        tbid, _, curves = _read(tmp_path / f"friction.beta{b}.k")
+        ids[b] = {tbid, *(c[0] for c in curves)}
+        assert _read(tmp_path / f"friction.beta{b}.upper.k")[0] == tbid  # the band shares the state's ids
+    assert not ids["0.05"] & ids["0.1"] and min(ids["0.05"]) == 9_450_000
+

@@ -282,3 +282,13 @@ def test_a_missing_unknown_or_non_number_input_is_refused_with_the_state_unchang
     with pytest.raises(ParameterError, match="'speed', not an input"):
         model.step(1e-3, {"normal_force": 100.0, "grip_velocity": 0.08}, derivatives={"speed": (0.0, 0.0)})
     assert model.step(1e-3, {"normal_force": np.float64(100.0), "grip_velocity": np.int64(0)})["pull_force"] >= 0
+
+
+@pytest.mark.parametrize("dt", ["1e-3", None, True, [1e-3]])
+def test_a_step_length_that_is_not_a_number_is_refused_with_the_state_unchanged(dt):
+    model = _model(draw_length=0.01, n_elements=50, friction_model="constant")
+    _drive(model, 0.003, 1e-3)
+    before = model.get_state()
+    with pytest.raises(ParameterError, match=r"dt = .* is not a number; allowed: a real number of seconds > 0"):
+        model.step(dt, {"normal_force": 100.0, "grip_velocity": 0.08})
+    assert np.array_equal(model.get_state(), before)

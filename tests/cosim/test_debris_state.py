@@ -68,3 +68,10 @@ def test_given_betas_and_the_beta_axis(law):
 def test_a_bad_choice_names_the_option(law, choice, message):
     with pytest.raises(ParameterError, match=message):
         debris_states(choice, law, MM)
+
+
+def test_a_debris_choice_takes_one_value_or_a_sequence():
+    from tribocosim.cosim.apps.debris_state import DebrisChoice
+
+    assert DebrisChoice(beta=0.1).beta == (0.1,) and DebrisChoice(beta=[0.0, 0.1]).beta == (0.0, 0.1)
+    assert DebrisChoice(passes=3).passes == (3,) and DebrisChoice(beta="0.2").beta == ("0.2",)

@@ -56,6 +56,11 @@ BAD = [
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--option", "nope"], "--option 'nope' is not a multi-pass option"),
     (["lsdyna", "--beta", "0.1"], "the following arguments are required: -o/--out"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--table", "nowhere.npz"], "friction table file not found"),
+    (["abaqus", "-o", "f.inp", "--beta-levels", "0", "0.5", "0.1"],
+     "lookups in the exported range read friction-table nodes the mesoscale campaign did not simulate"),
+    (["table", "-o", "f.json", "--beta-levels", "0", "0.5", "0.1"], "the beta axis (--beta-levels 0 0.5 0.1): "),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--set", "mu0=abc"], "--set mu0=abc: 'abc' is not a number"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--set", "mu0"], "--set 'mu0': expected NAME=VALUE"),
 ]
 
 

@@ -169,3 +169,21 @@ def test_an_fmu_path_that_is_a_folder_is_named_as_such(tmp_path, osc_scene, fmu_
     err = capsys.readouterr().err
     assert (f"fmus.a.path: {tmp_path / 'extracted.fmu'} is a folder, not an FMU file: give the .fmu file (the zip "
             "archive of an FMU's folder)") in err, err
+
+
+def test_run_says_the_strips_mu_bar_as_the_demo_does(tmp_path, capsys):
+    """``tribocosim run demo --set ...`` prints mu_bar, the mean of pull_force / (2 normal_force) (Eq. 1) over the last
+    20 % of the run, of the results it wrote (the press's normal force, which the strip's input reads)."""
+    import numpy as np
+
+    from tribocosim.cosim.apps.run_cli import main as run_main
+
+    assert run_main(["demo", "--out", str(tmp_path), "--quiet"]) == 0
+    assert "mu_bar" not in capsys.readouterr().out  # --quiet says nothing
+    assert run_main(["demo", "--out", str(tmp_path), "--set", "fmus.strip.parameters.flake_shear_ratio=0"]) == 0
+    line = [x for x in capsys.readouterr().out.splitlines() if x.startswith("mu_bar:")]
+    data = np.genfromtxt(tmp_path / "demo.csv", delimiter=",", names=True)
+    t = data["time"]
+    sel = (t >= t[-1] - 0.2 * (t[-1] - t[0]) - 1e-12) & (data["pressnormal_force"] > 0)
+    want = np.mean(data["strippull_force"][sel] / (2 * data["pressnormal_force"][sel]))
+    assert len(line) == 1 and line[0].split()[1] == f"{want:.4f}", line

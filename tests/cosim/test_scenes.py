@@ -468,3 +468,23 @@ def test_a_relative_table_file_is_found_beside_the_scene_then_among_the_packaged
     message = str(info.value.problems[0])
     assert "fmus.strip.parameters.table_file: file 'missing.npz' not found" in message
     assert str(tmp_path / "missing.npz") in message and str(MODELS_DIR / "missing.npz") in message
+
+
+def test_results_and_sweeps_carry_the_units_the_fmus_declare(demo_run):
+    """The plots label axes and legends with units: a run records each column's unit from its FMU's model description,
+    and a sweep its variables set as they are to one parameter and its summaries of one recorded variable (the
+    pressure sweep: the pad length in m; mu_bar, an expression of two outputs, none)."""
+    from tribocosim.cosim.apps.scene_sweep import column_units
+    from tribocosim.cosim.studies.plotting import labelled
+    from tribocosim.paths import scene_file
+
+    units = demo_run.metadata["outputs"]["units"]
+    assert units["time"] == "s" and units["strip.pull_force"] == "N" and units["drive.grip_velocity"] == "m/s"
+    assert labelled("strip.pull_force", "N") == "strip.pull_force [N]" and labelled("strip.mu_mean", "1") == \
+        "strip.mu_mean"
+    sweep = load_sweep(scene_file("pressure_sweep"))
+    case = sweep.cases()[0]
+    plan = load_scene(sweep.scene, case.overrides)
+    got = column_units(sweep, plan)
+    assert got["tool_length"] == "m" and "mu_bar" not in got and "pressure_mpa" not in got, got
+    assert got["beta_end"] == units["strip.beta_mean"]

@@ -78,3 +78,16 @@ def test_the_librarys_sources_are_the_components_model_sources():
     on_disk = {f"{p.parent.name}/{p.name}" for folder in ("core", "resource_io")
                for p in (compiler.NATIVE_DIR / folder).glob("*.c")}
     assert on_disk == set(library.sources()), "every model source is declared by a component (no orphan file)"
+
+
+def test_the_binding_reads_the_cores_indices_from_its_header():
+    """The strip-draw binding's output order, nodal and info indices and refusal kinds are the header's enums: the
+    outputs in the component's declared order (the FMU's too), a C enum's implicit values counted as C counts them."""
+    from tribocosim.components.native.toolchain.prototypes import enums
+    from tribocosim.components.stripdraw import model
+    from tribocosim.components.stripdraw.ports import OUTPUTS
+
+    assert enums("enum e { A = 3, B, /* c */ C = 0x10, D };") == {"e": {"A": 3, "B": 4, "C": 16, "D": 17}}
+    assert model.OUTPUT_NAMES == tuple(o.name for o in OUTPUTS)
+    assert sorted(model._NODAL.values()) == list(range(len(model._NODAL)))
+    assert sorted(model._INFO.values()) == list(range(len(model._INFO)))

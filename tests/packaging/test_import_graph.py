@@ -24,7 +24,8 @@ ROOT = Path(__file__).resolve().parents[2]
 #: the layers, lowest first: a module imports only from its own layer and the layers below it. The package roots
 #: (``tribocosim``, ``tribocosim.cosim`` and the console script ``tribocosim.cli``) are facades over every layer.
 LAYERS = (
-    ("tribocosim.errors", "tribocosim.interrupt", "tribocosim.lazy", "tribocosim.paths"),
+    ("tribocosim.atomic", "tribocosim.errors", "tribocosim.interrupt", "tribocosim.lazy", "tribocosim.paths",
+     "tribocosim.name_value", "tribocosim.public"),
     ("tribocosim.components", "tribocosim.models"),
     ("tribocosim.surrogate",),
     ("tribocosim.cosim.engine",),

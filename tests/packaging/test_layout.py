@@ -40,7 +40,7 @@ def test_package_data_is_found_through_the_package():
 def test_import_tribocosim_is_lazy_and_offers_the_public_api():
     script = ("import sys, tribocosim\n"
               "loaded = {m for m in sys.modules if m.startswith('tribocosim.')}\n"
-              "assert loaded <= {'tribocosim.lazy'}, sorted(loaded)\n"
+              "assert loaded <= {'tribocosim.lazy', 'tribocosim.public'}, sorted(loaded)\n"
               "print(tribocosim.run.__module__, tribocosim.StripDrawModel.__module__)\n"
               "p = tribocosim.StripDrawParameters(friction_model='closed_form')\n"
               "tribocosim.StripDrawModel(p, tribocosim.make_friction_law(p)).step(1e-3, {'normal_force': 1e4, "
@@ -52,3 +52,25 @@ def test_import_tribocosim_is_lazy_and_offers_the_public_api():
     assert mods == "tribocosim.cosim.apps.scripting tribocosim.components.stripdraw.model"
     assert numba == "False", "the model is the native core: no numba"
     assert set(tribocosim.__all__) >= {"run", "StripDrawModel", "StripDrawParameters", "read_table", "FrictionTable"}
+
+
+def test_the_readme_example_runs_beside_a_clone_named_tribocosim(tmp_path):
+    """From the folder that holds a clone named ``tribocosim``, Python imports the clone's folder as the package (the
+    current directory comes first on sys.path): the repository's __init__.py makes it the package the clone holds, so
+    the README's strip-draw example runs there on the clone's own code."""
+    clone = tmp_path / "tribocosim"
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True, timeout=120)
+    for name in ("__init__.py", "tribocosim/__init__.py", "tribocosim/public.py"):  # this tree's, committed or not
+        (clone / name).write_text((ROOT / name).read_text())
+    script = ("import tribocosim\n"
+              "from tribocosim import DEFAULT_TABLE, StripDrawModel, StripDrawParameters, make_friction_law, read_table\n"
+              "p = StripDrawParameters()\n"
+              "model = StripDrawModel(p, make_friction_law(p, read_table(DEFAULT_TABLE)))\n"
+              "out = model.step(1e-3, {'normal_force': 12250.0, 'grip_velocity': 0.008})\n"
+              "import tribocosim.components.stripdraw.model as m\n"
+              "print(tribocosim.__file__, DEFAULT_TABLE, m.__file__, out['pull_force'] > 0)\n")
+    out = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    init, table, model, pulled = out.stdout.split()
+    assert init == str(clone / "__init__.py") and table == str(clone / "models" / "friction_table.npz")
+    assert model == str(clone / "components" / "stripdraw" / "model.py") and pulled == "True"

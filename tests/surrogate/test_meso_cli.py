@@ -130,7 +130,7 @@ def test_output_folders_and_os_errors_are_named_as_given(tmp_path, capsys):
     config.write_text("n = 16\nsize = 64e-6\nwavelength_ratio = 0.25\nn_flakes = 1\nn_slide_steps = 2\n")
     blocker = tmp_path / "results"
     blocker.write_text("")
-    assert meso_cli.main(["slide", "--config", str(config), "--out", str(blocker), "--quiet"]) == 1
+    assert meso_cli.main(["slide", "--config", str(config), "--out", str(blocker), "--quiet"]) == 2
     assert f"--out {blocker} is a file" in capsys.readouterr().err
     if Path("/proc").is_dir():
         assert meso_cli.main(["slide", "--config", str(config), "--out", "/proc/slide", "--quiet"]) == 2

@@ -49,7 +49,7 @@ def test_config_from_toml_and_unknown_keys(tmp_path):
 def test_cli_reports_bad_config_without_traceback(tmp_path, capsys):
     f = tmp_path / "run.toml"
     f.write_text("v0 = -3.0\n")
-    assert slide_cli.main(["--config", str(f), "--out", str(tmp_path / "o")]) == 1
+    assert slide_cli.main(["--config", str(f), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "v0 = -3.0" in err and "out of range" in err
     assert not (tmp_path / "o").exists(), "nothing is written for a failed run"

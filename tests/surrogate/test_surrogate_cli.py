@@ -71,17 +71,17 @@ def test_show_refuses_a_modified_table(built, tmp_path, capsys):
         arrays = {k: z[k] for k in z.files}
     arrays["mu"] = arrays["mu"] * 1.01
     np.savez(tmp_path / "bad.npz", **arrays)
-    assert surrogate_cli.main(["show", str(tmp_path / "bad.npz"), "--no-plot"]) == 1
+    assert surrogate_cli.main(["show", str(tmp_path / "bad.npz"), "--no-plot"]) == 2
     assert "fails its content hash check" in capsys.readouterr().err
 
 
 def test_bad_sweep_and_usage_errors(tmp_path, capsys):
     f = tmp_path / "s.toml"
     f.write_text(TINY.replace("seeds = [1, 2, 3]", "seeds = [1, 2, 3]\nbetas = [0.1]"))
-    assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o")]) == 1
+    assert surrogate_cli.main(["build", "--sweep", str(f), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert f"sweep file {f}, line 7: [grid] betas: unknown key 'betas'" in err
-    assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 1
+    assert surrogate_cli.main(["build", "--preset", "nope", "--out", str(tmp_path / "o")]) == 2
     shipped = ['cluster_sizes', 'domain_128um', 'domain_512um', 'first', 'paper', 'quick']
     assert f"preset = 'nope' is not known; available: {shipped}" in capsys.readouterr().err
     assert surrogate_cli.main(["frobnicate"]) == 2
@@ -232,7 +232,7 @@ def test_show_writes_its_plot_beside_the_table_or_into_out(built, tmp_path, caps
 
 def test_show_of_a_text_file_says_it_is_not_a_table(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("P [MPa], mu\n10, 0.12\n")
-    assert surrogate_cli.main(["show", str(tmp_path / "notes.txt")]) == 1
+    assert surrogate_cli.main(["show", str(tmp_path / "notes.txt")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "notes.txt is not a friction table: a text file" in err, err
 

@@ -6,6 +6,8 @@
  * - sink (debris_sink_length lambda > 0: lateral ejection or compaction into a transfer layer): source and sink are one
  *   local equation per unit slide s under the pad, d beta / ds = q - beta / lambda (q = K P / (H h_p)), integrated
  *   exactly over the interval's slide s_i = w_i |dU_i|: beta_i e^(-s_i/lambda) + q lambda (1 - e^(-s_i/lambda));
+ *   source and sink of a node are tc_debris_source and tc_debris_sunk (tc_debris_node.h), the formula a forming code's contact point
+ *   evaluates too (tc_node_friction.c);
  * - transport (Eq. 13-14): implicit upwind advection with the tool-carried flux -zeta u beta (u = face velocity)
  *   between nodes that are both under the pad: a tridiagonal M-matrix with unit column sums, so beta >= 0 and
  *   sum(beta) is conserved for any step;
@@ -18,6 +20,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "tc_debris_node.h"
 #include "tc_friction.h"
 #include "tc_kernels.h"
 #include "tc_stripdraw_model.h"
@@ -99,12 +102,10 @@ void tc_sd_debris_interval(struct tc_stripdraw *m, double pressure, double speed
         for (size_t i = t0; i <= t1; ++i) {
             m->weight[i] = 0.5 * (w0[i] + m->w[i]);
             const double slide = m->weight[i] * fabs(m->dU[i]); /* s of the interval under the pad */
-            const double src = m->weight[i] == 0.0 ? 0.0 : kp * fabs(m->dU[i]) * m->weight[i] / hh;
+            const double src = tc_debris_source(fabs(m->dU[i]), m->weight[i], kp, hh);
             m->bsrc[i] = m->beta[i] + src;
             if (lambda > 0 && slide > 0) {
-                /* d beta / ds = q - beta / lambda (q = src / slide) integrated exactly over the slide */
-                const double decay = exp(-slide / lambda);
-                const double b = m->beta[i] * decay + (src == 0.0 ? 0.0 : src / slide * lambda * -expm1(-slide / lambda));
+                const double b = tc_debris_sunk(m->beta + i, src, slide, lambda);
                 sunk += m->bsrc[i] - b;
                 m->bsrc[i] = b;
             }

@@ -75,14 +75,15 @@ static void contact_area(const tc_stripdraw_params *p, const tc_table *table, do
 /* The cap of a version 4 table at (P, v): the first beta where s times the interpolated share reaches 1 (mesoscale)
  * or s times the interpolated A_p reaches A_c of Eq. 8, limited to 1; 1 when it never does. */
 static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity,
-                             tc_table_rows *rows) {
+                             double limit, tc_table_rows *rows) {
     const int eq8 = p->contact_area == TC_STRIPDRAW_CONTACT_AREA_EQ8;
     const double level = eq8 ? eq8_area(p, pressure) : 1.0, s = p->particle_area_scale;
     if (!(s > 0)) return 1.0;
     double y[TC_TABLE_BETA_MAX], dl[TC_TABLE_BETA_MAX], dr[TC_TABLE_BETA_MAX], at;
     (void)tc_table_beta_line(table, eq8 ? particle_area(p, table) : particle_share(p, table), pressure, velocity, y,
                              dl, dr, rows, NO_MSG);
-    if (!tc_table_first_crossing(table->n_beta, table->beta, y, dl, dr, level / s * (1.0 - TC_REACH_RTOL), &at))
+    if (!tc_table_first_crossing_below(table->n_beta, table->beta, y, dl, dr, level / s * (1.0 - TC_REACH_RTOL), limit,
+                                       &at))
         return 1.0;
     return fmin(1.0, at);
 }
@@ -90,7 +91,8 @@ static double crossing_cubic(const tc_stripdraw_params *p, const tc_table *table
 /* where s A_p reaches A_c along the table's beta axis at (P, v), limited to 1; 1 when it never does */
 static double crossing(const tc_stripdraw_params *p, const tc_table *table, double pressure, double velocity,
                        tc_table_rows *rows) {
-    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC) return crossing_cubic(p, table, pressure, velocity, rows);
+    if (table->interpolation == TC_TABLE_MONOTONE_CUBIC)
+        return crossing_cubic(p, table, pressure, velocity, HUGE_VAL, rows);
     const double *b = table->beta;
     double d_prev = 0.0;
     for (size_t k = 0; k < table->n_beta; ++k) {
@@ -137,6 +139,15 @@ double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, doub
                        tc_table_rows *rows) {
     if (with_areas(p, table) && pressure > 0) return crossing(p, table, pressure, fabs(speed), rows);
     return tc_law_beta_threshold(p, table);
+}
+
+double tc_law_beta_capped(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed,
+                          double beta, tc_table_rows *rows) {
+    /* the cap's search stops at beta: a crossing above it does not cap (first_crossing in tc_table_lookup.c) */
+    const double cap = with_areas(p, table) && pressure > 0 && table->interpolation == TC_TABLE_MONOTONE_CUBIC
+                           ? crossing_cubic(p, table, pressure, fabs(speed), beta, rows)
+                           : tc_law_beta_cap(p, table, pressure, speed, rows);
+    return beta > cap ? cap : beta;
 }
 
 /* max(0, x), and 0 for a NaN x (as fmax(0, x)), in a compare the loops vectorise */

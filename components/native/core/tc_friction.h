@@ -51,6 +51,10 @@ TC_API int tc_law_mu(const tc_stripdraw_params *p, const tc_table *table, double
 TC_API double tc_law_beta_threshold(const tc_stripdraw_params *p, const tc_table *table);
 TC_API double tc_law_beta_cap(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed,
                               tc_table_rows *rows);
+/* min(beta, tc_law_beta_cap(p, table, pressure, speed, rows)) for a beta <= 1, the same number, without the search
+ * for a cap above beta (a point's debris update: tc_node_friction.c). */
+TC_API double tc_law_beta_capped(const tc_stripdraw_params *p, const tc_table *table, double pressure, double speed,
+                                 double beta, tc_table_rows *rows);
 
 /* alpha(v) of Eq. 23 (closed form). */
 TC_API double tc_law_alpha(const tc_stripdraw_params *p, double velocity);

@@ -33,7 +33,7 @@ void tc_table_cubic_free(tc_table_cubic *cubic) {
 
 /* The monotone cubic form of values on a table's axes with ln P = logp and the kinds of the table's nodes (a
  * node is unsimulated where table->unsimulated is not 0; every node one kind without it): tc_table_cubic. */
-static int cubic_form(const tc_table *t, const double *logp, const double *values, tc_table_cubic *c, tc_msg msg) {
+static int build_cubic_form(const tc_table *t, const double *logp, const double *values, tc_table_cubic *c, tc_msg msg) {
     const size_t nP = t->n_pressure, nv = t->n_velocity, nb = t->n_beta, plane = nv * nb, n = nP * plane;
     const size_t pieces = (nP - 1) * plane;
     const double *u = t->unsimulated;
@@ -72,7 +72,7 @@ int tc_table_cubic_make(const tc_table *table, const double *values, tc_table_cu
     if (table->log_pressure == NULL)
         return tc_fail(msg, TC_ERROR, "the monotone cubic form is that of a version 4 table; this table is version %d",
                        table->format_version);
-    return cubic_form(table, table->log_pressure, values, cubic, msg);
+    return build_cubic_form(table, table->log_pressure, values, cubic, msg);
 }
 
 const tc_table_cubic *tc_table_cubic_of(const tc_table *table, const double *values) {
@@ -216,7 +216,7 @@ int tc_table_set_cubic(tc_table *table, tc_msg msg) {
     const double *arrays[TC_TABLE_N_CUBIC] = {share, clusters, table->particle_area, table->particle_area_clusters};
     tc_table_cubic forms[TC_TABLE_N_CUBIC] = {{0}};
     for (int k = 0; k < TC_TABLE_N_CUBIC; ++k) {
-        const int rc = cubic_form(table, logp, arrays[k], &forms[k], msg);
+        const int rc = build_cubic_form(table, logp, arrays[k], &forms[k], msg);
         if (rc != TC_OK) {
             for (int j = 0; j < k; ++j) tc_table_cubic_free(&forms[j]);
             free(logp);
@@ -238,4 +238,37 @@ int tc_table_set_cubic(tc_table *table, tc_msg msg) {
     table->interpolation = TC_TABLE_MONOTONE_CUBIC;
     table->format_version = 4;
     return TC_OK;
+}
+
+const double *tc_table_part(const tc_table *table, int which, size_t *n) {
+    const size_t nP = table->n_pressure, plane = table->n_velocity * table->n_beta, all = nP * plane;
+    const size_t pieces = (nP - 1) * plane;
+    if (which >= TC_TABLE_PART_CUBIC && which < TC_TABLE_PART_CUBIC + 6 * TC_TABLE_N_CUBIC) {
+        const tc_table_cubic *c = &table->cubic[(which - TC_TABLE_PART_CUBIC) / 6];
+        const int k = (which - TC_TABLE_PART_CUBIC) % 6;
+        const double *parts[6] = {c->values, c->beta_slope, c->value_piece[0], c->value_piece[1], c->slope_piece[0],
+                                  c->slope_piece[1]};
+        *n = k < 2 ? all : pieces;
+        return parts[k];
+    }
+    const double *arrays[TC_TABLE_PART_CUBIC] = {
+        table->pressure, table->velocity, table->beta, table->mu, table->contact_area, table->particle_area,
+        table->contact_area_std, table->particle_area_std, table->unsimulated, table->particle_area_clusters,
+        table->log_pressure, table->share, table->share_clusters};
+    if (which < 0 || which >= TC_TABLE_PART_CUBIC) {
+        *n = 0;
+        return NULL;
+    }
+    *n = which == TC_TABLE_PART_PRESSURE || which == TC_TABLE_PART_LOG_PRESSURE ? nP
+         : which == TC_TABLE_PART_VELOCITY                                     ? table->n_velocity
+         : which == TC_TABLE_PART_BETA                                         ? table->n_beta
+                                                                               : all;
+    return arrays[which];
+}
+
+void tc_table_scalars(const tc_table *table, double out[TC_TABLE_N_SCALARS]) {
+    const double values[TC_TABLE_N_SCALARS] = {
+        table->pressure_lo, table->pressure_hi, table->velocity_lo, table->velocity_hi, table->beta_lo,
+        table->beta_hi, table->beta_threshold, (double)table->format_version, (double)table->interpolation};
+    for (int k = 0; k < TC_TABLE_N_SCALARS; ++k) out[k] = values[k];
 }

@@ -106,4 +106,21 @@ void tc_table_cubic_free(tc_table_cubic *cubic);
 
 TC_API void tc_table_free(tc_table *table);
 
+/* The arrays of a table, for a writer that embeds it as constant data (the user friction routines:
+ * components/friction_export/table_source.py): the members named in enum tc_table_part, and of form k of tc_table_cubic
+ * (k < TC_TABLE_N_CUBIC, in the order of cubic[]) TC_TABLE_PART_CUBIC + 6 k + (0 values, 1 beta_slope,
+ * 2 value_piece[0], 3 value_piece[1], 4 slope_piece[0], 5 slope_piece[1]). Returns the array (NULL where the table has
+ * none) and its length in *n. */
+enum tc_table_part {
+    TC_TABLE_PART_PRESSURE = 0, TC_TABLE_PART_VELOCITY, TC_TABLE_PART_BETA, TC_TABLE_PART_MU,
+    TC_TABLE_PART_CONTACT_AREA, TC_TABLE_PART_PARTICLE_AREA, TC_TABLE_PART_CONTACT_AREA_STD,
+    TC_TABLE_PART_PARTICLE_AREA_STD, TC_TABLE_PART_UNSIMULATED, TC_TABLE_PART_PARTICLE_AREA_CLUSTERS,
+    TC_TABLE_PART_LOG_PRESSURE, TC_TABLE_PART_SHARE, TC_TABLE_PART_SHARE_CLUSTERS, TC_TABLE_PART_CUBIC
+};
+TC_API const double *tc_table_part(const tc_table *table, int which, size_t *n);
+/* The scalars of a table beside its sizes, in this order: pressure_lo, pressure_hi, velocity_lo, velocity_hi, beta_lo,
+ * beta_hi, beta_threshold, format_version, interpolation. */
+#define TC_TABLE_N_SCALARS 9
+TC_API void tc_table_scalars(const tc_table *table, double out[TC_TABLE_N_SCALARS]);
+
 #endif

@@ -110,6 +110,17 @@ static void locate_pressure(const tc_table *t, double q, size_t *i, double *tp) 
     locate(t->log_pressure, n, log(qc), i, tp);
 }
 
+/* the pressure's cell, from rows made at this pressure when they are (locate_pressure's cell for it: the rows keep the
+ * cell they were made at) */
+static void pressure_cell(const tc_table *t, double q, const tc_table_rows *rows, size_t *i, double *tp) {
+    if (rows != NULL && rows->filled > 0 && rows->table == t && rows->pressure == q) {
+        *i = rows->ip;
+        *tp = rows->tp;
+        return;
+    }
+    locate_pressure(t, q, i, tp);
+}
+
 static int domain_error(const char *name, const char *unit, double bad, const double *axis, size_t n, tc_msg msg) {
     char r[TC_REPR_SIZE], a[TC_REPR_SIZE], b[TC_REPR_SIZE];
     return tc_fail(msg, TC_DISCARD, "friction table lookup %s = %s %s is outside the table's range [%s, %s] %s (by "
@@ -414,7 +425,7 @@ int tc_table_lookup2(const tc_table *table, const double *values, const double *
     }
     size_t ip;
     double tp;
-    locate_pressure(table, pressure, &ip, &tp);
+    pressure_cell(table, pressure, rows, &ip, &tp);
     if (table->interpolation != TC_TABLE_MONOTONE_CUBIC) {
         multilinear_lookup(table, values, values_b, ip, tp, outp, n, velocity, beta, out, out_b, clamped);
         return TC_OK;
@@ -483,7 +494,7 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
     tc_table_rows local;
     tc_table_rows *r = rows != NULL && c != &temp ? rows : &local;
     if (r == &local) local.filled = 0;
-    locate_pressure(table, pressure, &ip, &tp);
+    pressure_cell(table, pressure, r, &ip, &tp);
     locate(table->velocity, nv, fabs(velocity), &iv, &tv);
     rows_at(table, c, pressure, ip, tp, iv, tv != 0.0 ? 2 : 1, r);
     rows_line(table, r, tv); /* the line the lookups at this velocity evaluate */
@@ -500,14 +511,16 @@ int tc_table_beta_line(const tc_table *table, const double *values, double press
 /* the cubic c0 + c1 t + c2 t^2 + c3 t^3 */
 static double cubic(const double c[4], double t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }
 
-int tc_table_first_crossing(size_t n, const double *x, const double *y, const double *dl, const double *dr,
-                            double level, double *at) {
+/* tc_table_first_crossing over the pieces that start at or below limit: a crossing in a later piece lies above limit
+ * (the bisection stays in its part), so min(limit, the first crossing) is the same with or without the pieces left */
+static int first_crossing(size_t n, const double *x, const double *y, const double *dl, const double *dr, double level,
+                          double limit, double *at) {
     if (n == 0) return 0;
     if (y[0] >= level) {
         *at = x[0];
         return 1;
     }
-    for (size_t k = 0; k + 1 < n; ++k) {
+    for (size_t k = 0; k + 1 < n && !(x[k] > limit); ++k) {
         const double h = x[k + 1] - x[k], dy = y[k + 1] - y[k];
         /* the piece in t = (x - x_k) / h: p(0) = y_k, p(1) = y_k+1, p'(0) = h dl, p'(1) = h dr */
         const double c[4] = {y[k], h * dl[k], 3.0 * dy - h * (2.0 * dl[k] + dr[k]), -2.0 * dy + h * (dl[k] + dr[k])};
@@ -555,4 +568,14 @@ int tc_table_first_crossing(size_t n, const double *x, const double *y, const do
         }
     }
     return 0;
+}
+
+int tc_table_first_crossing(size_t n, const double *x, const double *y, const double *dl, const double *dr,
+                            double level, double *at) {
+    return first_crossing(n, x, y, dl, dr, level, HUGE_VAL, at);
+}
+
+int tc_table_first_crossing_below(size_t n, const double *x, const double *y, const double *dl, const double *dr,
+                                  double level, double limit, double *at) {
+    return first_crossing(n, x, y, dl, dr, level, limit, at);
 }

@@ -88,5 +88,10 @@ TC_API int tc_table_beta_line(const tc_table *table, const double *values, doubl
  * crossing is found even where the line is not monotone. */
 TC_API int tc_table_first_crossing(size_t n, const double *x, const double *y, const double *dl, const double *dr,
                                    double level, double *at);
+/* The same search over the pieces that start at or below limit only: where the first crossing is at or below limit it
+ * is found as tc_table_first_crossing finds it; otherwise 0, or a crossing above limit (so that min(limit, *at) is
+ * min(limit, the first crossing) either way). */
+TC_API int tc_table_first_crossing_below(size_t n, const double *x, const double *y, const double *dl, const double *dr,
+                                         double level, double limit, double *at);
 
 #endif

@@ -59,11 +59,9 @@ def encode(entries: dict) -> bytes:
 
 def write_arrays(path: str | os.PathLike, entries: dict) -> Path:
     """Write an array file atomically (a temporary file renamed into place)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    tmp.write_bytes(encode(entries))
-    os.replace(tmp, path)
-    return path
+    from tribocosim.atomic import write_bytes
+
+    return write_bytes(path, encode(entries))
 
 
 def read_arrays(path: str | os.PathLike) -> dict:

@@ -72,14 +72,11 @@ def memo(key: str, files: Iterable[Path], compute: Callable[[], object]) -> obje
     digest = compute()
     if signature(files) != sig:  # a file changed while it was read: do not store what may mix two versions
         return digest
-    import tempfile
+    from tribocosim.atomic import write_text
 
     try:
         record.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".digest-", dir=record.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump({"key": key, "files": sig, "digest": digest}, f)
-        os.replace(tmp, record)
+        write_text(record, json.dumps({"key": key, "files": sig, "digest": digest}))
     except OSError:  # a cache that cannot be written costs time, not results
         pass
     return digest

@@ -24,6 +24,7 @@ import os
 import sys
 from pathlib import Path
 
+from tribocosim.atomic import replaced
 from tribocosim.errors import ParameterError, TribocosimError
 
 #: the C sources of the core library beside the components' model sources: the helpers every model uses
@@ -171,15 +172,14 @@ def build(output: str | os.PathLike, defines=()) -> Path:
     platform = "win64" if sys.platform.startswith("win") else "darwin64" if sys.platform == "darwin" else "linux64"
     out = Path(output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="tribocosim-core-", dir=out.parent) as tmp:
+    with tempfile.TemporaryDirectory(prefix="tribocosim-core-", dir=out.parent) as tmp, \
+            replaced(out, out.suffix) as partial:
         _headers(Path(tmp))
-        partial = Path(tmp) / out.name
         try:
             compiler.compile_shared(list(map(compiler.source, sources())), partial, platform,
                                      defines=["TC_EXPORT_CORE", *defines], include_dirs=[tmp])
         except compiler.CompileError as exc:
             raise CoreBuildError(f"the native core library cannot be built: {exc}") from exc
-        os.replace(partial, out)
     return out
 
 

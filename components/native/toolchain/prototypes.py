@@ -81,6 +81,27 @@ def parse(text: str, header: str = "<text>") -> list[Prototype]:
     return found
 
 
+#: an enum with a tag: its name and the body of its members
+_ENUM = re.compile(r"\benum\s+(?P<name>\w+)\s*\{(?P<body>[^}]*)\}", re.S)
+
+
+def enums(text: str) -> dict[str, dict[str, int]]:
+    """The tagged enums of a header's text: ``{tag: {member: value}}``, values as C assigns them (an explicit integer,
+    else one more than the member before, 0 for the first)."""
+    out = {}
+    for m in _ENUM.finditer(code(text)):
+        members, value = {}, -1
+        for item in m.group("body").split(","):
+            item = item.strip()
+            if not item:
+                continue
+            name, eq, given = (x.strip() for x in item.partition("="))
+            value = int(given, 0) if eq else value + 1
+            members[name] = value
+        out[m.group("name")] = members
+    return out
+
+
 def exported(headers) -> dict[str, Prototype]:
     """Every TC_API prototype of the given header files by function name (a name declared twice is an error)."""
     out: dict[str, Prototype] = {}
