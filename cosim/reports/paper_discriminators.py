@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tribocosim.cosim.reports.paper_physics import CAL_PAD, LOW_PRESSURE, OPTIONS
+from tribocosim.cosim.reports.paper_physics import CAL_PAD, OPTIONS
 from tribocosim.cosim.studies.stripdraw_experiment import START_LENGTH, Point
 
 #: the pressures of the drop curves [MPa] (each against 1 MPa on the same pass)

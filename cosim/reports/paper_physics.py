@@ -7,7 +7,7 @@ calibrated the same way as the report's main columns: the scale s of A_p solves 
 one-pass drop at 25 MPa on the 35 mm pad (:func:`tribocosim.cosim.reports.paper.calibrate`); everything else is
 predicted.
 
-- Multi-pass options (:data:`OPTIONS`; docs/model.md sections 3-4 and "The floor under debris"): the default model
+- Multi-pass options (:data:`tribocosim.components.stripdraw.multipass_options.OPTIONS`; docs/model.md sections 3-4 and "The floor under debris"): the default model
   (flake-borne shear at the floor the project sets, r = 0.2, no sink, every flake carried into the next pass), the paper's
   model (frictionless flakes, r = 0), the upper end of r's sourced range, and the paper's model with a debris sink
   of length lambda or with half the debris carried into the next pass. None of r, lambda or the carried share is
@@ -45,7 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import TribocosimError
-from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_RANGE, PAPER_MODEL
+from tribocosim.components.stripdraw.friction_floor import PAPER_MODEL
+from tribocosim.components.stripdraw.multipass_options import OPTIONS  # noqa: F401 - the report's options
 from tribocosim.components.stripdraw.table import mu_of_areas
 from tribocosim.cosim.studies.stripdraw_experiment import Point
 
@@ -59,35 +60,6 @@ CAL_PRESSURE, LOW_PRESSURE, CAL_PAD = 25e6, 1e6, 0.035  # the calibration test a
 #: 30 MPa, 0.08 m/s (``tribocosim surrogate build --preset domain_128um`` / ``domain_512um``)
 DOMAIN_TABLES = {"domain_128": "friction_table_128um.npz", "domain_512": "friction_table_512um.npz"}
 FORM_VARIANT = "fitted_rows"  # the table with its rows' fits at the simulated nodes (with_fitted_rows)
-
-
-@dataclasses.dataclass(frozen=True)
-class Option:
-    """A multi-pass option: the strip-draw parameters it changes, and why those values."""
-
-    name: str
-    label: str
-    parameters: dict
-    why: str
-
-
-R_LOW, R_HIGH = FLAKE_SHEAR_RATIO_RANGE
-OPTIONS = (
-    Option("default", f"the default model (r = {R_LOW:g})", {},
-           f"flake-borne shear at the floor the project sets (r mu0 = 0.03 at full coverage: a bound chosen, not "
-           "measured), no sink, every flake carried into the next pass (docs/model.md, the floor under debris)"),
-    Option("paper", "the paper's model (r = 0)", dict(PAPER_MODEL),
-           "frictionless flakes (r = 0), no sink, every flake carried into the next pass"),
-    Option(f"shear_{R_HIGH:g}", f"flake-borne shear r = {R_HIGH:g}", {"flake_shear_ratio": R_HIGH},
-           f"the upper end of r's sourced range: a flake junction that shears like boundary-lubricated aluminium with "
-           f"an additive (mu 0.09, Tabary et al. 1996); r = 1 would remove the debris effect"),
-    Option("sink_140", "the paper's model, debris sink lambda = 140 mm", {**PAPER_MODEL, "debris_sink_length": 0.14},
-           "r = 0; lambda = one draw length: a flake leaves the interface after ~140 mm of sliding under the pad"),
-    Option("sink_35", "the paper's model, debris sink lambda = 35 mm", {**PAPER_MODEL, "debris_sink_length": 0.035},
-           "r = 0; lambda = the pad's width: ejected sideways after sliding about one pad width"),
-    Option("carry_0.5", "the paper's model, half the debris carried over", {**PAPER_MODEL, "debris_carry_over": 0.5},
-           "r = 0; half the debris falls off or is wiped from the strip between passes"),
-)
 
 
 #: the model choice reported beside the budget: the observable, as the parameters that choose the other one

@@ -146,3 +146,17 @@ def test_mu_below_the_documented_floor_is_a_warning_naming_the_setting_and_the_f
         assert least < MU_FLOOR and f"mu = {least:.4g} is below" in line, (least, line)
         assert doc["warnings"] == [line.split(f"{name}: ", 1)[1]]
         assert any("WARNING: the least value: mu =" in h for h in doc["header"]), doc["header"]
+
+
+def test_the_option_help_names_every_multi_pass_option_and_each_is_accepted(tmp_path, capsys):
+    """The --option help lists the options the code defines (one list: multipass_options.OPTIONS), and each name
+    it lists exports."""
+    from tribocosim.components.stripdraw.multipass_options import option_names
+
+    with pytest.raises(SystemExit):
+        main(["table", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    listed = help_text.split("a multi-pass option of the paper report (", 1)[1].split(")", 1)[0]
+    assert [name.strip() for name in listed.split(",")] == list(option_names())
+    for name in option_names():
+        assert main(["table", "-o", str(tmp_path / f"{name}.json"), "--beta", "0.1", "--option", name]) == 0, name
