@@ -435,7 +435,8 @@ def plot(results: dict, out: Path) -> list[str]:
 
 def run_report(out: Path, table_file: str | None = None, quick: bool = False, workers: int | None = None,
                log=None) -> dict:
-    """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv and the figures."""
+    """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv, the figures and
+    readme_results.md (the README's block of the results)."""
     import csv
 
     from tribocosim.errors import ParameterError
@@ -474,6 +475,7 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     calibrated = results[Config("mesoscale", True)]["metrics"]
     text += "\n".join(paper_text.physics_markdown(extra, cals, grid, calibrated, clamps_per_figure(calibrated))) + "\n"
     (out / "paper.md").write_text(text, encoding="utf-8")
+    (out / "readme_results.md").write_text(readme_results(results, cals, grid, extra), encoding="utf-8")
     summary = {
         "mode": "quick" if quick else "full", "wall_time": wall, "table": str(table_path),
         "table_hash": table.metadata.get("content_hash"), "grid": dataclasses.asdict(grid),
@@ -495,6 +497,18 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     }
     (out / "paper.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
     return summary
+
+
+def readme_results(results: dict, cals: dict, grid: Grid, extra: dict) -> str:
+    """The README's block of the results: the paper-vs-model table, what its entries are, the budget in a paragraph."""
+    from tribocosim.cosim.reports.paper_text_predictions import budget_summary
+
+    lines = paper_text.results_table(results, cals, grid)
+    lines += ["", paper_text.table_note(), "",
+              "Uncertainty budget of the default model (each chosen input over the range its evidence gives, s recalibrated "
+              "at every end, each side summed apart; docs/model.md section 8): " + budget_summary(extra["budget"], extra["options"]["default"],
+                                                                          cals["mesoscale"])]
+    return "\n".join(lines) + "\n"
 
 
 def _compute(runs: Runs, base: dict, table, grid: Grid, quick: bool, workers: int | None, log=None) -> tuple:

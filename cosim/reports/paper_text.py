@@ -61,8 +61,8 @@ def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_st
     return float(kappa * CAL_PRESSURE / (rms_slope * e_star) / ac) if ac > 0 else None
 
 
-def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
-    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
+def results_table(results: dict, cals: dict, grid) -> list[str]:
+    """The paper-vs-model table: one column per configuration, entries the floor sets marked "(floor)"."""
     configs = list(results)
     shear = {c: 0.0 if c.paper_model else FLAKE_SHEAR_RATIO_DEFAULT for c in configs}
     values = {c: _row_values(results[c]["metrics"], cals.get(c.key) if c.calibrated else None, grid, shear[c],
@@ -84,20 +84,28 @@ def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: s
         (f"largest beta after {grid.passes} passes at {at} MPa (in any test)", "-", "beta"),
         ("table lookups outside the table's axes or simulated range (clamped)", "-", "clamps"),
     ]
-    lines = [header, "", "| quantity | paper | " + " | ".join(c.label for c in configs) + " |",
-             "|---|---|" + "---|" * len(configs)]
+    lines = ["| quantity | paper | " + " | ".join(c.label for c in configs) + " |", "|---|---|" + "---|" * len(configs)]
     for title, paper, key in rows:
         lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
+    return lines
+
+
+def table_note() -> str:
+    """What the table's entries are: which one is fitted, which the floor sets, which are predicted."""
+    return ("Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the one-pass drop at "
+            "25 MPa is fitted (by s, per column). The columns without the paper's model use the default "
+            f"r = {FLAKE_SHEAR_RATIO_DEFAULT:g}: flake-borne shear at the floor mu = {MU_FLOOR:g} the project sets, a "
+            "bound chosen, not measured (docs/model.md, the floor under debris). An entry marked (floor) is set by "
+            f"that choice, not predicted: its mu_bar at the high pressure lies within {100 * (FLOOR_MARGIN - 1):.0f} % "
+            "of r mu0, where flakes carry the whole contact, so the value is the floor re-expressed (a 3-pass drop at "
+            "most 1 - r mu0 / mu_bar(1 MPa), the report's floor scan). The other entries are predictions.")
+
+
+def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
+    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
+    lines = [header, "", *results_table(results, cals, grid)]
     ratio = table_contact_ratio(table)
-    lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
-              "one-pass drop at 25 MPa is fitted (by s, per column). The columns without the paper's model use the "
-              f"default r = {FLAKE_SHEAR_RATIO_DEFAULT:g}: flake-borne shear at the floor mu = {MU_FLOOR:g} the "
-              "project sets, a bound chosen, not measured (docs/model.md, the floor under debris). An entry marked "
-              f"(floor) is set by that choice, not predicted: its mu_bar at the high pressure lies within "
-              f"{100 * (FLOOR_MARGIN - 1):.0f} % of r mu0, where flakes carry the whole contact, so the value is the "
-              "floor re-expressed (a 3-pass drop at most 1 - r mu0 / mu_bar(1 MPa), the floor scan below). The "
-              "other entries are predictions. "
-              f"The table's beta axis ends at {table.beta[-1]:.4g}."
+    lines += ["", table_note() + f" The table's beta axis ends at {table.beta[-1]:.4g}."
               + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
                  f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
                  if ratio and "eq8" in cals and "mesoscale" in cals else ""), ""]

@@ -24,8 +24,7 @@ def _span(pair, scale: float = 100.0, digits: int = 1) -> str:
 
 def budget_markdown(budget: dict, nominal: dict, cal) -> list[str]:
     """The uncertainty budget: its rows, totals and intervals within the model's bounds, the h_p check."""
-    rows, tot, band, bounds = budget["rows"], budget["total"], budget["intervals"], budget["bounds"]
-    missing = budget["not_varied"]
+    rows, tot, missing = budget["rows"], budget["total"], budget["not_varied"]
     lines = ["", f"## Uncertainty budget (the default model, r = {FLAKE_SHEAR_RATIO_DEFAULT:g}, A_c from the table)", "",
              "Each chosen input varied over the range its evidence gives (docs/model.md section 8; an input not varied "
              "is named in the table, and the totals leave it out), s recalibrated on the 35 % at every end, and each "
@@ -48,18 +47,7 @@ def budget_markdown(budget: dict, nominal: dict, cal) -> list[str]:
     not_in = f", without the {', '.join(m['quantity'] for m in missing)}" if missing else ""
     lines += [f"| **total** (quadrature of each side, with the quote{not_in}) | | **{_span(tot['scale'], 1.0, 3)}** | "
               f"**{_span(tot['drop3'])}** | **{_span(tot['drop140'])}** | **{_span(tot['coverage'], 1.0, 3)}** |", "",
-              f"So s = {cal.scale:.3g} (interval {band['scale'][0]:.3g} to {band['scale'][1]:.3g}), the 3-pass drop "
-              f"{pct(nominal['drops'][2])} (interval {pct(band['drop3'][0])} to {pct(band['drop3'][1])}; the paper: up "
-              f"to 72 %), the 140 mm pad's one-pass drop {pct(nominal['drop_140'])} (interval "
-              f"{pct(band['drop140'][0])} to {pct(band['drop140'][1])}), the coverage after one pass at 25 MPa "
-              f"{nominal['coverage'][0]:.3g} (interval {band['coverage'][0]:.3g} to {band['coverage'][1]:.3g}): the "
-              "value less the downward total to the value plus the upward one, within the model's bounds. A drop is "
-              "at most what the floor allows, 1 - r mu0 / mu_bar(1 MPa) of the same test: "
-              f"{pct(nominal['bound_3'])} after three passes and {pct(nominal['bound_140'])} on the 140 mm pad at the "
-              f"default settings, {pct(bounds['drop3'])} and {pct(bounds['drop140'])} at most over the budget's runs "
-              "(a larger mu0 with the floor held lowers r)"
-              + (f"; the {', '.join(m['quantity'] for m in missing)} is not varied, so these intervals leave "
-                 f"{'it' if len(missing) == 1 else 'them'} out." if missing else "."), ""]
+              "So " + budget_summary(budget, nominal, cal), ""]
     check = budget["thickness_check"]
     if "error" not in check:
         diff = check["largest_difference"]
@@ -68,6 +56,23 @@ def budget_markdown(budget: dict, nominal: dict, cal) -> list[str]:
                   "predictions above " + ("bit for bit the same." if diff == 0 else f"within {diff:.1g} of each other."),
                   ""]
     return lines
+
+
+def budget_summary(budget: dict, nominal: dict, cal) -> str:
+    """The budget in one paragraph: s and each prediction with its interval, within the floor's bounds."""
+    band, bounds, missing = budget["intervals"], budget["bounds"], budget["not_varied"]
+    return (f"s = {cal.scale:.3g} (interval {band['scale'][0]:.3g} to {band['scale'][1]:.3g}), the 3-pass drop "
+            f"{pct(nominal['drops'][2])} (interval {pct(band['drop3'][0])} to {pct(band['drop3'][1])}; the paper: up "
+            f"to 72 %), the 140 mm pad's one-pass drop {pct(nominal['drop_140'])} (interval "
+            f"{pct(band['drop140'][0])} to {pct(band['drop140'][1])}), the coverage after one pass at 25 MPa "
+            f"{nominal['coverage'][0]:.3g} (interval {band['coverage'][0]:.3g} to {band['coverage'][1]:.3g}): the "
+            "value less the downward total to the value plus the upward one, within the model's bounds. A drop is "
+            "at most what the floor allows, 1 - r mu0 / mu_bar(1 MPa) of the same test: "
+            f"{pct(nominal['bound_3'])} after three passes and {pct(nominal['bound_140'])} on the 140 mm pad at the "
+            f"default settings, {pct(bounds['drop3'])} and {pct(bounds['drop140'])} at most over the budget's runs "
+            "(a larger mu0 with the floor held lowers r)"
+            + (f"; the {', '.join(m['quantity'] for m in missing)} is not varied, so these intervals leave "
+               f"{'it' if len(missing) == 1 else 'them'} out." if missing else "."))
 
 
 def floor_scan_markdown(scan: dict) -> list[str]:
