@@ -34,6 +34,7 @@ import argparse
 import shlex
 import sys
 
+from tribocosim.components.stripdraw.multipass_options import option_names
 from tribocosim.errors import TribocosimError
 
 FORMATS = ("lsdyna", "abaqus", "table", "vfriction", "fric", "usrfrc")
@@ -89,8 +90,7 @@ def _parser() -> argparse.ArgumentParser:
                      "written by tribocosim calibrate, or a calibration's JSON file)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a strip-draw parameter")
     p.add_argument("--option", default=None, metavar="NAME", help="a multi-pass option of the paper report "
-                   "(shear_0.25, shear_0.5, sink_140, sink_35, carry_0.5; paper: the defaults): its parameters for the "
-                   "law and the passes; --set overrides them")
+                   f"({', '.join(option_names())}): its parameters for the law and the passes; --set overrides them")
     p.add_argument("--pressure-range", nargs=2, default=None, metavar=("LO", "HI"),
                    help="the pressures to export (default: the table's axis)")
     p.add_argument("--beta-levels", nargs="+", default=None, metavar="B",

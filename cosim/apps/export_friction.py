@@ -64,8 +64,8 @@ def export_friction(format: str, out, state: DebrisChoice | None = None, *, unit
     settings : dict, optional
         Strip-draw parameters (name -> value) on top of the table's or calibration's (and of ``option``'s).
     option : str, optional
-        A multi-pass option of the paper report by name (:data:`tribocosim.cosim.reports.paper_physics.OPTIONS`:
-        ``shear_0.25``, ``sink_35``, ``carry_0.5``, ...): its strip-draw parameters, for the law and the passes.
+        A multi-pass option by name (:data:`tribocosim.components.stripdraw.multipass_options.OPTIONS`:
+        ``shear_0.6``, ``sink_35``, ``carry_0.5``, ...): its strip-draw parameters, for the law and the passes.
     pressure_range : (low, high), optional
         The pressures to export (default: the table's axis), in ``units``.
     beta_levels : sequence, optional
@@ -212,7 +212,7 @@ def multipass_option(name: str | None) -> tuple[dict, tuple]:
     ``({}, ())`` for None; ParameterError naming ``--option`` for another name."""
     if name is None:
         return {}, ()
-    from tribocosim.cosim.reports.paper_physics import OPTIONS
+    from tribocosim.components.stripdraw.multipass_options import OPTIONS
 
     found = {o.name: o for o in OPTIONS}
     if name not in found:

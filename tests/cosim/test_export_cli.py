@@ -195,3 +195,17 @@ def test_the_help_says_the_law_is_calibrated_by_default(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "The law is calibrated by default" in text and "--slide S [S ...]" in text
     assert "paper (the default, without --table and --set particle_area_scale" in text
+
+
+def test_the_option_help_names_every_multi_pass_option_and_each_is_accepted(tmp_path, capsys):
+    """The --option help lists the options the code defines (one list: multipass_options.OPTIONS), and each name
+    it lists exports."""
+    from tribocosim.components.stripdraw.multipass_options import option_names
+
+    with pytest.raises(SystemExit):
+        main(["table", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    listed = help_text.split("a multi-pass option of the paper report (", 1)[1].split(")", 1)[0]
+    assert [name.strip() for name in listed.split(",")] == list(option_names())
+    for name in option_names():
+        assert main(["table", "-o", str(tmp_path / f"{name}.json"), "--beta", "0.1", "--option", name]) == 0, name

@@ -56,7 +56,7 @@ def test_a_calibration_files_band_holds_the_interval_of_its_scale(tmp_path):
 def test_a_multi_pass_option_of_the_paper_report_sets_the_law_and_the_passes(tmp_path):
     """debris_sink_length = 35 mm (the report's sink_35) takes debris out while it slides under the pad: less of it
     after three passes than with the paper's model, and the option is written in the header."""
-    from tribocosim.cosim.reports.paper_physics import OPTIONS
+    from tribocosim.components.stripdraw.multipass_options import OPTIONS
 
     state = tribocosim.DebrisChoice(passes=(3,), pressure=25)
     paper = tribocosim.export_friction("table", tmp_path / "paper.json", state, pressure_range=(10, 30))
