@@ -7,8 +7,8 @@ the largest wall time, the grid and the accuracy the export states. Run it on a 
     python benchmarks/bench_export.py [--repeat 5] [--json bench_export.json]
 
 The cases: LS-DYNA at one beta with the band (three files), Abaqus with beta as field variable 1 (the largest grid),
-the neutral table at one beta, and LS-DYNA at the state after three strip-draw passes (which runs the three passes
-of the 140 mm test first).
+the neutral table at one beta, LS-DYNA at the state after three strip-draw passes (which runs the three passes of the
+140 mm test first), and LS-DYNA at the debris of a 20 mm slide under each pressure.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ CASES = {
     "table, beta 0.1": ["table", "-o", "friction.json", "--beta", "0.1"],
     "lsdyna, after 3 passes at 25 MPa": ["lsdyna", "-o", "friction.k", "--passes", "3", "--pressure", "25",
                                          "--pressure-range", "10", "30"],
+    "lsdyna, slide 20 mm": ["lsdyna", "-o", "friction.k", "--slide", "20"],
 }
 TARGET = 2.0  # s
 

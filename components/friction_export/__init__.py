@@ -4,8 +4,11 @@ An export writes what the runtime evaluates: the table law through the same nati
 sampled finely enough for the target code's own linear interpolation (:mod:`.grid_refinement`), with its provenance
 (table hash, parameters, debris state, units) in its header (:mod:`.export_header`), in the target's format
 (:mod:`.lsdyna_deck`, :mod:`.abaqus_friction`, :mod:`.neutral_table`), all files of an export or none
-(:mod:`.file_set`); :mod:`.export_run` does one export. The command ``tribocosim export`` and the debris state from a
-multi-pass strip-draw test are applications (:mod:`tribocosim.cosim.apps.export_friction`).
+(:mod:`.file_set`); :mod:`.export_run` does one export. A calibration is a calibrated table or a calibration file,
+the shipped ones by name (:mod:`.named_calibration`: ``paper``, the default); the user friction routines are
+:mod:`.user_routines`. The command ``tribocosim export``, the debris state from a multi-pass strip-draw test or a
+sheet point's slide, and the paper calibration's file are applications (:mod:`tribocosim.cosim.apps.export_friction`,
+:mod:`tribocosim.cosim.apps.debris_state`, :mod:`tribocosim.cosim.apps.paper_calibration`).
 """
 
 from tribocosim.lazy import lazy_exports

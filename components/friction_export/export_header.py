@@ -52,11 +52,21 @@ def table_line(provenance: dict) -> str:
 
 
 def calibration_line(provenance: dict) -> str:
-    """The calibration of a law: its status, the scale fitted and its data by file name and SHA-256."""
-    cal = provenance["calibration"]
+    """The calibration of a law: a calibration file by name, file name and SHA-256, with what it was fitted on; a
+    calibrated table's status, the scale fitted and its data by file name and SHA-256; or none, with the scale."""
+    cal = provenance.get("calibration")
+    if not cal:
+        scale = float(provenance["parameters"].get("particle_area_scale", 1.0))
+        return ("calibration: none: the table's areas as the mesoscale campaign simulated them, A_p scaled by "
+                f"particle_area_scale = {scale:g}" + (" (uncalibrated; --calibration paper fits the paper's one-pass "
+                                                      "drop)" if scale == 1 else " (given)"))
     scale = (cal.get("fitted") or {}).get("particle_area_scale")
     fitted = (f"s = {scale['value']:.6g}" + (f" +- {scale['stderr']:.2g}" if scale.get("stderr") is not None
                                                else "")) if scale else "s not fitted"
+    if cal.get("sha256"):  # a calibration file (named_calibration.py)
+        made = (cal.get("made_by") or {}).get("command")
+        return (f"calibration {cal.get('name')} ({cal.get('file')}, SHA-256 {cal.get('sha256')}): {cal.get('title')}; "
+                f"status {cal.get('status')}, {fitted}" + (f"; made by {made}" if made else ""))
     data = cal.get("data") or {}
     name = data.get("file") or (data.get("path") and data["path"].replace("\\", "/").rsplit("/", 1)[-1])
     return (f"calibration (tribocosim calibrate): status {cal.get('status')}, {fitted}; data {name} (SHA-256 "
@@ -72,8 +82,7 @@ def header_lines(f: FileFacts) -> list[str]:
     out += _wrap("law: mu = mu0 (1 - (1 - r) s A_p/A_c) of the strip-draw model (docs/model.md section 4), "
                  "evaluated by its native core (tc_friction.c), the code the StripDraw FMU runs")
     out += _wrap(table_line(prov))
-    if prov.get("calibration"):
-        out += _wrap(calibration_line(prov))
+    out += _wrap(calibration_line(prov))
     out += _wrap(f"debris state: {f.state}")
     out += _wrap(f.units_line)
     for line in f.range_lines:

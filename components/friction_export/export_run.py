@@ -12,6 +12,7 @@ the export is written, or none (:mod:`.file_set`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,7 +25,8 @@ from tribocosim.components.friction_export.export_header import FileFacts, heade
 from tribocosim.components.friction_export.exported_law import ExportedLaw, value_warnings
 from tribocosim.components.friction_export.export_units import UnitSystem
 from tribocosim.components.friction_export.file_set import check_target, tagged, write_all
-from tribocosim.components.friction_export.grid_refinement import AxisSpec, percent_up, sample
+from tribocosim.components.friction_export.grid_refinement import (AxisSpec, percent_up, relative_deviation,
+                                                                   sample)
 
 #: the deviation of the FE code's reading from the law, relative to mu (0.005: 0.5 %)
 DEFAULT_TOLERANCE = 0.005
@@ -32,6 +34,9 @@ DEFAULT_TOLERANCE = 0.005
 ACCURACY_FLOOR = 1e-3
 #: a point of the range is on an axis end within this (relative), as the table's lookup takes it
 END_TOLERANCE = 1e-9
+#: mu equal at every velocity of the grid within this (relative, the round-off of the lookup's sums): the law does not
+#: depend on the velocity, and the file writes one
+VELOCITY_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -59,13 +64,28 @@ FORMATS = {
 
 @dataclass(frozen=True)
 class DebrisState:
-    """One debris state of an export: its beta (None: beta is an axis of the file), its tag in the file names when an
-    export has several states, what it is in words, and how it was chosen (a JSON record)."""
+    """One debris state of an export: its beta (None: beta is an axis of the file, or the state is a slide), its tag
+    in the file names when an export has several states, what it is in words, how it was chosen (a JSON record), and
+    for a slide (``--slide``) its length [m] and the beta the point starts from: the file's beta at each (P, v) is then
+    the debris a sheet point makes sliding that far there (:meth:`ExportedLaw.beta_after_slide`)."""
 
     beta: float | None
     label: str
     description: str
     record: dict = field(default_factory=dict)
+    slide: float | None = None
+    beta_initial: float = 0.0
+
+    @property
+    def is_axis(self) -> bool:
+        """Whether beta is an axis of the file (no debris state chosen)."""
+        return self.beta is None and self.slide is None
+
+    def beta_at(self, law: ExportedLaw, pressure, velocity):
+        """The state's beta at the points (SI, broadcast together): its beta, or its slide's debris there."""
+        if self.slide is not None:
+            return law.beta_after_slide(pressure, velocity, self.slide, self.beta_initial)
+        return float(self.beta)
 
 
 AXIS_STATE = DebrisState(None, "", "none chosen: beta is an axis of the file", {"beta": None,
@@ -93,7 +113,8 @@ class ExportRequest:
 
 @dataclass(frozen=True)
 class ExportedFile:
-    """One file written: its path, role (nominal, upper, lower), debris state, grid size and the accuracy reached."""
+    """One file written: its path, role (nominal, upper, lower), debris state, grid size, the accuracy reached, and
+    whether it writes one velocity (the law does not depend on it: :func:`velocity_free`)."""
 
     path: Path
     role: str
@@ -104,26 +125,33 @@ class ExportedFile:
     checked: int
     unsimulated: str
     warnings: tuple
+    one_velocity: bool = False
 
 
 @dataclass(frozen=True)
 class ExportResult:
-    """The files of an export and what the command says about them."""
+    """The files of an export and what the command says about them (``notes``: lines about the law, for the error
+    stream: an uncalibrated law and its one-pass drop, :mod:`tribocosim.cosim.apps.export_friction`)."""
 
     files: tuple
     range_line: str
     beyond: str
+    velocity_line: str = ""
+    notes: tuple = ()
 
     def summary(self) -> list[str]:
         """Lines for the command's output (its warnings apart: :meth:`warning_lines`)."""
         out = []
         for f in self.files:
-            size = " x ".join(f"{n} {what}" for n, what in zip(f.shape, ("pressures", "velocities", "beta levels")))
-            out.append(f"wrote {f.path} ({f.role}; {size}): the FE code's linear interpolation of it reproduces "
-                       f"tribocosim's mu within {percent_up(f.accuracy)} % (target {100 * f.tolerance:g} %) in the "
-                       f"range ({f.checked} points checked)")
+            sizes = [f"{f.shape[0]} pressures",
+                     "1 velocity (mu does not depend on it)" if f.one_velocity else f"{f.shape[1]} velocities",
+                     *(f"{n} beta levels" for n in f.shape[2:])]
+            out.append(f"wrote {f.path} ({f.role}; {' x '.join(sizes)}): the FE code's linear interpolation of it "
+                       f"reproduces tribocosim's mu within {percent_up(f.accuracy)} % (target {100 * f.tolerance:g} "
+                       f"%) in the range ({f.checked} points checked)")
             out += [f"  unsimulated: {f.unsimulated}"] if f.unsimulated else []
-        return out + [self.range_line, f"beyond it: {self.beyond}"]
+        return out + ([self.velocity_line] if self.velocity_line else []) + [self.range_line,
+                                                                             f"beyond it: {self.beyond}"]
 
     def warning_lines(self) -> list[str]:
         """One line per warning of a file written (the files are written all the same; each holds its warnings in
@@ -169,7 +197,9 @@ def _pressure_range(law: ExportedLaw, request: ExportRequest) -> tuple[float, fl
     return max(lo, lo_axis), min(hi, hi_axis)
 
 
-def _check_request(law: ExportedLaw, request: ExportRequest) -> Format:
+def check_request(law: ExportedLaw, request: ExportRequest) -> Format:
+    """The request's format; ParameterError naming the option of a request that cannot be written (checked before
+    anything is sampled)."""
     if request.format not in FORMATS:
         raise ParameterError(f"FORMAT {request.format!r} is not an export format; choose one of {', '.join(FORMATS)}")
     fmt = FORMATS[request.format]
@@ -181,12 +211,12 @@ def _check_request(law: ExportedLaw, request: ExportRequest) -> Format:
         law.check_band()
     if not request.states:
         raise ParameterError("no debris state: give --beta or --passes, or none for a beta axis")
-    if fmt.needs_state and any(s.beta is None for s in request.states):
-        raise ParameterError(f"FORMAT {fmt.name} needs a debris state, --beta B or --passes N: an LS-DYNA friction "
-                             "table has no axis for the debris (several states: several files)")
-    if request.beta_levels is not None and any(s.beta is not None for s in request.states):
-        raise ParameterError("--beta-levels gives the levels of a beta axis; with --beta or --passes the file holds "
-                             "one debris state")
+    if fmt.needs_state and any(s.is_axis for s in request.states):
+        raise ParameterError(f"FORMAT {fmt.name} needs a debris state, --beta B, --passes N or --slide S: an LS-DYNA "
+                             "friction table has no axis for the debris (several states: several files)")
+    if request.beta_levels is not None and any(not s.is_axis for s in request.states):
+        raise ParameterError("--beta-levels gives the levels of a beta axis; with --beta, --passes or --slide the file "
+                             "holds one debris state")
     if not 1 <= int(request.table_id) <= lsdyna_deck.MAX_ID - 10_000:
         raise ParameterError(f"--table-id {request.table_id}: an id in [1, {lsdyna_deck.MAX_ID - 10_000}] is required "
                              "(the curves take the ids after it)")
@@ -256,13 +286,15 @@ def _refusal(law: ExportedLaw, request: ExportRequest, state: DebrisState, flags
         what = f"--beta {state.beta:g}"
     elif how == "passes":
         what = f"--passes {state.record.get('after_pass')} (beta = {state.beta:.6g} after that pass)"
+    elif how == "slide":
+        what = f"--slide {state.slide / u.length_scale:g} {u.length}"
     elif request.beta_levels is not None:
         what = f"the beta axis (--beta-levels {' '.join(f'{b:g}' for b in request.beta_levels)})"
     else:
         what = "the beta axis"
     hint = ""
     above = law.table.pressure[law.table.pressure > flags.pressure[1] * (1 + END_TOLERANCE)]
-    if state.beta is not None and above.size and flags.pressure[0] <= prange[0] * (1 + END_TOLERANCE):
+    if not state.is_axis and above.size and flags.pressure[0] <= prange[0] * (1 + END_TOLERANCE):
         hint = (f"--pressure-range {u.pressure_to_file(above[0]):g} {u.pressure_to_file(prange[1]):g} exports the "
                 "range where it was simulated; ")
     return (f"{what}: {flags.count} of {flags.total} lookups in the exported range read friction-table nodes the "
@@ -278,13 +310,14 @@ def _range_line(units: UnitSystem, prange, vrange, betas) -> str:
     return text + (f", beta {betas[0]:.6g}-{betas[-1]:.6g}" if betas is not None else "")
 
 
-def _beyond(fmt: Format, units: UnitSystem, prange, vrange, betas) -> str:
+def _beyond(fmt: Format, units: UnitSystem, prange, vrange, betas, one_velocity: bool = False) -> str:
     u = units
     code = {"lsdyna": "LS-DYNA", "abaqus": "Abaqus", "table": "a reader following the rule"}[fmt.name]
     p0, p1 = (f"{u.pressure_to_file(x):g} {u.pressure}" for x in prange)
     v1 = f"{u.velocity_to_file(vrange[1]):g} {u.velocity}"
-    text = (f"{code} holds the end values (clamps): below {p0} it reads mu at {p0}, above {p1} mu at {p1}, above "
-            f"{v1} mu at {v1}")
+    text = (f"{code} holds the end values (clamps): below {p0} it reads mu at {p0}, above {p1} mu at {p1}, "
+            + (f"at any velocity (above {v1} too) mu of its one velocity" if one_velocity else
+               f"above {v1} mu at {v1}"))
     if betas is not None:
         text += f", beta outside {betas[0]:.6g}-{betas[-1]:.6g} the end level"
     return text + "; tribocosim's table holds no simulation there"
@@ -294,7 +327,7 @@ def run_export(law: ExportedLaw, request: ExportRequest, log=None) -> ExportResu
     """Sample, check and write the export (module docstring); ParameterError naming the option when the request
     cannot be written, and then no file is written. ``log`` (one line of text) hears of the progress of an export
     that samples long (several debris states, a refinement that passes its first rounds)."""
-    fmt = _check_request(law, request)
+    fmt = check_request(law, request)
     units = request.units
     prange = _pressure_range(law, request)
     vrange = law.velocity_axis
@@ -305,19 +338,19 @@ def run_export(law: ExportedLaw, request: ExportRequest, log=None) -> ExportResu
     roles = ("nominal",) if request.band is None else ("nominal", "upper", "lower")
     code_version = _code_version()
     contents, files = {}, []
-    range_line = beyond = ""
+    range_line = beyond = velocity_line = ""
     next_id = int(request.table_id)  # several states share a deck: each its own table and curve ids, own name
     for state in request.states:
         specs = [AxisSpec("pressure", p_nodes, geometric=True), AxisSpec("velocity", v_nodes)]
-        if state.beta is None:
+        if state.is_axis:
             specs.append(_beta_nodes(law, request, prange, vrange, cap))
-        else:
+        elif state.slide is None:
             _check_beta(law, float(state.beta), cap, state)
         flags = _Flags()
 
         def evaluate(points, state=state, flags=flags):
             p, v = points[0], points[1]
-            b = points[2] if state.beta is None else float(state.beta)
+            b = points[2] if state.is_axis else state.beta_at(law, p, v)
             mu, flagged = law.mu(p, v, b)
             flags.add(flagged, p, b)
             columns = [mu]
@@ -330,11 +363,15 @@ def run_export(law: ExportedLaw, request: ExportRequest, log=None) -> ExportResu
         grid = sample(evaluate, specs, request.tolerance, ACCURACY_FLOOR, log=log)
         if flags.count and not request.allow_unsimulated:
             raise ParameterError(_refusal(law, request, state, flags, prange))
-        betas = grid.axes[2] if state.beta is None else None
+        betas = grid.axes[2] if state.is_axis else None
         range_line = _range_line(units, prange, vrange, betas)
-        beyond = _beyond(fmt, units, prange, vrange, betas)
+        one_velocity = velocity_free(grid)
+        beyond = _beyond(fmt, units, prange, vrange, betas, one_velocity)
+        if one_velocity:
+            velocity_line = _velocity_line(units, vrange, grid.axes[1], betas is not None, fmt)
+            grid = _one_velocity(grid)
         mesh = np.meshgrid(*grid.axes, indexing="ij")
-        node_beta = mesh[2] if betas is not None else float(state.beta)
+        node_beta = mesh[2] if betas is not None else state.beta_at(law, mesh[0], mesh[1])
         _, node_flagged = law.mu(mesh[0], mesh[1], node_beta)
         unsimulated = "" if not flags.count else (
             f"{flags.count} of {flags.total} lookups in the range read friction-table nodes the mesoscale campaign "
@@ -350,17 +387,55 @@ def run_export(law: ExportedLaw, request: ExportRequest, log=None) -> ExportResu
                 range_lines=(range_line,), accuracy=grid.accuracy, largest=grid.largest, tolerance=grid.tolerance,
                 checked=grid.checked, floor=ACCURACY_FLOOR,
                 band=_band_words(law, request.band, role), unsimulated=unsimulated, warnings=warnings,
-                code_version=code_version, command=request.command, notes=request.notes + _notes(law))
+                code_version=code_version, command=request.command,
+                notes=request.notes + _notes(law) + ((velocity_line,) if one_velocity else ()))
             contents[path] = _render(fmt, facts, grid, values, law, request, state, node_flagged, next_id,
-                                     _interaction_name(request.interaction_name, state.label if several else ""))
+                                     _interaction_name(request.interaction_name, state.label if several else ""),
+                                     vrange if one_velocity else None)
             files.append(ExportedFile(path, role, state, tuple(a.size for a in grid.axes), grid.accuracy,
-                                      grid.tolerance, grid.checked, unsimulated, warnings))
+                                      grid.tolerance, grid.checked, unsimulated, warnings, one_velocity))
         next_id += grid.axes[0].size + 1  # the table's id, then one curve id per pressure
         if next_id > lsdyna_deck.MAX_ID:
             raise ParameterError(f"--table-id {request.table_id}: the tables and curves of {len(request.states)} "
                                  f"debris states need ids up to {next_id - 1}, above {lsdyna_deck.MAX_ID}")
     write_all(contents)
-    return ExportResult(tuple(files), range_line, beyond)
+    return ExportResult(tuple(files), range_line, beyond,
+                        velocity_line if all(f.one_velocity for f in files) else "")
+
+
+def velocity_free(grid) -> bool:
+    """Whether the law of a sampled grid does not depend on the velocity: mu (and the band's) at every pressure and
+    beta of the grid equal at every velocity of it (the table's velocity nodes in the range and any the refinement
+    added) within :data:`VELOCITY_RTOL`. Then the FE code's reading of the grid is the same with one velocity, and the
+    check of the grid (at points between the nodes and at random points of the range, :mod:`.grid_refinement`) holds
+    for it. The table law is linear in v between the table's velocity nodes, so a law equal at them is constant in v
+    over the range."""
+    values = grid.values
+    if grid.axes[1].size < 2:
+        return False
+    spread = relative_deviation(values, values[:, :1], ACCURACY_FLOOR)
+    return bool(np.all(spread <= VELOCITY_RTOL))
+
+
+def _one_velocity(grid):
+    """The grid with its velocity axis reduced to the range's lower end (the law does not depend on it)."""
+    return dataclasses.replace(grid, axes=(grid.axes[0], grid.axes[1][:1], *grid.axes[2:]),
+                               values=grid.values[:, :1])
+
+
+def _velocity_line(units: UnitSystem, vrange, velocities, with_beta: bool, fmt: Format) -> str:
+    u = units
+    at = ", ".join(f"{u.velocity_to_file(v):g}" for v in velocities)
+    how = {"lsdyna": f"each curve holds two equal points, at {u.velocity_to_file(vrange[0]):g} and "
+                     f"{u.velocity_to_file(vrange[1]):g} {u.velocity}: an LS-DYNA curve has two points or more",
+           "abaqus": f"one line per pressure{' and beta level' if with_beta else ''}, the slip rate left blank: no "
+                     "slip-rate dependence",
+           "table": "the velocity axis holds one value, its range beside it"}[fmt.name]
+    return (f"velocity: mu does not depend on the relative sliding velocity over {u.velocity_to_file(vrange[0]):g}-"
+            f"{u.velocity_to_file(vrange[1]):g} {u.velocity}: at every pressure{' and beta' if with_beta else ''} of "
+            f"the file it is the same at {at} {u.velocity} (within {VELOCITY_RTOL:g} of mu), because the table is: its "
+            "slides do not depend on v in the overdamped regime (docs/physics/table_domain.md) and no hydrodynamic "
+            f"effect is modelled; one velocity is written ({how})")
 
 
 def _interaction_name(name: str, label: str) -> str:
@@ -402,35 +477,56 @@ def _notes(law: ExportedLaw) -> tuple:
 
 
 def _render(fmt: Format, facts: FileFacts, grid, values, law: ExportedLaw, request: ExportRequest,
-            state: DebrisState, node_flagged: np.ndarray, table_id: int, interaction_name: str) -> str:
+            state: DebrisState, node_flagged: np.ndarray, table_id: int, interaction_name: str,
+            one_velocity: tuple | None) -> str:
+    """The text of one file; ``one_velocity``: the velocity range of a law that does not depend on it (the grid holds
+    one velocity, written as each format allows: :func:`_velocity_line`)."""
     u = request.units
     header = header_lines(facts)
     pressures = u.pressure_to_file(grid.axes[0])
     velocities = u.velocity_to_file(grid.axes[1])
-    if fmt.name == "lsdyna":
-        marked = {i: "UNSIMULATED: lookups at this pressure read table nodes not simulated"
-                  for i in range(pressures.size) if node_flagged[i].any()}
-        return lsdyna_deck.render(header, pressures, velocities, values, table_id, u, marked)
-    if fmt.name == "abaqus":
-        betas = grid.axes[2] if state.beta is None else None
-        return abaqus_friction.render(header, velocities, pressures, values, u, betas, interaction_name)
-    axes = [{"name": "pressure", "unit": u.pressure, "values": pressures.tolist()},
-            {"name": "velocity", "unit": u.velocity, "values": velocities.tolist()}]
-    if state.beta is None:
-        axes.append({"name": "beta", "unit": "1", "values": grid.axes[2].tolist()})
     mesh = np.meshgrid(*grid.axes, indexing="ij")
-    node_beta = mesh[2] if state.beta is None else float(state.beta)
+    node_beta = mesh[2] if state.is_axis else np.broadcast_to(state.beta_at(law, mesh[0], mesh[1]), mesh[0].shape)
+    if fmt.name == "lsdyna":
+        comments = {}
+        for i in range(pressures.size):
+            text = []
+            if state.slide is not None:
+                lo, hi = float(node_beta[i].min()), float(node_beta[i].max())
+                text.append(f"the debris after the slide: beta = {lo:.6g}" + (f"-{hi:.6g} over the velocities"
+                                                                               if hi > lo else ""))
+            if node_flagged[i].any():
+                text.append("UNSIMULATED: lookups at this pressure read table nodes not simulated")
+            if text:
+                comments[i] = text
+        if one_velocity is not None:  # a curve has two points or more: the range's ends, mu equal at both
+            velocities = u.velocity_to_file(np.asarray(one_velocity, dtype=float))
+            values = np.repeat(values, 2, axis=1)
+        return lsdyna_deck.render(header, pressures, velocities, values, table_id, u, comments)
+    if fmt.name == "abaqus":
+        betas = grid.axes[2] if state.is_axis else None
+        return abaqus_friction.render(header, None if one_velocity is not None else velocities, pressures, values, u,
+                                      betas, interaction_name)
+    velocity_axis = {"name": "velocity", "unit": u.velocity, "values": velocities.tolist()}
+    if one_velocity is not None:
+        velocity_axis.update(independent=True, range=u.velocity_to_file(np.asarray(one_velocity)).tolist())
+    axes = [{"name": "pressure", "unit": u.pressure, "values": pressures.tolist()}, velocity_axis]
+    if state.is_axis:
+        axes.append({"name": "beta", "unit": "1", "values": grid.axes[2].tolist()})
     mu_se = law.standard_error(mesh[0], mesh[1], node_beta) if law.table.version >= 3 else None
     table_axes = (law.table.pressure, law.table.velocity, law.table.beta)
     on_node = [np.isclose(m[..., None], ax, rtol=END_TOLERANCE, atol=0).any(axis=-1)
                for m, ax in zip(mesh, table_axes)]
-    if state.beta is not None:
-        on_node.append(np.full(mesh[0].shape, bool(np.isclose(law.table.beta, state.beta, rtol=END_TOLERANCE,
-                                                              atol=0).any())))
+    if not state.is_axis:
+        on_node.append(np.isclose(np.asarray(node_beta)[..., None], law.table.beta, rtol=END_TOLERANCE,
+                                  atol=0).any(axis=-1))
     provenance = {**law.provenance(), "code_version": facts.code_version, "command": facts.command}
     band = None if request.band is None else {"k": request.band, "role": facts.role, "definition": facts.band}
+    debris = {"beta": state.beta, "description": state.description, **state.record}
+    if state.slide is not None:
+        debris["beta_at_nodes"] = np.asarray(node_beta).tolist()
     return neutral_table.render(
         role=facts.role, axes=axes, mu=values, mu_se=mu_se, simulated=~node_flagged,
         table_node=np.logical_and.reduce(on_node), accuracy=grid.accuracy, tolerance=grid.tolerance,
-        checked=grid.checked, debris_state={"beta": state.beta, "description": state.description, **state.record},
-        units=u, provenance=provenance, band=band, warnings=list(facts.warnings), header=header)
+        checked=grid.checked, debris_state=debris, units=u, provenance=provenance, band=band,
+        warnings=list(facts.warnings), header=header)

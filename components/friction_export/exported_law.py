@@ -18,9 +18,14 @@ se(q) the table's ensemble standard error of q interpolated as the table interpo
   A_c^2)^2, the covariance of A_p and A_c left out;
 - ``eq8``: se(A_p) / A_c(Eq. 8).
 
-A calibration file (``tribocosim calibrate``) adds the interval of its scale s: se(q) and q se(s) / s are combined
-in quadrature (the table's ensemble noise and the measured data's scatter are independent sources), so that the
-calibrated law's band holds both.
+A calibration (a table of ``tribocosim calibrate``, or a calibration file such as the shipped ``paper``,
+:mod:`.named_calibration`) adds the interval of its scale s: se(q) and q se(s) / s are combined in quadrature (the
+table's ensemble noise and the data's scatter are independent sources), so that the calibrated law's band holds both.
+With a calibration file the table's q is unscaled and s is the law's particle_area_scale: se(mu) = mu0 (1 - r)
+hypot(s se(q), q se(s)), the same as a calibrated table's.
+
+:meth:`ExportedLaw.beta_after_slide` is the debris one sheet point makes sliding at constant (P, v), the per-point
+update the strip's nodes and the user friction routines share (``tc_node_slide`` of tc_node_friction.c).
 """
 
 from __future__ import annotations
@@ -69,11 +74,14 @@ class ExportedLaw:
     table_path : Path
         Where the table was read from (for the provenance).
     calibration : dict, optional
-        The calibration file's record (its metadata's ``strip_draw_calibration``) when the table is one.
+        The calibration's record: a calibrated table's (its metadata's ``strip_draw_calibration``) or a calibration
+        file's (:mod:`.named_calibration`).
+    fitted_with : StripDrawParameters, optional
+        The parameters the calibration was fitted with (before ``--set``).
     """
 
     def __init__(self, params: StripDrawParameters, table: FrictionTable, table_path: Path,
-                 calibration: dict | None = None):
+                 calibration: dict | None = None, fitted_with: StripDrawParameters | None = None):
         from tribocosim.components.stripdraw.friction import FrictionLaw
 
         if params.friction_model != "table":
@@ -81,7 +89,16 @@ class ExportedLaw:
                                  "(friction_model = table), the friction the StripDraw FMU reads from its table")
         self.params = params.replace(table_policy="clamp")
         self.table, self.table_path, self.calibration = table, Path(table_path), calibration
+        self.fitted_with = fitted_with
         self.law = FrictionLaw(self.params, table)
+
+    def departures(self) -> dict:
+        """The parameters that differ from those the calibration was fitted with: name -> (the fit's value, the
+        law's); empty without a calibration (the table policy aside: a law is looked up under clamp)."""
+        if self.fitted_with is None:
+            return {}
+        fit, own = dataclasses.asdict(self.fitted_with), dataclasses.asdict(self.params)
+        return {k: (fit[k], own[k]) for k in fit if k != "table_policy" and fit[k] != own[k]}
 
     # ---------------------------------------------------------------------------------------------- the law
     def mu(self, pressure, velocity, beta) -> tuple[np.ndarray, np.ndarray]:
@@ -89,6 +106,11 @@ class ExportedLaw:
         or read a node the campaign did not simulate (the FMU's ``table_clamp_count``)."""
         mu, flagged = self.law.mu(pressure, velocity, beta)
         return np.asarray(mu, dtype=float), np.asarray(flagged, dtype=bool)
+
+    def beta_after_slide(self, pressure, velocity, slide: float, beta_initial: float = 0.0) -> np.ndarray:
+        """beta of a sheet point that slides ``slide`` at each (P, v) from ``beta_initial``: the per-point debris
+        update of the strip's nodes and the user routines (:meth:`FrictionLaw.beta_after_slide`, with the cap)."""
+        return np.asarray(self.law.beta_after_slide(pressure, velocity, slide, beta_initial), dtype=float)
 
     def cap(self, pressure: float, velocity: float) -> float:
         """The cap of beta (Eq. 24) at (P, v): the strip-draw model never holds more debris there."""
@@ -195,6 +217,11 @@ class ExportedLaw:
             cal = self.calibration
             out["calibration"] = {"status": cal.get("status"), "fitted": cal.get("fitted"), "note": cal.get("note"),
                                   "source_table": cal.get("source_table"), "data": cal.get("data")}
+            out["calibration"].update({k: cal[k] for k in ("name", "title", "file", "sha256", "fit", "made_by")
+                                       if k in cal})
+            if self.departures():
+                out["calibration"]["departures"] = {k: {"fitted_with": a, "law": b}
+                                                    for k, (a, b) in self.departures().items()}
         return out
 
 
@@ -221,32 +248,51 @@ def _cell_span(axis: np.ndarray, low: float, high: float) -> tuple[int, int]:
 
 
 def load_law(table_path=None, calibration_path=None, settings: dict | None = None) -> ExportedLaw:
-    """The law an export writes: the table (``table_path``, default the shipped one) or the calibration file
-    (``calibration_path``: a table written by ``tribocosim calibrate``, with the parameters its record says to run
-    with: its contact area, rule, the other fitted parameters, and particle_area_scale = 1, the scale being in its
-    A_p), then ``settings`` (strip-draw parameter -> value, ``--set``)."""
+    """The law an export writes: the table (``table_path``, default the shipped one) or the calibration
+    (``calibration_path``), then ``settings`` (strip-draw parameter -> value, ``--set``).
+
+    A calibration is a shipped one's name (``paper``; ``none``: the shipped table uncalibrated,
+    :mod:`.named_calibration`), a calibration file of that form (JSON: its table with the parameters it was fitted
+    with, particle_area_scale = the fitted s), or a table written by ``tribocosim calibrate`` (an .npz with the
+    parameters its record says to run with: its contact area, rule, the other fitted parameters, and
+    particle_area_scale = 1, the scale being in its A_p). The parameters before ``settings`` are the calibration's
+    (:meth:`ExportedLaw.departures` names those ``settings`` change)."""
+    from tribocosim.components.friction_export import named_calibration as named
     from tribocosim.paths import DEFAULT_TABLE
 
     if table_path is not None and calibration_path is not None:
         raise ParameterError("--table and --calibration both given: a calibration file is the table it was "
                              "calibrated on with A_p scaled; give one of them")
-    path = Path(calibration_path or table_path or DEFAULT_TABLE)
-    table = read_table(path)
-    calibration = table.metadata.get(CALIBRATION_KEY)
-    if calibration_path is not None and calibration is None:
-        raise ParameterError(f"--calibration {path}: the file holds no calibration record ({CALIBRATION_KEY} in its "
-                             "metadata); a friction table is given with --table")
+    given = calibration_path
+    if calibration_path is not None and str(calibration_path) == named.NONE:
+        calibration_path = None
+    calibration_path = named.named_path(calibration_path) or calibration_path
+    if calibration_path is not None and not Path(calibration_path).is_file():
+        raise ParameterError(f"--calibration {given}: no such file, and not a calibration's name "
+                             f"({', '.join(sorted((*named.NAMED, named.NONE)))})")
     names = {f.name for f in dataclasses.fields(StripDrawParameters)}
     values: dict = {}
-    if calibration is not None:
-        values.update({k: v for k, v in (calibration.get("parameters") or {}).items() if k in names})
-        values.update({k: d["value"] for k, d in (calibration.get("fitted") or {}).items() if k in names})
-        values.update(particle_area_scale=1.0, contact_area=calibration.get("contact_area", "mesoscale"),
-                      particle_area_rule=calibration.get("particle_area_rule", "load_bearing"))
+    if calibration_path is not None and named.is_calibration_json(Path(calibration_path)):
+        cal = named.read_calibration(calibration_path)
+        path, table, calibration = cal.table_path, read_table(cal.table_path), cal.law_record()
+        values.update({k: v for k, v in cal.record["parameters"].items() if k in names})
+    else:
+        path = Path(calibration_path or table_path or DEFAULT_TABLE)
+        table = read_table(path)
+        calibration = table.metadata.get(CALIBRATION_KEY)
+        if calibration_path is not None and calibration is None:
+            raise ParameterError(f"--calibration {path}: the file holds no calibration record ({CALIBRATION_KEY} in "
+                                 "its metadata); a friction table is given with --table")
+        if calibration is not None:
+            values.update({k: v for k, v in (calibration.get("parameters") or {}).items() if k in names})
+            values.update({k: d["value"] for k, d in (calibration.get("fitted") or {}).items() if k in names})
+            values.update(particle_area_scale=1.0, contact_area=calibration.get("contact_area", "mesoscale"),
+                          particle_area_rule=calibration.get("particle_area_rule", "load_bearing"))
+    fitted_with = StripDrawParameters(**values) if calibration is not None else None
     for name, value in (settings or {}).items():
         if calibration is not None and name == "particle_area_scale":
-            raise ParameterError(f"--set particle_area_scale={value} with the calibration file {path}: its A_p already "
-                                 "holds the fitted scale (the file is used with particle_area_scale = 1)")
+            raise ParameterError(f"--set particle_area_scale={value} with the calibration {given}: it sets the "
+                                 "fitted scale itself")
         values[name] = typed_setting(name, value)
     params = StripDrawParameters(**values)
-    return ExportedLaw(params, table, path.resolve(), calibration)
+    return ExportedLaw(params, table, path.resolve(), calibration, fitted_with)

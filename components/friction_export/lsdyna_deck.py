@@ -13,8 +13,12 @@ What LS-DYNA reads (the keyword texts Ansys ships in the PyPI package ansys-dyna
   line, abscissa and ordinate in two 20-column fields (here: relative sliding velocity, mu).
 
 LS-DYNA interpolates linearly between the table's values and along each curve and holds the end values outside them
-(the rule :mod:`.grid_refinement` samples for). Every number is written right-aligned in its field with at least one
-blank before it (20-column reals as ``%20.12E``: 13 significant digits), ids as integers in 10 columns.
+(the rule :mod:`.grid_refinement` samples for). A curve has two points or more (LS-DYNA rediscretizes each curve over
+its abscissa's span into LCINT intervals: the LS-DYNA support FAQ on the discretization of curves; Oasys PRIMER's
+manual: "lists of two or more (x, y) data points"): a law that does not depend on the velocity is written as a curve
+of two equal points per pressure, at the ends of the velocity range. Every number is written right-aligned in its
+field with at least one blank before it (20-column reals as ``%20.12E``: 13 significant digits), ids as integers in
+10 columns.
 """
 
 from __future__ import annotations
@@ -71,8 +75,8 @@ def render(header: list[str], pressures: np.ndarray, velocities: np.ndarray, mu:
            units, marked: dict | None = None) -> str:
     """The include file: ``header`` as comments, the commented contact card, the *DEFINE_TABLE of ``pressures``
     (file units, increasing) and one *DEFINE_CURVE per pressure, mu (``mu[i, j]``) against ``velocities`` (file
-    units). ``marked``: pressure index -> a comment put before that pressure's curve (its lookups read unsimulated
-    nodes)."""
+    units). ``marked``: pressure index -> comment lines put before that pressure's curve (its debris state, that its
+    lookups read unsimulated nodes)."""
     marked = marked or {}
     lines = ["*KEYWORD", *(f"$ {h}" for h in header), "$", *contact_card(table_id), "$"]
     lines += ["*DEFINE_TABLE",
@@ -84,8 +88,7 @@ def render(header: list[str], pressures: np.ndarray, velocities: np.ndarray, mu:
         lines.append("*DEFINE_CURVE")
         lines.append(f"$ mu against sliding velocity [{units.velocity}] at contact pressure {p:.10g} "
                      f"{units.pressure}")
-        if i in marked:
-            lines.append(f"$ {marked[i]}")
+        lines += [f"$ {text}" for text in marked.get(i, ())]
         lines.append("$#    lcid      sidr       sfa       sfo      offa      offo    dattyp     lcint")
         lines.append(int10(table_id + 1 + i) + int10(0) + real10(1.0) + real10(1.0) + real10(0.0) + real10(0.0)
                      + int10(0) + int10(0))

@@ -79,6 +79,7 @@ class RoutineResult:
     files: tuple
     routine: Routine
     check: int
+    notes: tuple = ()  # lines about the law for the error stream (cosim/apps/export_friction.py)
 
     def summary(self) -> list[str]:
         """Every file written, one line each."""
@@ -153,7 +154,7 @@ def _build(routine: Routine, stem: str) -> list[str]:
 
 
 def header(routine: Routine, law: ExportedLaw, units: UnitSystem, check: int, stem: str, command: str,
-           code_version: str) -> list[str]:
+           code_version: str, notes: tuple = ()) -> list[str]:
     """The header of the three files (lines of at most :data:`WIDTH` characters before wrapping)."""
     prov = law.provenance()
     prm = law.params
@@ -180,11 +181,8 @@ def header(routine: Routine, law: ExportedLaw, units: UnitSystem, check: int, st
              *_keywords(routine, check, units),
              *_build(routine, stem),
              f"{table_line(prov)}, embedded as constant data in {stem}.c"]
-    if prov.get("calibration"):
-        lines.append(calibration_line(prov))
-    else:
-        lines.append("calibration: none (the table's areas as the mesoscale campaign measured them, scaled by "
-                     f"particle_area_scale = {prm.particle_area_scale:g})")
+    lines.append(calibration_line(prov))
+    lines += list(notes)
     lines.append(f"units {units.name} ({units.description}): forces N, lengths {units.length}, pressures "
                  f"{units.pressure}, time s; mu and beta have no unit")
     lines += _sources(routine)
@@ -224,11 +222,11 @@ def _banner(lines: list[str]) -> str:
 
 
 def render(routine: Routine, law: ExportedLaw, units: UnitSystem, out: Path, command: str = "",
-           code_version: str = "") -> tuple[dict, int]:
-    """``({path: text}, check number)`` of the three files (module docstring)."""
+           code_version: str = "", notes: tuple = ()) -> tuple[dict, int]:
+    """``({path: text}, check number)`` of the three files (module docstring); ``notes``: further header lines."""
     stem = out.stem
     check = check_number(law, units)
-    lines = header(routine, law, units, check, stem, command, code_version)
+    lines = header(routine, law, units, check, stem, command, code_version, notes)
     guard = f"TRIBOCOSIM_{''.join(ch if ch.isalnum() else '_' for ch in stem.upper())}_H"
     proto, body = _ENTRIES[routine.name]
     h_text = (_banner(lines) + f"#ifndef {guard}\n#define {guard}\n\n" + c_amalgamation.header_text() +
@@ -251,7 +249,7 @@ def render(routine: Routine, law: ExportedLaw, units: UnitSystem, out: Path, com
 
 
 def write_routine(name: str, law: ExportedLaw, units: UnitSystem, out, *, command: str = "",
-                  code_version: str = "") -> RoutineResult:
+                  code_version: str = "", notes: tuple = ()) -> RoutineResult:
     """Write the routine ``name`` (a key of :data:`ROUTINES`) for ``law`` to ``out`` (FILE.f) and FILE.c, FILE.h beside
     it, all or none; ParameterError naming ``-o`` when they cannot be written."""
     routine = ROUTINES[name]
@@ -260,6 +258,6 @@ def write_routine(name: str, law: ExportedLaw, units: UnitSystem, out, *, comman
     if out.suffix.lower() not in (".f", ".for"):
         raise ParameterError(f"-o {out}: a user friction routine is a fixed-form Fortran file, FILE.f (or FILE.for); "
                              f"FILE.c and FILE.h are written beside it")
-    files, check = render(routine, law, units, out, command, code_version)
+    files, check = render(routine, law, units, out, command, code_version, notes)
     written = write_all(files)
     return RoutineResult(tuple(written), routine, check)

@@ -36,6 +36,9 @@ Laws (``friction_model``), each a :class:`FrictionLaw` with ``mu(pressure, veloc
   (the default: the shipped campaign's alpha falls with v, so no saturation law is fitted; b is its
   alpha at the slowest velocity, whose row the table holds down to the test's 0.08 m/s);
 - ``constant``: mu_const, no debris effect (beta capped at 1).
+
+:meth:`FrictionLaw.beta_after_slide` gives the debris one point makes sliding at constant (P, v) by the per-point
+update the strip's nodes and the user friction routines share (``tc_node_slide`` of tc_node_friction.c).
 """
 
 from __future__ import annotations
@@ -101,6 +104,21 @@ class FrictionLaw:
         """The cap of beta (Eq. 24) at (P, |v|)."""
         return float(self._core.lib.tc_law_beta_cap(ctypes.byref(self._struct), self.native_table, float(pressure),
                                                      float(velocity), None))
+
+    def beta_after_slide(self, pressure, velocity, slide: float, beta_initial: float = 0.0) -> np.ndarray:
+        """beta of a point that slides ``slide`` [m] at constant pressure and slip rate, at each (P, |v|) (broadcast
+        together), from ``beta_initial``: the per-point debris update of the strip's nodes and the user friction
+        routines (``tc_node_slide`` of tc_node_friction.c: the Archard production K P S / (H h_p) of Eq. 37, the sink
+        ``debris_sink_length`` integrated exactly, the cap of Eq. 24 at (P, v); no transport, zeta = 0);
+        ParameterError for a pressure not > 0, a slide < 0 or a beta outside [0, 1]."""
+        p, v = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (pressure, velocity)))
+        pq, vq = np.ascontiguousarray(p.ravel()), np.ascontiguousarray(np.abs(v).ravel())
+        out = np.empty(pq.size)
+        c = self._core
+        c.call(c.lib.tc_node_slide, ctypes.byref(self._struct), self.native_table, pq.size, ptr(pq), ptr(vq),
+               float(slide), float(beta_initial), ptr(out))
+        out = out.reshape(p.shape)
+        return out if out.ndim else float(out)
 
     def alpha(self, velocity):
         """alpha(v) of Eq. 23 (the closed form): b (1 - exp(-|v| / v_ref)), or b when v_ref is 0."""

@@ -9,18 +9,19 @@ r = tau_flake / tau0 is the shear strength of a junction carried by a flake over
 junction (tau0, fixed by mu0 = tau0 A_c / (P A0), Eq. 6). Debris is capped where flakes carry the whole real contact
 (s A_p = A_c, Eq. 24): there mu = r mu0, the lowest value the law gives.
 
-:data:`MU_FLOOR` is the documented floor: no friction coefficient below it is supported for this oil-starved contact
-(1.12 g/m^2 of mineral oil, at most a 1.30 um film against 1.52 um of combined RMS roughness: lambda <= 0.86, no
-full film) with debris of aluminium and its oxide (the paper's EDS, Table 2). Its sources: a hydrodynamic film gives
-mu < 0.01 and boundary lubrication of aluminium with a boundary additive 0.09 (Tabary et al., J. Tribol. 118 (1996)
-629, doi:10.1115/1.2831584); a purpose-made lamellar solid lubricant (PVD MoS2) keeps 0.06 in long runs and reaches
-0.02 only at 77 K in high vacuum (Coatings 15 (2025) 500, introduction, citing Gradt et al.). The floor is half the
-solid lubricant's long-run value: mu below it would need a film the oil supply excludes or a lubricant better than
-MoS2, which flakes of aluminium and alumina are not.
+:data:`MU_FLOOR` is the documented floor, a bound the project sets for this oil-starved contact (1.12 g/m^2 of
+mineral oil, at most a 1.30 um film against 1.52 um of combined RMS roughness: lambda <= 0.86, no full film) with
+debris of aluminium and its oxide (the paper's EDS, Table 2); no source gives its value. The sources put a hydrodynamic
+film at mu < 0.01 and boundary lubrication of aluminium with a boundary additive at 0.09 (Tabary et al., J. Tribol. 118
+(1996) 629, doi:10.1115/1.2831584); a purpose-made lamellar solid lubricant (PVD MoS2) keeps 0.06 in long runs and
+reaches 0.02 only at 77 K in high vacuum (Coatings 15 (2025) 500, introduction, citing Gradt et al.). The floor is half
+the solid lubricant's long-run value, a factor of the project's choosing. Where flakes carry the whole contact it fixes
+mu_bar, so a drop 1 - mu_bar(P) / mu_bar(1 MPa) is at most 1 - r mu0 / mu_bar(1 MPa): the paper report's floor scan
+gives the 3-pass drop at each r.
 
-:data:`FLAKE_SHEAR_RATIO_RANGE` is the sourced range of r with mu0 = 0.15: from the floor (0.03 / 0.15) to a flake
-junction that shears like boundary-lubricated aluminium with an additive (0.09 / 0.15). The default r is its lower
-end: the paper's premise (flakes shear more easily than metal) kept down to the floor and no further.
+:data:`FLAKE_SHEAR_RATIO_RANGE` is the range of r with mu0 = 0.15: from the floor the project sets (0.03 / 0.15) to a
+flake junction that shears like boundary-lubricated aluminium with an additive (0.09 / 0.15, sourced). The default r is
+its lower end: the paper's premise (flakes shear more easily than metal) kept down to the floor and no further.
 :data:`PAPER_MODEL` is the paper's model, frictionless flakes.
 
 A friction coefficient below the floor is reported, naming the setting that lets it (:func:`floor_note`): the
@@ -37,7 +38,7 @@ from tribocosim.components.params import BOUND_RTOL
 
 #: the documented floor of the friction coefficient in the strip-draw contact (module docstring)
 MU_FLOOR = 0.03
-#: the sourced range of the flake-borne shear ratio r = tau_flake / tau0 at mu0 = 0.15 (module docstring)
+#: the range of the flake-borne shear ratio r = tau_flake / tau0 at mu0 = 0.15, from the floor up (module docstring)
 FLAKE_SHEAR_RATIO_RANGE = (0.2, 0.6)
 #: the default r: the lower end of the range, MU_FLOOR / mu0 at the default mu0 = 0.15
 FLAKE_SHEAR_RATIO_DEFAULT = 0.2

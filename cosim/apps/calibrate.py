@@ -28,20 +28,25 @@ how much debris there is: the production K / H (``archard_k``, H fixed), the sha
 the parameters to fit (default: particle_area_scale); the fit (:mod:`tribocosim.cosim.apps.calibrate_fit`) is
 Gauss-Newton least squares within the parameters' bounds on the pure strip-draw model, with standard errors from the
 Jacobian. Below the cap mu depends on s and r only through (1 - r) s: fitted together, they are separated only by
-tests whose debris reaches the cap (several passes, high pressure, long pads); otherwise the command says in one line
-that the data determine only (1 - r) s, with its value and standard error.
+tests whose debris reaches the cap (several passes, high pressure, long pads). When the fit from the start does not
+succeed, the fit searches the valley (1 - r) s = const for where the model's debris reaches the cap and fits from
+there (the cap search); when no start there fits better, the command says in one line that the data determine only
+(1 - r) s, with its value and standard error.
 
-It succeeds when it has converged (every change within 1e-6 of the value or 1 % of the standard error), no parameter
-is held at a bound the data push it against, and the data separate the parameters (the Jacobian's singular values,
-the parameters' correlations). Otherwise the command says which of these failed, writes nothing and exits with 1,
-unless ``--keep-unconverged`` asks for the last iterate; that table's metadata then give the status.
+It succeeds when it has converged (every change within 1e-6 of its value, or the change within 1 % of a standard
+error), no parameter is held at a bound the data push it against, the residual is not larger than the data's noise
+(chi^2 against the stated standard deviations, or the lack of fit against the spread of replicated tests; not judged,
+and said so, when the data carry neither) and the data separate the parameters (the Jacobian's singular values, the
+parameters' correlations), each judged at the best fit. Otherwise the command says which of these failed (a residual
+beyond the noise: the model does not describe the data, with the residual), writes nothing and exits with 1, unless
+``--keep-unconverged`` asks for the last iterate; that table's metadata then give the status.
 
 The output is the input table (format version 2 or later) with the A_p of the chosen rule (and its spread and
 standard error) times s and mu recomputed, so that the model with ``particle_area_scale = 1`` and the same
 ``contact_area`` is the calibrated one; its metadata (``strip_draw_calibration``) record every fitted parameter with
 its standard error, their correlations, the status, the convention, every point's measured and model values and
-residuals, and the data file's SHA-256. The fitted debris-balance parameters are strip-draw parameters: the note
-says which values to run with.
+residuals, the residual's judgement, the cap search's starts, and the data file's SHA-256. The fitted debris-balance
+parameters are strip-draw parameters: the note says which values to run with.
 """
 
 from __future__ import annotations
@@ -117,8 +122,8 @@ def _parser() -> argparse.ArgumentParser:
                         "such rows are refused (exit code 2, nothing written)")
     p.add_argument("--keep-unconverged", action="store_true",
                    help="write the table from the last iterate (metadata: its status) and exit 0 when the fit has not "
-                        "converged, is held at a bound or cannot separate its parameters; without it, that is exit "
-                        "code 1 and no table")
+                        "converged, is held at a bound, does not describe the data or cannot separate its parameters; "
+                        "without it, that is exit code 1 and no table")
     return p
 
 
@@ -134,9 +139,9 @@ def _failure(f: Fit) -> str:
         moved = ", ".join(f"{n} = {v:.6g} changed by {d:+.3g} (standard error {e:.2g})"
                           for n, v, d, e in zip(f.names, f.values, f.last_change, f.stderr))
         parts.append(f"the fit has not converged in {f.iterations} iterations ({f.evaluations} model evaluations): in "
-                     f"the last one {moved}; converged means every change within {RTOL:g} of the value or "
-                     f"{STDERR_FRACTION:.0%} of the standard error")
-    parts += f.inseparable
+                     f"the last one {moved}; converged means every change within {RTOL:g} of its value, or the "
+                     f"change within {STDERR_FRACTION:.0%} of a standard error")
+    parts += f.problems
     rms = np.sqrt(np.mean([(r["residual"] / r["measured"]) ** 2 for r in f.residuals if r["measured"]] or [0.0]))
     return "; ".join(parts) + f" (RMS residual {100 * rms:.3g} % of the data)"
 
@@ -248,6 +253,13 @@ def main(argv: list[str] | None = None) -> int:
     except TribocosimError as exc:
         print(f"tribocosim calibrate: {exc}", file=sys.stderr)
         return 2
+    if not f.succeeded and not args.keep_unconverged:
+        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. Nothing written; fix the data or "
+              "the parameters fitted (--fit), allow more iterations (--max-iterations), or write the last iterate "
+              "with --keep-unconverged.", file=sys.stderr)
+        if clamped:
+            print(f"tribocosim calibrate: note: {_clamped_line(clamped)}", file=sys.stderr)
+        return 1
     if clamped and not args.allow_clamped:
         print(f"tribocosim calibrate: {_clamped_line(clamped)}. Nothing written; leave these rows out, or keep them "
               "with --allow-clamped (the table's metadata then counts their clamped lookups).", file=sys.stderr)
@@ -256,12 +268,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tribocosim calibrate: warning: {_clamped_line(clamped)}; kept as asked (--allow-clamped), the table's "
               "metadata counts them (strip_draw_calibration.clamped_rows)", file=sys.stderr)
     if not f.succeeded:
-        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. "
-              + (f"Writing the last iterate to {args.out} as asked (--keep-unconverged)." if args.keep_unconverged
-                 else "Nothing written; fix the data or the parameters fitted (--fit), allow more iterations "
-                      "(--max-iterations), or write the last iterate with --keep-unconverged."), file=sys.stderr)
-        if not args.keep_unconverged:
-            return 1
+        print(f"tribocosim calibrate: the fit failed ({f.status()}): {_failure(f)}. Writing the last iterate to "
+              f"{args.out} as asked (--keep-unconverged).", file=sys.stderr)
     values = dict(zip(f.names, f.values))
     scaled = not all(n in d.stds for d in data for n in d.values)  # calibrate_fit's covariance rule
     scale = float(values.get("particle_area_scale", parameters.get("particle_area_scale", 1.0)))
@@ -274,6 +282,7 @@ def main(argv: list[str] | None = None) -> int:
         "inseparable": f.inseparable, "correlation": f.correlation.tolist(),
         "singular_values_in_scale_units": f.singular_values.tolist(),
         "chi2": f.chi2, "dof": f.dof, "shear_scale_product": f.shear_scale,
+        "residual_test": f.residual_test.as_dict(), "cap_search": f.search,
         "stderr_scaled_by_reduced_chi2": scaled,
         "contact_area": args.contact_area, "particle_area_rule": rule,
         "parameters": {k: v for k, v in parameters.items() if k != "table_file"},
@@ -309,6 +318,7 @@ def main(argv: list[str] | None = None) -> int:
     if f.shear_scale is not None:
         print(f"(1 - flake_shear_ratio) particle_area_scale = {f.shear_scale['value']:.6g} +- "
               f"{f.shear_scale['stderr']:.2g} (the combination mu depends on below the cap)")
+    print(f"residual: {f.residual_test.line()}")
     if len(f.names) > 1:
         print("correlations: " + ", ".join(f"{a}/{b} {f.correlation[i, j]:+.3f}" for i, a in enumerate(f.names)
                                            for j, b in enumerate(f.names) if j > i))

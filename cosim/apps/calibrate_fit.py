@@ -16,25 +16,59 @@ within its bounds (the strip-draw parameter's declared range; a sink length abov
 r_i = (model_i - measured_i) / sigma_i; Gauss-Newton with a forward-difference Jacobian J (steps of 1e-3 times the
 value or the parameter's scale), the step solved in units of the parameters' scales without the directions the data
 do not see (below :data:`SINGULAR_RATIO` of the largest singular value), clipped to the bounds and halved while it
-does not lower sum r^2. Covariance C = (J^T J)^-1, scaled by chi^2 / (N - n) when the data give no standard deviations
-(one observable only: without them observables of different units cannot be weighed against each other).
+does not lower sum r^2 (:data:`HALVINGS` times at most; when none does, the iteration keeps its point). Covariance
+C = (J^T J)^-1, scaled by chi^2 / (N - n) when the data give no standard deviations (one observable only: without them
+observables of different units cannot be weighed against each other).
 
-The outcome (:class:`Fit`) says what the data determine:
+**The cap search (s and r fitted together).** Below the cap mu = mu0 (1 - (1 - r) s A_p / A_c) depends on s and r only
+through q = (1 - r) s, and so does everything the model computes from mu (the strip's slip, the debris): along the
+valley (1 - r) s = q the model's values are the same, bit for bit, until s A_p reaches A_c somewhere (the cap's onset,
+where the cap starts removing debris); beyond it mu = r mu0 where flakes carry the whole contact, and the data see r. A
+fit that starts below the onset (the shipped table's largest A_p / A_c is 0.878: no debris reaches the cap at s < 1.14,
+the default s = 1 included) sees q alone, and Gauss-Newton cannot leave the valley's flat part: its Jacobian has no
+component along it. So when the fit from the start does not succeed, :func:`search_the_cap` evaluates the valley through
+its q at r = 0, 0.05, ..., 0.95 (:data:`CAP_SEARCH_RATIOS`, s = q / (1 - r), the other fitted parameters as fitted), in
+one batch of 20 model evaluations run in parallel: the starts whose values differ from the r = 0 start's are beyond the
+onset, found exactly whatever the data's noise, and Gauss-Newton starts from the one of them with the least chi^2; the
+outcome is the better of the two fits. Why this and not several starts or a global bounded method: the model's structure
+says where the unknown lies (one bounded number, r in [0, 1], once q is fitted), so a grid over r's range costs 20
+evaluations, where each extra Gauss-Newton start costs a run (10-20 evaluations for two parameters in the review's case
+below) and a global method spends its evaluations over the whole box; and from beyond the onset Gauss-Newton reached the
+data's (s, r) from every start tried (in the review's case six, from (1.215, 0.3) to (3.0, 0.7), in 10-20 evaluations
+each; the tests' starts beyond the onset). Measured on the review's case (mu_bar after passes 1-5 at 1, 10, 25 and 30
+MPa on the 35 mm pad, made by the default strip at s = 1.28, r = 0.3, no noise; tests/cosim/test_calibrate.py, ``pytest
+-m slow -s -k reviews``): from the default start the fit sees q = 0.8507 only (RMS residual 6.9 %), 14 of the 20 starts
+reach the cap (r >= 0.3), and the fit from r = 0.3 ends at (1.28, 0.3) to 1e-6 after 4 iterations, 45 model evaluations
+in all (the fit from the start alone: 2 iterations, 13 evaluations, ending at q). What it does not do: an onset beyond r
+= 0.95 (s > 20 q) is not found; it runs along one valley, that of the fit from the start, with the other fitted
+parameters at their values there in every start (Gauss-Newton then moves them all); and only when s and r are both
+fitted, the pair only the cap separates.
 
-- converged: an iteration that changes every parameter by at most 1e-6 of its value (of its scale below it) or 1 %
-  of its standard error; a fit that reaches the iteration limit without it is not converged;
+The outcome (:class:`Fit`) says what the data determine, every judgement at the fit the outcome reports:
+
+- converged: an iteration that changes every parameter by at most 1e-6 of its value (of its scale below it), or
+  whose change is at most 1 % of a standard error in the metric of the covariance, sqrt(d^T C^-1 d) <= 0.01 (for one
+  parameter |d| / its standard error; a change along a direction the data hardly see counts as little as they see
+  it, one along the directions they see in full); a fit that reaches the iteration limit without it is not converged;
 - at a bound: a parameter on its bound whose unconstrained Gauss-Newton step points beyond it; the data ask for a
   value the model does not allow (measured mu_bar above mu0 needs s < 0), so the fit has failed, whatever its
   changes; its standard error is not given;
+- the residual against the data's noise (:mod:`tribocosim.cosim.apps.calibrate_noise`): chi^2 against its
+  distribution on N - n degrees of freedom when the data state their standard deviations, the lack of fit against
+  the spread of replicated tests when they do not, not judged (and said so) when they carry neither; a residual the
+  noise gives with probability below 0.01 says the model does not describe the data: that fit has failed, with the
+  residual and the largest residuals named, whatever the Jacobian;
 - separable: the singular values of the Jacobian with each column in units of its parameter's scale; the data
   cannot separate the parameters when the smallest is below 1e-6 of the largest (a direction the residuals do not
   see: fewer independent data than parameters, or a parameter the data do not touch), when two parameters'
   correlation C_ij / sqrt(C_ii C_jj) exceeds 0.99 in magnitude (only a combination of them is determined), or when a
   bounded parameter's standard error exceeds the width of its range (the data barely touch it: the debris left on
-  the strip hardly depends on zeta, which moves the debris under the pad). s and r fitted together: below the cap
-  mu depends on them only through (1 - r) s, and r acts alone where flakes carry the whole contact (mu = r mu0); when
-  their correlation exceeds 0.99 the outcome says in one line that the data determine only (1 - r) s, with its value
-  and standard error (:func:`shear_scale_product`), in place of the general messages for that pair.
+  the strip hardly depends on zeta, which moves the debris under the pad). s and r fitted together: when their
+  correlation exceeds 0.99 at the best fit (after the cap search: no start on the valley that reaches the cap fits
+  better) the outcome says in one line that the data determine only (1 - r) s, with its value and standard error
+  (:func:`shear_scale_product`), in place of the general messages for that pair. "Not separable" is the status only
+  when the residual is the data's noise or cannot be judged (the outcome then says so); a residual beyond the noise
+  is the misfit above.
 """
 
 from __future__ import annotations
@@ -47,6 +81,7 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import ParameterError
+from tribocosim.cosim.apps.calibrate_noise import ResidualTest, residual_test
 
 KEYS = ("pressure", "tool_length", "passes")
 #: measured quantity -> (the strip draw's pass result it is, the check of a value, what is allowed)
@@ -69,6 +104,8 @@ SINK_START = 0.14
 RTOL = 1e-6
 STDERR_FRACTION = 0.01
 MAX_ITERATIONS = 20
+#: halvings of a step that does not lower chi^2 before the iteration keeps its start
+HALVINGS = 6
 #: the data cannot separate the parameters below this ratio of the Jacobian's singular values, or above this
 #: correlation of two parameters
 SINGULAR_RATIO, CORRELATION_MAX = 1e-6, 0.99
@@ -158,8 +195,8 @@ class Fit:
     values: np.ndarray
     stderr: np.ndarray  # NaN for a parameter at its bound
     residuals: list[dict]  # per row and observable: measured, model, residual (model - measured)
-    iterations: int
-    evaluations: int
+    iterations: int  # of the Gauss-Newton run that gave these values
+    evaluations: int  # of the model, every run and the cap search's starts together
     converged: bool
     last_change: np.ndarray
     at_bound: dict  # name -> "lower" or "upper"
@@ -170,11 +207,45 @@ class Fit:
     chi2: float
     dof: int
     shear_scale: dict | None = None  # (1 - r) s with its standard error when s and r are fitted together
+    residual_test: ResidualTest | None = None  # the residual against the data's noise
+    search: dict | None = None  # the cap search (:func:`search_the_cap`), when it ran
+
+    @property
+    def describes(self) -> bool | None:
+        """Whether the residual is the data's noise (None: not judged, :mod:`calibrate_noise`)."""
+        return None if self.residual_test is None else self.residual_test.describes
 
     @property
     def succeeded(self) -> bool:
-        """Converged, inside the bounds, and every parameter separated by the data."""
-        return self.converged and not self.at_bound and self.separable
+        """Converged, inside the bounds, a residual not larger than the data's noise, and every parameter separated
+        by the data."""
+        return self.converged and not self.at_bound and self.describes is not False and self.separable
+
+    @property
+    def misfit(self) -> list[str]:
+        """The one line that says the model does not describe the data, when it does not."""
+        if self.describes is not False:
+            return []
+        values = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names, self.values))
+        if not self.separable:
+            values += "; there the data do not separate the parameters"
+        return [f"the model does not describe the data: at the best fit found ({values}), "
+                f"{self.residual_test.line(with_rms=False)}; the largest residuals: "
+                f"{self.residual_test.worst_line()}. The "
+                "strip-draw model with these parameters free cannot follow these data: fit other parameters (the "
+                "debris balance: archard_k, debris_carry_over, debris_sink_length) or check the data's standard "
+                "deviations"]
+
+    @property
+    def problems(self) -> list[str]:
+        """Why the fit did not succeed beyond the bounds and the convergence, in words: the misfit, or what the data
+        cannot separate (with a word on the residual when the data carry no measure of their noise)."""
+        if self.misfit:
+            return self.misfit
+        note = ([f"{self.residual_test.reason}: whether the residual is their noise is not judged (give each value's "
+                 "<name>_std, or repeat tests, to judge it)"]
+                if self.inseparable and self.residual_test is not None and self.describes is None else [])
+        return self.inseparable + note
 
     def as_dict(self) -> dict:
         return {n: {"value": float(v), "stderr": None if not math.isfinite(e) else float(e),
@@ -186,6 +257,8 @@ class Fit:
             return "at bound"
         if not self.converged:
             return "not converged"
+        if self.describes is False:
+            return "does not describe the data"
         if not self.separable:
             return "not separable"
         return "converged"
@@ -205,9 +278,117 @@ def start_values(parameters: dict, names, defaults: dict) -> np.ndarray:
     return theta
 
 
+class _Problem:
+    """One weighted least-squares problem: the measured values in order (row, observable), their standard deviations,
+    the fitted parameters' bounds and scales, and the model, whose evaluations it counts."""
+
+    def __init__(self, data: list[Measurement], parameters: dict, names: tuple[str, ...], model):
+        self.names, self.parameters, self.model = names, parameters, model
+        self.keys = [(d.row, n) for d in data for n in d.values]
+        self.tests = [(d.pressure, d.tool_length, d.passes) for d in data for _ in d.values]
+        self.measured = np.array([d.values[n] for d in data for n in d.values])
+        self.sigma = np.array([d.stds.get(n, 1.0) for d in data for n in d.values])
+        self.weighted = all(n in d.stds for d in data for n in d.values)
+        self.lo, self.hi, self.scale = (np.array([FITTABLE[n][i] for n in names]) for i in range(3))
+        self.evaluations = 0
+
+    def run(self, thetas) -> list[np.ndarray]:
+        """The model's values at each parameter vector."""
+        self.evaluations += len(thetas)
+        out = self.model([{**self.parameters, **dict(zip(self.names, map(float, th)))} for th in thetas])
+        return [np.array([o[k] for k in self.keys]) for o in out]
+
+    def cost(self, values) -> float:
+        return float(np.sum(((values - self.measured) / self.sigma) ** 2))
+
+
+@dataclasses.dataclass
+class _Run:
+    """The end of one Gauss-Newton run: the parameters, the model's values there, the last Jacobian."""
+
+    theta: np.ndarray
+    values: np.ndarray
+    J: np.ndarray
+    iterations: int
+    converged: bool
+    change: np.ndarray  # of the last iteration
+    delta: np.ndarray  # the last unconstrained step
+
+
+def gauss_newton(problem: _Problem, theta, max_iterations: int, log=None, values=None) -> _Run:
+    """Gauss-Newton from ``theta`` (the model's ``values`` there, when known) to convergence or ``max_iterations``
+    (module docstring)."""
+    p = problem
+    current = p.run([theta])[0] if values is None else values
+    it, converged, change, delta = 0, False, np.zeros_like(theta), np.zeros_like(theta)
+    J = np.zeros((len(p.keys), len(p.names)))
+    for it in range(1, max_iterations + 1):
+        steps = 1e-3 * np.maximum(np.abs(theta), p.scale)
+        probes = []
+        for j in range(len(p.names)):
+            t = theta.copy()
+            t[j] = t[j] + steps[j] if t[j] + steps[j] <= p.hi[j] else t[j] - steps[j]
+            probes.append(t)
+        cols = p.run(probes)
+        J = np.column_stack([(c - current) / (q[j] - theta[j]) for j, (c, q) in enumerate(zip(cols, probes))])
+        r = (current - p.measured) / p.sigma
+        # the step in units of the parameters' scales, directions the data do not see (singular values below
+        # SINGULAR_RATIO of the largest) left out
+        step, *_ = np.linalg.lstsq(J / p.sigma[:, None] * p.scale[None, :], -r, rcond=SINGULAR_RATIO)
+        delta = step * p.scale
+        new = np.clip(theta + delta, p.lo, p.hi)
+        trial = p.run([new])[0]
+        if p.cost(trial) > p.cost(current) * (1 + 1e-12):  # no progress: half steps; none lowers chi^2: stay
+            for _ in range(HALVINGS):
+                new = 0.5 * (theta + new)
+                trial = p.run([new])[0]
+                if p.cost(trial) <= p.cost(current):
+                    break
+            else:
+                new, trial = theta, current
+        change = new - theta
+        converged = bool(np.all(np.abs(change) <= RTOL * np.maximum(np.abs(theta), p.scale))
+                         or _standard_errors(J, p.sigma, (trial - p.measured) / p.sigma, p.weighted, change)
+                         <= STDERR_FRACTION)
+        theta, current = new, trial
+        if log:
+            log(f"  iteration {it}: " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(p.names, theta))
+                + f", chi^2 {p.cost(current):.4g}")
+        if converged:
+            break
+    return _Run(theta, current, J, it, converged, change, delta)
+
+
+def judge(problem: _Problem, run: _Run) -> Fit:
+    """The :class:`Fit` at the end of ``run``: bounds, standard errors, separability and the residual against the
+    data's noise, all at that point (module docstring)."""
+    p, theta, names = problem, run.theta, problem.names
+    at_bound = {n: ("lower" if theta[j] <= p.lo[j] else "upper") for j, n in enumerate(names)
+                if (theta[j] <= p.lo[j] and run.delta[j] < 0) or (theta[j] >= p.hi[j] and run.delta[j] > 0)}
+    r = (run.values - p.measured) / p.sigma
+    stderr = _stderr(run.J, p.sigma, r, p.weighted)
+    stderr[[names.index(n) for n in at_bound]] = np.nan
+    Jw = run.J / p.sigma[:, None]
+    singular, correlation, inseparable = separability(Jw, names, p.scale)
+    inseparable += [f"the data do not determine {n}: its standard error {e:.3g} exceeds its range [{a:g}, {b:g}]"
+                    for n, e, a, b in zip(names, stderr, p.lo, p.hi) if np.isfinite(b - a) and e > b - a]
+    product = shear_scale_product(names, theta, Jw, r, p.weighted)
+    if product is not None and abs(product["correlation"]) > CORRELATION_MAX:
+        others = [n for n in names if n not in SHEAR_SCALE]
+        inseparable = [product_line(product)] + [m for m in inseparable if not any(n in m for n in SHEAR_SCALE)
+                                                 or any(n in m for n in others)]
+    rows = [{"row": k[0], "observable": k[1], "measured": float(m), "model": float(v), "residual": float(v - m),
+             "std": float(s) if p.weighted else None} for k, m, v, s in zip(p.keys, p.measured, run.values, p.sigma)]
+    test = residual_test(p.tests, p.keys, p.measured, run.values, p.sigma, p.weighted, len(names))
+    return Fit(tuple(names), theta, stderr, rows, run.iterations, p.evaluations, run.converged, run.change, at_bound,
+               singular, correlation, not inseparable, inseparable, float(np.sum(r**2)), len(p.keys) - len(names),
+               product, test)
+
+
 def fit(data: list[Measurement], parameters: dict, names: tuple[str, ...], model, log=None,
         max_iterations: int = MAX_ITERATIONS) -> Fit:
-    """Least-squares fit of the parameters ``names`` to ``data`` (module docstring).
+    """Least-squares fit of the parameters ``names`` to ``data`` (module docstring): Gauss-Newton from the start,
+    and with s and r fitted together, when that fit does not succeed, the cap search (:func:`search_the_cap`).
 
     ``model(list of parameter dicts) -> list of {(row, observable): value}`` evaluates the strip-draw model for every
     measurement at each parameter set (:func:`strip_draw_model`); ``parameters`` holds the start values and the
@@ -220,79 +401,63 @@ def fit(data: list[Measurement], parameters: dict, names: tuple[str, ...], model
         raise ParameterError(f"--fit {' '.join(names)}: fit one or more of {', '.join(FITTABLE)}, each once")
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) or max_iterations < 1:
         raise ParameterError(f"max_iterations = {max_iterations!r} is not allowed; an integer >= 1 is required")
-    keys = [(d.row, n) for d in data for n in d.values]
-    if len(keys) < len(names):
-        raise ParameterError(f"{len(keys)} measured value(s) cannot determine {len(names)} parameters "
+    n_values = sum(len(d.values) for d in data)
+    if n_values < len(names):
+        raise ParameterError(f"{n_values} measured value(s) cannot determine {len(names)} parameters "
                              f"({', '.join(names)}): measure more tests or passes, or fit fewer")
-    measured = np.array([d.values[n] for d in data for n in d.values])
-    sigma = np.array([d.stds.get(n, 1.0) for d in data for n in d.values])
-    weighted = all(n in d.stds for d in data for n in d.values)
-    lo, hi, scale = (np.array([FITTABLE[n][i] for n in names]) for i in range(3))
-    theta = start_values(parameters, names, COMPONENT.defaults)
-    evaluations = 0
+    problem = _Problem(data, parameters, tuple(names), model)
+    run = gauss_newton(problem, start_values(parameters, names, COMPONENT.defaults), max_iterations, log)
+    outcome = judge(problem, run)
+    if all(n in names for n in SHEAR_SCALE) and not outcome.succeeded:
+        outcome = search_the_cap(problem, run, outcome, max_iterations, log)
+    outcome.evaluations = problem.evaluations
+    return outcome
 
-    def run(thetas):
-        nonlocal evaluations
-        evaluations += len(thetas)
-        out = model([{**parameters, **dict(zip(names, map(float, th)))} for th in thetas])
-        return [np.array([o[k] for k in keys]) for o in out]
 
-    def cost(values):
-        return float(np.sum(((values - measured) / sigma) ** 2))
+#: the cap search's starts: r on this grid over its range, s = q / (1 - r) holding (1 - r) s = q
+CAP_SEARCH_RATIOS = tuple(round(0.05 * k, 2) for k in range(20))
+#: model values that differ by more than this (relative) from those the valley gives below the cap's onset
+CAP_SEEN = 1e-9
 
-    current = run([theta])[0]
-    it, converged, change, delta = 0, False, np.zeros_like(theta), np.zeros_like(theta)
-    J = np.zeros((len(keys), len(names)))
-    stderr = np.full(len(names), np.inf)
-    for it in range(1, max_iterations + 1):
-        steps = 1e-3 * np.maximum(np.abs(theta), scale)
-        probes = []
-        for j in range(len(names)):
-            t = theta.copy()
-            t[j] = t[j] + steps[j] if t[j] + steps[j] <= hi[j] else t[j] - steps[j]
-            probes.append(t)
-        cols = run(probes)
-        J = np.column_stack([(c - current) / (p[j] - theta[j]) for j, (c, p) in enumerate(zip(cols, probes))])
-        r = (current - measured) / sigma
-        # the step in units of the parameters' scales, directions the data do not see (singular values below
-        # SINGULAR_RATIO of the largest) left out
-        step, *_ = np.linalg.lstsq(J / sigma[:, None] * scale[None, :], -r, rcond=SINGULAR_RATIO)
-        delta = step * scale
-        new = np.clip(theta + delta, lo, hi)
-        trial = run([new])[0]
-        if cost(trial) > cost(current) * (1 + 1e-12):  # no progress: half steps
-            for _ in range(6):
-                new = 0.5 * (theta + new)
-                trial = run([new])[0]
-                if cost(trial) <= cost(current):
-                    break
-        change = new - theta
-        stderr = _stderr(J, sigma, (trial - measured) / sigma, weighted)
-        converged = bool(np.all((np.abs(change) <= RTOL * np.maximum(np.abs(theta), scale))
-                                | (np.abs(change) <= STDERR_FRACTION * stderr)))
-        theta, current = new, trial
-        if log:
-            log(f"  iteration {it}: " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, theta))
-                + f", chi^2 {cost(current):.4g}")
-        if converged:
-            break
-    at_bound = {n: ("lower" if theta[j] <= lo[j] else "upper") for j, n in enumerate(names)
-                if (theta[j] <= lo[j] and delta[j] < 0) or (theta[j] >= hi[j] and delta[j] > 0)}
-    r = (current - measured) / sigma
-    stderr = _stderr(J, sigma, r, weighted)
-    stderr[[names.index(n) for n in at_bound]] = np.nan
-    singular, correlation, inseparable = separability(J / sigma[:, None], names, scale)
-    inseparable += [f"the data do not determine {n}: its standard error {e:.3g} exceeds its range [{a:g}, {b:g}]"
-                    for n, e, a, b in zip(names, stderr, lo, hi) if np.isfinite(b - a) and e > b - a]
-    product = shear_scale_product(names, theta, J / sigma[:, None], r, weighted)
-    if product is not None and abs(product["correlation"]) > CORRELATION_MAX:
-        others = [n for n in names if n not in SHEAR_SCALE]
-        inseparable = [product_line(product)] + [m for m in inseparable if not any(n in m for n in SHEAR_SCALE)
-                                                 or any(n in m for n in others)]
-    rows = [{"row": k[0], "observable": k[1], "measured": float(m), "model": float(v), "residual": float(v - m),
-             "std": float(s) if weighted else None} for k, m, v, s in zip(keys, measured, current, sigma)]
-    return Fit(tuple(names), theta, stderr, rows, it, evaluations, converged, change, at_bound, singular,
-               correlation, not inseparable, inseparable, float(np.sum(r**2)), len(keys) - len(names), product)
+
+def search_the_cap(problem: _Problem, run: _Run, outcome: Fit, max_iterations: int, log=None) -> Fit:
+    """The fit of s and r where the model's debris reaches the cap (module docstring): the starts along the valley
+    (1 - r) s = q of ``run``'s q, r on :data:`CAP_SEARCH_RATIOS`, the other fitted parameters at ``run``'s values,
+    all evaluated in one batch; those whose model values differ from the r = 0 start's (below the onset every start
+    of the valley gives the same values) reach the cap, and Gauss-Newton starts from the one of them with the least
+    chi^2. The outcome is the better (lower chi^2) of that fit and ``outcome``, with the search's record."""
+    p = problem
+    i, j = (p.names.index(n) for n in SHEAR_SCALE)
+    q = (1.0 - run.theta[j]) * run.theta[i]
+    starts = []
+    for r in CAP_SEARCH_RATIOS:
+        t = run.theta.copy()
+        t[j], t[i] = r, min(max(q / (1.0 - r), p.lo[i]), p.hi[i])
+        starts.append(t)
+    values = p.run(starts)
+    costs = [p.cost(v) for v in values]
+    below = [k for k, v in enumerate(values) if np.all(np.abs(v - values[0]) <= CAP_SEEN * np.abs(values[0]))]
+    reach = [k not in below or len(below) == 1 for k in range(len(starts))]
+    record = {"product": float(q), "flake_shear_ratio": [float(t[j]) for t in starts],
+              "particle_area_scale": [float(t[i]) for t in starts], "chi2": costs, "reaches_cap": reach,
+              "from_start": {"values": dict(zip(p.names, map(float, run.theta))), "chi2": outcome.chi2,
+                             "status": outcome.status(), "iterations": run.iterations}}
+    candidates = [k for k in range(len(starts)) if reach[k]]
+    if log:
+        log(f"  from the start: {outcome.status()} (chi^2 {outcome.chi2:.4g}); the cap search along (1 - r) s = "
+            f"{q:.4g}, r = {CAP_SEARCH_RATIOS[0]:g}-{CAP_SEARCH_RATIOS[-1]:g}: {len(candidates)} of {len(starts)} "
+            f"starts reach the cap" + (f" (r >= {min(starts[k][j] for k in candidates):g})" if candidates else ""))
+    if not candidates:
+        record["chosen"] = "start"
+        return dataclasses.replace(outcome, search=record)
+    best = min(candidates, key=lambda k: costs[k])
+    record["from"] = dict(zip(p.names, map(float, starts[best])))
+    if log:
+        log(f"  from r = {starts[best][j]:g}, s = {starts[best][i]:.4g} (chi^2 {costs[best]:.4g}):")
+    searched = judge(p, gauss_newton(p, starts[best], max_iterations, log, values[best]))
+    chosen = searched if searched.chi2 < outcome.chi2 else outcome
+    record["chosen"] = "search" if chosen is searched else "start"
+    return dataclasses.replace(chosen, search=record)
 
 
 #: the parameters that enter mu below the cap only through (1 - r) s
@@ -333,6 +498,18 @@ def product_line(product: dict) -> str:
             "(1 - (1 - r) s A_p / A_c) depends on them only through that product, so they cannot be separated; fix one "
             "(--set) or add tests whose debris reaches the cap, where mu = r mu0 (more passes, higher pressure, a "
             "longer pad)")
+
+
+def _standard_errors(J, sigma, r, weighted: bool, change) -> float:
+    """The length of ``change`` in standard errors: sqrt(d^T C^-1 d) with C^-1 = J_w^T J_w (divided by chi^2 / (N - n)
+    unless the data give their standard deviations), the change of the model it makes in units of the data's noise.
+    One parameter: |d| / its standard error; several: at least |d_i| / se_i for each, and the change along a
+    direction the data hardly see counts as little as they see it."""
+    Jw = J / sigma[:, None]
+    moved = float(np.sum((Jw @ change) ** 2))
+    if not weighted:
+        moved /= max(float(np.sum(r**2)) / max(1, J.shape[0] - J.shape[1]), 1e-300)
+    return math.sqrt(moved)
 
 
 def _stderr(J, sigma, r, weighted: bool) -> np.ndarray:

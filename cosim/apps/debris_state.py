@@ -1,10 +1,22 @@
-"""The debris state an exported friction law is written at: a beta the user gives, or the one a strip-draw test
-reaches after N passes.
+"""The debris state an exported friction law is written at: a beta the user gives, the one a strip-draw test
+reaches after N passes, or the one a sheet point makes sliding S under each pressure.
 
-An FE code has no beta (the area fraction of the strip covered by flakes, docs/model.md section 3): within one stroke
-a point of the tool slides little, while debris builds up over strokes. So the user chooses the state:
+A tabulated friction law of an FE code has no beta (the area fraction of the strip covered by flakes, docs/model.md
+section 3). In the model a sheet point makes its debris while it slides under pressure, within the stroke, in
+proportion to its own pressure times its slide (d beta / ds = K P / (H h_p), Eq. 37): tens of millimetres over a die
+radius or under a blankholder. The user routines (``export vfriction|fric|usrfrc``) keep that state per contact point;
+a table holds one of these states, which the user chooses:
 
 - ``--beta B`` (several: one file each);
+- ``--slide S`` (several: one file each): at each contact pressure P and sliding velocity v of the file, the debris a
+  sheet point makes sliding S at that (P, v) from the blank's debris (``beta_initial``, a strip-draw parameter: 0, a
+  clean blank, unless ``--set`` gives it), keeping what it makes (no transport: zeta = 0), by the per-point update of
+  the native core the strip's nodes and the user routines share (:meth:`~tribocosim.components.friction_export.
+  exported_law.ExportedLaw.beta_after_slide`: the Archard production K P S / (H h_p), the sink if
+  ``debris_sink_length`` is set, the cap of Eq. 24 at (P, v)). So beta rises with P and mu falls with it, as in the
+  strip-draw test. The production does not depend on v; the cap does, through the table: each value of the file is
+  the state of a point that slid S at that (P, v), the state the user routines reach for such a point, so that the
+  file is what they would return there (for the shipped table the cap, like mu, is the same at every velocity);
 - ``--passes N`` with the test's ``--pressure`` (and ``--velocity``, ``--pad-length``; the paper's 0.08 m/s and 35
   mm pad by default): the strip-draw test run through the same native core
   (:func:`tribocosim.cosim.studies.stripdraw_experiment.draw`, the multi-pass runs of the calibration and the paper
@@ -31,18 +43,20 @@ from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw
 
 @dataclass(frozen=True)
 class DebrisChoice:
-    """The debris state asked for: ``beta`` values, or ``passes`` of a strip-draw test at ``pressure`` (and
-    ``velocity``, ``pad_length``; None: the paper's), in the export's units; neither: beta is an axis of the file.
-    ``beta`` and ``passes`` take one value or a sequence of them (``DebrisChoice(beta=0.1)``, ``beta=(0, 0.1)``)."""
+    """The debris state asked for: ``beta`` values, ``passes`` of a strip-draw test at ``pressure`` (and
+    ``velocity``, ``pad_length``; None: the paper's), or ``slide`` lengths, in the export's units; none: beta is an
+    axis of the file. ``beta``, ``passes`` and ``slide`` take one value or a sequence of them
+    (``DebrisChoice(beta=0.1)``, ``beta=(0, 0.1)``, ``slide=20``)."""
 
     beta: tuple = ()
     passes: tuple = ()
     pressure: float | None = None
     velocity: float | None = None
     pad_length: float | None = None
+    slide: tuple = ()
 
     def __post_init__(self):
-        for name in ("beta", "passes"):
+        for name in ("beta", "passes", "slide"):
             value = getattr(self, name)
             if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
                 value = (value,)
@@ -62,8 +76,11 @@ def _finite(option: str, value) -> float:
 def debris_states(choice: DebrisChoice, law: ExportedLaw, units: UnitSystem, log=None) -> tuple[DebrisState, ...]:
     """The states of an export (module docstring); ParameterError naming the option of a bad choice."""
     test = {"--pressure": choice.pressure, "--velocity": choice.velocity, "--pad-length": choice.pad_length}
-    if choice.beta and choice.passes:
-        raise ParameterError("--beta and --passes both given: the debris state is one or the other")
+    given = [name for name, on in (("--beta", choice.beta), ("--passes", choice.passes), ("--slide", choice.slide))
+             if on]
+    if len(given) > 1:
+        raise ParameterError(f"{given[0]} and {given[1]} both given: the debris state is one of --beta, --passes and "
+                             "--slide")
     if not choice.passes:
         given = [k for k, v in test.items() if v is not None]
         if given:
@@ -77,9 +94,41 @@ def debris_states(choice: DebrisChoice, law: ExportedLaw, units: UnitSystem, log
             states.append(DebrisState(beta, f"beta{beta:g}", f"beta = {beta:g}, given (--beta)",
                                       {"beta": beta, "how": "given"}))
         return tuple(states)
+    if choice.slide:
+        return tuple(_after_slide(s, law, units) for s in choice.slide)
     if not choice.passes:
         return (AXIS_STATE,)
     return _after_passes(choice, law, units, log)
+
+
+def _after_slide(text, law: ExportedLaw, units: UnitSystem) -> DebrisState:
+    """The state of ``--slide S`` (module docstring)."""
+    u, prm = units, law.params
+    shown = _finite("--slide", text)
+    if shown < 0:
+        raise ParameterError(f"--slide {shown:g} {u.length} is negative; a sheet point's slide is >= 0")
+    slide = u.length_from_file(shown)
+    beta0 = prm.beta_initial
+    start = ("0, a clean blank (--set beta_initial=B: a blank that arrives with debris)" if beta0 == 0 else
+             f"{beta0:g}, the debris the blank arrives with (beta_initial)")
+    sink = (f"; with the sink of length lambda = {prm.debris_sink_length / u.length_scale:g} {u.length}: "
+            "q lambda (1 - exp(-S / lambda)) above beta_initial exp(-S / lambda)" if prm.debris_sink_length > 0 else
+            "")
+    pressures = law.table.pressure
+    at = law.beta_after_slide(pressures, V0, slide, beta0)
+    listed = ", ".join(f"{u.pressure_to_file(p):g} {u.pressure} {b:.4g}" for p, b in zip(pressures, at))
+    text = (f"beta = beta(P, S), the debris a sheet point makes sliding S = {shown:g} {u.length} at a constant "
+            f"contact pressure P and sliding velocity v, at each (P, v) of the file, from beta_initial = {start}, "
+            "keeping what it makes (no transport: zeta = 0): the per-point update the strip's nodes and the user "
+            "routines share "
+            f"(tc_node_slide, components/native/core/tc_node_friction.h): the Archard production K P S / (H h_p) "
+            f"(Eq. 37; K = {prm.archard_k:g}, H = {prm.hardness / 1e6:g} MPa, h_p = {prm.particle_thickness * 1e6:g} "
+            f"um){sink}, capped at the law's cap at (P, v) (Eq. 24); the production does not depend on v, the cap "
+            "does through the table: each value is the state of a point that slid S at that (P, v), as the user "
+            f"routines make it; beta at the table's pressures and {u.velocity_to_file(V0):g} {u.velocity}: {listed}")
+    record = {"beta": None, "how": "slide", "slide": slide, "beta_initial": beta0, "units": "SI",
+              "driver": "tc_node_slide (components/native/core/tc_node_friction.h)"}
+    return DebrisState(None, f"slide{shown:g}", text, record, slide=slide, beta_initial=beta0)
 
 
 def _after_passes(choice: DebrisChoice, law: ExportedLaw, units: UnitSystem, log) -> tuple[DebrisState, ...]:

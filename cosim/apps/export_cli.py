@@ -1,8 +1,9 @@
 """``tribocosim export``: the strip-draw friction law for a forming simulation (LS-DYNA, Abaqus, a neutral table, user
 friction routines).
 
-    tribocosim export FORMAT -o FILE [--beta B ... | --passes N ... --pressure P [--velocity V] [--pad-length L]]
-                     [--units mm-t-s|SI] [--band K] [--table T | --calibration C] [--set NAME=VALUE ...]
+    tribocosim export FORMAT -o FILE [--beta B ... | --slide S ... |
+                                      --passes N ... --pressure P [--velocity V] [--pad-length L]]
+                     [--units mm-t-s|SI] [--band K] [--table T | --calibration paper|none|C] [--set NAME=VALUE ...]
                      [--option NAME]
                      [--pressure-range LO HI] [--beta-levels B ...] [--allow-unsimulated] [--tolerance X]
                      [--table-id N] [--interaction-name NAME]
@@ -12,9 +13,18 @@ INTERACTION with a tabulated *FRICTION; without a debris state beta is field var
 table), ``vfriction``, ``fric``, ``usrfrc`` (user friction routines for Abaqus/Explicit, Abaqus/Standard and LS-DYNA:
 FILE.f with FILE.c and FILE.h beside it, the debris state kept per contact node; they take --table, --calibration,
 --set, --option and --units). Every pressure, velocity and length is in the ``--units`` system. Bad input is one line
-naming the option on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short of the target, mu
-below the documented floor of the strip-draw contact, naming the setting that lets it) is one line on stderr per file,
-``tribocosim export: warning: <file>: ...``, and in the file's header; the file is written and the exit code is 0.
+naming the option on stderr, exit code 2, and no file written. A warning about what a file holds (its accuracy short
+of the target, mu below the documented floor of the strip-draw contact, naming the setting that lets it) is one line on
+stderr per file, ``tribocosim export: warning: <file>: ...``, and in the file's header; the file is written and the
+exit code is 0. A note about the law (uncalibrated, or with parameters other than its calibration's, and the one-pass
+drop it gives in the paper's test) is one line on stderr, ``tribocosim export: note: ...``, and in the headers.
+
+The law is calibrated by default: without --table, --calibration or --set particle_area_scale it is the shipped
+paper calibration (--calibration paper: the scale s of the flakes' load share fitted so that the model's one-pass drop
+of mu_bar at 25 MPa on the 35 mm pad is the paper's 35 %; the mesoscale campaign's law as simulated, s = 1, gives a
+smaller one, and a forming simulation would carry a law weaker in pressure than the test's). --slide S writes the law
+at the debris a sheet point makes sliding S under each pressure (mu falls with pressure, as in the test). A law that
+does not depend on the velocity (the shipped table's) is written at one velocity, and the output says so.
 docs/forming-friction.md is the guide.
 """
 
@@ -24,6 +34,7 @@ import argparse
 import shlex
 import sys
 
+from tribocosim.components.stripdraw.multipass_options import option_names
 from tribocosim.errors import TribocosimError
 
 FORMATS = ("lsdyna", "abaqus", "table", "vfriction", "fric", "usrfrc")
@@ -46,11 +57,17 @@ def _parser() -> argparse.ArgumentParser:
     from tribocosim.components.friction_export.export_units import DEFAULT_UNITS, UNIT_SYSTEMS
     from tribocosim.components.friction_export.lsdyna_deck import DEFAULT_TABLE_ID
 
-    p = _Parser(prog="tribocosim export", description=__doc__.split("\n\n")[2].strip())
+    p = _Parser(prog="tribocosim export", description=__doc__.split("\n\n")[2].strip(),
+                epilog=__doc__.split("\n\n")[3].strip())
     p.add_argument("format", metavar="FORMAT", help=f"one of {', '.join(FORMATS)}")
     p.add_argument("-o", "--out", required=True, help="the file to write")
     state = p.add_argument_group("debris state (none: beta is an axis of the file; abaqus and table only)")
     state.add_argument("--beta", nargs="+", default=[], metavar="B", help="debris area fraction(s): one file each")
+    state.add_argument("--slide", nargs="+", default=[], metavar="S", help="slide(s) in the --units system's length "
+                       "(mm in mm-t-s, m in SI): at each pressure P and velocity of the file, the debris a sheet point "
+                       "makes sliding S there from a clean blank (--set beta_initial=B: the blank's debris), keeping "
+                       "what it makes (zeta = 0): beta = K P S / (H h_p) below the cap (Eq. 24), with the sink if "
+                       "debris_sink_length is set; e.g. 20 for a die radius; one file each")
     state.add_argument("--passes", nargs="+", default=[], metavar="N",
                        help="the state a strip-draw test reaches after N passes: one file each")
     state.add_argument("--pressure", default=None, help="--passes: the test's nominal pressure in the --units system "
@@ -64,12 +81,16 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--band", default=None, metavar="K", help="also write FILE.upper.SUFFIX and FILE.lower.SUFFIX: mu "
                    "+- K standard errors")
     law = p.add_mutually_exclusive_group()
-    law.add_argument("--table", default=None, help="the friction table (default: the shipped one)")
-    law.add_argument("--calibration", default=None, help="a calibration file written by tribocosim calibrate")
+    law.add_argument("--table", default=None, help="a friction table, its law uncalibrated (particle_area_scale = 1 "
+                     "unless --set gives it)")
+    law.add_argument("--calibration", default=None, metavar="C", help="paper (the default, without --table and --set "
+                     "particle_area_scale: the shipped table with the paper report's calibration on the paper's "
+                     "one-pass 35 %% drop at 25 MPa, models/calibration_paper.json), none (the shipped table "
+                     "uncalibrated, A_p as the mesoscale campaign simulated it), or a calibration file (a table "
+                     "written by tribocosim calibrate, or a calibration's JSON file)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a strip-draw parameter")
     p.add_argument("--option", default=None, metavar="NAME", help="a multi-pass option of the paper report "
-                   "(shear_0.25, shear_0.5, sink_140, sink_35, carry_0.5; paper: the defaults): its parameters for the "
-                   "law and the passes; --set overrides them")
+                   f"({', '.join(option_names())}): its parameters for the law and the passes; --set overrides them")
     p.add_argument("--pressure-range", nargs=2, default=None, metavar=("LO", "HI"),
                    help="the pressures to export (default: the table's axis)")
     p.add_argument("--beta-levels", nargs="+", default=None, metavar="B",
@@ -112,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         state = DebrisChoice(beta=tuple(args.beta), passes=tuple(args.passes), pressure=args.pressure,
-                             velocity=args.velocity, pad_length=args.pad_length)
+                             velocity=args.velocity, pad_length=args.pad_length, slide=tuple(args.slide))
         result = export_friction(
             args.format, args.out, state, units=args.units,
             band=None if args.band is None else _number("--band", args.band),
@@ -132,6 +153,8 @@ def main(argv: list[str] | None = None) -> int:
         print("tribocosim export: interrupted by SIGINT: no file is written", file=sys.stderr)
         return 130
     print("\n".join(result.summary()))
+    for line in result.notes:  # what the law is, when it is not a calibration's fitted model
+        print(f"tribocosim export: note: {line}", file=sys.stderr)
     for line in result.warning_lines():  # the files are written; what they hold that the user should know
         print(f"tribocosim export: warning: {line}", file=sys.stderr)
     return 0

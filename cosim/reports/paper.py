@@ -20,7 +20,7 @@ Calibration on one number of the paper's text (Sec. 2.1): after one pass on the 
 drop(s) = 0.35 (drop rises with s: blocked flakes carry more of the contact), by bracketing and false
 position (Illinois) to |drop - 0.35| < 1e-4. The columns:
 
-- A_c from the table (``mesoscale``, the default), s fitted: the default model (r at the documented floor);
+- A_c from the table (``mesoscale``, the default), s fitted: the default model (r at the floor the project sets);
 - the paper's model (frictionless flakes, r = 0), A_c from the table, s fitted;
 - A_c from Eq. 8 (``eq8``), s fitted: the same model up to a constant factor on A_p / A_c (Eq. 8's area over the
   table's), so its s is the other's times that factor and its predictions nearly the same: it confirms nothing
@@ -30,9 +30,12 @@ position (Illinois) to |drop - 0.35| < 1e-4. The columns:
 
 The standard error of s reported beside it combines the quote ("35 %" rounded to a whole percent: a uniform error
 of +-0.5 points, carried to s by d drop / d s) and the table's ensemble noise; the uncertainty budget
-(:mod:`tribocosim.cosim.reports.paper_physics`) adds every other chosen input, r among them. Nothing else is fitted:
-the 3-pass drop, the pad ordering and the zeta and K trends are predictions. The falsifiable prediction of the
-floor (five passes, a seeded strip: :mod:`tribocosim.cosim.reports.paper_floor`) closes the report.
+(:mod:`tribocosim.cosim.reports.paper_budget`) adds every other chosen input, r among them, with the floor scan.
+Nothing else is fitted; an entry whose mu_bar the floor r mu0 holds (within 10 %) is marked as set by that choice,
+the others are predictions. The floor's prediction at 25 MPa (five passes, a seeded strip:
+:mod:`tribocosim.cosim.reports.paper_floor`) and the discriminating predictions (the drops against pressure, five
+passes at 10 MPa, the coverage after one pass, the start of mu(t): :mod:`tribocosim.cosim.reports.paper_discriminators`)
+close the report.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import time
 from pathlib import Path
 
@@ -48,8 +52,8 @@ import numpy as np
 from tribocosim.errors import TribocosimError
 from tribocosim.components.stripdraw.friction_floor import (FLAKE_SHEAR_RATIO_DEFAULT, FLAKE_SHEAR_RATIO_RANGE,
                                                            MU_FLOOR, PAPER_MODEL)
-from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, run_points
-from tribocosim.cosim.reports import paper_floor
+from tribocosim.cosim.studies.stripdraw_experiment import V0, Point, draw, point_pool, run_points
+from tribocosim.cosim.reports import paper_budget, paper_discriminators, paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports import paper_text
 from tribocosim.cosim.reports.paper_physics import CAL_PAD, CAL_PRESSURE, LOW_PRESSURE
@@ -120,11 +124,19 @@ class Calibration:
 
 
 class Runs:
-    """mu_bar of strip-draw tests, each run once (a test with n passes also gives passes 1..n-1)."""
+    """mu_bar of strip-draw tests, each run once (a test with n passes also gives passes 1..n-1), in one pool of
+    worker processes kept until :meth:`close` (a calibration's steps are batches of two tests)."""
 
     def __init__(self, workers: int | None, log=None):
         self.workers, self.log, self._done = workers, log, {}
         self.evaluations = 0
+        self._pool = None
+
+    def close(self) -> None:
+        """End the worker processes (the results stay)."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
 
     @staticmethod
     def _key(p: Point) -> tuple:
@@ -139,7 +151,9 @@ class Runs:
         todo = list(need.values())
         if todo:
             t0 = time.perf_counter()
-            for p, passes in zip(todo, run_points(todo, self.workers, draw)):
+            if self._pool is None and len(todo) > 1 and (self.workers or os.cpu_count() or 1) > 1:
+                self._pool = point_pool(self.workers)
+            for p, passes in zip(todo, run_points(todo, self.workers, draw, self._pool)):
                 self._done[self._key(p)] = passes
             self.evaluations += sum(p.passes for p in todo)
             if self.log:
@@ -354,6 +368,7 @@ def metrics(figures: dict, grid: Grid) -> dict:
         "k_steps": k_steps,
         "k_saturates": len(k_steps) >= 2 and abs(k_steps[-1]) < abs(k_steps[-2]),
         "mu_low": passes[1][min(grid.pressures)],
+        "mu_at_drop": {k: c[at] for k, c in passes.items()},
         "beta_max": max(r["beta_max"] for rows in figures.values() for r in rows),
         "beta_max_3pass": next(r["beta_max"] for r in figures["fig2b"]
                                if r["pass"] == grid.passes and r["pressure_mpa"] == at),
@@ -420,7 +435,8 @@ def plot(results: dict, out: Path) -> list[str]:
 
 def run_report(out: Path, table_file: str | None = None, quick: bool = False, workers: int | None = None,
                log=None) -> dict:
-    """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv and the figures."""
+    """Run the report (module docstring) into ``out``: paper.md, paper.json, paper.csv, the figures and
+    readme_results.md (the README's block of the results)."""
     import csv
 
     from tribocosim.errors import ParameterError
@@ -437,6 +453,66 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     out.mkdir(parents=True, exist_ok=True)
     runs = Runs(workers, log)
     t0 = time.perf_counter()
+    try:
+        cals, results, extra = _compute(runs, base, table, grid, quick, workers, log)
+    finally:
+        runs.close()
+    wall = time.perf_counter() - t0
+    with open(out / "paper.csv", "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["configuration", "figure", "tool_length", "pass", "zeta", "archard_k", "pressure_mpa", "mu_bar"])
+        for c, res in results.items():
+            for name, rows in res["figures"].items():
+                for r in rows:
+                    tool = r.get("tool_length", 0.07 if name == "fig18b" else CAL_PAD)
+                    w.writerow([c.label, name, tool, r.get("pass", 1), r.get("zeta", 0.0 if name == "fig18b" else
+                                PAPER_ZETA), r.get("archard_k", PAPER_K), r["pressure_mpa"], repr(r["mu_bar"])])
+    files = plot(results, out) + [paper_floor.plot(extra["prediction"], MU_FLOOR, out),
+                                  paper_discriminators.plot(extra["discriminators"], out, floor=MU_FLOOR)]
+    header = (f"# The paper's macro results ({'quick' if quick else 'full'} report)\n\nGenerated by `tribocosim report "
+              f"paper{' --quick' if quick else ''}` in {wall:.0f} s ({runs.evaluations} strip-draw passes).")
+    text = paper_text.markdown(results, cals, grid, table, table_path, header, files)
+    calibrated = results[Config("mesoscale", True)]["metrics"]
+    text += "\n".join(paper_text.physics_markdown(extra, cals, grid, calibrated, clamps_per_figure(calibrated))) + "\n"
+    (out / "paper.md").write_text(text, encoding="utf-8")
+    (out / "readme_results.md").write_text(readme_results(results, cals, grid, extra), encoding="utf-8")
+    summary = {
+        "mode": "quick" if quick else "full", "wall_time": wall, "table": str(table_path),
+        "table_hash": table.metadata.get("content_hash"), "grid": dataclasses.asdict(grid),
+        "paper": {"drop_1pass_25mpa": PAPER_DROP_1PASS, "drop_3pass_25mpa": PAPER_DROP_3PASS},
+        "calibrations": {k: {**dataclasses.asdict(v), "stderr": v.stderr} for k, v in cals.items()},
+        "configurations": {c.label: {"contact_area": c.contact_area, "calibrated": c.calibrated,
+                                     "flake_shear_ratio": shear_ratio(base, c),
+                                     "metrics": _jsonable(r["metrics"])} for c, r in results.items()},
+        "floor": {"mu_floor": MU_FLOOR, "flake_shear_ratio_range": list(FLAKE_SHEAR_RATIO_RANGE)},
+        "prediction": _jsonable(extra["prediction"]),
+        "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
+                              for k, v in extra["options"].items()}),
+        "budget": _jsonable(extra["budget"]), "discriminators": _jsonable(extra["discriminators"]),
+        "observable": _jsonable({"choice": {k: v for k, v in extra["observable"]["choice"].items()
+                                            if k != "calibration"},
+                                 "evidence": extra["observable"]["evidence"]}),
+        "speed": _jsonable(extra["speed"]), "alpha": _jsonable(extra["alpha"]),
+        "direct_slides": _jsonable(extra["direct_slides"]),
+    }
+    (out / "paper.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    return summary
+
+
+def readme_results(results: dict, cals: dict, grid: Grid, extra: dict) -> str:
+    """The README's block of the results: the paper-vs-model table, what its entries are, the budget in a paragraph."""
+    from tribocosim.cosim.reports.paper_text_predictions import budget_summary
+
+    lines = paper_text.results_table(results, cals, grid)
+    lines += ["", paper_text.table_note(), "",
+              "Uncertainty budget of the default model (each chosen input over the range its evidence gives, s recalibrated "
+              "at every end, each side summed apart; docs/model.md section 8): " + budget_summary(extra["budget"], extra["options"]["default"],
+                                                                          cals["mesoscale"])]
+    return "\n".join(lines) + "\n"
+
+
+def _compute(runs: Runs, base: dict, table, grid: Grid, quick: bool, workers: int | None, log=None) -> tuple:
+    """The calibrations, every configuration's figures with their metrics, and :func:`physics`."""
     cals = {}
     for config in CONFIGS:
         if config.calibrated and config.key not in cals:
@@ -451,94 +527,31 @@ def run_report(out: Path, table_file: str | None = None, quick: bool = False, wo
     for c in CONFIGS:
         figures = collect(runs, figs[c])
         results[c] = {"figures": figures, "metrics": metrics(figures, grid)}
-    extra = physics(runs, base, table, cals["mesoscale"], quick, workers, log)
-    wall = time.perf_counter() - t0
-    with open(out / "paper.csv", "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(["configuration", "figure", "tool_length", "pass", "zeta", "archard_k", "pressure_mpa", "mu_bar"])
-        for c, res in results.items():
-            for name, rows in res["figures"].items():
-                for r in rows:
-                    tool = r.get("tool_length", 0.07 if name == "fig18b" else CAL_PAD)
-                    w.writerow([c.label, name, tool, r.get("pass", 1), r.get("zeta", 0.0 if name == "fig18b" else
-                                PAPER_ZETA), r.get("archard_k", PAPER_K), r["pressure_mpa"], repr(r["mu_bar"])])
-    files = plot(results, out) + [paper_floor.plot(extra["prediction"], MU_FLOOR, out)]
-    header = (f"# The paper's macro results ({'quick' if quick else 'full'} report)\n\nGenerated by `tribocosim report "
-              f"paper{' --quick' if quick else ''}` in {wall:.0f} s ({runs.evaluations} strip-draw passes).")
-    text = paper_text.markdown(results, cals, grid, table, table_path, header, files)
-    calibrated = results[Config("mesoscale", True)]["metrics"]
-    text += "\n".join(paper_text.physics_markdown(extra, cals, grid, calibrated, clamps_per_figure(calibrated))) + "\n"
-    (out / "paper.md").write_text(text, encoding="utf-8")
-    summary = {
-        "mode": "quick" if quick else "full", "wall_time": wall, "table": str(table_path),
-        "table_hash": table.metadata.get("content_hash"), "grid": dataclasses.asdict(grid),
-        "paper": {"drop_1pass_25mpa": PAPER_DROP_1PASS, "drop_3pass_25mpa": PAPER_DROP_3PASS},
-        "calibrations": {k: {**dataclasses.asdict(v), "stderr": v.stderr} for k, v in cals.items()},
-        "configurations": {c.label: {"contact_area": c.contact_area, "calibrated": c.calibrated,
-                                     "flake_shear_ratio": shear_ratio(base, c),
-                                     "metrics": _jsonable(r["metrics"])} for c, r in results.items()},
-        "floor": {"mu_floor": MU_FLOOR, "flake_shear_ratio_range": list(FLAKE_SHEAR_RATIO_RANGE)},
-        "prediction": _jsonable(extra["prediction"]),
-        "options": _jsonable({k: {kk: vv for kk, vv in v.items() if kk != "calibration"}
-                              for k, v in extra["options"].items()}),
-        "budget": _jsonable(extra["budget"]), "budget_total": _jsonable(extra["budget_total"]),
-        "budget_intervals": _jsonable(extra["budget_intervals"]),
-        "budget_not_varied": _jsonable(extra["budget_not_varied"]),
-        "observable": _jsonable({"choice": {k: v for k, v in extra["observable"]["choice"].items()
-                                            if k != "calibration"},
-                                 "evidence": extra["observable"]["evidence"]}),
-        "speed": _jsonable(extra["speed"]), "alpha": _jsonable(extra["alpha"]),
-        "direct_slides": _jsonable(extra["direct_slides"]),
-    }
-    (out / "paper.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
-    return summary
+    return cals, results, physics(runs, base, table, cals["mesoscale"], quick, workers, log)
 
 
 def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, workers: int | None, log=None) -> dict:
-    """The multi-pass options, the uncertainty budget with its intervals, the observable chosen (the other choice's
-    predictions and the evidence), the drawing-speed prediction, alpha of both observables and the direct-slide check
+    """The multi-pass options, the uncertainty budget with its intervals (:mod:`tribocosim.cosim.reports.paper_budget`),
+    the observable chosen (the other choice's predictions and the evidence), the drawing-speed prediction, alpha of
+    both observables, the floor's prediction (:mod:`tribocosim.cosim.reports.paper_floor`), the discriminating
+    predictions (:mod:`tribocosim.cosim.reports.paper_discriminators`) and the direct-slide check
     (:mod:`tribocosim.cosim.reports.paper_physics`), for A_c from the table."""
-    from tribocosim.paths import DEFAULT_TABLE
-
     params = config_params(base, Config("mesoscale", True))
     if log:
         log("multi-pass options ...")
     options = {o.name: pp.calibrated_predictions(runs, {**params, **o.parameters}, table, calibrate) for o in pp.OPTIONS}
     if log:
         log("uncertainty budget ...")
-    varied = {}
-    with pp.scratch_folder() as folder:
-        # the domain-size variation's tables are the shipped table's (the same slides on 128 and 512 um domains)
-        shipped = Path(base["table_file"]).resolve() == Path(DEFAULT_TABLE).resolve()
-        domains = {name: Path(DEFAULT_TABLE).with_name(file) for name, file in pp.DOMAIN_TABLES.items()}
-        tables = pp.table_variants(table, Path(folder),
-                                   {name: path for name, path in domains.items() if shipped and path.is_file()})
-        for v in pp.VARIATIONS:
-            if v.table in pp.DOMAIN_TABLES and v.table not in tables:
-                continue  # no table on that domain size: one-sided, or named as not varied (pp.inputs_not_varied)
-            if v.table is not None and v.table not in tables:
-                needs = "version 4" if v.table == pp.FORM_VARIANT else "version 3 or 4"
-                varied[v.name] = {"error": f"needs a {needs} table that records its campaign"}
-                continue
-            if v.name == pp.SHEAR_VARIATION:
-                varied[v.name] = pp.shear_upper_end(runs, params, table, calibrate)
-                continue
-            p = {**params, **({"table_file": tables[v.table]} if v.table else {}), **v.parameters}
-            varied[v.name] = pp.calibrated_predictions(runs, p, table, calibrate)
     nominal = options["default"]
-    rows = pp.budget(nominal, varied)
-    total = {key: pp.budget_total(rows, key, cal.stderr_quote if key == "scale" else 0.0)
-             for key in ("scale", "drop3", "drop140")}
-    intervals = {"scale": pp.band(cal.scale, total["scale"], 0.0, math.inf),
-                 "drop3": pp.band(nominal["drops"][2], total["drop3"]),
-                 "drop140": pp.band(nominal["drop_140"], total["drop140"])}
+    budget = paper_budget.run_budget(runs, params, base["table_file"], table, calibrate, nominal, cal.stderr_quote,
+                                     log)
     if log:
         log("the observable: the other choice and the evidence ...")
     observable = {"choice": pp.calibrated_predictions(runs, {**params, **pp.OBSERVABLE_CHOICE}, table, calibrate),
                   "evidence": pp.observable_evidence(runs, params, table, calibrate)}
     if log:
         log("drawing speed ...")
-    speed = pp.speed_prediction(runs, params, cal.scale, total["scale"])
+    speed = pp.speed_prediction(runs, params, cal.scale, budget["intervals"]["scale"])
     alpha = {"load_bearing": pp.table_alpha(table, "particle_area"),
              "clusters": pp.table_alpha(table, "particle_area_clusters"), "study": pp.alpha_study(),
              "sizes": pp.cluster_rule_sizes()}
@@ -546,11 +559,14 @@ def physics(runs: Runs, base: dict, table, cal: Calibration, quick: bool, worker
         log("the floor's prediction: five passes and a seeded strip ...")
     prediction = {"five_passes": paper_floor.five_passes(runs, options, params),
                   "seeded": paper_floor.seeded_strip(runs, options, params)}
+    if log:
+        log("the discriminating predictions: drops against pressure, five passes at 10 MPa, coverage, mu(t) ...")
+    discriminators = paper_discriminators.predict(runs, options, params)
+    discriminators["separations"] = paper_discriminators.separations(discriminators, prediction["five_passes"],
+                                                                     prediction["seeded"])
     checks = pp.direct_slide_check(table, workers, quick, log)
-    return {"options": options, "budget": rows, "budget_total": total, "budget_intervals": intervals,
-            "prediction": prediction,
-            "budget_not_varied": pp.inputs_not_varied(table, tables), "observable": observable,
-            "speed": speed, "alpha": alpha, "direct_slides": checks,
+    return {"options": options, "budget": budget, "prediction": prediction, "discriminators": discriminators,
+            "observable": observable, "speed": speed, "alpha": alpha, "direct_slides": checks,
             "simulated_velocities": pp.simulated_velocities(table)}
 
 

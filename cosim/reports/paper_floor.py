@@ -1,5 +1,5 @@
-"""The falsifiable prediction of the floor under debris (docs/model.md, "The floor under debris"): what five passes
-and a seeded strip would show for the default model, the paper's model and the other multi-pass options.
+"""The floor's prediction at 25 MPa (docs/model.md, "The floor under debris"): what five passes and a seeded strip
+would show for the default model, the paper's model and the other multi-pass options.
 
 Every option of :data:`tribocosim.cosim.reports.paper_physics.OPTIONS` runs at the s it was calibrated with on the
 paper's 35 % one-pass drop (so all of them agree on the first pass), on the 35 mm pad with the pure model of
@@ -17,9 +17,12 @@ paper's 35 % one-pass drop (so all of them agree on the first pass), on the 35 m
   r > 0 and falls toward 0 with r = 0; the carry-over option is then the paper's model, and a sink takes part of
   the seeded debris during the pass.
 
-What decides between them: mu_bar of the seeded strip at large seeding (r mu0 against about 0) tells r; the debris
-weighed after each of five passes tells the debris balance (a carry-over or a sink against none), and with it
-mu_bar of passes 4-5 tells r again.
+How well each tells them apart is measured by
+:func:`tribocosim.cosim.reports.paper_discriminators.separations`: at 25 MPa the floor, a 35 mm sink and half the
+debris carried over level off near each other over passes 4-5 (the weakest of the records; the report gives by how
+much), while
+the seeded strip holds r mu0 against a sink's lower plateau and the frictionless flakes' fall; the seeded debris
+stands for a coverage only through the assumed h_p.
 """
 
 from __future__ import annotations

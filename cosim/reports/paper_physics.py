@@ -7,27 +7,26 @@ calibrated the same way as the report's main columns: the scale s of A_p solves 
 one-pass drop at 25 MPa on the 35 mm pad (:func:`tribocosim.cosim.reports.paper.calibrate`); everything else is
 predicted.
 
-- Multi-pass options (:data:`OPTIONS`; docs/model.md sections 3-4 and "The floor under debris"): the default model
-  (flake-borne shear at the documented floor, r = 0.2, no sink, every flake carried into the next pass), the paper's
+- Multi-pass options (:data:`tribocosim.components.stripdraw.multipass_options.OPTIONS`; docs/model.md sections 3-4 and "The floor under debris"): the default model
+  (flake-borne shear at the floor the project sets, r = 0.2, no sink, every flake carried into the next pass), the paper's
   model (frictionless flakes, r = 0), the upper end of r's sourced range, and the paper's model with a debris sink
   of length lambda or with half the debris carried into the next pass. None of r, lambda or the carried share is
   measured here: each is shown at values that bracket what the literature and the mesoscale model allow (the
   module constants say why), calibrated on the one-pass 35 % alone, so that the 2- and 3-pass drops, their
   spacing, the 140 mm pad's drop and the debris weighed after each pass are what would tell them apart
-  (:mod:`tribocosim.cosim.reports.paper_floor`: five passes and a seeded strip).
-- Uncertainty budget (:data:`VARIATIONS`) of the default model: every chosen input varied over a stated range, s
-  recalibrated, and the change of s and of each prediction recorded; the total is the quadrature sum of the
-  half-ranges (a one-sided variation counts whole), and a prediction's band is the interval it spans, clipped to
-  [0, 100 %] (:func:`band`). The flake-borne shear ratio is varied over its sourced range, from the default (its
-  lower end) to its upper end; the paper's model (r = 0, below the range) is reported beside the budget. The slides' domain size is varied with the shipped tables of the same slides on a 128 um and a
-  512 um domain at the rows the 3-pass and 140 mm tests read (:data:`DOMAIN_TABLES`); the table's form with the
-  table whose simulated nodes hold their row's fit instead of the ensemble means (:func:`with_fitted_rows`).
+  (:mod:`tribocosim.cosim.reports.paper_floor`: five passes at 25 MPa and a seeded strip;
+  :mod:`tribocosim.cosim.reports.paper_discriminators`: the drops against pressure, five passes at 10 MPa, the
+  coverage after one pass and the start of mu(t)).
+- Uncertainty budget: :mod:`tribocosim.cosim.reports.paper_budget` varies every chosen input over the range its
+  evidence gives, each setting calibrated and predicted here (:func:`calibrated_predictions`, on the table variants of
+  :func:`table_variants`: the ensemble noise, each surface pair alone, the slides on another domain size
+  (:data:`DOMAIN_TABLES`), the rows' fits at the simulated nodes (:func:`with_fitted_rows`)).
 - The observable (:func:`observable_evidence`): A_p of every load-bearing flake or of the paper's cluster rule alone
   is a model choice, not an input with a range: it is reported beside the budget with its evidence (the alpha of
   Eq. 23 the paper's own macro model needs for the 35 % drop, against the alpha_eff each observable's share gives at
   that model's contact area) and with the predictions of the other choice, and is not summed into the total.
 - Drawing speed (:data:`SPEEDS`): mu_bar at 0.02-0.5 m/s after 1 and 3 passes at 25 MPa, with the band of s's
-  total standard error. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
+  interval in the budget. The paper's alpha(v) (Fig. 15, rising with v0 by an exponential saturation) would make
   the debris effect grow with the drawing speed; the report names the velocities the table simulated.
 - alpha of both observables (every load-bearing flake, the paper's cluster rule alone): the table's Eq. 23 slope
   at its first debris level per velocity row (alpha = A_p / A0 / (beta P / E*), mean over the pressures with its
@@ -46,7 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from tribocosim.errors import TribocosimError
-from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_RANGE, PAPER_MODEL
+from tribocosim.components.stripdraw.friction_floor import PAPER_MODEL
+from tribocosim.components.stripdraw.multipass_options import OPTIONS  # noqa: F401 - the report's options
 from tribocosim.components.stripdraw.table import mu_of_areas
 from tribocosim.cosim.studies.stripdraw_experiment import Point
 
@@ -62,86 +62,8 @@ DOMAIN_TABLES = {"domain_128": "friction_table_128um.npz", "domain_512": "fricti
 FORM_VARIANT = "fitted_rows"  # the table with its rows' fits at the simulated nodes (with_fitted_rows)
 
 
-@dataclasses.dataclass(frozen=True)
-class Option:
-    """A multi-pass option: the strip-draw parameters it changes, and why those values."""
-
-    name: str
-    label: str
-    parameters: dict
-    why: str
-
-
-R_LOW, R_HIGH = FLAKE_SHEAR_RATIO_RANGE
-OPTIONS = (
-    Option("default", f"the default model (r = {R_LOW:g})", {},
-           f"flake-borne shear at the documented floor (r mu0 = 0.03 at full coverage), no sink, every flake carried "
-           "into the next pass (docs/model.md, the floor under debris)"),
-    Option("paper", "the paper's model (r = 0)", dict(PAPER_MODEL),
-           "frictionless flakes (r = 0), no sink, every flake carried into the next pass"),
-    Option(f"shear_{R_HIGH:g}", f"flake-borne shear r = {R_HIGH:g}", {"flake_shear_ratio": R_HIGH},
-           f"the upper end of r's sourced range: a flake junction that shears like boundary-lubricated aluminium with "
-           f"an additive (mu 0.09, Tabary et al. 1996); r = 1 would remove the debris effect"),
-    Option("sink_140", "the paper's model, debris sink lambda = 140 mm", {**PAPER_MODEL, "debris_sink_length": 0.14},
-           "r = 0; lambda = one draw length: a flake leaves the interface after ~140 mm of sliding under the pad"),
-    Option("sink_35", "the paper's model, debris sink lambda = 35 mm", {**PAPER_MODEL, "debris_sink_length": 0.035},
-           "r = 0; lambda = the pad's width: ejected sideways after sliding about one pad width"),
-    Option("carry_0.5", "the paper's model, half the debris carried over", {**PAPER_MODEL, "debris_carry_over": 0.5},
-           "r = 0; half the debris falls off or is wiped from the strip between passes"),
-)
-
-
-@dataclasses.dataclass(frozen=True)
-class Variation:
-    """One input of the uncertainty budget varied: the strip-draw parameters it sets or the table it uses."""
-
-    name: str
-    quantity: str
-    value: str
-    parameters: dict = dataclasses.field(default_factory=dict)
-    table: str | None = None  # a table variant (:func:`table_variants`)
-    pair: str | None = None  # the name of the other end of a two-sided range
-
-
-VARIATIONS = (
-    Variation("ensemble_low", "ensemble noise of the table", "A_p - 1 standard error at every node",
-              table="ensemble_low", pair="ensemble_high"),
-    Variation("ensemble_high", "ensemble noise of the table", "A_p + 1 standard error at every node",
-              table="ensemble_high", pair="ensemble_low"),
-    Variation("k_low", "Archard K (an order-of-magnitude choice)", "5e-5 (x 0.5)", {"archard_k": 5e-5}, pair="k_high"),
-    Variation("k_high", "Archard K (an order-of-magnitude choice)", "2e-4 (x 2)", {"archard_k": 2e-4}, pair="k_low"),
-    Variation("h_low", "hardness H (handbook HV 84: 0.8 GPa)", "0.68 GPa (HB 69)", {"hardness": 0.68e9}),
-    Variation("zeta_low", "zeta (the paper's fit to another model: 0.2)", "0.1", {"zeta": 0.1}, pair="zeta_high"),
-    Variation("zeta_high", "zeta (the paper's fit to another model: 0.2)", "0.3", {"zeta": 0.3}, pair="zeta_low"),
-    Variation("pair_1", "surface pair", "the table of the first pair alone", table="pair_0", pair="pair_2"),
-    Variation("pair_2", "surface pair", "the table of the second pair alone", table="pair_1", pair="pair_1"),
-    Variation("domain_128", "domain size of the slides", "128 um instead of 256 um at 1, 20 and 30 MPa (0.08 m/s)",
-              table="domain_128", pair="domain_512"),
-    Variation("domain_512", "domain size of the slides", "512 um", table="domain_512", pair="domain_128"),
-    Variation("form", "form of the table", "each row's fit (smaller AIC) at its simulated nodes instead of the "
-              "ensemble means", table=FORM_VARIANT),
-    Variation("velocity", "velocity in the lookup", "each node's slip rate instead of the grip's",
-              {"friction_velocity": "slip_rate"}),
-    Variation("shear", f"flake-borne shear ratio r (sourced range {R_LOW:g}-{R_HIGH:g}, docs/model.md)",
-              f"{R_HIGH:g} (the default {R_LOW:g} is the range's lower end)", {"flake_shear_ratio": R_HIGH}),
-)
-#: the budget's variation of r: its upper end is the largest r of the sourced range on a grid of SHEAR_STEP that the
-#: calibration can reach the paper's 35 % with (:func:`shear_upper_end`)
-SHEAR_VARIATION, SHEAR_STEP = "shear", 0.1
 #: the model choice reported beside the budget: the observable, as the parameters that choose the other one
 OBSERVABLE_CHOICE = {"particle_area_rule": "clusters"}
-
-
-def inputs_not_varied(table, variants: dict) -> list[dict]:
-    """The chosen inputs of the uncertainty budget that no variation covers, named so that the budget's total is not
-    read as covering them: the domain size of the table's slides when there is no table on another domain size
-    (``variants`` has none of :data:`DOMAIN_TABLES`; docs/physics/table_domain.md)."""
-    if any(name in variants for name in DOMAIN_TABLES):
-        return []
-    size = table.metadata.get("campaign", {}).get("sweep", {}).get("slide", {}).get("size")
-    where = f"the table's {size * 1e6:g} um domain only" if size else "the table's one domain size"
-    return [{"quantity": "domain size of the slides", "range": where,
-             "why": "no table on a second domain size at the nodes the 3-pass test reads"}]
 
 
 def with_rows_of(table, other):
@@ -238,15 +160,30 @@ def three_pass_points(params: dict, velocity: float = 0.08) -> dict[str, Point]:
             "long_high": Point(CAL_PRESSURE, LONG_PAD, 1, params, velocity)}
 
 
+def floor_of(params: dict) -> float:
+    """r mu0 of strip-draw parameters (the component's defaults where unset): the least mu of the law, where flakes
+    carry the whole contact."""
+    from tribocosim.components.stripdraw.component import COMPONENT
+
+    return float(params.get("flake_shear_ratio", COMPONENT.defaults["flake_shear_ratio"])) * float(
+        params.get("mu0", COMPONENT.defaults["mu0"]))
+
+
 def predictions(runs, params: dict, velocity: float = 0.08) -> dict:
-    """The drops after 1, 2, 3 passes at 25 MPa (35 mm pad), the 140 mm pad's one-pass drop, the debris weighed
-    after each pass at 25 MPa and the clamped lookups of these tests."""
+    """The drops after 1, 2, 3 passes at 25 MPa (35 mm pad), the 140 mm pad's one-pass drop, the debris weighed and
+    the coverage beta (the mean over the strip that passed under the pad) after each pass at 25 MPa, the floor
+    r mu0, the largest drops it allows (``bound_3``, ``bound_140``: 1 - r mu0 / mu_bar(1 MPa) of the same test) and
+    the clamped lookups of these tests."""
     pts = three_pass_points(params, velocity)
     runs.run(list(pts.values()))
     drops = [1.0 - runs.mu(pts["high"], k) / runs.mu(pts["low"], k) for k in (1, 2, 3)]
+    floor = floor_of(params)
     return {"drops": drops, "spacing_3_2": drops[2] - drops[1],
             "drop_140": 1.0 - runs.mu(pts["long_high"]) / runs.mu(pts["long_low"]),
             "debris_g_m2": [runs.result(pts["high"], k)["debris_g_m2"] for k in (1, 2, 3)],
+            "coverage": [runs.result(pts["high"], k)["beta_left"] for k in (1, 2, 3)],
+            "floor": floor, "bound_3": 1.0 - floor / runs.mu(pts["low"], 3),
+            "bound_140": 1.0 - floor / runs.mu(pts["long_low"]),
             "mu_bar_1mpa": runs.mu(pts["low"]),
             "clamps": sum(runs.result(p, k)["table_clamps"] for p in pts.values() for k in range(1, p.passes + 1))}
 
@@ -259,68 +196,6 @@ def calibrated_predictions(runs, params: dict, table, calibrate, log=None) -> di
     except TribocosimError as exc:
         return {"error": str(exc)}
     return {"scale": cal.scale, "calibration": cal, **predictions(runs, {**params, "particle_area_scale": cal.scale})}
-
-
-def shear_upper_end(runs, params: dict, table, calibrate) -> dict:
-    """:func:`calibrated_predictions` at the upper end of r's sourced range, or, where no s gives the paper's 35 %
-    one-pass drop there (flakes that shear at r tau0 cannot lower mu_bar at 25 MPa by 35 % against 1 MPa when r is
-    large), at the largest r below it on a grid of :data:`SHEAR_STEP` that can; the r taken and the ones refused are
-    recorded (``value``, ``refused``). An error when no r above the default can."""
-    refused = []
-    r = R_HIGH
-    while r > R_LOW + 1e-9:
-        result = calibrated_predictions(runs, {**params, "flake_shear_ratio": r}, table, calibrate)
-        if "error" not in result:
-            return {**result, "value": r, "refused": refused}
-        refused.append(r)
-        r = round(r - SHEAR_STEP, 10)
-    return {"error": f"no r in ({R_LOW:g}, {R_HIGH:g}] on a grid of {SHEAR_STEP:g} gives the 35 % one-pass drop",
-            "refused": refused}
-
-
-def budget(nominal: dict, varied: dict) -> list[dict]:
-    """The budget's rows: per quantity varied, the change of s, of the 3-pass drop and of the 140 mm drop. A
-    two-sided range counts half the difference of its ends when they lie on either side of the nominal, and the
-    larger change when both lie on one side (a response that is not monotonic across the nominal); a one-sided
-    change counts whole. An end absent from ``varied`` leaves the other end one-sided; an end with an error makes
-    the row an error."""
-    keys = {"scale": lambda r: r["scale"], "drop3": lambda r: r["drops"][2], "drop140": lambda r: r["drop_140"]}
-    rows, seen = [], set()
-    for v in VARIATIONS:
-        if v.name in seen or v.name not in varied:
-            continue
-        ends = [v] + [w for w in VARIATIONS if w.name == v.pair and w.name in varied]
-        seen.update(w.name for w in ends)
-        results = [varied[w.name] for w in ends]
-        row = {"quantity": v.quantity, "range": " / ".join(w.value for w in ends)}
-        if v.name == SHEAR_VARIATION and varied[v.name].get("refused"):
-            found = varied[v.name]
-            taken = (f"{found['value']:g}" if "value" in found else "none")
-            row["range"] = (f"{taken} (the default {R_LOW:g} is the range's lower end; "
-                            + ", ".join(f"{x:g}" for x in found["refused"])
-                            + " cannot give the paper's 35 % one-pass drop with any s)")
-        if any("error" in r for r in results):
-            row["error"] = "; ".join(r["error"] for r in results if "error" in r)
-            rows.append(row)
-            continue
-        for key, get in keys.items():
-            changes = [get(r) - get(nominal) for r in results]
-            if len(changes) == 2 and changes[0] * changes[1] < 0.0:
-                row[key] = 0.5 * abs(changes[1] - changes[0])
-            else:
-                row[key] = max(abs(c) for c in changes)
-        rows.append(row)
-    return rows
-
-
-def budget_total(rows: list[dict], key: str, ensemble_quote: float = 0.0) -> float:
-    """Quadrature sum of the rows' ``key`` (rows with an error are left out and named by the report)."""
-    return math.sqrt(ensemble_quote**2 + sum(r[key] ** 2 for r in rows if key in r))
-
-
-def band(value: float, half_width: float, low: float = 0.0, high: float = 1.0) -> tuple[float, float]:
-    """The interval value -+ half_width clipped to [low, high] (a drop lies in [0, 100 %], a scale s above 0)."""
-    return max(low, value - half_width), min(high, value + half_width)
 
 
 def observable_evidence(runs, params: dict, table, calibrate) -> dict:
@@ -412,10 +287,10 @@ def speed_points(params: dict, scale: float) -> list[tuple[float, dict[str, Poin
                  if k in ("low", "high")}) for v in SPEEDS]
 
 
-def speed_prediction(runs, params: dict, scale: float, scale_se: float) -> list[dict]:
-    """mu_bar after 1 and 3 passes at 25 MPa per drawing speed, and its band for s +- its standard error."""
+def speed_prediction(runs, params: dict, scale: float, scales: tuple[float, float]) -> list[dict]:
+    """mu_bar after 1 and 3 passes at 25 MPa per drawing speed, and its band over the interval ``scales`` of s."""
     rows = []
-    for s in (scale, max(scale - scale_se, 0.0), scale + scale_se):
+    for s in (scale, *scales):
         pts = speed_points(params, s)
         runs.run([p for _, d in pts for p in d.values()])
         for v, d in pts:

@@ -1,7 +1,7 @@
 """The text of the paper report (``paper.md``): the paper-vs-model table and the sections of
 :mod:`tribocosim.cosim.reports.paper_physics` (options, the uncertainty budget and the observable chosen beside it,
 the drawing speed, alpha of both observables, the table's checks) and of :mod:`tribocosim.cosim.reports.paper_floor`
-(the floor's falsifiable prediction), from the numbers :func:`tribocosim.cosim.reports.paper.run_report` computed."""
+(the floor's prediction at 25 MPa; their text and the budget's: :mod:`.paper_text_predictions`), from the numbers :func:`tribocosim.cosim.reports.paper.run_report` computed."""
 
 from __future__ import annotations
 
@@ -10,30 +10,41 @@ from pathlib import Path
 
 from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_DEFAULT, MU_FLOOR
 from tribocosim.cosim.studies.stripdraw_experiment import V0
-from tribocosim.cosim.reports import paper_floor
+from tribocosim.cosim.reports import paper_text_predictions as ptp
+from tribocosim.cosim.reports.paper_text_predictions import pct as _pct
 from tribocosim.cosim.reports import paper_physics as pp
 from tribocosim.cosim.reports.paper_physics import CAL_PRESSURE
 
 
-def _pct(x: float) -> str:
-    return f"{100 * x:.1f} %"
 
 
-def _row_values(m: dict, cal, grid, shear: float) -> dict[str, str]:
+#: an entry is set by the floor when its mu_bar at the high pressure lies within this factor of r mu0
+FLOOR_MARGIN = 1.1
+
+
+def _set_by_floor(mu: float, floor: float) -> str:
+    """" (floor)" when ``mu`` lies within :data:`FLOOR_MARGIN` of the floor r mu0 > 0: the entry is the floor the
+    project sets re-expressed, not a prediction."""
+    return " (floor)" if floor > 0 and mu <= FLOOR_MARGIN * floor else ""
+
+
+def _row_values(m: dict, cal, grid, shear: float, floor: float) -> dict[str, str]:
     at = m["drop_at_mpa"]
+    pads = m["mu_by_pad"]
     return {
         "shear": f"{shear:g}",
         "scale": (f"{cal.scale:.4g} +- {cal.stderr:.2g}" if cal else "1"),
         "drop1": _pct(m["drop_1pass"]) + (" (calibrated)" if cal else ""),
-        "drop3": _pct(m["drop_by_pass"][grid.passes]),
-        "pads": " / ".join(_pct(m["drop_by_pad"][p]) for p in grid.pads),
+        "drop3": _pct(m["drop_by_pass"][grid.passes]) + _set_by_floor(m["mu_at_drop"][grid.passes], floor),
+        "pads": " / ".join(_pct(m["drop_by_pad"][p]) + _set_by_floor(pads[p][at], floor) for p in grid.pads),
         "order": f"{'yes' if m['pad_order_holds'][0] == m['pad_order_holds'][1] else 'no'} "
                  f"({m['pad_order_holds'][0]} of {m['pad_order_holds'][1]} pressures)",
         "zeta": ("falls: " if m["zeta_falls"] else "does not fall: ")
-                + " / ".join(f"{m['mu_by_zeta'][z]:.4f}" for z in grid.zetas),
+                + " / ".join(f"{m['mu_by_zeta'][z]:.4f}" + _set_by_floor(m["mu_by_zeta"][z], floor)
+                             for z in grid.zetas),
         "k": ("falls" if m["k_falls"] else "does not fall") + ", "
              + ("saturates" if m["k_saturates"] else "does not saturate") + ": "
-             + " / ".join(f"{m['mu_by_k'][K]:.4f}" for K in grid.ks),
+             + " / ".join(f"{m['mu_by_k'][K]:.4f}" + _set_by_floor(m["mu_by_k"][K], floor) for K in grid.ks),
         "mu_low": f"{m['mu_low']:.4f}",
         "beta": f"{m['beta_max_3pass']:.3g} ({m['beta_max']:.3g})",
         "clamps": str(m["table_clamps"]),
@@ -50,11 +61,12 @@ def table_contact_ratio(table, kappa: float = 2.0, rms_slope: float = 0.34, e_st
     return float(kappa * CAL_PRESSURE / (rms_slope * e_star) / ac) if ac > 0 else None
 
 
-def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
-    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
+def results_table(results: dict, cals: dict, grid) -> list[str]:
+    """The paper-vs-model table: one column per configuration, entries the floor sets marked "(floor)"."""
     configs = list(results)
-    values = {c: _row_values(results[c]["metrics"], cals.get(c.key) if c.calibrated else None, grid,
-                             0.0 if c.paper_model else FLAKE_SHEAR_RATIO_DEFAULT) for c in configs}
+    shear = {c: 0.0 if c.paper_model else FLAKE_SHEAR_RATIO_DEFAULT for c in configs}
+    values = {c: _row_values(results[c]["metrics"], cals.get(c.key) if c.calibrated else None, grid, shear[c],
+                             pp.floor_of({"flake_shear_ratio": shear[c]})) for c in configs}
     at = grid.pressures[-2] if 25 not in grid.pressures else 25
     pads = " / ".join(f"{1000 * p:g}" for p in grid.pads)
     rows = [
@@ -72,16 +84,28 @@ def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: s
         (f"largest beta after {grid.passes} passes at {at} MPa (in any test)", "-", "beta"),
         ("table lookups outside the table's axes or simulated range (clamped)", "-", "clamps"),
     ]
-    lines = [header, "", "| quantity | paper | " + " | ".join(c.label for c in configs) + " |",
-             "|---|---|" + "---|" * len(configs)]
+    lines = ["| quantity | paper | " + " | ".join(c.label for c in configs) + " |", "|---|---|" + "---|" * len(configs)]
     for title, paper, key in rows:
         lines.append(f"| {title} | {paper} | " + " | ".join(values[c][key] for c in configs) + " |")
+    return lines
+
+
+def table_note() -> str:
+    """What the table's entries are: which one is fitted, which the floor sets, which are predicted."""
+    return ("Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the one-pass drop at "
+            "25 MPa is fitted (by s, per column). The columns without the paper's model use the default "
+            f"r = {FLAKE_SHEAR_RATIO_DEFAULT:g}: flake-borne shear at the floor mu = {MU_FLOOR:g} the project sets, a "
+            "bound chosen, not measured (docs/model.md, the floor under debris). An entry marked (floor) is set by "
+            f"that choice, not predicted: its mu_bar at the high pressure lies within {100 * (FLOOR_MARGIN - 1):.0f} % "
+            "of r mu0, where flakes carry the whole contact, so the value is the floor re-expressed (a 3-pass drop at "
+            "most 1 - r mu0 / mu_bar(1 MPa), the report's floor scan). The other entries are predictions.")
+
+
+def markdown(results: dict, cals: dict, grid, table, table_path: Path, header: str, files: list[str]) -> str:
+    """The report text: the paper-vs-model table, the calibrations, links to the figures and data."""
+    lines = [header, "", *results_table(results, cals, grid)]
     ratio = table_contact_ratio(table)
-    lines += ["", "Drops are 1 - mu_bar(P) / mu_bar(1 MPa) on the same curve (same pad, same pass). Only the "
-              "one-pass drop at 25 MPa is fitted (by s, per column); every other entry is a prediction. The columns "
-              f"without the paper's model use the default r = {FLAKE_SHEAR_RATIO_DEFAULT:g}, flake-borne shear at "
-              f"the documented floor mu = {MU_FLOOR:g} (docs/model.md, the floor under debris). "
-              f"The table's beta axis ends at {table.beta[-1]:.4g}."
+    lines += ["", table_note() + f" The table's beta axis ends at {table.beta[-1]:.4g}."
               + (f" The eq8 column is the first up to the factor A_c(Eq. 8) / A_c(table) = {ratio:.3g} at 25 MPa "
                  f"on A_p / A_c: its s is {cals['eq8'].scale / cals['mesoscale'].scale:.3g} times the first's."
                  if ratio and "eq8" in cals and "mesoscale" in cals else ""), ""]
@@ -105,11 +129,12 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
 
     lines = ["", "## Multi-pass options", "",
              "Each option calibrated on the one-pass 35 % alone (A_c from the table); the paper: 35 % after one pass, up "
-             "to 72 % after three. The default model has flake-borne shear at the documented floor; the sink and the "
+             "to 72 % after three. The default model has flake-borne shear at the floor the project sets; the sink and the "
              "partial carry-over are shown on the paper's model (r = 0), as other ways than a floor to limit the "
              "multi-pass drop. What would tell them apart: the spacing of the 2- and 3-pass drops, the 140 mm pad's "
              "drop, the debris weighed on the strip after each pass (beta h_p rho over the strip that was under the "
-             "pad), and the falsifiable prediction at the end of this report (five passes, a seeded strip).", "",
+             "pad), and the predictions at the end of this report (five passes, a seeded strip, the drops against "
+             "pressure, the coverage after one pass, the start of mu(t)).", "",
              "| option | why these values | s | drop 1 / 2 / 3 passes at 25 MPa | 3-pass minus 2-pass | 140 mm pad, 1 pass "
              "| debris after pass 1 / 2 / 3 [g/m^2] | clamped lookups |", "|---|---|---|---|---|---|---|---|"]
     for opt in pp.OPTIONS:
@@ -120,40 +145,14 @@ def physics_markdown(extra: dict, cals: dict, grid, m: dict, clamps: dict) -> li
         lines.append(f"| {opt.label} | {opt.why} | {r['scale']:.4g} | " + " / ".join(_pct(d) for d in r["drops"])
                      + f" | {100 * r['spacing_3_2']:.1f} points | {_pct(r['drop_140'])} | "
                      + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
-    rows = extra["budget"]
     nominal = extra["options"]["default"]
     cal = cals["mesoscale"]
-    lines += ["", f"## Uncertainty budget (the default model, r = {FLAKE_SHEAR_RATIO_DEFAULT:g}, A_c from the table)",
-              "",
-              "Each chosen input varied over the range shown (an input not varied is named in the table, and the "
-              "total leaves it out), s recalibrated on the 35 %, and the change of s and of the predictions recorded "
-              "(a two-sided range: half the difference of its ends, or the larger change when both ends move the "
-              "same way; a one-sided change whole). The quote of the 35 % alone gives s a standard error of "
-              f"{cal.stderr_quote:.2g}. The observable A_p stands for is a model choice, not an input with a range: "
-              "it is stated with its evidence in the next section and not summed here.", "",
-              "| input | range | s | 3-pass drop [points] | 140 mm drop [points] |", "|---|---|---|---|---|"]
-    for r in rows:
-        if "error" in r:
-            lines.append(f"| {r['quantity']} | {r['range']} | {r['error']} | | |")
-        else:
-            lines.append(f"| {r['quantity']} | {r['range']} | {r['scale']:.3g} | {100 * r['drop3']:.1f} | "
-                         f"{100 * r['drop140']:.1f} |")
-    tot, band = extra["budget_total"], extra["budget_intervals"]
-    missing = extra["budget_not_varied"]
-    for m_ in missing:
-        lines.append(f"| {m_['quantity']} | {m_['range']} | not varied: {m_['why']} | - | - |")
-    not_in = f", without the {', '.join(m_['quantity'] for m_ in missing)}" if missing else ""
-    lines += [f"| **total** (quadrature, with the quote{not_in}) | | **{tot['scale']:.3g}** | "
-              f"**{100 * tot['drop3']:.1f}** | **{100 * tot['drop140']:.1f}** |", "",
-              f"So s = {cal.scale:.3g} (interval {band['scale'][0]:.3g} to {band['scale'][1]:.3g}), the 3-pass drop "
-              f"{_pct(nominal['drops'][2])} (interval {_pct(band['drop3'][0])} to {_pct(band['drop3'][1])}; the "
-              f"paper: up to 72 %), the 140 mm pad's one-pass drop {_pct(nominal['drop_140'])} (interval "
-              f"{_pct(band['drop140'][0])} to {_pct(band['drop140'][1])}): the value -+ the total, clipped to "
-              "[0, 100 %]"
-              + (f"; the {', '.join(m_['quantity'] for m_ in missing)} is not varied, so these intervals leave "
-                 f"{'it' if len(missing) == 1 else 'them'} out." if missing else "."), ""]
+    band = extra["budget"]["intervals"]
+    lines += ptp.budget_markdown(extra["budget"], nominal, cal)
+    lines += ptp.floor_scan_markdown(extra["budget"]["floor_scan"])
     lines += paper_model_beside(extra["options"].get("paper", {}), nominal)
-    lines += prediction_markdown(extra["prediction"]) + [""]
+    lines += ptp.prediction_markdown(extra["prediction"]) + [""]
+    lines += ptp.discriminators_markdown(extra["discriminators"]) + [""]
     lines += observable_markdown(extra["observable"], nominal)
     lines += ["## Drawing speed", "",
               f"mu_bar at 25 MPa on the 35 mm pad (s = {cal.scale:.3g}, over its interval {band['scale'][0]:.3g} to "
@@ -241,45 +240,6 @@ def paper_model_beside(paper: dict, nominal: dict) -> list[str]:
             f"calibrated the same way: s = {paper['scale']:.3g}, the 3-pass drop {_pct(paper['drops'][2])} and the "
             f"140 mm pad's one-pass drop {_pct(paper['drop_140'])}, against {_pct(nominal['drops'][2])} and "
             f"{_pct(nominal['drop_140'])} of the default model (the budget's other inputs are not varied for it).", ""]
-
-
-def prediction_markdown(prediction: dict) -> list[str]:
-    """The floor's falsifiable prediction (paper_floor): five passes at 25 MPa and a seeded strip, per option."""
-    five, seeded = prediction["five_passes"], prediction["seeded"]
-    labels = {o.name: o.label for o in pp.OPTIONS}
-    passes = range(1, paper_floor.PASSES + 1)
-    lines = ["", "## The falsifiable prediction: five passes and a seeded strip", "",
-             f"Each option at its s calibrated on the 35 % (the table above), 35 mm pad, 25 MPa ([floor.png](floor.png);"
-             f" the documented floor mu = {MU_FLOOR:g}, docs/model.md). Five passes over one strip without cleaning: "
-             "mu_bar and the debris weighed after each pass (the drop against 1 MPa in brackets). With flake-borne "
-             "shear (r > 0) mu_bar levels off near r mu0 once flakes carry the contact; the paper's model with every "
-             "flake carried over keeps falling; a sink or a partial carry-over levels off where the debris made "
-             "balances the debris lost.", "",
-             "| option | " + " | ".join(f"mu_bar, pass {k}" for k in passes)
-             + " | debris after pass " + " / ".join(str(k) for k in passes) + " [g/m^2] | clamped lookups |",
-             "|---|" + "---|" * (paper_floor.PASSES + 2)]
-    for name, r in five.items():
-        lines.append(f"| {labels[name]} | " + " | ".join(f"{mu:.4f} ({_pct(d)})" for mu, d in zip(r["mu_bar"],
-                                                                                               r["drop"]))
-                     + " | " + " / ".join(f"{g:.3g}" for g in r["debris_g_m2"]) + f" | {r['clamps']} |")
-    levels = [paper_floor.seeded_g_m2(b) for b in paper_floor.SEEDED_BETAS]
-    lines += ["", "One pass over a clean strip, re-oiled, seeded with a known debris (weighed: beta0 h_p rho): mu_bar "
-              "against the debris seeded. The seeding fixes the debris whatever the options' balances: the carry-over "
-              "option is the paper's model here, and a sink takes part of the seeded debris during the pass. An "
-              "option's seeding stops at its largest cap of beta (the model refuses more; a cell above it holds the "
-              "cap's, in brackets the debris seeded), and the cap at 25 MPa takes what exceeds it there.", "",
-              "| option | " + " | ".join(f"{g:.3g} g/m^2" for g in levels) + " | clamped lookups |",
-              "|---|" + "---|" * (len(levels) + 1)]
-    for name, r in seeded.items():
-        cells = [f"{mu:.4f}" + ("" if abs(g - want) < 1e-12 else f" ({g:.3g})")
-                 for mu, g, want in zip(r["mu_bar"], r["seeded_g_m2"], levels)]
-        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {r['clamps']} |")
-    lines += ["", "The measurement that decides: mu_bar of a seeded strip at the largest seeding (r mu0 if flakes "
-              "shear at r tau0, about 0 if they are frictionless) and the debris weighed after each of five passes "
-              "(growing without bound with full carry-over, levelling off with a sink or a partial carry-over); the "
-              "same test on a strip cleaned and re-oiled without seeding is the reference (the paper: little "
-              "difference from one pass)."]
-    return lines
 
 
 def observable_markdown(observable: dict, nominal: dict) -> list[str]:

@@ -6,7 +6,8 @@ F_N = P_N L_T w_T on each pad; mu(t) = pull_force / (2 F_N) (Eq. 1) and mu_bar i
 the draw, the steady-state region. A later pass starts from the debris field the previous one left (paper
 Fig. 2b; the share ``debris_carry_over`` of it), with the strip's mechanics afresh. After each pass the debris
 left on the strip is weighed: the mean of beta over the nodes that were under the pad in the pass, times
-h_p rho (flakes of Al, rho = 2700 kg/m^3) per unit area. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
+h_p rho (flakes of Al, rho = 2700 kg/m^3) per unit area, and the start of mu(t) is kept: its first
+``START_LENGTH`` of draw, where the strip under the pad carries the debris of a few millimetres of slide only. Used by the calibration (:mod:`tribocosim.cosim.apps.calibrate`) and the paper report; runs in
 worker processes (:func:`run_points`). :func:`run_strip_draw` and :func:`steady_mean`: one draw with its outputs at
 every step (the accuracy report and the benchmarks).
 """
@@ -17,6 +18,7 @@ import functools
 import os
 import re
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,6 +30,7 @@ RAMP = 0.01  # s
 STEP = 1e-3  # s
 LAST = 0.2  # the steady-state fraction of the draw
 FLAKE_DENSITY = 2700.0  # kg/m^3 (Al)
+START_LENGTH = 0.02  # m: the draw over which each pass's mu(t) is kept (``mu_start``)
 
 
 @dataclass(frozen=True)
@@ -51,7 +54,8 @@ def draw(point: Point) -> list[dict]:
     """Every pass of ``point``: ``mu_bar``, ``beta_max`` (the largest debris fraction on the strip at the
     end of the pass), ``table_clamps`` (nodal table lookups outside the table's axes or its simulated range in
     the pass), ``beta_left`` (the mean debris fraction on the strip that passed under the pad) and
-    ``debris_g_m2`` (that debris weighed: beta_left h_p rho [g/m^2])."""
+    ``debris_g_m2`` (that debris weighed: beta_left h_p rho [g/m^2]), ``draw_start`` and ``mu_start`` (the grip's
+    draw [m] and mu = pull_force / (2 F_N) at every step of the first :data:`START_LENGTH` of the pass)."""
     from tribocosim.components.stripdraw.component import COMPONENT
     from tribocosim.components.stripdraw.model import StripDrawModel
 
@@ -64,15 +68,18 @@ def draw(point: Point) -> list[dict]:
         draw = model.params.draw_length
         n = int(round((draw / point.velocity + 0.5 * RAMP) / STEP))
         mus = np.empty(n)
+        drawn = np.empty(n)
         before = model.mesh.X + model.U <= model.mesh.window_hi  # not yet past the pad's exit edge
         for k in range(n):
             v = point.velocity * min(1.0, (k + 0.5) * STEP / RAMP)
+            drawn[k] = v * STEP + (drawn[k - 1] if k else 0.0)
             mus[k] = model.step(STEP, {"normal_force": fn, "grip_velocity": v})["pull_force"] / (2.0 * fn)
         passed = before & (model.mesh.X + model.U >= model.mesh.window_lo)  # was under the pad in this pass
         left = float(model.beta[passed].mean()) if passed.any() else 0.0
         out.append({"mu_bar": float(mus[int((1.0 - LAST) * n):].mean()), "beta_max": float(model.beta.max()),
                     "table_clamps": int(model.clamp_count), "beta_left": left,
-                    "debris_g_m2": 1e3 * left * model.params.particle_thickness * FLAKE_DENSITY})
+                    "debris_g_m2": 1e3 * left * model.params.particle_thickness * FLAKE_DENSITY,
+                    "draw_start": drawn[drawn <= START_LENGTH].tolist(), "mu_start": mus[drawn <= START_LENGTH].tolist()})
         beta = model.beta.copy()
     return out
 
@@ -98,18 +105,30 @@ def _report(caught: list[tuple], n_points: int) -> None:
         warnings.warn(first + more, category, stacklevel=3)
 
 
-def run_points(points: list[Point], workers: int | None = None, fn=mu_bar) -> list:
-    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes (at most one per point: the
-    project's local executor, whose workers ignore SIGINT and SIGTERM and are killed on a stop,
-    :class:`tribocosim.surrogate.executors.ProcessPoolCaseExecutor`). Within :func:`tribocosim.interrupt.
-    stop_on_signals` a signal stops it between draws with :class:`~tribocosim.errors.Interrupted` (the draws in
+def point_pool(workers: int | None = None) -> ProcessPoolExecutor:
+    """A pool of spawned worker processes for :func:`run_points` to reuse over many calls (a caller that runs many
+    small batches, such as a root finder's steps, saves the start of the processes at every call)."""
+    import multiprocessing
+
+    return ProcessPoolExecutor(max_workers=max(1, workers or os.cpu_count() or 1),
+                               mp_context=multiprocessing.get_context("spawn"))
+
+
+def run_points(points: list[Point], workers: int | None = None, fn=mu_bar, pool=None) -> list:
+    """``fn`` (:func:`mu_bar` or :func:`draw`) of every point, in parallel processes: in ``pool`` (a
+    :func:`point_pool`, for a caller that runs many small batches) when given, otherwise at most one per point on the
+    project's local executor, whose workers ignore SIGINT and SIGTERM and are killed on a stop
+    (:class:`tribocosim.surrogate.executors.ProcessPoolCaseExecutor`). Within :func:`tribocosim.interrupt.
+    stop_on_signals` a signal stops the latter between draws with :class:`~tribocosim.errors.Interrupted` (the draws in
     progress are discarded). The warnings of the draws are given once per distinct message, with the number of draws
     that raised it; a draw that raises raises here."""
     from tribocosim import interrupt
     from tribocosim.errors import Interrupted
 
     n = max(1, min(workers or os.cpu_count() or 1, len(points)))
-    if n == 1:
+    if pool is not None and len(points) > 1:
+        done = list(pool.map(functools.partial(_recorded, fn), points))
+    elif n == 1:
         done = []
         for p in points:
             interrupt.raise_if_stopped(Interrupted)

@@ -8,6 +8,10 @@
 
 Fixture names start with ``stripdraw_fmu``/``fmu_``/``built_fmus`` so that they do not collide with
 other fixtures of ``tests/components``.
+
+Beside them, for the friction exports: ``velocity_dependent_table``, the shipped table with its particle-borne area at
+0.5 m/s made 30 % smaller (the shipped table's law does not depend on the velocity, so an export writes it at one
+velocity; this one keeps the velocity axis).
 """
 
 from __future__ import annotations
@@ -250,3 +254,28 @@ def numpy_fmpy_venv(tmp_path_factory) -> tuple[Path, dict]:
     )  # fmt: skip
     assert pip.returncode == 0, f"pip install numpy fmpy failed (the registry must be reachable):\n{pip.stderr}"
     return python, env
+
+
+@pytest.fixture(scope="session")
+def velocity_dependent_table(tmp_path_factory) -> Path:
+    """The shipped table with A_p (and its spread and standard errors) times 0.7 in its 0.5 m/s row, so that the law
+    falls off less with debris at the higher speed: a table whose law depends on the velocity, for the exports'
+    velocity axis (the module docstring)."""
+    import dataclasses
+
+    from tribocosim.components.stripdraw.table import read_table, write_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    table = read_table(DEFAULT_TABLE)
+    factor = np.ones(table.velocity.size)
+    factor[table.velocity == 0.5] = 0.7
+    scale = factor[None, :, None]
+    extras = {k: (v * scale if k in ("particle_area_se", "particle_area_clusters", "particle_area_clusters_se", "mu_se")
+                  else v) for k, v in table.extras.items()}
+    meta = {k: v for k, v in table.metadata.items() if k != "content_hash"}
+    meta["note"] = "the shipped table with A_p x 0.7 at 0.5 m/s (a test's table)"
+    path = tmp_path_factory.mktemp("tables") / "velocity_dependent.npz"
+    write_table(path, dataclasses.replace(table, particle_area=table.particle_area * scale,
+                                          particle_area_std=table.particle_area_std * scale, extras=extras,
+                                          metadata=meta))
+    return path

@@ -38,7 +38,8 @@ def _data_lines(text: str) -> list[list[str]]:
     return [[x.strip() for x in line.split(",")] for line in text.splitlines() if line and not line.startswith("*")]
 
 
-def test_the_block_has_the_keyword_references_layout(law, tmp_path):
+def test_the_block_has_the_keyword_references_layout(tmp_path, velocity_dependent_table):
+    law = load_law(table_path=velocity_dependent_table)
     text = _export(law, tmp_path).read_text()
     keywords = [line for line in text.splitlines() if line.startswith("*") and not line.startswith("**")]
     assert keywords == ["*SURFACE INTERACTION, NAME=TRIBOCOSIM_FRICTION", "*FRICTION, DEPENDENCIES=1"]
@@ -54,6 +55,21 @@ def test_the_block_has_the_keyword_references_layout(law, tmp_path):
     single = _export(law, tmp_path, beta=0.1).read_text()
     assert [line for line in single.splitlines() if line.startswith("*FRICTION")] == ["*FRICTION"]
     assert all(len(r) == 3 for r in _data_lines(single)), "mu, slip rate, pressure without dependencies"
+
+
+def test_a_law_without_slip_rate_dependence_leaves_the_slip_rate_blank(law, tmp_path):
+    """The shipped table's law does not depend on the velocity: one line per pressure (and beta), the slip-rate field
+    blank, which Abaqus reads as no slip-rate dependence; the header says why."""
+    text = _export(law, tmp_path).read_text()
+    rows = _data_lines(text)
+    assert all(len(r) == 5 and r[1] == "" and r[3] == "" for r in rows)
+    pairs = [(float(r[2]), float(r[4])) for r in rows]
+    assert len(set(pairs)) == len(pairs), "one line per pressure and beta"
+    single = _data_lines(_export(law, tmp_path, beta=0.1).read_text())
+    assert all(len(r) == 3 and r[1] == "" for r in single)
+    assert len({r[2] for r in single}) == len(single)
+    flat = " ".join(line[2:].strip() for line in text.splitlines() if line.startswith("**"))
+    assert "mu does not depend on the relative sliding velocity over 0-500 mm/s" in flat
 
 
 def _abq2ccx_mu(module, rows, point):
@@ -94,10 +110,13 @@ def test_an_abaqus_deck_reader_from_pypi_reads_tribocosims_mu(law, tmp_path, uni
 
 def _multilinear_from_rows(rows, point):
     """Linear interpolation in each of slip rate, pressure and beta on the grid the rows span, end values held."""
-    grid = {(float(r[1]), float(r[2]), float(r[4])): float(r[0]) for r in rows}
+    grid = {(float(r[1] or 0.0), float(r[2]), float(r[4])): float(r[0]) for r in rows}  # a blank is 0
     axes = [sorted({k[i] for k in grid}) for i in range(3)]
     corners = []
     for axis, x in zip(axes, point):
+        if len(axis) == 1:  # one value: the property is constant in it
+            corners.append(((axis[0], 1.0),))
+            continue
         x = min(max(x, axis[0]), axis[-1])
         i = min(bisect.bisect_right(axis, x) - 1, len(axis) - 2)
         t = (x - axis[i]) / (axis[i + 1] - axis[i])
@@ -105,9 +124,12 @@ def _multilinear_from_rows(rows, point):
     return sum(wa * wb * wc * grid[(a, b, c)] for (a, wa), (b, wb), (c, wc) in itertools.product(*corners))
 
 
+@pytest.mark.parametrize("velocity_dependent", [False, True])
 @pytest.mark.parametrize("units, p_scale, v_scale", [("mm-t-s", 1e6, 1e-3), ("SI", 1.0, 1.0)])
-def test_multilinear_interpolation_of_the_block_is_tribocosims_mu_within_the_stated_accuracy(law, tmp_path, units,
-                                                                                             p_scale, v_scale):
+def test_multilinear_interpolation_of_the_block_is_tribocosims_mu_within_the_stated_accuracy(
+        law, tmp_path, units, p_scale, v_scale, velocity_dependent, velocity_dependent_table):
+    if velocity_dependent:
+        law = load_law(table_path=velocity_dependent_table)
     text = _export(law, tmp_path, units).read_text()
     stated = _stated_accuracy(text)
     rows = _data_lines(text)
@@ -140,3 +162,31 @@ def test_several_debris_states_get_their_own_abaqus_interaction_names(law, tmp_p
              if line.startswith("*SURFACE INTERACTION")]
     assert names == ["*SURFACE INTERACTION, NAME=TRIBOCOSIM_FRICTION_BETA0_05",
                      "*SURFACE INTERACTION, NAME=TRIBOCOSIM_FRICTION_BETA0_1"]
+
+
+def test_a_slide_is_read_by_the_deck_reader_with_mu_falling_with_pressure(tmp_path):
+    """--slide 20 (mm) with the default export's law (the paper calibration): abq2ccx reads one line per pressure
+    (no slip-rate dependence) and its reading at any slip rate is tribocosim's mu at the debris a sheet point makes
+    sliding 20 mm at that pressure, within the stated accuracy; mu falls with pressure at every line."""
+    abq2ccx = pytest.importorskip("abq2ccx", reason="abq2ccx (the test extra) reads Abaqus decks")
+    from tribocosim.components.friction_export.named_calibration import DEFAULT
+    from tribocosim.cosim.apps.debris_state import DebrisChoice, debris_states
+
+    law = load_law(calibration_path=DEFAULT)
+    units = UNIT_SYSTEMS["mm-t-s"]
+    (state,) = debris_states(DebrisChoice(slide=20), law, units)
+    path = tmp_path / "friction.inp"
+    run_export(law, ExportRequest("abaqus", path, (state,), units))
+    text = path.read_text()
+    stated = _stated_accuracy(text)
+    blocks = abq2ccx.read_blocks(str(path), abq2ccx.Report())
+    friction, = (b for b in blocks if b.keyword == "FRICTION")
+    rows = abq2ccx.material_rows(friction, 3)
+    assert rows is not None and all(r[1] == "" for r in rows)
+    line_mu = [float(r[0]) for r in rows]
+    assert np.all(np.diff(line_mu) < 0) and np.all(np.diff([float(r[2]) for r in rows]) > 0)
+    rng = np.random.default_rng(6)
+    for p, v in zip(np.exp(rng.uniform(np.log(1e6), np.log(3e7), 100)), rng.uniform(0, 0.5, 100)):
+        fe = _abq2ccx_mu(abq2ccx, rows, (v * 1e3, p / 1e6, 0.0))  # slip rate, pressure, temperature (blank)
+        mu = float(law.mu(p, v, law.beta_after_slide(p, v, 0.02))[0])
+        assert abs(fe - mu) / mu <= stated, (p, v, fe, mu)

@@ -88,14 +88,46 @@ def test_several_states_and_a_band_make_one_file_each(law, tmp_path):
     assert "beyond it: LS-DYNA holds the end values (clamps)" in summary
 
 
-def test_the_grid_holds_the_tables_nodes_in_the_range_and_its_ends(law, tmp_path):
-    result = run_export(law, _request(tmp_path, "table", pressure_range=(3e6, 25e6)))
+def test_the_grid_holds_the_tables_nodes_in_the_range_and_its_ends(tmp_path, velocity_dependent_table):
     import json
 
+    law = load_law(table_path=velocity_dependent_table)
+    result = run_export(law, _request(tmp_path, "table", pressure_range=(3e6, 25e6)))
     doc = json.loads(result.files[0].path.read_text())
     p, v = (np.array(a["values"]) for a in doc["axes"])
     assert p[0] == pytest.approx(3.0) and p[-1] == pytest.approx(25.0)
     for node in (5.0, 10.0, 20.0):
         assert np.isclose(p, node, rtol=1e-12).any()
     np.testing.assert_allclose(v, [0.0, 80.0, 500.0])
+    assert "independent" not in doc["axes"][1] and not result.files[0].one_velocity
     assert "range: contact pressure 3-25 MPa" in result.range_line
+
+
+def test_a_law_that_does_not_depend_on_the_velocity_is_written_at_one(law, tmp_path):
+    """The shipped table's law is the same at 0, 0.08 and 0.5 m/s (its slides do not depend on v in the overdamped
+    regime): the grid's velocity axis collapses to one value, the FE code's reading of it is the law within the
+    accuracy stated at every velocity of the range (the random points of the check), and the command says so."""
+    import json
+
+    from tribocosim.components.friction_export.grid_refinement import multilinear
+
+    v_nodes = law.table.velocity
+    for beta in (0.0, 0.05, 0.2):  # the law at the table's velocity nodes: equal, to the bit here
+        mu, _ = law.mu(law.table.pressure[:, None], v_nodes[None, :], beta)
+        assert np.all(mu == mu[:, :1])
+    result = run_export(law, _request(tmp_path, "table", states=(_state(0.1),)))
+    (f,) = result.files
+    doc = json.loads(f.path.read_text())
+    p_axis, v_axis = doc["axes"]
+    assert f.one_velocity and f.shape[1] == 1 and v_axis["values"] == [0.0]
+    assert v_axis["independent"] is True and v_axis["range"] == [0.0, 500.0]
+    rng = np.random.default_rng(4)
+    p, v = rng.uniform(1e6, 3e7, 2000), rng.uniform(0.0, 0.5, 2000)
+    fe = multilinear([np.array(p_axis["values"]) * 1e6, np.array([0.0])], np.array(doc["mu"])[..., None], (p, v))
+    exact, _ = law.mu(p, v, 0.1)
+    assert (np.abs(fe[:, 0] - exact) / exact).max() <= f.accuracy
+    summary = result.summary()
+    assert "1 velocity (mu does not depend on it)" in summary[0]
+    assert summary[1].startswith("velocity: mu does not depend on the relative sliding velocity over 0-500 mm/s: ")
+    assert "at 0, 80, 500 mm/s" in summary[1]
+    assert any("velocity: mu does not depend" in line for line in doc["header"])

@@ -1,6 +1,8 @@
 """The LS-DYNA include read back by a reader nobody here wrote (ansys-dyna-core's deck reader, offline), and read
 by the rule of the LS-DYNA manual (linear between the table's pressures and along each curve, end values held
-beyond them): tribocosim's mu within the accuracy the file states, in both unit systems."""
+beyond them): tribocosim's mu within the accuracy the file states, in both unit systems, for a law that depends on
+the velocity and for the shipped one, which does not (a curve of two equal points per pressure), at a given beta and
+at the debris of a slide (--slide: mu falls with pressure)."""
 
 from __future__ import annotations
 
@@ -83,15 +85,20 @@ def test_the_reader_finds_every_pressure_and_curve_point(law, tmp_path):
     assert result.files[0].accuracy <= 0.005
 
 
+@pytest.mark.parametrize("velocity_dependent", [False, True])
 @pytest.mark.parametrize("units, p_scale, v_scale", [("mm-t-s", 1e6, 1e-3), ("SI", 1.0, 1.0)])
 @pytest.mark.parametrize("beta", [0.05, 0.2])
 def test_the_manuals_reading_is_tribocosims_mu_within_the_stated_accuracy(law, tmp_path, units, p_scale, v_scale,
-                                                                          beta):
+                                                                          beta, velocity_dependent,
+                                                                          velocity_dependent_table):
+    if velocity_dependent:
+        law = load_law(table_path=velocity_dependent_table)
     _export(law, tmp_path, units, beta)
     text = (tmp_path / "friction.k").read_text()
     stated = _stated_accuracy(text)
     assert stated <= 0.005
     _, pressures, curves = _read(tmp_path / "friction.k")
+    assert all(len(c[1]) == (3 if velocity_dependent else 2) for c in curves), "the table's velocities, or two"
     rng = np.random.default_rng(11)
     p = rng.uniform(1e6, 3e7, 1000)
     v = rng.uniform(0.0, 0.5, 1000)
@@ -167,3 +174,36 @@ def test_several_debris_states_can_share_one_deck(law, tmp_path):
         assert _read(tmp_path / f"friction.beta{b}.upper.k")[0] == tbid  # the band shares the state's ids
     assert not ids["0.05"] & ids["0.1"] and min(ids["0.05"]) == 9_450_000
 
+
+
+def test_a_slide_gives_mu_falling_with_pressure_and_the_reader_reads_it(tmp_path):
+    """--slide 20 (mm, a die radius) with the default export's law (the paper calibration): at each pressure the debris
+    a sheet point makes sliding 20 mm there, K P S / (H h_p) below the cap, so mu falls with pressure at every node
+    of the file; each curve holds two equal points (the law does not depend on the velocity); the manual's reading
+    of what the reader finds is tribocosim's mu at the slide's debris within the stated accuracy."""
+    from tribocosim.components.friction_export.named_calibration import DEFAULT
+    from tribocosim.cosim.apps.debris_state import DebrisChoice, debris_states
+
+    law = load_law(calibration_path=DEFAULT)
+    units = UNIT_SYSTEMS["mm-t-s"]
+    (state,) = debris_states(DebrisChoice(slide=20), law, units)
+    run_export(law, ExportRequest("lsdyna", tmp_path / "friction.k", (state,), units))
+    text = (tmp_path / "friction.k").read_text()
+    _, pressures, curves = _read(tmp_path / "friction.k")
+    prm = law.params
+    beta = np.minimum(prm.archard_k * pressures * 1e6 * 0.02 / (prm.hardness * prm.particle_thickness),
+                      [law.cap(p * 1e6, 0.08) for p in pressures])
+    node_mu = []
+    for p, b, (_, v, m) in zip(pressures, beta, curves):
+        assert list(v) == [0.0, 500.0] and m[0] == m[1]
+        np.testing.assert_allclose(m[0], law.mu(p * 1e6, 0.08, b)[0], rtol=1e-12)
+        assert f"$ the debris after the slide: beta = {b:.6g}" in text
+        node_mu.append(m[0])
+    assert np.all(np.diff(node_mu) < 0), node_mu
+    assert node_mu[0] - node_mu[-1] > 0.05, "from 1 to 30 MPa"
+    stated = _stated_accuracy(text)
+    rng = np.random.default_rng(5)
+    p, v = np.exp(rng.uniform(np.log(1e6), np.log(3e7), 500)), rng.uniform(0.0, 0.5, 500)
+    fe = np.array([manual_lookup(pressures, curves, a / 1e6, c / 1e-3) for a, c in zip(p, v)])
+    mu, _ = law.mu(p, v, law.beta_after_slide(p, v, 0.02))
+    assert (np.abs(fe - mu) / mu).max() <= stated

@@ -83,3 +83,25 @@ def test_the_band_files_hold_the_band_at_the_same_nodes(law, tmp_path):
     mu, up, lo, se = (np.array(d) for d in (nominal["mu"], upper["mu"], lower["mu"], nominal["mu_se"]))
     np.testing.assert_allclose(up, np.minimum(0.15, mu + 1.5 * se), rtol=1e-12)
     np.testing.assert_allclose(lo, np.maximum(0.0, mu - 1.5 * se), rtol=1e-12)
+
+
+def test_a_slide_state_holds_the_debris_at_every_node(law, tmp_path):
+    """--slide 20 (mm): the file's debris state holds beta at every node, K P S / (H h_p) (below the cap at s = 1),
+    and mu there is the law's at that beta; the velocity axis is one value with its range (the law does not depend
+    on it)."""
+    from tribocosim.cosim.apps.debris_state import DebrisChoice, debris_states
+
+    (state,) = debris_states(DebrisChoice(slide=20), law, UNIT_SYSTEMS["mm-t-s"])
+    result = run_export(law, ExportRequest("table", tmp_path / "friction.json", (state,), UNIT_SYSTEMS["mm-t-s"]))
+    doc = json.loads(result.files[0].path.read_text())
+    p = np.array(doc["axes"][0]["values"]) * 1e6
+    assert doc["axes"][1] == {"name": "velocity", "unit": "mm/s", "values": [0.0], "independent": True,
+                              "range": [0.0, 500.0]}
+    prm = law.params
+    beta = np.array(doc["debris_state"]["beta_at_nodes"])
+    assert beta.shape == (p.size, 1)
+    np.testing.assert_allclose(beta[:, 0], prm.archard_k * p * 0.02 / (prm.hardness * prm.particle_thickness),
+                               rtol=8 * 2.0**-53)
+    np.testing.assert_allclose(np.array(doc["mu"])[:, 0], law.mu(p, 0.0, beta[:, 0])[0], rtol=1e-15)
+    assert doc["debris_state"]["how"] == "slide" and doc["debris_state"]["slide"] == 0.02
+    assert np.all(np.diff(np.array(doc["mu"])[:, 0]) < 0), "mu falls with pressure"

@@ -134,3 +134,81 @@ def test_the_strip_caps_beta_where_the_particle_area_reaches_the_contact_area():
     assert model.beta_removed > 0
     floor = p.flake_shear_ratio * p.mu0  # where A_p = A_c the flakes carry the whole contact: mu = r mu0
     assert floor <= out["mu_mean"] < floor + 0.01, (out["mu_mean"], floor)
+
+
+# ------------------------------------------------------------------------------------------------ a point's slide
+U = 2.0**-53
+
+
+@pytest.fixture(scope="module")
+def shipped_law():
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    return make_friction_law(StripDrawParameters(), read_table(DEFAULT_TABLE))
+
+
+def test_a_points_slide_makes_the_archard_production_below_the_cap(shipped_law):
+    """beta = beta0 + K P S / (H h_p) (Eq. 37 at contact weight 1), formed as fl(fl(K P) S / (H h_p)): within 4 u."""
+    p = StripDrawParameters()
+    pressure = np.array([1e6, 2e6, 5e6, 10e6, 20e6, 30e6])
+    for slide, beta0 in ((0.02, 0.0), (0.01, 0.03), (0.0, 0.02)):
+        beta = shipped_law.beta_after_slide(pressure, 0.08, slide, beta0)
+        expected = beta0 + p.archard_k * pressure * slide / (p.hardness * p.particle_thickness)
+        assert np.all(beta < [shipped_law.beta_cap(x, 0.08) for x in pressure]), "below the cap"
+        assert_allclose(beta, expected, rtol=8 * U, atol=0)
+    assert shipped_law.beta_after_slide(20e6, 0.08, 0.02) == pytest.approx(0.1, rel=4 * U)  # 1e-4 20e6 0.02 / 400
+
+
+def test_with_the_sink_a_points_slide_approaches_q_lambda(shipped_law):
+    """d beta / ds = q - beta / lambda: beta = beta0 exp(-S / lambda) + q lambda (1 - exp(-S / lambda))."""
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    p = StripDrawParameters(debris_sink_length=0.035)
+    law = make_friction_law(p, read_table(DEFAULT_TABLE))
+    pressure = np.array([1e6, 5e6, 10e6, 20e6])
+    q = p.archard_k * pressure / (p.hardness * p.particle_thickness)
+    lam = p.debris_sink_length
+    for slide, beta0 in ((0.02, 0.0), (0.1, 0.0), (0.05, 0.04)):
+        decay = np.exp(-slide / lam)
+        expected = beta0 * decay + q * lam * (1.0 - decay)
+        assert_allclose(law.beta_after_slide(pressure, 0.08, slide, beta0), expected, rtol=1e-14, atol=0)
+    # a long slide: the balance q lambda, below the cap for these pressures
+    assert_allclose(law.beta_after_slide(pressure, 0.08, 50 * lam), q * lam, rtol=1e-14)
+
+
+def test_a_long_slide_holds_the_laws_cap_and_slides_compose(shipped_law):
+    """Beyond the cap (Eq. 24, at (P, v)) beta is the cap itself; and a slide in n increments from each one's end
+    reaches the one slide's beta within (2 n + 8) u (each increment's source within 4 u and one rounding of its sum; the
+    production is linear in the slide, the cap a constant of the point): what the user routines make of a point that
+    slides S in increments. With s = 1.6 (about the paper calibration's) blocked flakes reach the contact inside the
+    table's beta axis."""
+    from tribocosim.components.stripdraw.table import read_table
+    from tribocosim.paths import DEFAULT_TABLE
+
+    law = make_friction_law(StripDrawParameters(particle_area_scale=1.6), read_table(DEFAULT_TABLE))
+    pressure = np.array([5e6, 10e6, 30e6])
+    caps = np.array([law.beta_cap(x, 0.08) for x in pressure])
+    assert np.all(caps < 0.5)
+    beta = law.beta_after_slide(pressure, 0.08, 1.0)  # 1 m: far beyond the cap at these pressures
+    assert np.array_equal(beta, caps)
+    for slide in (0.02, 0.2):  # below the cap, and through it at 10 and 30 MPa
+        one = law.beta_after_slide(pressure, 0.08, slide)
+        steps, n = np.zeros(pressure.size), 100
+        for _ in range(n):
+            steps = np.array([law.beta_after_slide(x, 0.08, slide / n, b) for x, b in zip(pressure, steps)])
+        assert_allclose(steps, one, rtol=(2 * n + 8) * U, atol=0)
+    assert np.array_equal(law.beta_after_slide(pressure[1:], 0.08, 0.2), caps[1:])
+
+
+@pytest.mark.parametrize("args, message", [
+    ((1e6, 0.08, -0.01), "slide = -0.01 m: a finite slide >= 0"),
+    ((1e6, 0.08, np.inf), "slide = inf m"),
+    ((1e6, 0.08, 0.02, 1.5), "beta_initial = 1.5: a debris area fraction in"),
+    ((0.0, 0.08, 0.02), "pressure = 0 Pa, slip rate = 0.08 m/s: a pressure > 0"),
+    ((1e6, np.nan, 0.02), "slip rate = nan m/s"),
+])
+def test_a_bad_slide_is_refused_naming_the_value(shipped_law, args, message):
+    with pytest.raises(ParameterError, match=message.replace("(", r"\(")):
+        shipped_law.beta_after_slide(*args)

@@ -39,6 +39,7 @@ import numpy as np
 import pytest
 
 from tribocosim.components.friction_export.exported_law import load_law
+from tribocosim.components.friction_export.named_calibration import DEFAULT as DEFAULT_CALIBRATION
 from tribocosim.components.stripdraw import StripDrawModel, StripDrawParameters, make_friction_law, read_table
 from tribocosim.cosim.apps.export_cli import main as export_main
 from tribocosim.paths import DEFAULT_TABLE
@@ -49,6 +50,11 @@ GFORTRAN = shutil.which("gfortran")
 needs_gfortran = pytest.mark.skipif(GFORTRAN is None, reason="gfortran is not installed (.ci/run installs it)")
 FFLAGS = ["-O2", "-Wall", "-Werror", "-Wno-unused-dummy-argument"]
 #: the unused dummy arguments are the FE codes' (temperatures, coordinates, ...): the argument lists keep them
+
+
+def _default_law():
+    """The law a routine exports by default: the shipped table with the default calibration."""
+    return load_law(calibration_path=DEFAULT_CALIBRATION)
 
 
 def _zig_cc() -> list[str]:
@@ -139,7 +145,7 @@ def test_the_embedded_table_is_the_fmus_bit_for_bit(tmp_path):
     v = rng.uniform(0, 0.7, p.size)
     b = rng.uniform(0, 1.1, p.size)
     out = _run([exe], input="".join(f"{float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in zip(p, v, b))).stdout.split("\n")
-    law = load_law()
+    law = _default_law()
     mu, flagged = law.mu(p, v, b)
     got = [line.split() for line in out if line]
     assert len(got) == p.size
@@ -150,10 +156,11 @@ def test_the_embedded_table_is_the_fmus_bit_for_bit(tmp_path):
 
 # ------------------------------------------------------------------------------------------------ the replay
 def _draw(zeta: float):
-    """The model's default draw at 10 MPa, 0.08 m/s, 1 ms steps (one coupling interval each: a step slides 0.08 mm,
-    below the interval's window_courant elements), with the increments of each node under the pad: its contact area
-    (the interval's mean contact weight times l_e w_T), its slide w |dU| and what the model's interval held."""
-    params = StripDrawParameters(zeta=zeta)
+    """The model's draw with the law a routine exports by default (the default calibration's scale) at 10 MPa, 0.08
+    m/s, 1 ms steps (one coupling interval each: a step slides 0.08 mm, below the interval's window_courant elements),
+    with the increments of each node under the pad: its contact area (the interval's mean contact weight times l_e
+    w_T), its slide w |dU| and what the model's interval held."""
+    params = StripDrawParameters(zeta=zeta, particle_area_scale=_default_law().params.particle_area_scale)
     table = read_table(DEFAULT_TABLE)
     share = table.particle_area / table.contact_area  # the law's share at the table's nodes: the same at every velocity
     assert all(np.array_equal(share[:, j, :], share[:, 0, :]) for j in range(table.velocity.size))
@@ -255,7 +262,7 @@ def test_fric_sticks_elastically_then_slides_at_mu_p(tmp_path):
     state updated by the Archard production K P |DGAM| / (H h_p); an open point stays open; a wrong check number
     stops the analysis."""
     exe, check = _build(tmp_path, "fric", "fric_harness")
-    law = load_law()
+    law = _default_law()
     prm = law.params
     mu = float(law.mu(10e6, 0.08, 0.0)[0])
     press, length, dtime = 10.0, 1.0, 1.0  # MPa, mm, s
@@ -288,7 +295,7 @@ def test_lsdyna_node_routine_returns_mu_as_its_coefficients(tmp_path):
     """tcdynafric at one node (mm-t-s): fric = (mu, mu, 0, 0) with mu at P = F_N / A and the node's beta at the
     increment's start; the history variables updated as the other routines' states."""
     exe, check = _build(tmp_path, "usrfrc", "usrfrc_harness")
-    law = load_law()
+    law = _default_law()
     beta0 = 0.05
     text = f"350.0 35.0 0.06 0.08 0.0 0.001 3\n{beta0} 1.0 0.0 1\n{check}.\n"  # 10 MPa, |ds| = 0.1 mm
     out = np.array([float(x) for x in _run([exe], input=text).stdout.split()])

@@ -1,10 +1,12 @@
-"""The debris state of an export: given, or the one the strip-draw test reaches after N passes (the multi-pass runs
-of the calibration and the paper report, with the export's parameters and units)."""
+"""The debris state of an export: given, the one the strip-draw test reaches after N passes (the multi-pass runs of
+the calibration and the paper report, with the export's parameters and units), or the one a sheet point makes
+sliding S under each pressure (the per-point update of the native core)."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from tribocosim.errors import ParameterError
@@ -51,7 +53,34 @@ def test_given_betas_and_the_beta_axis(law):
     assert axis.beta is None
 
 
+def test_a_slide_state_is_the_debris_a_sheet_point_makes_under_each_pressure(law):
+    """--slide 20 (mm): beta(P, S) = K P S / (H h_p) below the cap at every pressure and velocity, from the blank's
+    beta_initial; the same state given in SI; one state per slide."""
+    states = debris_states(DebrisChoice(slide=(20, "5")), law, MM)
+    assert [s.label for s in states] == ["slide20", "slide5"]
+    assert [s.slide for s in states] == [0.02, 0.005] and all(s.is_axis is False for s in states)
+    prm = law.params
+    p = law.table.pressure[:, None]
+    for v in law.table.velocity:
+        expected = prm.archard_k * p * 0.02 / (prm.hardness * prm.particle_thickness)
+        np.testing.assert_allclose(states[0].beta_at(law, p, v), expected, rtol=8 * 2.0**-53, atol=0)
+    assert states[0].record == {"beta": None, "how": "slide", "slide": 0.02, "beta_initial": 0.0, "units": "SI",
+                                "driver": "tc_node_slide (components/native/core/tc_node_friction.h)"}
+    assert "sliding S = 20 mm" in states[0].description and "30 MPa 0.15" in states[0].description
+    (si,) = debris_states(DebrisChoice(slide=0.02), law, SI)
+    assert si.slide == 0.02 and si.label == "slide0.02"
+    arriving = load_law(settings={"beta_initial": "0.03"})
+    (s,) = debris_states(DebrisChoice(slide=20), arriving, MM)
+    np.testing.assert_allclose(s.beta_at(arriving, 10e6, 0.08), 0.03 + 0.05, rtol=1e-15)
+    assert "from beta_initial = 0.03, the debris the blank arrives with" in s.description
+
+
 @pytest.mark.parametrize("choice, message", [
+    (DebrisChoice(beta=(0.1,), slide=(20,)), "--beta and --slide both given"),
+    (DebrisChoice(passes=(1,), pressure=25, slide=(20,)), "--passes and --slide both given"),
+    (DebrisChoice(slide=(-1,)), "--slide -1 mm is negative"),
+    (DebrisChoice(slide=("nan",)), "--slide nan is not finite"),
+    (DebrisChoice(slide=(20,), velocity=80), "--velocity describes the strip-draw test of --passes"),
     (DebrisChoice(passes=(2,)), "--passes needs --pressure"),
     (DebrisChoice(pressure=25), "--pressure describes the strip-draw test of --passes"),
     (DebrisChoice(beta=(0.1,), passes=(1,), pressure=25), "--beta and --passes both given"),

@@ -56,9 +56,25 @@ BAD = [
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--option", "nope"], "--option 'nope' is not a multi-pass option"),
     (["lsdyna", "--beta", "0.1"], "the following arguments are required: -o/--out"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--table", "nowhere.npz"], "friction table file not found"),
-    (["abaqus", "-o", "f.inp", "--beta-levels", "0", "0.5", "0.1"],
+    (["abaqus", "-o", "f.inp", "--beta-levels", "0", "0.5", "0.1", "--calibration", "none"],
      "lookups in the exported range read friction-table nodes the mesoscale campaign did not simulate"),
-    (["table", "-o", "f.json", "--beta-levels", "0", "0.5", "0.1"], "the beta axis (--beta-levels 0 0.5 0.1): "),
+    (["table", "-o", "f.json", "--beta-levels", "0", "0.5", "0.1", "--calibration", "none"],
+     "the beta axis (--beta-levels 0 0.5 0.1): "),
+    (["abaqus", "-o", "f.inp", "--beta-levels", "0", "0.5", "0.1"], "--beta-levels: 0.5 is outside the table's beta "
+     "axis [0, 1.00092] or above the cap of beta in the range"),
+    (["lsdyna", "-o", "f.k", "--slide", "20", "--beta", "0.1"], "--beta and --slide both given"),
+    (["lsdyna", "-o", "f.k", "--slide", "20", "--passes", "2", "--pressure", "25"], "--passes and --slide both given"),
+    (["lsdyna", "-o", "f.k", "--slide", "-1"], "--slide -1 mm is negative"),
+    (["lsdyna", "-o", "f.k", "--slide", "abc"], "--slide 'abc' is not a number"),
+    (["lsdyna", "-o", "f.k", "--slide", "inf"], "--slide inf is not finite"),
+    (["lsdyna", "-o", "f.k", "--slide", "20", "--pressure", "25"], "--pressure describes the strip-draw test of "
+     "--passes"),
+    (["lsdyna", "-o", "f.k", "--slide", "20", "--set", "beta_initial=2"], "beta_initial = 2"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--calibration", "nowhere"], "--calibration nowhere: no such file, and "
+     "not a calibration's name (none, paper)"),
+    (["lsdyna", "-o", "f.k", "--beta", "0.1", "--calibration", "paper", "--set", "particle_area_scale=2"],
+     "particle_area_scale=2.0 with the calibration paper: it sets the fitted scale itself"),
+    (["vfriction", "-o", "f.f", "--slide", "20"], "--slide does not apply to FORMAT vfriction"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--set", "mu0=abc"], "--set mu0=abc: 'abc' is not a number"),
     (["lsdyna", "-o", "f.k", "--beta", "0.1", "--set", "mu0"], "--set 'mu0': expected NAME=VALUE"),
 ]
@@ -76,7 +92,7 @@ def test_bad_input_is_one_line_naming_the_option_exit_2_and_no_file(tmp_path, mo
 
 
 def test_the_console_script_reports_bad_input_without_a_traceback(tmp_path):
-    proc = _cli(["lsdyna", "-o", "f.k", "--beta", "0.5"], tmp_path)
+    proc = _cli(["lsdyna", "-o", "f.k", "--beta", "0.5", "--calibration", "none"], tmp_path)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.startswith("tribocosim export: --beta 0.5: ") and len(proc.stderr.strip().splitlines()) == 1
     assert "--allow-unsimulated writes them marked" in proc.stderr and "Traceback" not in proc.stderr
@@ -146,3 +162,50 @@ def test_mu_below_the_documented_floor_is_a_warning_naming_the_setting_and_the_f
         assert least < MU_FLOOR and f"mu = {least:.4g} is below" in line, (least, line)
         assert doc["warnings"] == [line.split(f"{name}: ", 1)[1]]
         assert any("WARNING: the least value: mu =" in h for h in doc["header"]), doc["header"]
+
+
+def test_a_slide_at_one_velocity_and_the_note_on_an_uncalibrated_law(tmp_path, capsys):
+    """--slide 20 with the default (calibrated) law: the output says the file holds one velocity and why, nothing on
+    stderr; the campaign's law (--calibration none) adds one note line with its one-pass drop, computed."""
+    from tribocosim.components.friction_export.exported_law import load_law
+    from tribocosim.cosim.apps.paper_calibration import one_pass_drop
+
+    assert main(["lsdyna", "-o", str(tmp_path / "f.k"), "--slide", "20"]) == 0
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    assert err == "" and "(nominal; " in lines[0] and "x 1 velocity (mu does not depend on it))" in lines[0]
+    assert lines[1].startswith("velocity: mu does not depend on the relative sliding velocity over 0-500 mm/s")
+    assert "LS-DYNA curve has two points or more" in lines[1]
+    assert lines[-2] == "range: contact pressure 1-30 MPa, relative sliding velocity 0-500 mm/s"
+    for fmt, name in (("table", "g.json"), ("vfriction", "r.f")):
+        assert main([fmt, "-o", str(tmp_path / name), "--calibration", "none"]) == 0
+        out, err = capsys.readouterr()
+        (line,) = err.strip().splitlines()
+        assert line.startswith("tribocosim export: note: the law is the mesoscale campaign's (friction_table.npz), "
+                               "uncalibrated")
+        assert f"is {100 * one_pass_drop(load_law()):.1f} %, where the paper measures 35 %" in line
+    assert main(["usrfrc", "-o", str(tmp_path / "u.f")]) == 0
+    assert capsys.readouterr().err == ""
+    assert "calibration paper (calibration_paper.json" in (tmp_path / "u.f").read_text().replace("\nC     ", " ")
+
+
+def test_the_help_says_the_law_is_calibrated_by_default(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "The law is calibrated by default" in text and "--slide S [S ...]" in text
+    assert "paper (the default, without --table and --set particle_area_scale" in text
+
+
+def test_the_option_help_names_every_multi_pass_option_and_each_is_accepted(tmp_path, capsys):
+    """The --option help lists the options the code defines (one list: multipass_options.OPTIONS), and each name
+    it lists exports."""
+    from tribocosim.components.stripdraw.multipass_options import option_names
+
+    with pytest.raises(SystemExit):
+        main(["table", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    listed = help_text.split("a multi-pass option of the paper report (", 1)[1].split(")", 1)[0]
+    assert [name.strip() for name in listed.split(",")] == list(option_names())
+    for name in option_names():
+        assert main(["table", "-o", str(tmp_path / f"{name}.json"), "--beta", "0.1", "--option", name]) == 0, name

@@ -1,6 +1,6 @@
-"""The paper report's physics pieces (tribocosim.cosim.reports.paper_physics): the budget's arithmetic on known
-results, alpha at small beta on a table of known areas, the ensemble variants of a table, and the options' and the
-budget's tests on the real model (the whole report runs in .ci/run: tribocosim report paper --quick)."""
+"""The paper report's physics pieces (tribocosim.cosim.reports.paper_physics): alpha at small beta on a table of
+known areas, the table variants of the budget, and the options' tests on the real model (the whole report runs in
+.ci/run: tribocosim report paper --quick)."""
 
 from __future__ import annotations
 
@@ -13,72 +13,7 @@ import pytest
 from tribocosim.components.stripdraw.table import FrictionTable
 from tribocosim.errors import RangeWarning, TableError
 from tribocosim.cosim.reports import paper, paper_physics as pp
-
-
-def _result(scale, drop3, drop140):
-    return {"scale": scale, "drops": [0.35, 0.5, drop3], "drop_140": drop140}
-
-
-def test_budget_takes_half_a_two_sided_range_and_a_one_sided_change_whole():
-    nominal = _result(1.0, 0.7, 0.6)
-    varied = {"k_low": _result(0.5, 0.5, 0.4), "k_high": _result(2.0, 0.9, 0.8), "h_low": _result(0.8, 0.75, 0.62),
-              "zeta_low": {"error": "cannot be calibrated"}, "zeta_high": _result(1.1, 0.72, 0.61)}
-    rows = {r["quantity"].split(" (")[0]: r for r in pp.budget(nominal, varied)}
-    k = rows["Archard K"]
-    assert (k["scale"], k["drop3"], k["drop140"]) == pytest.approx((0.75, 0.2, 0.2))
-    h = rows["hardness H"]
-    assert (h["scale"], h["drop3"], h["drop140"]) == pytest.approx((0.2, 0.05, 0.02))
-    assert "cannot be calibrated" in rows["zeta"]["error"] and "scale" not in rows["zeta"]
-    assert pp.budget_total(list(rows.values()), "scale", 0.1) == pytest.approx(math.sqrt(0.75**2 + 0.2**2 + 0.1**2))
-
-
-def test_a_two_sided_range_with_both_ends_on_one_side_counts_the_larger_change_and_a_missing_end_one_side():
-    """The domain size: 128 and 512 um around the nominal 256 um. Ends on either side: half their difference; both
-    above the nominal (not monotonic across it): the larger change, not the smaller half-difference; one end only
-    (no 512 um table): that change whole."""
-    nominal = _result(1.0, 0.7, 0.6)
-
-    def row(varied):
-        return next(r for r in pp.budget(nominal, varied) if r["quantity"] == "domain size of the slides")
-
-    across = row({"domain_128": _result(0.8, 0.6, 0.5), "domain_512": _result(1.4, 0.75, 0.7)})
-    assert (across["scale"], across["drop3"], across["drop140"]) == pytest.approx((0.3, 0.075, 0.1))
-    assert across["range"].endswith(" / 512 um")
-    same = row({"domain_128": _result(1.2, 0.8, 0.5), "domain_512": _result(1.1, 0.75, 0.7)})
-    assert (same["scale"], same["drop3"], same["drop140"]) == pytest.approx((0.2, 0.1, 0.1))
-    alone = row({"domain_128": _result(1.2, 0.8, 0.55)})
-    assert (alone["scale"], alone["drop3"], alone["drop140"]) == pytest.approx((0.2, 0.1, 0.05))
-    assert "512" not in alone["range"]
-    failed = row({"domain_128": _result(1.2, 0.8, 0.55), "domain_512": {"error": "cannot be calibrated"}})
-    assert failed["error"] == "cannot be calibrated" and "scale" not in failed
-
-
-def test_the_shear_row_counts_its_upper_end_whole_and_names_the_r_that_cannot_give_the_35_percent():
-    """r's row is one-sided (the default is the range's lower end): the change at the upper end taken counts whole, and
-    the row says which r of the range no s can calibrate on the paper's 35 %."""
-    nominal = _result(1.6, 0.735, 0.633)
-    upper = {**_result(3.1, 0.40, 0.38), "value": 0.5, "refused": [0.6]}
-    row = next(r for r in pp.budget(nominal, {"shear": upper}) if r["quantity"].startswith("flake-borne shear"))
-    assert (row["scale"], row["drop3"], row["drop140"]) == pytest.approx((1.5, 0.335, 0.253))
-    assert row["range"].startswith("0.5 (the default 0.2 is the range's lower end; 0.6 cannot give the paper's 35 %")
-    plain = next(r for r in pp.budget(nominal, {"shear": {**_result(2.0, 0.6, 0.5), "value": 0.6, "refused": []}})
-                 if r["quantity"].startswith("flake-borne shear"))
-    assert plain["range"] == "0.6 (the default 0.2 is the range's lower end)"
-    failed = pp.budget(nominal, {"shear": {"error": "no r", "refused": [0.6, 0.5, 0.4, 0.3]}})[0]
-    assert failed["error"] == "no r" and failed["range"].startswith("none (")
-
-
-def test_the_observable_is_not_a_row_of_the_budget_and_the_table_form_is():
-    assert "particle_area_rule" not in {k for v in pp.VARIATIONS for k in v.parameters}
-    assert pp.OBSERVABLE_CHOICE == {"particle_area_rule": "clusters"}
-    assert [v.table for v in pp.VARIATIONS if v.quantity == "form of the table"] == [pp.FORM_VARIANT]
-
-
-@pytest.mark.parametrize("value, half, interval", [(0.946, 0.591, (0.355, 1.0)), (0.2, 0.5, (0.0, 0.7)),
-                                                   (0.5, 0.1, (0.4, 0.6))])
-def test_bands_are_intervals_clipped_to_0_and_100_percent(value, half, interval):
-    assert pp.band(value, half) == pytest.approx(interval)
-    assert pp.band(1.28, 2.0, 0.0, math.inf) == pytest.approx((0.0, 3.28))
+from tribocosim.cosim.reports.paper_discriminators import coverage_without_sink
 
 
 def _v3_table(alpha=400.0, clusters=0.01):
@@ -113,22 +48,6 @@ def test_simulated_velocities_leave_out_the_copied_v0_row_and_unsimulated_column
     shipped = read_table(DEFAULT_TABLE)
     if shipped.version == 2:  # the campaign velocities recorded in its metadata
         assert pp.simulated_velocities(shipped) == shipped.metadata["axes"]["velocity"]["campaign"]
-
-
-def test_the_budget_names_the_domain_size_unless_a_table_on_another_size_varies_it():
-    """Without the domain-size variant the budget says the input is not varied instead of leaving it out; with it,
-    the row is the variation's."""
-    from tribocosim.components.stripdraw.table import read_table
-    from tribocosim.paths import DEFAULT_TABLE
-
-    shipped = read_table(DEFAULT_TABLE)
-    size = shipped.metadata["campaign"]["sweep"]["slide"]["size"]
-    (row,) = pp.inputs_not_varied(shipped, {})
-    assert row["quantity"] == "domain size of the slides" and f"{size * 1e6:g} um domain only" in row["range"]
-    assert pp.inputs_not_varied(shipped, {"domain_128": "x.npz"}) == []
-    assert pp.inputs_not_varied(shipped, {"domain_512": "x.npz"}) == []
-    assert {v.table: v.quantity for v in pp.VARIATIONS if v.table in pp.DOMAIN_TABLES} == {
-        "domain_128": "domain size of the slides", "domain_512": "domain size of the slides"}
 
 
 def test_with_rows_of_takes_the_other_tables_shared_rows_interpolated_in_beta(tmp_path):
@@ -196,6 +115,12 @@ def test_options_calibrate_on_the_one_pass_drop_and_a_sink_leaves_less_debris(tm
     assert d[2] > d[1] > d[0] > 0
     assert all(s < b for s, b in zip(sink["debris_g_m2"], base["debris_g_m2"]))
     assert sink["scale"] > base["scale"]  # less debris under the pad needs a larger A_p scale for the same 35 %
+    # the debris is conserved without a sink: its mean over the strip that passed is K P D L_T / (H h_p (D + L_T))
+    want = coverage_without_sink(25e6, 0.035, 1e-4, 0.8e9, 0.5e-6, 0.14)
+    assert base["coverage"][0] == pytest.approx(want, rel=3e-3) and sink["coverage"][0] < 0.9 * want
+    # mu >= r mu0 where flakes carry the contact: no drop beyond 1 - r mu0 / mu_bar(1 MPa), nor beyond 1 - r
+    assert base["floor"] == pytest.approx(0.2 * 0.15)
+    assert base["drops"][2] <= base["bound_3"] <= 1.0 - 0.2 and base["drop_140"] <= base["bound_140"] <= 0.8
 
 
 def _v4_table(alpha=400.0):

@@ -39,6 +39,27 @@ double tc_node_debris(const tc_node_law *law, double pressure, double slip, doub
     return p->beta_threshold > 0 ? held : tc_law_beta_capped(p, law->table, pressure, rate, held, rows);
 }
 
+int tc_node_slide(const tc_stripdraw_params *p, const tc_table *table, size_t n, const double *pressure,
+                  const double *rate, double slide, double beta0, double *beta, tc_msg msg) {
+    char a[TC_REPR_SIZE], b[TC_REPR_SIZE];
+    if (!(isfinite(slide) && slide >= 0))
+        return tc_fail(msg, TC_ERROR, "slide = %s m: a finite slide >= 0 is required", tc_repr_double(slide, a));
+    if (!(isfinite(beta0) && beta0 >= 0 && beta0 <= 1))
+        return tc_fail(msg, TC_ERROR, "beta_initial = %s: a debris area fraction in [0, 1] is required",
+                       tc_repr_double(beta0, a));
+    tc_node_law law;
+    const int rc = tc_node_law_make(p, table, &law, msg);
+    if (rc != TC_OK) return rc;
+    tc_table_rows rows = {0};
+    for (size_t k = 0; k < n; ++k) {
+        if (!(isfinite(pressure[k]) && pressure[k] > 0 && isfinite(rate[k]) && rate[k] >= 0))
+            return tc_fail(msg, TC_ERROR, "pressure = %s Pa, slip rate = %s m/s: a pressure > 0 and a slip rate >= 0, "
+                           "both finite, are required", tc_repr_double(pressure[k], a), tc_repr_double(rate[k], b));
+        beta[k] = tc_node_debris(&law, pressure[k], slide, rate[k], beta0, &rows);
+    }
+    return TC_OK;
+}
+
 double tc_node_friction(const tc_node_law *law, double pressure, double slip, double dt, double *beta, int *flagged,
                         tc_table_rows *rows) {
     const double b0 = *beta, ds = fabs(slip);

@@ -62,4 +62,17 @@ TC_API void tc_node_mu(const tc_node_law *law, double pressure, size_t n, const 
 TC_API double tc_node_debris(const tc_node_law *law, double pressure, double slip, double rate, double beta,
                              tc_table_rows *rows);
 
+/* The debris of a point that slides `slide` [m] at a constant pressure and slip rate from beta0 (a sheet point under a
+ * die radius or a blankholder; the table the exports write for codes without user routines, --slide): for each of the
+ * n points (pressure[k] > 0, rate[k] >= 0) beta[k] is tc_node_debris of one increment of the whole slide, with the law
+ * made from p and table by tc_node_law_make. One increment is the slide's many: the production is linear in the slide
+ * and the sink's exact integral composes (e^-a e^-b = e^-(a+b)), so a point that slides S in any increments at
+ * constant (P, v) reaches the same beta to rounding; the cap at (P, v) is a constant of the point and the update is
+ * monotone in beta, so capping after each increment or at the end gives the same. Without the sink and below the cap
+ * beta = beta0 + K P S / (H h_p); with it, beta0 e^(-S/lambda) + q lambda (1 - e^(-S/lambda)). TC_ERROR naming the
+ * value for a law tc_node_law_make refuses, a pressure not > 0, a rate < 0, a slide < 0, a beta0 outside [0, 1], or
+ * one of them not finite. */
+TC_API int tc_node_slide(const tc_stripdraw_params *p, const tc_table *table, size_t n, const double *pressure,
+                         const double *rate, double slide, double beta0, double *beta, tc_msg msg);
+
 #endif
