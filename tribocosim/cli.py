@@ -19,8 +19,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "report": ("tribocosim.cosim.apps.report_cli", "error-vs-run-time, stability and paper-figure reports"),
     "calibrate": ("tribocosim.cosim.apps.calibrate", "fit the particle-borne area and the debris balance to measured "
                   "mu_bar and debris"),
-    "export": ("tribocosim.cosim.apps.export_cli", "the friction law for a forming simulation: LS-DYNA, Abaqus, a "
-               "neutral table"),
+    "export": ("tribocosim.cosim.apps.export_cli", "the friction law for a forming simulation: user friction "
+                                                    "routines, LS-DYNA, Abaqus, a neutral table"),
     "fmu": ("tribocosim.components.fmus.fmu_cli", "build the project's FMUs"),
     "meso": ("tribocosim.surrogate.meso_cli", "mesoscale tools: surfaces, contact, sliding"),
     "surrogate": ("tribocosim.surrogate.surrogate_cli", "campaigns and the friction table"),
