@@ -107,3 +107,19 @@ def osc_scene(fmu_dir):
 def exact_t10():
     """(x1, x2) of the reference oscillator at t = 10 s."""
     return X1_EXACT, X2_EXACT
+
+
+@pytest.fixture(scope="session")
+def known_area_table():
+    """A version 2 table of known areas: A_c = P / 300 MPa, A_p / A_c = 16.4 beta (Eq. 23 with alpha = 3000), beta to
+    1: flakes carry the whole contact at beta = 0.061 / s, inside the axis for s > 0.061."""
+    import numpy as np
+
+    from tribocosim.components.stripdraw.table import FrictionTable
+
+    p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1, 0.5, 1.0])
+    ap = 3000.0 * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 5))
+    ac = np.broadcast_to((p / 3e8)[:, None, None], (3, 3, 5)).copy()
+    zeros = np.zeros((3, 3, 5))
+    return FrictionTable(p, v, b, 0.15 * np.maximum(0.0, 1 - ap / ac), {"beta_threshold": 1.0}, contact_area=ac,
+                         particle_area=ap, contact_area_std=zeros, particle_area_std=zeros)

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from tribocosim.components.stripdraw.friction_floor import MU_FLOOR
-from tribocosim.components.stripdraw.table import FrictionTable, write_table
+from tribocosim.components.stripdraw.table import write_table
 from tribocosim.cosim.reports import paper, paper_budget as pb, paper_physics as pp
 from tribocosim.cosim.studies.stripdraw_experiment import Point, draw
 
@@ -108,20 +107,10 @@ def test_the_budget_names_the_domain_size_unless_a_table_on_another_size_varies_
         "domain_128": "domain size of the slides", "domain_512": "domain size of the slides"}
 
 
-def _table() -> FrictionTable:
-    """A version 2 table of known areas: A_c = P / 300 MPa, A_p / A_c = 16.4 beta (Eq. 23 with alpha = 3000)."""
-    p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1, 0.5, 1.0])
-    ap = 3000.0 * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 5))
-    ac = np.broadcast_to((p / 3e8)[:, None, None], (3, 3, 5)).copy()
-    zeros = np.zeros((3, 3, 5))
-    return FrictionTable(p, v, b, 0.15 * np.maximum(0.0, 1 - ap / ac), {"beta_threshold": 1.0}, contact_area=ac,
-                         particle_area=ap, contact_area_std=zeros, particle_area_std=zeros)
-
-
 @pytest.fixture(scope="module")
-def known(tmp_path_factory):
+def known(tmp_path_factory, known_area_table):
     path = tmp_path_factory.mktemp("budget") / "t.npz"
-    table = _table()
+    table = known_area_table
     write_table(path, table)
     runs = paper.Runs(workers=1)
     return runs, paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True)), table

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from tribocosim.components.stripdraw.table import FrictionTable, write_table
+from tribocosim.components.stripdraw.table import write_table
 from tribocosim.errors import RangeWarning
 from tribocosim.cosim.reports import paper, paper_discriminators as pd, paper_physics as pp
 
@@ -44,23 +44,13 @@ def test_separations_take_the_most_telling_point_and_the_nearer_competitor():
     assert order == sorted(order, reverse=True)
 
 
-def _table() -> FrictionTable:
-    """A version 2 table of known areas: A_c = P / 300 MPa, A_p / A_c = C beta with C = 3000 x 300e6 / 55e9."""
-    p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1, 0.5, 1.0])
-    ap = 3000.0 * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 5))
-    ac = np.broadcast_to((p / 3e8)[:, None, None], (3, 3, 5)).copy()
-    zeros = np.zeros((3, 3, 5))
-    return FrictionTable(p, v, b, 0.15 * np.maximum(0.0, 1 - ap / ac), {"beta_threshold": 1.0}, contact_area=ac,
-                         particle_area=ap, contact_area_std=zeros, particle_area_std=zeros)
-
-
 SHARE = 3000.0 * 300e6 / 55e9  # A_p / A_c per unit beta in _table
 
 
 @pytest.fixture(scope="module")
-def predicted(tmp_path_factory):
+def predicted(tmp_path_factory, known_area_table):
     path = tmp_path_factory.mktemp("discriminators") / "t.npz"
-    table = _table()
+    table = known_area_table
     write_table(path, table)
     runs = paper.Runs(workers=1)
     params = paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True))

@@ -5,25 +5,13 @@ beta h_p rho."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from tribocosim.components.stripdraw.friction_floor import FLAKE_SHEAR_RATIO_DEFAULT, MU_FLOOR
-from tribocosim.components.stripdraw.table import FrictionTable, write_table
+from tribocosim.components.stripdraw.table import write_table
 from tribocosim.errors import RangeWarning
 from tribocosim.cosim.reports import paper, paper_floor
 from tribocosim.cosim.reports import paper_physics as pp
-
-
-def _table() -> FrictionTable:
-    """A version 2 table of known areas: A_c = P / 300 MPa, A_p / A_c = 16.4 beta (Eq. 23 with alpha = 3000), beta
-    to 1: flakes carry the whole contact at beta = 0.061 / s, inside the axis for s > 0.061."""
-    p, v, b = np.array([1e6, 10e6, 30e6]), np.array([0.0, 0.08, 0.5]), np.array([0.0, 0.02, 0.1, 0.5, 1.0])
-    ap = 3000.0 * b[None, None, :] * p[:, None, None] / 55e9 * np.ones((3, 3, 5))
-    ac = np.broadcast_to((p / 3e8)[:, None, None], (3, 3, 5)).copy()
-    zeros = np.zeros((3, 3, 5))
-    return FrictionTable(p, v, b, 0.15 * np.maximum(0.0, 1 - ap / ac), {"beta_threshold": 1.0}, contact_area=ac,
-                         particle_area=ap, contact_area_std=zeros, particle_area_std=zeros)
 
 
 def test_seeded_debris_is_weighed_as_beta_h_p_rho():
@@ -31,9 +19,9 @@ def test_seeded_debris_is_weighed_as_beta_h_p_rho():
     assert paper_floor.seeded_g_m2(0.2, 1e-6) == pytest.approx(0.2 * 2.7)
 
 
-def test_the_default_model_levels_off_at_the_floor_and_the_papers_keeps_falling(tmp_path):
+def test_the_default_model_levels_off_at_the_floor_and_the_papers_keeps_falling(tmp_path, known_area_table):
     path = tmp_path / "t.npz"
-    table = _table()
+    table = known_area_table
     write_table(path, table)
     runs = paper.Runs(workers=1)
     params = paper.config_params({"table_file": str(path)}, paper.Config("mesoscale", True))
